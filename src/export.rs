@@ -1,0 +1,97 @@
+//! Point clouds out: binary little-endian PLY and glTF 2.0 binary (.glb) with a POINTS
+//! primitive. Positions are in the scene's own coordinates; colours are the functions' colours
+//! (linear RGB in glTF, as its COLOR_0 requires; sRGB bytes in PLY, as viewers expect).
+
+use std::io::Write;
+
+use glam::Vec3;
+
+use crate::scene::linear_to_srgb;
+
+pub fn write_ply(w: &mut dyn Write, points: &[Vec3], colors: &[[f32; 3]]) -> std::io::Result<()> {
+    write!(
+        w,
+        "ply\nformat binary_little_endian 1.0\ncomment written by nlifs\nelement vertex {}\n\
+         property float x\nproperty float y\nproperty float z\n\
+         property uchar red\nproperty uchar green\nproperty uchar blue\nend_header\n",
+        points.len()
+    )?;
+    let mut buf = Vec::with_capacity(points.len() * 15);
+    for (p, c) in points.iter().zip(colors) {
+        for v in p.to_array() {
+            buf.extend_from_slice(&v.to_le_bytes());
+        }
+        for v in c {
+            buf.push((linear_to_srgb(*v) * 255.0 + 0.5) as u8);
+        }
+    }
+    w.write_all(&buf)
+}
+
+/// A glTF 2.0 binary with one mesh of one POINTS primitive (POSITION float VEC3, COLOR_0
+/// normalized unsigned byte VEC4), validated with the Khronos validator.
+pub fn write_glb_points(w: &mut dyn Write, points: &[Vec3], colors: &[[f32; 3]]) -> std::io::Result<()> {
+    let n = points.len();
+    let mut lo = Vec3::splat(f32::INFINITY);
+    let mut hi = Vec3::splat(f32::NEG_INFINITY);
+    let mut bin = Vec::with_capacity(n * 16);
+    for p in points {
+        lo = lo.min(*p);
+        hi = hi.max(*p);
+        for v in p.to_array() {
+            bin.extend_from_slice(&v.to_le_bytes());
+        }
+    }
+    if n == 0 {
+        lo = Vec3::ZERO;
+        hi = Vec3::ZERO;
+    }
+    let color_offset = bin.len();
+    for c in colors {
+        for v in c {
+            bin.push((v.clamp(0.0, 1.0) * 255.0 + 0.5) as u8);
+        }
+        bin.push(255);
+    }
+    let json = serde_json::json!({
+        "asset": { "version": "2.0", "generator": "nlifs" },
+        "scene": 0,
+        "scenes": [ { "nodes": [0] } ],
+        "nodes": [ { "mesh": 0, "name": "attractor" } ],
+        "meshes": [ { "name": "attractor", "primitives": [ {
+            "attributes": { "POSITION": 0, "COLOR_0": 1 },
+            "mode": 0
+        } ] } ],
+        "accessors": [
+            { "bufferView": 0, "componentType": 5126, "count": n, "type": "VEC3",
+              "min": lo.to_array(), "max": hi.to_array() },
+            { "bufferView": 1, "componentType": 5121, "normalized": true, "count": n, "type": "VEC4" }
+        ],
+        "bufferViews": [
+            { "buffer": 0, "byteOffset": 0, "byteLength": color_offset, "target": 34962 },
+            { "buffer": 0, "byteOffset": color_offset, "byteLength": bin.len() - color_offset, "target": 34962 }
+        ],
+        "buffers": [ { "byteLength": bin.len() } ]
+    });
+    write_glb(w, &json, &bin)
+}
+
+/// Writes a GLB container: header, JSON chunk padded with spaces, BIN chunk padded with zeros.
+pub fn write_glb(w: &mut dyn Write, json: &serde_json::Value, bin: &[u8]) -> std::io::Result<()> {
+    let mut json_bytes = serde_json::to_vec(json).map_err(std::io::Error::other)?;
+    while json_bytes.len() % 4 != 0 {
+        json_bytes.push(b' ');
+    }
+    let bin_padded = bin.len().div_ceil(4) * 4;
+    let total = 12 + 8 + json_bytes.len() + 8 + bin_padded;
+    w.write_all(b"glTF")?;
+    w.write_all(&2u32.to_le_bytes())?;
+    w.write_all(&(total as u32).to_le_bytes())?;
+    w.write_all(&(json_bytes.len() as u32).to_le_bytes())?;
+    w.write_all(b"JSON")?;
+    w.write_all(&json_bytes)?;
+    w.write_all(&(bin_padded as u32).to_le_bytes())?;
+    w.write_all(b"BIN\0")?;
+    w.write_all(bin)?;
+    w.write_all(&vec![0u8; bin_padded - bin.len()])
+}

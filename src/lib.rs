@@ -1,0 +1,14 @@
+//! nlifs: modeling and rendering of nonlinear iterated function systems whose functions are
+//! given by distorting a regular grid (E. Gröller, "Modeling and Rendering of Nonlinear Iterated
+//! Function Systems"). The library holds the model, the scene format, the camera and the CPU
+//! chaos game; the binary in `main.rs` is a thin command line on top of it.
+
+pub mod camera;
+pub mod chaos_game;
+pub mod export;
+pub mod io;
+pub mod model;
+pub mod render;
+pub mod rng;
+pub mod scene;
+pub mod splat;

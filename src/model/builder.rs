@@ -1,0 +1,182 @@
+//! Grid builders: Barr's global deformations (taper, twist, bend; A. H. Barr, "Global and Local
+//! Deformations of Solid Primitives", 1984) composed with affine steps. A builder stays a list
+//! of parameters (so the viewer can edit it and the timeline can animate it) and is resolved to
+//! grid points by applying its steps in order to every point of a grid.
+
+use glam::{DMat3, DVec3};
+
+/// An axis of the scene's coordinate frame.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Axis {
+    X,
+    Y,
+    Z,
+}
+
+impl Axis {
+    pub fn index(self) -> usize {
+        self as usize
+    }
+
+    /// The two other axes, in right-handed order (so that (a, b) rotate like (x, y) about z).
+    pub fn others(self) -> (usize, usize) {
+        match self {
+            Axis::X => (1, 2),
+            Axis::Y => (2, 0),
+            Axis::Z => (0, 1),
+        }
+    }
+
+    pub fn parse(s: &str) -> Option<Self> {
+        match s {
+            "x" => Some(Axis::X),
+            "y" => Some(Axis::Y),
+            "z" => Some(Axis::Z),
+            _ => None,
+        }
+    }
+
+    pub fn name(self) -> &'static str {
+        ["x", "y", "z"][self.index()]
+    }
+}
+
+/// One step of a builder. Deformations act about `center` (default: the scene grid's centre)
+/// and vary along `axis` over `range` (default: the grid's extent along `axis`); outside the
+/// range the deformation of the nearest range end applies, as in Barr's paper.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Step {
+    /// Scales by `by` about `center`.
+    Scale { by: DVec3, center: DVec3 },
+    /// Rotates by `degrees` about `axis` through `center`.
+    Rotate { axis: Axis, degrees: f64, center: DVec3 },
+    Translate { by: DVec3 },
+    /// Barr's taper: the coordinates across `axis` are scaled, about `center`, by a factor that
+    /// goes linearly from 1 at the start of `range` to `1 - amount` at its end.
+    Taper { axis: Axis, amount: f64, range: [f64; 2], center: DVec3 },
+    /// Barr's twist: rotation about `axis` through `center` by an angle growing linearly from 0
+    /// at the start of `range` to `degrees` at its end.
+    Twist { axis: Axis, degrees: f64, range: [f64; 2], center: DVec3 },
+    /// Barr's bend: the part of the shape along `axis` within `range` is bent towards the
+    /// `toward` axis by a total angle of `degrees` (radius = range length / angle); beyond the
+    /// range it continues straight along the bent tangent.
+    Bend { axis: Axis, toward: Axis, degrees: f64, range: [f64; 2], center: DVec3 },
+    /// A general affine step p' = matrix * p + offset.
+    Affine { matrix: DMat3, offset: DVec3 },
+}
+
+/// Linear ramp from 0 at `range[0]` to 1 at `range[1]`, clamped.
+fn ramp(x: f64, range: [f64; 2]) -> f64 {
+    let len = range[1] - range[0];
+    if len.abs() < 1e-300 {
+        return if x >= range[1] { 1.0 } else { 0.0 };
+    }
+    ((x - range[0]) / len).clamp(0.0, 1.0)
+}
+
+fn rotate_about(p: DVec3, axis: Axis, radians: f64, center: DVec3) -> DVec3 {
+    let (a, b) = axis.others();
+    let d = p - center;
+    let (s, c) = radians.sin_cos();
+    let mut out = d;
+    out[a] = c * d[a] - s * d[b];
+    out[b] = s * d[a] + c * d[b];
+    center + out
+}
+
+impl Step {
+    pub fn apply(&self, p: DVec3) -> DVec3 {
+        match *self {
+            Step::Scale { by, center } => center + (p - center) * by,
+            Step::Rotate { axis, degrees, center } => rotate_about(p, axis, degrees.to_radians(), center),
+            Step::Translate { by } => p + by,
+            Step::Taper { axis, amount, range, center } => {
+                let k = 1.0 - amount * ramp(p[axis.index()], range);
+                let (a, b) = axis.others();
+                let mut out = p;
+                out[a] = center[a] + k * (p[a] - center[a]);
+                out[b] = center[b] + k * (p[b] - center[b]);
+                out
+            }
+            Step::Twist { axis, degrees, range, center } => {
+                let angle = degrees.to_radians() * ramp(p[axis.index()], range);
+                rotate_about(p, axis, angle, center)
+            }
+            Step::Bend { axis, toward, degrees, range, center } => bend(p, axis, toward, degrees, range, center),
+            Step::Affine { matrix, offset } => matrix * p + offset,
+        }
+    }
+}
+
+/// Barr's bend (his equations for bending along y towards z, generalised to any axis pair):
+/// coordinates along `axis` in `range` are wrapped onto a circular arc of radius
+/// r = (range length) / angle whose centre lies at `center` + r along `toward`.
+fn bend(p: DVec3, axis: Axis, toward: Axis, degrees: f64, range: [f64; 2], center: DVec3) -> DVec3 {
+    let (ia, it) = (axis.index(), toward.index());
+    if ia == it || degrees.abs() < 1e-12 {
+        return p;
+    }
+    let len = range[1] - range[0];
+    if len.abs() < 1e-300 {
+        return p;
+    }
+    let k = degrees.to_radians() / len; // bend rate: radians per unit length
+    let y = p[ia];
+    let y_hat = y.clamp(range[0].min(range[1]), range[0].max(range[1]));
+    let theta = k * (y_hat - range[0]);
+    let (s, c) = theta.sin_cos();
+    let z = p[it] - center[it];
+    let r = 1.0 / k;
+    let mut out = p;
+    // Inside the range: the point moves onto the arc; beyond it: along the tangent.
+    out[ia] = range[0] - s * (z - r) + c * (y - y_hat);
+    out[it] = center[it] + c * (z - r) + r + s * (y - y_hat);
+    out
+}
+
+/// A builder: its steps, applied in order.
+#[derive(Clone, Debug, PartialEq, Default)]
+pub struct Builder {
+    pub steps: Vec<Step>,
+}
+
+impl Builder {
+    pub fn apply(&self, p: DVec3) -> DVec3 {
+        self.steps.iter().fold(p, |q, s| s.apply(q))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn taper_scales_linearly() {
+        let s = Step::Taper { axis: Axis::Y, amount: 0.5, range: [0.0, 10.0], center: DVec3::ZERO };
+        assert!(s.apply(DVec3::new(2.0, 0.0, 2.0)).distance(DVec3::new(2.0, 0.0, 2.0)) < 1e-12);
+        assert!(s.apply(DVec3::new(2.0, 10.0, 2.0)).distance(DVec3::new(1.0, 10.0, 1.0)) < 1e-12);
+        assert!(s.apply(DVec3::new(2.0, 5.0, 2.0)).distance(DVec3::new(1.5, 5.0, 1.5)) < 1e-12);
+    }
+
+    #[test]
+    fn twist_rotates_by_height() {
+        let s = Step::Twist { axis: Axis::Y, degrees: 90.0, range: [0.0, 1.0], center: DVec3::ZERO };
+        // About y, (z, x) rotate like (x, y): z -> x.
+        let top = s.apply(DVec3::new(0.0, 1.0, 1.0));
+        assert!(top.distance(DVec3::new(1.0, 1.0, 0.0)) < 1e-12, "{top}");
+        assert!(s.apply(DVec3::new(0.0, 0.0, 1.0)).distance(DVec3::new(0.0, 0.0, 1.0)) < 1e-12);
+    }
+
+    #[test]
+    fn bend_preserves_length_along_axis() {
+        // A bend wraps the axis segment onto an arc: arc length equals the segment length.
+        let s = Step::Bend { axis: Axis::Y, toward: Axis::X, degrees: 90.0, range: [0.0, 1.0], center: DVec3::ZERO };
+        let n = 1000;
+        let pts: Vec<DVec3> = (0..=n).map(|i| s.apply(DVec3::new(0.0, i as f64 / n as f64, 0.0))).collect();
+        let length: f64 = pts.windows(2).map(|w| w[0].distance(w[1])).sum();
+        assert!((length - 1.0).abs() < 1e-5, "length {length}");
+        // The end tangent is turned by 90°: the end point is at (r, r) with r = 2/π.
+        let r = 2.0 / std::f64::consts::PI;
+        assert!(pts[n].distance(DVec3::new(r, r, 0.0)) < 1e-9, "{}", pts[n]);
+    }
+}

@@ -1,0 +1,55 @@
+//! Headless rendering of a scene at a time on the CPU: compile the IFS, estimate the
+//! attractor's bounds, frame the camera, run the chaos game into per-thread framebuffers and
+//! resolve. A pure function of (scene, time, settings).
+
+use glam::DVec3;
+
+use crate::camera::OrbitCamera;
+use crate::chaos_game::{self, CompiledIfs};
+use crate::scene::{RenderSettings, Scene};
+use crate::splat::{Framebuffer, SplatView};
+
+#[derive(Debug, thiserror::Error)]
+pub enum RenderError {
+    #[error("the scene has no enabled function")]
+    NoFunctions,
+}
+
+/// What a render produced besides the image.
+pub struct Rendered {
+    pub image: image::RgbImage,
+    pub camera: OrbitCamera,
+    pub bounds: (DVec3, DVec3),
+    pub framebuffer: Framebuffer,
+}
+
+/// Renders `scene` at `t_secs` with `settings`; `camera` overrides the scene's camera.
+/// `progress(done, total)` is called as chunks finish (from worker threads).
+pub fn render_cpu(
+    scene: &Scene,
+    t_secs: f64,
+    settings: &RenderSettings,
+    camera: Option<OrbitCamera>,
+    progress: &(dyn Fn(u64, u64) + Sync),
+) -> Result<Rendered, RenderError> {
+    let ifs = scene.at(t_secs);
+    let compiled = CompiledIfs::new(&ifs).ok_or(RenderError::NoFunctions)?;
+    let bounds = chaos_game::attractor_bounds(&compiled, settings.seed);
+    let camera = camera.unwrap_or_else(|| scene.camera_for(bounds));
+    let view = SplatView::new(&camera, settings.width, settings.height, bounds, settings.mode, settings.depth_cue, settings.background);
+    let (chunks, _, _) = chaos_game::chunking(settings.points);
+    let done = std::sync::atomic::AtomicU64::new(0);
+    let framebuffer = chaos_game::run_parallel(
+        &compiled,
+        settings.seed,
+        0,
+        settings.points,
+        || Framebuffer::new(view, compiled.colors.clone()),
+        Framebuffer::merge,
+        || {
+            let d = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
+            progress(d, chunks as u64);
+        },
+    );
+    Ok(Rendered { image: framebuffer.resolve(), camera, bounds, framebuffer })
+}

@@ -1,0 +1,232 @@
+//! Splatting chaos-game points into a framebuffer and resolving it to an image (CPU reference;
+//! the GPU twin is `shaders/splat.wgsl` + `shaders/resolve.wgsl`).
+//!
+//! Three modes, as in the paper plus one from the fractal-flame tradition:
+//! - `Closest`: per pixel the point nearest the viewer, its function's colour depth-cued
+//!   (faded towards the background with distance between the attractor's near and far bounds).
+//!   Stored as one u32 per pixel, (depth in 24 bits << 8) | function, merged with `min`.
+//! - `Average`: the mean of the depth-cued colours of all points on the pixel.
+//! - `Density`: the average colour scaled by log(1 + count) / log(1 + max count).
+//!
+//! Accumulators are integers, so merging per-thread framebuffers is order-independent and the
+//! image is a pure function of the points.
+
+use glam::{Mat4, Vec3, Vec4};
+
+use crate::camera::OrbitCamera;
+use crate::chaos_game::PointSink;
+use crate::scene::linear_to_srgb;
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum SplatMode {
+    #[default]
+    Closest,
+    Average,
+    Density,
+}
+
+impl SplatMode {
+    pub const ALL: [SplatMode; 3] = [SplatMode::Closest, SplatMode::Average, SplatMode::Density];
+
+    pub fn parse(s: &str) -> Option<Self> {
+        match s {
+            "closest" => Some(SplatMode::Closest),
+            "average" => Some(SplatMode::Average),
+            "density" => Some(SplatMode::Density),
+            _ => None,
+        }
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            SplatMode::Closest => "closest",
+            SplatMode::Average => "average",
+            SplatMode::Density => "density",
+        }
+    }
+}
+
+/// Depth is quantized to this many bits in the closest-point key.
+pub const DEPTH_BITS: u32 = 24;
+/// Colour channels are accumulated as integers 0..=COLOR_SCALE.
+pub const COLOR_SCALE: f32 = 255.0;
+/// The empty closest-point key.
+pub const EMPTY: u32 = u32::MAX;
+
+/// Everything the splat needs about the view, derived once per image.
+#[derive(Clone, Copy, Debug)]
+pub struct SplatView {
+    pub width: u32,
+    pub height: u32,
+    /// Rows: pixel x · w, pixel y · w, view distance, w.
+    pub pixel_from_world: Mat4,
+    pub near: f32,
+    pub far: f32,
+    pub mode: SplatMode,
+    pub depth_cue: f32,
+    pub background: [f32; 3],
+}
+
+impl SplatView {
+    /// The view of `camera` on an image of `width`×`height` with depth range from `bounds`.
+    pub fn new(camera: &OrbitCamera, width: u32, height: u32, bounds: (glam::DVec3, glam::DVec3), mode: SplatMode, depth_cue: f32, background: [f32; 3]) -> Self {
+        let (near, far) = camera.depth_range(bounds);
+        let aspect = width as f32 / height as f32;
+        let view_from_world = camera.view_from_world();
+        let clip_from_world = camera.clip_from_view(aspect, near, far) * view_from_world;
+        let row = |m: &Mat4, r: usize| -> Vec4 { m.row(r) };
+        let (w, h) = (width as f32, height as f32);
+        let r0 = 0.5 * w * (row(&clip_from_world, 0) + row(&clip_from_world, 3));
+        let r1 = 0.5 * h * (row(&clip_from_world, 3) - row(&clip_from_world, 1));
+        let r2 = -row(&view_from_world, 2);
+        let r3 = row(&clip_from_world, 3);
+        let pixel_from_world = Mat4::from_cols(r0, r1, r2, r3).transpose();
+        Self { width, height, pixel_from_world, near, far, mode, depth_cue, background }
+    }
+
+    /// Pixel index and depth fraction t in [0, 1] of a world point, if it lands in the image.
+    #[inline(always)]
+    pub fn project(&self, p: Vec3) -> Option<(usize, f32)> {
+        let q = self.pixel_from_world * p.extend(1.0);
+        if !(q.w > 0.0) {
+            return None;
+        }
+        let inv_w = 1.0 / q.w;
+        let (x, y) = (q.x * inv_w, q.y * inv_w);
+        if !(x >= 0.0 && y >= 0.0 && x < self.width as f32 && y < self.height as f32) {
+            return None;
+        }
+        let t = ((q.z - self.near) / (self.far - self.near)).clamp(0.0, 1.0);
+        Some((y as usize * self.width as usize + x as usize, t))
+    }
+
+    /// A colour faded towards the background by depth fraction t.
+    #[inline(always)]
+    pub fn cue(&self, color: [f32; 3], t: f32) -> [f32; 3] {
+        let k = self.depth_cue * t;
+        [0, 1, 2].map(|c| color[c] + (self.background[c] - color[c]) * k)
+    }
+}
+
+/// A CPU framebuffer for one mode.
+#[derive(Clone, Debug)]
+pub struct Framebuffer {
+    pub view: SplatView,
+    /// Closest mode: one key per pixel.
+    pub closest: Vec<u32>,
+    /// Average and density modes: r, g, b sums and the count per pixel.
+    pub accum: Vec<[u32; 4]>,
+    /// Function colours (linear RGB), indexed by compiled function.
+    pub colors: Vec<[f32; 3]>,
+}
+
+impl Framebuffer {
+    pub fn new(view: SplatView, colors: Vec<[f32; 3]>) -> Self {
+        let n = view.width as usize * view.height as usize;
+        let (closest, accum) = match view.mode {
+            SplatMode::Closest => (vec![EMPTY; n], Vec::new()),
+            _ => (Vec::new(), vec![[0; 4]; n]),
+        };
+        Self { view, closest, accum, colors }
+    }
+
+    /// Elementwise merge (min of keys, sum of accumulators): order-independent.
+    pub fn merge(mut self, other: Self) -> Self {
+        if self.closest.is_empty() && self.accum.is_empty() {
+            return other;
+        }
+        for (a, b) in self.closest.iter_mut().zip(&other.closest) {
+            *a = (*a).min(*b);
+        }
+        for (a, b) in self.accum.iter_mut().zip(&other.accum) {
+            for c in 0..4 {
+                a[c] = a[c].saturating_add(b[c]);
+            }
+        }
+        self
+    }
+
+    /// Number of pixels hit by at least one point.
+    pub fn covered_pixels(&self) -> usize {
+        match self.view.mode {
+            SplatMode::Closest => self.closest.iter().filter(|&&k| k != EMPTY).count(),
+            _ => self.accum.iter().filter(|a| a[3] > 0).count(),
+        }
+    }
+
+    /// Resolves to an 8-bit sRGB image.
+    pub fn resolve(&self) -> image::RgbImage {
+        let v = &self.view;
+        let bg = v.background;
+        let to_srgb8 = |c: [f32; 3]| -> [u8; 3] { c.map(|x| (linear_to_srgb(x) * 255.0 + 0.5) as u8) };
+        let mut img = image::RgbImage::new(v.width, v.height);
+        let max_count = self.accum.iter().map(|a| a[3]).max().unwrap_or(0).max(1);
+        let log_max = (1.0 + max_count as f32).ln();
+        for (i, px) in img.pixels_mut().enumerate() {
+            let c = match v.mode {
+                SplatMode::Closest => {
+                    let key = self.closest[i];
+                    if key == EMPTY {
+                        bg
+                    } else {
+                        let fi = (key & 0xff) as usize;
+                        let t = (key >> 8) as f32 / ((1u32 << DEPTH_BITS) - 1) as f32;
+                        v.cue(self.colors[fi.min(self.colors.len() - 1)], t)
+                    }
+                }
+                SplatMode::Average | SplatMode::Density => {
+                    let a = self.accum[i];
+                    if a[3] == 0 {
+                        bg
+                    } else {
+                        let n = a[3] as f32 * COLOR_SCALE;
+                        let avg = [a[0] as f32 / n, a[1] as f32 / n, a[2] as f32 / n];
+                        if v.mode == SplatMode::Average {
+                            avg
+                        } else {
+                            let b = (1.0 + a[3] as f32).ln() / log_max;
+                            [0, 1, 2].map(|k| bg[k] + (avg[k] - bg[k]) * b)
+                        }
+                    }
+                }
+            };
+            *px = image::Rgb(to_srgb8(c));
+        }
+        img
+    }
+}
+
+impl PointSink for Framebuffer {
+    fn consume(&mut self, points: &[Vec3], functions: &[u8]) {
+        let v = self.view;
+        match v.mode {
+            SplatMode::Closest => {
+                let scale = ((1u32 << DEPTH_BITS) - 1) as f32;
+                for (p, &fi) in points.iter().zip(functions) {
+                    if let Some((idx, t)) = v.project(*p) {
+                        let key = ((t * scale) as u32) << 8 | fi as u32;
+                        let slot = &mut self.closest[idx];
+                        if key < *slot {
+                            *slot = key;
+                        }
+                    }
+                }
+            }
+            _ => {
+                let colors: Vec<[f32; 3]> = self.colors.iter().map(|c| c.map(|x| x * COLOR_SCALE)).collect();
+                let bg = v.background.map(|x| x * COLOR_SCALE);
+                for (p, &fi) in points.iter().zip(functions) {
+                    if let Some((idx, t)) = v.project(*p) {
+                        let c = colors[fi as usize];
+                        let k = v.depth_cue * t;
+                        let a = &mut self.accum[idx];
+                        for ch in 0..3 {
+                            a[ch] = a[ch].saturating_add((c[ch] + (bg[ch] - c[ch]) * k + 0.5) as u32);
+                        }
+                        a[3] = a[3].saturating_add(1);
+                    }
+                }
+            }
+        }
+    }
+}
