@@ -104,6 +104,7 @@ struct StepToml {
     by: Option<Spanned<VectorToml>>,
     axis: Option<Spanned<String>>,
     toward: Option<Spanned<String>>,
+    along: Option<Spanned<String>>,
     degrees: Option<Spanned<f64>>,
     amount: Option<Spanned<f64>>,
     range: Option<Spanned<Vec<f64>>>,
@@ -605,15 +606,16 @@ impl Checker<'_> {
             "rotate" => &["axis", "degrees", "center"],
             "translate" => &["by"],
             "taper" => &["axis", "amount", "range", "center"],
-            "twist" => &["axis", "degrees", "range", "center"],
+            "twist" => &["axis", "along", "degrees", "range", "center"],
             "bend" => &["axis", "toward", "degrees", "range", "center"],
             "affine" => &["matrix", "offset"],
             other => {
                 return Err(self.err(s.op.span(), &field("op"), format!("`{other}` is not a step; use scale, rotate, translate, taper, twist, bend or affine")));
             }
         };
-        let present: [(&str, Option<Range<usize>>); 9] = [
+        let present: [(&str, Option<Range<usize>>); 10] = [
             ("by", s.by.as_ref().map(|v| v.span())),
+            ("along", s.along.as_ref().map(|v| v.span())),
             ("axis", s.axis.as_ref().map(|v| v.span())),
             ("toward", s.toward.as_ref().map(|v| v.span())),
             ("degrees", s.degrees.as_ref().map(|v| v.span())),
@@ -691,8 +693,15 @@ impl Checker<'_> {
             }
             "twist" => {
                 let a = axis(default_axis)?;
-                let range = if dim == 2 && s.range.is_none() { [domain.min().y, domain.max().y] } else { range_along(a)? };
-                Step::Twist { axis: a, degrees: number(&s.degrees, "degrees")?, range, center }
+                let along = match &s.along {
+                    Some(x) => self.axis(x, &field("along"))?,
+                    None if dim == 2 => Axis::Y,
+                    None => a,
+                };
+                if dim == 2 && (a != Axis::Z || along == Axis::Z) {
+                    return Err(self.err(span, &field("axis"), "a 2D twist rotates about z, with the angle growing `along` x or y"));
+                }
+                Step::Twist { axis: a, along, degrees: number(&s.degrees, "degrees")?, range: range_along(along)?, center }
             }
             "bend" => {
                 let a = axis(None)?;

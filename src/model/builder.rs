@@ -55,8 +55,9 @@ pub enum Step {
     /// goes linearly from 1 at the start of `range` to `1 - amount` at its end.
     Taper { axis: Axis, amount: f64, range: [f64; 2], center: DVec3 },
     /// Barr's twist: rotation about `axis` through `center` by an angle growing linearly from 0
-    /// at the start of `range` to `degrees` at its end.
-    Twist { axis: Axis, degrees: f64, range: [f64; 2], center: DVec3 },
+    /// at the start of `range` to `degrees` at its end, the range measured along `along` (the
+    /// rotation axis itself in 3D; in 2D the rotation is about z and the angle grows along x or y).
+    Twist { axis: Axis, along: Axis, degrees: f64, range: [f64; 2], center: DVec3 },
     /// Barr's bend: the part of the shape along `axis` within `range` is bent towards the
     /// `toward` axis by a total angle of `degrees` (radius = range length / angle); beyond the
     /// range it continues straight along the bent tangent.
@@ -98,8 +99,8 @@ impl Step {
                 out[b] = center[b] + k * (p[b] - center[b]);
                 out
             }
-            Step::Twist { axis, degrees, range, center } => {
-                let angle = degrees.to_radians() * ramp(p[axis.index()], range);
+            Step::Twist { axis, along, degrees, range, center } => {
+                let angle = degrees.to_radians() * ramp(p[along.index()], range);
                 rotate_about(p, axis, angle, center)
             }
             Step::Bend { axis, toward, degrees, range, center } => bend(p, axis, toward, degrees, range, center),
@@ -160,7 +161,7 @@ mod tests {
 
     #[test]
     fn twist_rotates_by_height() {
-        let s = Step::Twist { axis: Axis::Y, degrees: 90.0, range: [0.0, 1.0], center: DVec3::ZERO };
+        let s = Step::Twist { axis: Axis::Y, along: Axis::Y, degrees: 90.0, range: [0.0, 1.0], center: DVec3::ZERO };
         // About y, (z, x) rotate like (x, y): z -> x.
         let top = s.apply(DVec3::new(0.0, 1.0, 1.0));
         assert!(top.distance(DVec3::new(1.0, 1.0, 0.0)) < 1e-12, "{top}");
