@@ -84,7 +84,50 @@ pub struct CompiledIfs {
     /// Discarded points per orbit: enough for the worst contraction to shrink the domain
     /// below 1e-5 of its size.
     pub transient: u32,
+    /// The CPU's packed copy of the kernel, see [`FastKernel`].
+    fast: FastKernel,
 }
+
+/// The CPU's private, packed copy of the compiled IFS: the same data with the cell search by
+/// bins and 24 tightly packed coefficients per cell. Private, and checked once when built, so
+/// that its hot loop can index without bounds checks (see the SAFETY notes in `map_fast`).
+#[derive(Clone, Debug, PartialEq)]
+struct FastKernel {
+    functions: Vec<FastFunction>,
+    coords: Vec<[f32; 2]>,
+    bin_cells: Vec<u32>,
+    cells: Vec<[f32; 24]>,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct FastFunction {
+    axes: [FastAxis; 3],
+    cell_base: u32,
+    stride_x: u32,
+    stride_y: u32,
+    julia: bool,
+}
+
+/// The CPU's cell search along one axis of one function: the axis is cut into bins no wider
+/// than its narrowest cell, so a bin overlaps at most two cells; `bin_cells` gives the cell at
+/// the bin's start and one comparison with the next coordinate finishes the search. Same
+/// result as the linear search of [`CompiledIfs::map`] (the GPU's), without its loops.
+#[derive(Clone, Copy, Debug, PartialEq, Default)]
+struct FastAxis {
+    lo: f32,
+    hi: f32,
+    inv_bin: f32,
+    last_bin: f32,
+    bin_offset: u32,
+    coord_offset: u32,
+    last_cell: u32,
+    /// MAX_BINS limited the bins: a bin may overlap more than two cells.
+    capped: bool,
+}
+
+/// At most this many bins per axis (finer grids fall back to a slightly larger bin; the search
+/// then takes a second step in rare cases, see `locate_fast`).
+const MAX_BINS: usize = 4096;
 
 /// Function selection: a coarse grid over the domain (1×1×1 when probabilities are global);
 /// each cell holds `n` cumulative thresholds t_0 ≤ … ≤ t_{n−1} = 2^24 and the function chosen
@@ -154,6 +197,7 @@ impl CompiledIfs {
         let domain_lo = ifs.domain.min().as_vec3();
         let domain_hi = ifs.domain.max().as_vec3();
         let selection = selection_table(ifs, &active, domain_lo, domain_hi);
+        let fast = FastKernel::new(&functions, &coords, &cells);
         let worst = active
             .iter()
             .filter_map(|&i| ifs.functions[i].map.lipschitz_bound())
@@ -171,9 +215,32 @@ impl CompiledIfs {
             domain_lo,
             domain_hi,
             transient,
+            fast,
         })
     }
 
+    /// The same map as [`Self::map`] (bit for bit) with the cell search by bins.
+    #[inline(always)]
+    pub fn map_fast(&self, fi: usize, p: Vec3) -> Vec3 {
+        let k = &self.fast;
+        let f = &k.functions[fi];
+        if f.julia {
+            return self.map(fi, p);
+        }
+        let (ix, u) = k.locate(&f.axes[0], p.x);
+        let (iy, v) = k.locate(&f.axes[1], p.y);
+        let (iz, w) = k.locate(&f.axes[2], p.z);
+        let cell = f.cell_base as usize + ix * f.stride_x as usize + iy * f.stride_y as usize + iz;
+        debug_assert!(cell < k.cells.len());
+        // SAFETY: `locate` returns ix, iy, iz within the function's cell counts (FastKernel::new
+        // checked that every bin maps to a valid cell and that the counts, strides and bases
+        // stay inside `cells`), so `cell` indexes the function's own cells.
+        #[allow(unsafe_code)]
+        let c = unsafe { k.cells.get_unchecked(cell) };
+        let v3 = |i: usize| Vec3::new(c[3 * i], c[3 * i + 1], c[3 * i + 2]);
+        let inner = v3(3) + u * v3(5) + v * (v3(6) + u * v3(7));
+        v3(0) + u * v3(1) + v * (v3(2) + u * v3(4)) + w * inner
+    }
     /// Maps `p` by compiled function `fi` (f32; the twin of `map_point` in the shader).
     #[inline(always)]
     pub fn map(&self, fi: usize, p: Vec3) -> Vec3 {
@@ -216,6 +283,113 @@ impl CompiledIfs {
         let t = Vec3::new(rng.next_f32(), rng.next_f32(), if self.dimension == 3 { rng.next_f32() } else { 0.0 });
         self.domain_lo + t * (self.domain_hi - self.domain_lo)
     }
+}
+
+impl FastKernel {
+    fn new(functions: &[KernelFunction], coords: &[[f32; 2]], cells: &[Cell]) -> Self {
+        let mut bin_cells = Vec::new();
+        let mut fast_functions = Vec::new();
+        for f in functions {
+            let julia = f.coord_offset[3] == KIND_JULIA;
+            let mut axes = [FastAxis::default(); 3];
+            if !julia {
+                for (a, fa) in axes.iter_mut().enumerate() {
+                    *fa = fast_axis(f, a, coords, &mut bin_cells);
+                }
+            }
+            let [cx, cy, cz] = [f.cells[0], f.cells[1], f.cells[2]];
+            let base = f.cells[3];
+            // The checks that the unchecked indexing in `map_fast` and `locate` relies on.
+            if !julia {
+                assert!(base as usize + (cx * cy * cz) as usize <= cells.len(), "cell pool too short");
+                for (a, fa) in axes.iter().enumerate() {
+                    assert_eq!(fa.last_cell + 1, f.cells[a], "cell count");
+                    assert!(fa.coord_offset as usize + fa.last_cell as usize + 2 <= coords.len(), "coordinate pool too short");
+                    let bins = fa.last_bin as usize + 1;
+                    assert!(fa.bin_offset as usize + bins <= bin_cells.len(), "bin table too short");
+                    let table = &bin_cells[fa.bin_offset as usize..fa.bin_offset as usize + bins];
+                    assert!(table.iter().all(|&c| c <= fa.last_cell), "bin table out of range");
+                }
+            }
+            fast_functions.push(FastFunction { axes, cell_base: base, stride_x: cy * cz, stride_y: cz, julia });
+        }
+        Self {
+            functions: fast_functions,
+            coords: coords.to_vec(),
+            bin_cells,
+            cells: cells.iter().map(|c| std::array::from_fn(|i| c.coef[i / 3][i % 3])).collect(),
+        }
+    }
+
+    /// Cell index and local coordinate of `x` along one axis: clamp, bin, one comparison.
+    #[inline(always)]
+    fn locate(&self, a: &FastAxis, x: f32) -> (usize, f32) {
+        // Written as comparisons (single maxss/minss) rather than f32::max/min, which handle
+        // NaN with extra instructions; these map NaN to a bound all the same.
+        let x = if x >= a.lo { x } else { a.lo };
+        let x = if x <= a.hi { x } else { a.hi };
+        // x ≥ lo, so this is ≥ 0, or NaN for an unbounded one-cell axis (inf · 0), which the
+        // comparison maps to last_bin = 0.
+        let b = (x - a.lo) * a.inv_bin;
+        let b = if b <= a.last_bin { b } else { a.last_bin };
+        // SAFETY: b is finite and in [0, last_bin] (see above), so the conversion is exact, and
+        // FastKernel::new checked that last_bin + 1 table entries at bin_offset hold cells
+        // ≤ last_cell and that last_cell + 2 coordinates follow coord_offset; i stays ≤ last_cell.
+        #[allow(unsafe_code)]
+        unsafe {
+            let bin = b.to_int_unchecked::<u32>() as usize;
+            let mut i = *self.bin_cells.get_unchecked(a.bin_offset as usize + bin) as usize;
+            let axis = self.coords.get_unchecked(a.coord_offset as usize..);
+            let last = a.last_cell as usize;
+            // The bin overlaps cells i and i + 1 at most.
+            i += (i < last && x >= axis.get_unchecked(i + 1)[0]) as usize;
+            if a.capped {
+                while i < last && x >= axis.get_unchecked(i + 1)[0] {
+                    i += 1;
+                }
+            }
+            let e = axis.get_unchecked(i);
+            (i, (x - e[0]) * e[1])
+        }
+    }
+}
+
+fn fast_axis(f: &KernelFunction, a: usize, coords: &[[f32; 2]], bin_cells: &mut Vec<u32>) -> FastAxis {
+    let n = f.cells[a] as usize;
+    let base = f.coord_offset[a] as usize;
+    let axis = &coords[base..base + n + 1];
+    let mut fa = FastAxis {
+        lo: f.lo[a],
+        hi: f.hi[a],
+        coord_offset: base as u32,
+        bin_offset: bin_cells.len() as u32,
+        last_cell: n.saturating_sub(1) as u32,
+        ..Default::default()
+    };
+    if n <= 1 || f.inv_bin[a] == 0.0 {
+        // One cell (an affine map, or z in 2D): every coordinate is in cell 0.
+        bin_cells.push(0);
+        return fa;
+    }
+    let extent = axis[n][0] - axis[0][0];
+    let narrowest = axis.windows(2).map(|w| w[1][0] - w[0][0]).fold(f32::INFINITY, f32::min);
+    let wanted = (extent / narrowest).ceil() as usize * 2;
+    let bins = wanted.clamp(n, MAX_BINS);
+    fa.capped = wanted > MAX_BINS;
+    fa.inv_bin = bins as f32 / extent;
+    fa.last_bin = (bins - 1) as f32;
+    for b in 0..bins {
+        // A little before the bin's start, so that rounding in the runtime bin computation
+        // can only leave a point above the tabulated cell, never below it.
+        let x = axis[0][0] + (b as f32 - 0.01) / fa.inv_bin;
+        // The cell containing it, found by the reference linear search.
+        let mut i = 0;
+        while i + 1 < n && x >= axis[i + 1][0] {
+            i += 1;
+        }
+        bin_cells.push(i as u32);
+    }
+    fa
 }
 
 fn complex_sqrt_f32(re: f32, im: f32) -> (f32, f32) {
@@ -387,7 +561,7 @@ pub fn run_chunk(ifs: &CompiledIfs, seed: u32, frame: u32, chunk: u32, steps: us
         for p in pos.iter_mut() {
             let cell = if adaptive { sel.cell_of(*p) } else { 0 };
             let fi = sel.select(cell, rng.next_u32());
-            *p = ifs.map(fi, *p);
+            *p = ifs.map_fast(fi, *p);
         }
     }
     let mut out_pos = vec![Vec3::ZERO; K * STEPS_PER_BATCH];
@@ -400,7 +574,7 @@ pub fn run_chunk(ifs: &CompiledIfs, seed: u32, frame: u32, chunk: u32, steps: us
             for (k, p) in pos.iter_mut().enumerate() {
                 let cell = if adaptive { sel.cell_of(*p) } else { 0 };
                 let fi = sel.select(cell, rng.next_u32());
-                *p = ifs.map(fi, *p);
+                *p = ifs.map_fast(fi, *p);
                 out_pos[row + k] = *p;
                 out_fn[row + k] = fi as u8;
             }
@@ -508,6 +682,27 @@ mod tests {
                 let want = ifs.eval(fi, p.as_dvec3());
                 let got = c.map(fi, p).as_dvec3();
                 assert!(got.distance(want) < 2e-5, "f{fi} at {p}: {got} vs {want}");
+            }
+        }
+    }
+
+    /// The CPU's binned cell search gives bit-identical results to the reference search that
+    /// the GPU mirrors, including points on and near cell faces and outside the grid.
+    #[test]
+    fn fast_map_is_bit_identical() {
+        let ifs = warped_ifs();
+        let c = CompiledIfs::new(&ifs).unwrap();
+        let mut r = Pcg32::for_stream(4, 0, 0);
+        let faces = [0.0f32, 0.3, 0.5, 0.8, 0.4, 1.0];
+        for k in 0..20_000 {
+            let mut p = Vec3::new(r.next_f32(), r.next_f32(), r.next_f32()) * 1.4 - 0.2;
+            if k % 4 == 0 {
+                // Exactly on a face, or one ulp either side.
+                let f = faces[k / 4 % faces.len()];
+                p.y = match k % 3 { 0 => f, 1 => f.next_up(), _ => f.next_down() };
+            }
+            for fi in 0..4 {
+                assert_eq!(c.map_fast(fi, p), c.map(fi, p), "f{fi} at {p:?}");
             }
         }
     }

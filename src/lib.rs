@@ -3,6 +3,7 @@
 //! Function Systems"). The library holds the model, the scene format, the camera and the CPU
 //! chaos game; the binary in `main.rs` is a thin command line on top of it.
 
+pub mod bench;
 pub mod camera;
 pub mod chaos_game;
 pub mod export;

@@ -48,6 +48,23 @@ enum Command {
     /// Export geometry.
     #[command(subcommand)]
     Export(ExportCommand),
+    /// Benchmarks (throughput figures for the README).
+    #[command(subcommand)]
+    Bench(BenchCommand),
+}
+
+#[derive(Subcommand)]
+enum BenchCommand {
+    /// CPU chaos game on one core: map only and map + splat at 1920×1080.
+    Cpu {
+        /// Scene to run (default: the paper's tapering).
+        #[arg(default_value = "scenes/tapering.toml")]
+        scene: PathBuf,
+        #[arg(long, default_value_t = 50_000_000)]
+        points: u64,
+        #[arg(long, default_value_t = 3)]
+        repeats: usize,
+    },
 }
 
 #[derive(Args)]
@@ -149,6 +166,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         Some(Command::Export(ExportCommand::Points { scene, output, points, seed, time })) => {
             export_points(&scene, &output, points, seed, time)
         }
+        Some(Command::Bench(BenchCommand::Cpu { scene, points, repeats })) => bench_cpu(&scene, points, repeats),
     }
 }
 
@@ -303,5 +321,16 @@ fn export_points(path: &Path, output: &Path, points: u64, seed: Option<u32>, tim
     write_atomic(output, |w| if glb { export::write_glb_points(w, &pts, &colors) } else { export::write_ply(w, &pts, &colors) })
         .with_context(|| format!("cannot write {}", output.display()))?;
     eprintln!("wrote {} ({} points)", output.display(), pts.len());
+    Ok(())
+}
+
+fn bench_cpu(path: &Path, points: u64, repeats: usize) -> anyhow::Result<()> {
+    let scene = load(path)?;
+    eprintln!("CPU chaos game, one thread, {} ({points} points, best of {repeats})", scene.name);
+    let r = nlifs::bench::cpu(&scene, points, 1920, 1080, repeats.max(1));
+    println!("map only:                 {:8.1} M points/s", r.map_points_per_sec / 1e6);
+    for (mode, rate) in r.splat_points_per_sec {
+        println!("map + splat 1920x1080 {:<8} {:8.1} M points/s", mode.name(), rate / 1e6);
+    }
     Ok(())
 }

@@ -1,0 +1,61 @@
+//! `nlifs bench cpu`: chaos-game throughput of the CPU reference on one core, map only and
+//! map + splat at 1920×1080, side by side in one run so their ratio is meaningful.
+
+use std::time::Instant;
+
+use glam::Vec3;
+
+use crate::chaos_game::{self, CompiledIfs, PointSink};
+use crate::scene::Scene;
+use crate::splat::{Framebuffer, SplatMode, SplatView};
+
+/// A sink that only keeps the points alive (so mapping is not optimized away).
+struct MapOnly {
+    acc: Vec3,
+}
+
+impl PointSink for MapOnly {
+    fn consume(&mut self, points: &[Vec3], _functions: &[u8]) {
+        if let Some(p) = points.last() {
+            self.acc += *p;
+        }
+    }
+}
+
+pub struct CpuBench {
+    pub map_points_per_sec: f64,
+    pub splat_points_per_sec: Vec<(SplatMode, f64)>,
+}
+
+/// Runs `points` chaos-game points of `scene` on the current thread, map only and then map +
+/// splat into a `width`×`height` framebuffer in each mode; the best of `repeats` runs each.
+pub fn cpu(scene: &Scene, points: u64, width: u32, height: u32, repeats: usize) -> CpuBench {
+    let ifs = scene.at(0.0);
+    let compiled = CompiledIfs::new(&ifs).expect("scene has functions");
+    let bounds = chaos_game::attractor_bounds(&compiled, 1);
+    let camera = scene.camera_for(bounds);
+    let (chunks, steps, last) = chaos_game::chunking(points);
+    let time = |sink: &mut dyn FnMut(u32, usize)| -> f64 {
+        let mut best = f64::INFINITY;
+        for _ in 0..repeats {
+            let start = Instant::now();
+            for c in 0..chunks {
+                sink(c, if c + 1 == chunks { last } else { steps });
+            }
+            best = best.min(start.elapsed().as_secs_f64());
+        }
+        points as f64 / best
+    };
+    let mut map_only = MapOnly { acc: Vec3::ZERO };
+    let map_points_per_sec = time(&mut |c, n| chaos_game::run_chunk(&compiled, 1, 0, c, n, &mut map_only));
+    std::hint::black_box(map_only.acc);
+    let mut splat_points_per_sec = Vec::new();
+    for mode in SplatMode::ALL {
+        let view = SplatView::new(&camera, width, height, bounds, mode, 0.75, [0.0; 3]);
+        let mut fb = Framebuffer::new(view, compiled.colors.clone());
+        let rate = time(&mut |c, n| chaos_game::run_chunk(&compiled, 1, 0, c, n, &mut fb));
+        std::hint::black_box(fb.covered_pixels());
+        splat_points_per_sec.push((mode, rate));
+    }
+    CpuBench { map_points_per_sec, splat_points_per_sec }
+}
