@@ -59,3 +59,48 @@ pub fn cpu(scene: &Scene, points: u64, width: u32, height: u32, repeats: usize) 
     }
     CpuBench { map_points_per_sec, splat_points_per_sec }
 }
+
+/// Coverage of the attractor by a fixed budget of points under each way of choosing
+/// probabilities: the fraction of the reference image's lit pixels (from `reference_points`
+/// points under both the contractivity and the adaptive rule) that `budget` points light.
+pub fn coverage(scene: &Scene, budget: u64, reference_points: u64, size: u32) -> Vec<(&'static str, f64)> {
+    use crate::model::ProbabilityMode;
+    let base = scene.at(0.0);
+    let variants: Vec<(&'static str, crate::model::Ifs)> = vec![
+        ("uniform", {
+            let mut ifs = base.clone();
+            ifs.probability_mode = ProbabilityMode::Explicit;
+            ifs.functions.iter_mut().for_each(|f| f.weight = Some(1.0));
+            ifs
+        }),
+        ("contractivity", {
+            let mut ifs = base.clone();
+            ifs.probability_mode = ProbabilityMode::Contractivity;
+            ifs
+        }),
+        ("adaptive", {
+            let mut ifs = base.clone();
+            ifs.probability_mode = ProbabilityMode::Adaptive;
+            ifs
+        }),
+    ];
+    let compiled: Vec<CompiledIfs> = variants.iter().map(|(_, ifs)| CompiledIfs::new(ifs).expect("functions")).collect();
+    let bounds = chaos_game::attractor_bounds(&compiled[1], 1);
+    let camera = scene.camera_for(bounds);
+    let view = SplatView::new(&camera, size, size, bounds, SplatMode::Closest, 0.0, [0.0; 3]);
+    let run = |c: &CompiledIfs, points: u64, seed: u32| -> Framebuffer {
+        chaos_game::run_parallel(c, seed, 0, points, || Framebuffer::new(view, c.colors.clone()), Framebuffer::merge, || {})
+    };
+    let reference = run(&compiled[1], reference_points, 101).merge(run(&compiled[2], reference_points, 202));
+    let lit: Vec<bool> = reference.closest.iter().map(|&k| k != crate::splat::EMPTY).collect();
+    let total = lit.iter().filter(|&&l| l).count().max(1);
+    variants
+        .iter()
+        .zip(&compiled)
+        .map(|((name, _), c)| {
+            let fb = run(c, budget, 7);
+            let hit = fb.closest.iter().zip(&lit).filter(|(k, l)| **l && **k != crate::splat::EMPTY).count();
+            (*name, hit as f64 / total as f64)
+        })
+        .collect()
+}

@@ -65,6 +65,17 @@ enum BenchCommand {
         #[arg(long, default_value_t = 3)]
         repeats: usize,
     },
+    /// How much of the attractor a fixed budget of points covers under uniform, contractivity
+    /// and locally adaptive probabilities.
+    Coverage {
+        scene: PathBuf,
+        #[arg(long, default_value_t = 200_000)]
+        budget: u64,
+        #[arg(long, default_value_t = 40_000_000)]
+        reference: u64,
+        #[arg(long, default_value_t = 512)]
+        size: u32,
+    },
 }
 
 #[derive(Args)]
@@ -167,6 +178,14 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             export_points(&scene, &output, points, seed, time)
         }
         Some(Command::Bench(BenchCommand::Cpu { scene, points, repeats })) => bench_cpu(&scene, points, repeats),
+        Some(Command::Bench(BenchCommand::Coverage { scene, budget, reference, size })) => {
+            let s = load(&scene)?;
+            println!("{}: share of the attractor's {size}x{size} pixels lit by {budget} points", s.name);
+            for (name, share) in nlifs::bench::coverage(&s, budget, reference, size) {
+                println!("  {name:<14} {:6.2} %", 100.0 * share);
+            }
+            Ok(())
+        }
     }
 }
 
