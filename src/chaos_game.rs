@@ -324,14 +324,15 @@ impl FastKernel {
     /// Cell index and local coordinate of `x` along one axis: clamp, bin, one comparison.
     #[inline(always)]
     fn locate(&self, a: &FastAxis, x: f32) -> (usize, f32) {
-        // Written as comparisons (single maxss/minss) rather than f32::max/min, which handle
-        // NaN with extra instructions; these map NaN to a bound all the same.
-        let x = if x >= a.lo { x } else { a.lo };
-        let x = if x <= a.hi { x } else { a.hi };
+        // Strict comparisons, the exact semantics of x86's maxss/minss (one instruction each),
+        // rather than f32::max/min, which treat NaN with extra instructions; these map NaN to a
+        // bound all the same.
+        let x = if x > a.lo { x } else { a.lo };
+        let x = if x < a.hi { x } else { a.hi };
         // x ≥ lo, so this is ≥ 0, or NaN for an unbounded one-cell axis (inf · 0), which the
         // comparison maps to last_bin = 0.
         let b = (x - a.lo) * a.inv_bin;
-        let b = if b <= a.last_bin { b } else { a.last_bin };
+        let b = if b < a.last_bin { b } else { a.last_bin };
         // SAFETY: b is finite and in [0, last_bin] (see above), so the conversion is exact, and
         // FastKernel::new checked that last_bin + 1 table entries at bin_offset hold cells
         // ≤ last_cell and that last_cell + 2 coordinates follow coord_offset; i stays ≤ last_cell.
