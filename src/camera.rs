@@ -63,6 +63,40 @@ impl OrbitCamera {
         need
     }
 
+    /// Re-targets and re-distances the camera (keeping its angles and field of view) so that
+    /// `points` fill an image of aspect `aspect` with a 5% margin: tighter than framing a
+    /// bounding box, whose corners an attractor rarely fills.
+    pub fn fit_points(&mut self, points: &[Vec3], aspect: f32) {
+        let pts: Vec<Vec3> = points.iter().copied().filter(|p| p.is_finite()).collect();
+        if pts.is_empty() {
+            return;
+        }
+        let back = self.eye_direction();
+        let right = Vec3::Y.cross(back).try_normalize().unwrap_or(Vec3::X);
+        let up = back.cross(right);
+        let (mut r0, mut r1, mut u0, mut u1, mut d0, mut d1) = (f32::MAX, f32::MIN, f32::MAX, f32::MIN, f32::MAX, f32::MIN);
+        for p in &pts {
+            let (r, u, d) = (p.dot(right), p.dot(up), p.dot(back));
+            (r0, r1, u0, u1, d0, d1) = (r0.min(r), r1.max(r), u0.min(u), u1.max(u), d0.min(d), d1.max(d));
+        }
+        self.target = 0.5 * (r0 + r1) * right + 0.5 * (u0 + u1) * up + 0.5 * (d0 + d1) * back;
+        let tan_y = (0.5 * self.fov_y_deg.to_radians()).max(1e-3).tan();
+        let tan_x = tan_y * aspect.max(1e-3);
+        let margin = 1.05;
+        self.distance = match self.projection {
+            Projection::Parallel => margin * (0.5 * (u1 - u0) / tan_y).max(0.5 * (r1 - r0) / tan_x).max(1e-6),
+            Projection::Perspective => {
+                let mut need = 1e-6f32;
+                for p in &pts {
+                    let c = *p - self.target;
+                    let depth = c.dot(back);
+                    need = need.max(depth + margin * c.dot(right).abs() / tan_x).max(depth + margin * c.dot(up).abs() / tan_y);
+                }
+                need
+            }
+        };
+    }
+
     /// Unit vector from the target towards the eye.
     pub fn eye_direction(&self) -> Vec3 {
         let (yaw, pitch) = (self.yaw_deg.to_radians(), self.pitch_deg.to_radians());

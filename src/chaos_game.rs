@@ -619,6 +619,15 @@ pub fn run_parallel<S: PointSink + Send>(
         .reduce(&make_sink, &merge)
 }
 
+/// A short deterministic sample of the attractor (16,384 points), for framing and bounds.
+pub fn attractor_sample(ifs: &CompiledIfs, seed: u32) -> Vec<Vec3> {
+    let mut sink = CollectSink::default();
+    for c in 0..4 {
+        run_chunk(ifs, seed ^ 0x5eed_b0d5, 0, c, 64, &mut sink);
+    }
+    sink.points
+}
+
 /// Axis-aligned bounds of the attractor from a short deterministic run, or the domain's box if
 /// the run gives nothing finite.
 pub fn attractor_bounds(ifs: &CompiledIfs, seed: u32) -> (DVec3, DVec3) {

@@ -35,7 +35,10 @@ pub fn render_cpu(
     let ifs = scene.at(t_secs);
     let compiled = CompiledIfs::new(&ifs).ok_or(RenderError::NoFunctions)?;
     let bounds = chaos_game::attractor_bounds(&compiled, settings.seed);
-    let camera = camera.unwrap_or_else(|| scene.camera_for(bounds));
+    let camera = camera.unwrap_or_else(|| {
+        let sample = chaos_game::attractor_sample(&compiled, settings.seed);
+        frame_camera(scene, bounds, &sample, settings.width as f32 / settings.height as f32)
+    });
     let view = SplatView::new(&camera, settings.width, settings.height, bounds, settings.mode, settings.depth_cue, settings.background);
     let (chunks, _, _) = chaos_game::chunking(settings.points);
     let done = std::sync::atomic::AtomicU64::new(0);
@@ -52,4 +55,14 @@ pub fn render_cpu(
         },
     );
     Ok(Rendered { image: framebuffer.resolve(), camera, bounds, framebuffer })
+}
+
+/// The scene's camera; where the scene leaves both target and distance open, fitted to a sample
+/// of the attractor's points (tighter than fitting its bounding box).
+pub fn frame_camera(scene: &Scene, bounds: (DVec3, DVec3), sample: &[glam::Vec3], aspect: f32) -> OrbitCamera {
+    let mut camera = scene.camera_for(bounds);
+    if scene.camera.target.is_none() && scene.camera.distance.is_none() {
+        camera.fit_points(sample, aspect);
+    }
+    camera
 }
