@@ -220,7 +220,7 @@ fn info(path: &Path, json: bool, time: f64) -> anyhow::Result<()> {
 
 fn render(args: RenderArgs) -> anyhow::Result<()> {
     let scene = load(&args.scene)?;
-    let mut settings = scene.render.clone();
+    let mut settings = scene.render_at(args.time);
     if let Some(w) = args.width {
         settings.width = w;
     }

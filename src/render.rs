@@ -35,7 +35,7 @@ pub fn render_cpu(
     let ifs = scene.at(t_secs);
     let compiled = CompiledIfs::new(&ifs).ok_or(RenderError::NoFunctions)?;
     let bounds = chaos_game::attractor_bounds(&compiled, settings.seed);
-    let camera = camera.unwrap_or_else(|| scene.camera_for(bounds));
+    let camera = camera.unwrap_or_else(|| scene.camera_for_at(t_secs, bounds));
     let view = SplatView::new(&camera, settings.width, settings.height, bounds, settings.mode, settings.depth_cue, settings.background);
     let (chunks, _, _) = chaos_game::chunking(settings.points);
     let done = std::sync::atomic::AtomicU64::new(0);
