@@ -7,6 +7,7 @@ pub mod camera;
 pub mod chaos_game;
 pub mod export;
 pub mod io;
+pub mod record;
 pub mod model;
 pub mod render;
 pub mod rng;
