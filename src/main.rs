@@ -211,6 +211,9 @@ fn record(args: RecordArgs) -> anyhow::Result<()> {
         // The GPU recorder is not part of this build; the CPU path gives the same frames' content.
         eprintln!("note: no GPU recording path in this build; rendering frames on the CPU");
     }
+    if args.video.is_some() && !record::ffmpeg_available() {
+        return Err(BadInput("--video needs ffmpeg, which was not found on PATH; install ffmpeg or leave out --video (frames can be encoded later)".into()).into());
+    }
     let mut settings = RecordSettings::for_scene(&scene);
     settings.fps = args.fps;
     settings.width = args.width.unwrap_or(settings.width);
@@ -279,8 +282,14 @@ fn info(path: &Path, json: bool, time: f64) -> anyhow::Result<()> {
     let scene = load(path)?;
     let ifs = scene.at(time);
     let report: IfsReport = ifs.report();
+    // Sampled along the whole timeline, for animated scenes.
+    let timeline = nlifs::timeline::check_timeline(&scene, TIMELINE_SAMPLES_PER_INTERVAL);
     if json {
-        println!("{}", serde_json::to_string_pretty(&report)?);
+        let mut value = serde_json::to_value(&report)?;
+        if let (Some(check), Some(obj)) = (&timeline, value.as_object_mut()) {
+            obj.insert("timeline".into(), serde_json::to_value(check)?);
+        }
+        println!("{}", serde_json::to_string_pretty(&value)?);
         return Ok(());
     }
     let d = scene.domain.dims();
@@ -319,8 +328,25 @@ fn info(path: &Path, json: bool, time: f64) -> anyhow::Result<()> {
         fmt_opt(report.max_lipschitz_bound),
         report.all_contained.map_or("n/a", |c| if c { "yes" } else { "NO" })
     );
+    if let Some(check) = timeline {
+        print!(
+            "timeline: {}, {:.3} s, {} keys; checked at {} times (keys and {} between each): ",
+            check.loop_mode, check.duration_secs, check.keys, check.samples, TIMELINE_SAMPLES_PER_INTERVAL
+        );
+        if check.problems.is_empty() {
+            println!("contractive and contained throughout");
+        } else {
+            println!("{} problems", check.problems.len());
+            for p in &check.problems {
+                println!("    {p}");
+            }
+        }
+    }
     Ok(())
 }
+
+/// Samples strictly between neighbouring keys for the timeline check of `nlifs info`.
+const TIMELINE_SAMPLES_PER_INTERVAL: usize = 8;
 
 fn render(args: RenderArgs) -> anyhow::Result<()> {
     let scene = load(&args.scene)?;

@@ -438,3 +438,57 @@ fn killing_a_recording_leaves_only_whole_frames() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn timeline_check_reports_the_key_and_interval_that_break_contractivity() {
+    use nlifs::timeline::{TimelineProblemKind as K, TimelineSpan as S, check_timeline};
+    let text = r#"
+version = 1
+[grid]
+x = [0, 1]
+y = [0, 1]
+[[function]]
+name = "shrink"
+kind = "affine"
+matrix = [[0.5, 0], [0, 0.5]]
+[[function]]
+name = "grow"
+kind = "affine"
+matrix = [[0.5, 0], [0, 0.5]]
+[[key]]
+t_secs = 0
+interpolation = "linear"
+[[key]]
+t_secs = 1
+interpolation = "linear"
+[[key.function]]
+name = "grow"
+matrix = [[0.5, 0], [0, 0.5]]
+[[key]]
+t_secs = 2
+[[key.function]]
+name = "grow"
+matrix = [[1.2, 0], [0, 1.2]]
+"#;
+    let scene = Scene::parse(text, "t.toml").unwrap();
+    let check = check_timeline(&scene, 8).unwrap();
+    assert_eq!(check.samples, 3 + 2 * 8);
+    let found: Vec<(S, &str, bool)> =
+        check.problems.iter().map(|p| (p.span.clone(), p.function.as_str(), matches!(p.kind, K::NotContractive { .. }))).collect();
+    let interval = S::Interval { from_key: Some(1), to_key: Some(2), from_secs: 1.0, to_secs: 2.0 };
+    let key2 = S::Key { index: 2, t_secs: 2.0 };
+    // The scale passes 1 at t = 1 + 0.5/0.7 ≈ 1.71 s, so the samples at 1.78 and 1.89 s see it.
+    assert_eq!(
+        found,
+        vec![(interval.clone(), "grow", true), (interval, "grow", false), (key2.clone(), "grow", true), (key2, "grow", false)],
+        "{:#?}",
+        check.problems
+    );
+    match &check.problems[2].kind {
+        // The bound is a guaranteed upper bound of the norm 1.2, padded by a relative 1e-9.
+        K::NotContractive { max_bound, .. } => assert!((1.2..=1.2 * (1.0 + 1e-8)).contains(max_bound), "{max_bound}"),
+        other => panic!("{other:?}"),
+    }
+    // The example scene stays contractive and contained all along.
+    assert_eq!(check_timeline(&example_scene(), 8).unwrap().problems, vec![]);
+}
