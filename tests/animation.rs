@@ -492,3 +492,32 @@ matrix = [[1.2, 0], [0, 1.2]]
     // The example scene stays contractive and contained all along.
     assert_eq!(check_timeline(&example_scene(), 8).unwrap().problems, vec![]);
 }
+
+// ---------------------------------------------------------------------------------------------
+// Saving.
+
+#[test]
+fn to_toml_round_trips_every_scene() {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
+    let mut scenes: Vec<(String, Scene)> = std::fs::read_dir(&dir)
+        .unwrap()
+        .filter_map(|e| e.ok())
+        .map(|e| e.path())
+        .filter(|p| p.extension().is_some_and(|x| x == "toml"))
+        .map(|p| (p.display().to_string(), Scene::load(&p).unwrap()))
+        .collect();
+    scenes.sort_by(|a, b| a.0.cmp(&b.0));
+    assert!(scenes.len() >= 6, "found {} scenes", scenes.len());
+    for interp in ["hold", "linear", "catmull-rom"] {
+        for mode in ["once", "ping-pong"] {
+            scenes.push((format!("twist_scene {interp} {mode}"), Scene::parse(&twist_scene(interp, mode, 1.0), "t.toml").unwrap()));
+        }
+    }
+    for (name, mut scene) in scenes {
+        scene.path = None;
+        let text = scene.to_toml();
+        let back = Scene::parse(&text, "saved.toml").unwrap_or_else(|e| panic!("{name}: {e}\n{text}"));
+        assert_eq!(back, scene, "{name} does not read back equal:\n{text}");
+        assert_eq!(back.to_toml(), text, "{name}: writing is not a fixpoint");
+    }
+}
