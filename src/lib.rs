@@ -5,6 +5,7 @@
 
 pub mod camera;
 pub mod chaos_game;
+pub mod edit;
 pub mod export;
 pub mod io;
 pub mod record;
