@@ -86,6 +86,9 @@ struct RecordArgs {
     /// Open shutter as a fraction of the frame interval (for --motion-blur).
     #[arg(long, default_value_t = 0.5)]
     shutter: f64,
+    /// Print the animation's frame count at --fps and exit (for splitting over a job array).
+    #[arg(long)]
+    print_frame_count: bool,
 }
 
 #[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -207,7 +210,7 @@ fn record(args: RecordArgs) -> anyhow::Result<()> {
     if !(0.0..=1.0).contains(&args.shutter) {
         return Err(BadInput(format!("--shutter must lie in 0..1, found {}", args.shutter)).into());
     }
-    if args.backend != BackendArg::Cpu {
+    if args.backend != BackendArg::Cpu && !args.print_frame_count {
         // The GPU recorder is not part of this build; the CPU path gives the same frames' content.
         eprintln!("note: no GPU recording path in this build; rendering frames on the CPU");
     }
@@ -223,6 +226,10 @@ fn record(args: RecordArgs) -> anyhow::Result<()> {
     settings.shutter = args.shutter;
     let rec = Recorder::new(&scene, settings).map_err(|e| BadInput(e.to_string()))?;
     let count = rec.frame_count();
+    if args.print_frame_count {
+        println!("{count}");
+        return Ok(());
+    }
     let frames = args.frames.clone().unwrap_or(0..count);
     if frames.end > count {
         return Err(BadInput(format!("--frames {}..{} goes past the animation's {count} frames (0..{count} at {} fps)", frames.start, frames.end, args.fps)).into());
