@@ -124,21 +124,38 @@ impl<'a> Recorder<'a> {
         frame as f64 / self.settings.fps
     }
 
-    /// Renders frame `frame` on the CPU.
-    pub fn frame(&self, frame: u32) -> Result<image::RgbImage, RecordError> {
+    /// What frame `frame` is made of: one [`FrameSample`] per temporal sample. A GPU recorder
+    /// renders these same samples (and averages them with [`average_linear`]) to make the
+    /// same frame.
+    pub fn samples(&self, frame: u32) -> Vec<FrameSample> {
         let s = &self.settings;
         let samples = s.motion_blur_samples.max(1);
         let t_frame = self.time_of(frame);
+        (0..samples)
+            .map(|sample| {
+                let offset = if samples == 1 { 0.0 } else { ((sample as f64 + 0.5) / samples as f64 - 0.5) * s.shutter / s.fps };
+                let t_secs = t_frame + offset;
+                let render = self.scene.render_at(t_secs);
+                FrameSample {
+                    t_secs,
+                    camera: self.scene.camera_for_at(t_secs, self.bounds),
+                    bounds: self.bounds,
+                    points: s.points_per_frame.unwrap_or(render.points).div_ceil(samples as u64).max(1),
+                    stream: frame.wrapping_mul(samples).wrapping_add(sample),
+                    render,
+                }
+            })
+            .collect()
+    }
+
+    /// Renders frame `frame` on the CPU.
+    pub fn frame(&self, frame: u32) -> Result<image::RgbImage, RecordError> {
+        let (width, height) = (self.settings.width, self.settings.height);
         let mut images = Vec::new();
-        for sample in 0..samples {
-            let offset = if samples == 1 { 0.0 } else { ((sample as f64 + 0.5) / samples as f64 - 0.5) * s.shutter / s.fps };
-            let t_secs = t_frame + offset;
-            let render = self.scene.render_at(t_secs);
+        for sample in self.samples(frame) {
+            let FrameSample { t_secs, camera, bounds, points, stream, render } = sample;
             let compiled = CompiledIfs::new(&self.scene.at(t_secs)).ok_or(RecordError::NoFunctions { t_secs })?;
-            let camera = self.scene.camera_for_at(t_secs, self.bounds);
-            let view = SplatView::new(&camera, s.width, s.height, self.bounds, render.mode, render.depth_cue, render.background);
-            let points = s.points_per_frame.unwrap_or(render.points).div_ceil(samples as u64).max(1);
-            let stream = frame.wrapping_mul(samples).wrapping_add(sample);
+            let view = SplatView::new(&camera, width, height, bounds, render.mode, render.depth_cue, render.background);
             let fb = chaos_game::run_parallel(
                 &compiled,
                 render.seed,
@@ -152,6 +169,19 @@ impl<'a> Recorder<'a> {
         }
         Ok(if images.len() == 1 { images.remove(0) } else { average_linear(&images) })
     }
+}
+
+/// One temporal sample of a frame: the scene at `t_secs` seen by `camera`, `points` points from
+/// random stream `stream` (the chaos game's `frame` argument) with `render`'s seed and splat
+/// settings, depth-cued over `bounds`.
+#[derive(Clone, Debug)]
+pub struct FrameSample {
+    pub t_secs: f64,
+    pub camera: crate::camera::OrbitCamera,
+    pub bounds: (DVec3, DVec3),
+    pub points: u64,
+    pub stream: u32,
+    pub render: crate::scene::RenderSettings,
 }
 
 /// The mean of equally sized sRGB images, taken in linear light.
@@ -202,6 +232,9 @@ pub fn record(rec: &Recorder, dir: &Path, frames: Range<u32>, resume: bool, prog
         return Err(RecordError::FrameRange { start: frames.start, end: frames.end, count });
     }
     let todo = frames_to_render(rec, dir, frames.clone(), resume);
+    if resume {
+        remove_stale_temp_files(dir, frames.clone());
+    }
     let skipped = frames.filter(|k| !todo.contains(k)).collect();
     for (n, &k) in todo.iter().enumerate() {
         let img = rec.frame(k)?;
@@ -210,6 +243,24 @@ pub fn record(rec: &Recorder, dir: &Path, frames: Range<u32>, resume: bool, prog
         progress(n + 1, todo.len());
     }
     Ok(RecordReport { rendered: todo, skipped })
+}
+
+/// Removes temporary frame files (`.frame_00042.png.<pid>.tmp`) that a killed run left for
+/// frames in `frames`. Chunks of a job array own disjoint frame ranges, so this never touches
+/// a file another running chunk is writing.
+fn remove_stale_temp_files(dir: &Path, frames: Range<u32>) {
+    let Ok(entries) = std::fs::read_dir(dir) else { return };
+    for entry in entries.filter_map(|e| e.ok()) {
+        let name = entry.file_name().to_string_lossy().into_owned();
+        let frame = name
+            .strip_prefix(".frame_")
+            .filter(|_| name.ends_with(".tmp"))
+            .and_then(|rest| rest.split_once(".png."))
+            .and_then(|(digits, _)| digits.parse::<u32>().ok());
+        if frame.is_some_and(|k| frames.contains(&k)) {
+            let _ = std::fs::remove_file(entry.path());
+        }
+    }
 }
 
 /// Whether ffmpeg can be run.

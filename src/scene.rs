@@ -1192,6 +1192,12 @@ fn camera_fields(c: &CameraSpec) -> String {
 }
 
 impl Scene {
+    /// Writes [`Scene::to_toml`] to `path` atomically.
+    pub fn save(&self, path: &Path) -> std::io::Result<()> {
+        let text = self.to_toml();
+        crate::io::write_atomic(path, |w| std::io::Write::write_all(w, text.as_bytes()))
+    }
+
     /// The scene as format-version-1 TOML, with every setting explicit; reading it back gives
     /// an equal scene (colours are written as hex when that is exact, else as sRGB floats).
     pub fn to_toml(&self) -> String {
