@@ -599,6 +599,26 @@ mod tests {
     }
 
     #[test]
+    fn playhead_operations_keep_keys_sorted() {
+        let mut tl = Timeline { loop_mode: LoopMode::Once, duration_secs: 1.0, keys: vec![Key::new(0.0), Key::new(1.0)] };
+        assert_eq!(tl.key_at_playhead(0.5), 1);
+        assert_eq!(tl.key_at_playhead(0.5 + KEY_TIME_TOL_SECS / 2.0), 1, "the same key within the tolerance");
+        assert_eq!(tl.upsert_key(Key::new(3.0)), 3);
+        assert_eq!(tl.duration_secs, 3.0, "once: the duration grows to the last key");
+        let mut replaced = Key::new(1.0);
+        replaced.ease = Ease::Out;
+        assert_eq!(tl.upsert_key(replaced), 2);
+        assert_eq!(tl.keys.iter().map(|k| k.t_secs).collect::<Vec<_>>(), vec![0.0, 0.5, 1.0, 3.0]);
+        assert_eq!(tl.keys[2].ease, Ease::Out);
+        let def = FunctionDef::Julia(crate::model::JuliaMap { c: [0.1, 0.2], sign: 1.0 });
+        assert_eq!(tl.set_function_at(2.0, 1, def.clone()), 3);
+        assert_eq!(tl.keys[3].function(1), Some(&def));
+        assert_eq!(tl.delete_key_at(0.5).map(|k| k.t_secs), Some(0.5));
+        assert!(tl.delete_key_at(0.25).is_none());
+        assert_eq!(tl.keys.len(), 4);
+    }
+
+    #[test]
     fn unflatten_inverts_flatten() {
         use crate::model::builder::{Axis, Builder};
         let def = FunctionDef::Builder {
