@@ -6,10 +6,13 @@
 pub mod bench;
 pub mod camera;
 pub mod chaos_game;
+pub mod edit;
 pub mod export;
 pub mod io;
+pub mod record;
 pub mod model;
 pub mod render;
 pub mod rng;
 pub mod scene;
 pub mod splat;
+pub mod timeline;

@@ -17,6 +17,7 @@ use crate::camera::{OrbitCamera, Projection};
 use crate::model::builder::{Axis, Builder, Step};
 use crate::model::{AffineMap, Function, GridMap, Ifs, JuliaMap, Map, ProbabilityMode, RectGrid};
 use crate::splat::SplatMode;
+use crate::timeline::{self, Ease, FunctionKey, Interpolation, Key, LoopMode, RenderKey, Timeline};
 
 /// The scene format version this build reads and writes.
 pub const FORMAT_VERSION: i64 = 1;
@@ -56,6 +57,49 @@ struct SceneToml {
     probabilities: Option<Spanned<String>>,
     camera: Option<CameraToml>,
     render: Option<RenderToml>,
+    timeline: Option<Spanned<TimelineToml>>,
+    #[serde(default, rename = "key")]
+    keys: Vec<Spanned<KeyToml>>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct TimelineToml {
+    #[serde(rename = "loop")]
+    loop_mode: Option<Spanned<String>>,
+    duration_secs: Option<Spanned<f64>>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct KeyToml {
+    t_secs: Spanned<f64>,
+    interpolation: Option<Spanned<String>>,
+    ease: Option<Spanned<String>>,
+    #[serde(default, rename = "function")]
+    functions: Vec<Spanned<KeyFunctionToml>>,
+    camera: Option<CameraToml>,
+    render: Option<KeyRenderToml>,
+}
+
+/// A key's override of one function: the fields of its kind that hold numbers.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct KeyFunctionToml {
+    name: Spanned<String>,
+    points: Option<Spanned<Vec<Spanned<Vec<f64>>>>>,
+    steps: Option<Spanned<Vec<Spanned<StepToml>>>>,
+    matrix: Option<Spanned<Vec<Vec<f64>>>>,
+    offset: Option<Spanned<Vec<f64>>>,
+    c: Option<Spanned<Vec<f64>>>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct KeyRenderToml {
+    points: Option<Spanned<i64>>,
+    background: Option<Spanned<ColorToml>>,
+    depth_cue: Option<Spanned<f64>>,
 }
 
 #[derive(Deserialize)]
@@ -208,6 +252,8 @@ pub struct Scene {
     pub probability_mode: ProbabilityMode,
     pub camera: CameraSpec,
     pub render: RenderSettings,
+    /// Keys animating the functions, camera and render settings; None for a still scene.
+    pub timeline: Option<Timeline>,
 }
 
 /// Default per-function colours (sRGB), chosen to stay distinct when depth-cued.
@@ -257,20 +303,76 @@ impl Scene {
         Checker { text, file }.scene(raw)
     }
 
-    /// The resolved IFS at time `t_secs` (scenes without a timeline are static).
-    pub fn at(&self, _t_secs: f64) -> Ifs {
+    /// The resolved IFS at scene time `t_secs`: every function's definition interpolated
+    /// between the keys around `t_secs`, then resolved (scenes without a timeline are static).
+    pub fn at(&self, t_secs: f64) -> Ifs {
         let functions = self
             .functions
             .iter()
-            .map(|f| Function {
+            .enumerate()
+            .map(|(i, f)| Function {
                 name: f.name.clone(),
-                map: self.resolve(&f.def),
+                map: self.resolve(&self.function_def_at(i, t_secs)),
                 color: f.color,
                 weight: f.probability,
                 enabled: f.enabled,
             })
             .collect();
         Ifs { domain: self.domain.clone(), functions, probability_mode: self.probability_mode }
+    }
+
+    /// Function `i`'s definition at scene time `t_secs` (interpolated, not yet resolved).
+    pub fn function_def_at(&self, i: usize, t_secs: f64) -> FunctionDef {
+        let base = &self.functions[i].def;
+        let Some(tl) = &self.timeline else { return base.clone() };
+        tl.channel_at(t_secs, |k| k.function(i).map(timeline::flatten))
+            .and_then(|v| timeline::unflatten(base, &v))
+            .unwrap_or_else(|| base.clone())
+    }
+
+    /// The camera settings at scene time `t_secs`: each orbit parameter interpolated over the
+    /// keys that set it, else the scene's.
+    pub fn camera_at(&self, t_secs: f64) -> CameraSpec {
+        let mut out = self.camera.clone();
+        let Some(tl) = &self.timeline else { return out };
+        let scalar = |get: fn(&CameraSpec) -> Option<f64>| tl.channel_at(t_secs, |k| get(&k.camera).map(|v| vec![v])).map(|v| v[0]);
+        // Yaw is an angle: keys are joined the short way round (see `sample_channel_wrapped`).
+        if let Some(v) = tl.angle_channel_at(t_secs, Some(360.0), |k| k.camera.yaw_deg.map(|v| vec![v])) {
+            out.yaw_deg = Some(v[0]);
+        }
+        if let Some(v) = scalar(|c| c.pitch_deg) {
+            out.pitch_deg = Some(v.clamp(-89.9, 89.9));
+        }
+        if let Some(v) = scalar(|c| c.distance) {
+            out.distance = Some(v.max(1e-9));
+        }
+        if let Some(v) = scalar(|c| c.fov_y_deg) {
+            out.fov_y_deg = Some(v.clamp(1.0, 170.0));
+        }
+        if let Some(v) = tl.channel_at(t_secs, |k| k.camera.target.map(|p| p.to_array().to_vec())) {
+            out.target = Some(DVec3::new(v[0], v[1], v[2]));
+        }
+        if let Some(k) = tl.held_key(t_secs, |k| k.camera.projection.is_some()) {
+            out.projection = k.camera.projection;
+        }
+        out
+    }
+
+    /// The render settings at scene time `t_secs` (depth cue, background and point count may be
+    /// keyed).
+    pub fn render_at(&self, t_secs: f64) -> RenderSettings {
+        let mut out = self.render.clone();
+        let Some(tl) = &self.timeline else { return out };
+        if let Some(v) = tl.channel_at(t_secs, |k| k.render.depth_cue.map(|v| vec![v as f64])) {
+            out.depth_cue = v[0].clamp(0.0, 1.0) as f32;
+        }
+        if let Some(v) = tl.channel_at(t_secs, |k| k.render.background.map(|c| c.iter().map(|&x| x as f64).collect())) {
+            out.background = [0, 1, 2].map(|c| v[c].clamp(0.0, 1.0) as f32);
+        }
+        if let Some(v) = tl.channel_at(t_secs, |k| k.render.points.map(|n| vec![n as f64])) {
+            out.points = v[0].round().max(1.0) as u64;
+        }
+        out
     }
 
     /// Turns one definition into a map over the scene's grid.
@@ -286,11 +388,16 @@ impl Scene {
         }
     }
 
-    /// The scene camera with unset fields filled in from `bounds` (the attractor's box).
+    /// The scene camera (at time 0) with unset fields filled in from `bounds` (the attractor's box).
     pub fn camera_for(&self, bounds: (DVec3, DVec3)) -> OrbitCamera {
+        self.camera_for_at(0.0, bounds)
+    }
+
+    /// The camera at scene time `t_secs` with unset fields filled in from `bounds`.
+    pub fn camera_for_at(&self, t_secs: f64, bounds: (DVec3, DVec3)) -> OrbitCamera {
         let dim = self.domain.dimension();
         let mut cam = OrbitCamera::framing(bounds, dim);
-        let c = &self.camera;
+        let c = &self.camera_at(t_secs);
         if let Some(v) = c.yaw_deg {
             cam.yaw_deg = v as f32;
         }
@@ -464,12 +571,13 @@ impl Checker<'_> {
         }
         let camera = match &raw.camera {
             None => CameraSpec::default(),
-            Some(c) => self.camera(c, dim)?,
+            Some(c) => self.camera("camera", c, dim)?,
         };
         let render = match &raw.render {
             None => RenderSettings::default(),
             Some(r) => self.render(r)?,
         };
+        let timeline = self.timeline(raw.timeline.as_ref(), &raw.keys, &functions, &domain)?;
         Ok(Scene {
             path: None,
             name: raw.name.unwrap_or_else(|| "untitled".into()),
@@ -479,6 +587,7 @@ impl Checker<'_> {
             probability_mode,
             camera,
             render,
+            timeline,
         })
     }
 
@@ -547,7 +656,7 @@ impl Checker<'_> {
                 let centre = 0.5 * (domain.min() + domain.max());
                 let mut out = Vec::new();
                 for (k, s) in steps.get_ref().iter().enumerate() {
-                    out.push(self.step(i, k, s, domain, centre)?);
+                    out.push(self.step(&format!("function[{i}].steps[{k}]"), s, domain, centre)?);
                 }
                 FunctionDef::Builder { resolution, builder: Builder { steps: out } }
             }
@@ -595,9 +704,9 @@ impl Checker<'_> {
         })
     }
 
-    fn step(&self, i: usize, k: usize, s: &Spanned<StepToml>, domain: &RectGrid, centre: DVec3) -> Res<Step> {
+    fn step(&self, prefix: &str, s: &Spanned<StepToml>, domain: &RectGrid, centre: DVec3) -> Res<Step> {
         let dim = domain.dimension();
-        let field = |name: &str| format!("function[{i}].steps[{k}].{name}");
+        let field = |name: &str| format!("{prefix}.{name}");
         let span = s.span();
         let s = s.get_ref();
         let op = s.op.get_ref().as_str();
@@ -726,29 +835,209 @@ impl Checker<'_> {
         Ok(step)
     }
 
-    fn camera(&self, c: &CameraToml, dim: usize) -> Res<CameraSpec> {
+    fn timeline(&self, raw: Option<&Spanned<TimelineToml>>, keys: &[Spanned<KeyToml>], functions: &[FunctionSpec], domain: &RectGrid) -> Res<Option<Timeline>> {
+        if raw.is_none() && keys.is_empty() {
+            return Ok(None);
+        }
+        let loop_mode = match raw.and_then(|r| r.get_ref().loop_mode.as_ref()) {
+            None => LoopMode::Once,
+            Some(m) => LoopMode::parse(m.get_ref())
+                .ok_or_else(|| self.err(m.span(), "timeline.loop", format!("`{}` is not a loop mode; use \"once\", \"loop\" or \"ping-pong\"", m.get_ref())))?,
+        };
+        let mut out = Vec::new();
+        for (i, k) in keys.iter().enumerate() {
+            out.push(self.key(i, k, functions, domain)?);
+        }
+        for (i, w) in out.windows(2).enumerate() {
+            if w[1].t_secs <= w[0].t_secs {
+                return Err(self.err(keys[i + 1].get_ref().t_secs.span(), &format!("key[{}].t_secs", i + 1), "keys must be listed in increasing time"));
+            }
+        }
+        let last = out.last().map_or(0.0, |k| k.t_secs);
+        let duration_secs = match raw.and_then(|r| r.get_ref().duration_secs.as_ref()) {
+            Some(d) => {
+                let v = self.finite(d, "timeline.duration_secs")?;
+                if v <= 0.0 {
+                    return Err(self.err(d.span(), "timeline.duration_secs", "must be positive"));
+                }
+                if loop_mode == LoopMode::Loop && v <= last {
+                    return Err(self.err(
+                        d.span(),
+                        "timeline.duration_secs",
+                        format!("in loop mode the duration is the period, when the first key repeats; it must exceed the last key's time {last}"),
+                    ));
+                }
+                if v < last {
+                    return Err(self.err(d.span(), "timeline.duration_secs", format!("ends before the last key at {last} s")));
+                }
+                v
+            }
+            None if loop_mode == LoopMode::Loop => {
+                let span = raw.map_or(0..0, |r| r.span());
+                return Err(self.err(span, "timeline.duration_secs", "loop mode needs `duration_secs`, the period after which the first key repeats"));
+            }
+            None => last,
+        };
+        Ok(Some(Timeline { loop_mode, duration_secs, keys: out }))
+    }
+
+    fn key(&self, i: usize, k: &Spanned<KeyToml>, functions: &[FunctionSpec], domain: &RectGrid) -> Res<Key> {
+        let dim = domain.dimension();
+        let field = |name: &str| format!("key[{i}].{name}");
+        let k = k.get_ref();
+        let t_secs = self.finite(&k.t_secs, &field("t_secs"))?;
+        if t_secs < 0.0 {
+            return Err(self.err(k.t_secs.span(), &field("t_secs"), "must not be negative"));
+        }
+        let interpolation = match &k.interpolation {
+            None => Interpolation::default(),
+            Some(s) => Interpolation::parse(s.get_ref()).ok_or_else(|| {
+                self.err(s.span(), &field("interpolation"), format!("`{}` is not an interpolation; use \"hold\", \"linear\" or \"catmull-rom\"", s.get_ref()))
+            })?,
+        };
+        let ease = match &k.ease {
+            None => Ease::default(),
+            Some(s) => Ease::parse(s.get_ref())
+                .ok_or_else(|| self.err(s.span(), &field("ease"), format!("`{}` is not an ease; use \"none\", \"in\", \"out\" or \"in-out\"", s.get_ref())))?,
+        };
+        let mut keyed = Vec::new();
+        for (j, f) in k.functions.iter().enumerate() {
+            let prefix = format!("key[{i}].function[{j}]");
+            let span = f.span();
+            let f = f.get_ref();
+            let name = f.name.get_ref();
+            let index = functions.iter().position(|s| &s.name == name).ok_or_else(|| {
+                self.err(f.name.span(), &format!("{prefix}.name"), format!("no [[function]] is named `{name}`"))
+            })?;
+            if keyed.iter().any(|g: &FunctionKey| g.function == index) {
+                return Err(self.err(f.name.span(), &format!("{prefix}.name"), format!("`{name}` appears twice in this key")));
+            }
+            let base = &functions[index].def;
+            let (kind, allowed): (&str, &[&str]) = match base {
+                FunctionDef::Grid { .. } => ("grid", &["points"]),
+                FunctionDef::Builder { .. } => ("builder", &["steps"]),
+                FunctionDef::Affine(_) => ("affine", &["matrix", "offset"]),
+                FunctionDef::Julia(_) => ("julia", &["c"]),
+            };
+            let present: [(&str, Option<Range<usize>>); 5] = [
+                ("points", f.points.as_ref().map(|v| v.span())),
+                ("steps", f.steps.as_ref().map(|v| v.span())),
+                ("matrix", f.matrix.as_ref().map(|v| v.span())),
+                ("offset", f.offset.as_ref().map(|v| v.span())),
+                ("c", f.c.as_ref().map(|v| v.span())),
+            ];
+            for (field_name, s) in present {
+                if let Some(s) = s
+                    && !allowed.contains(&field_name)
+                {
+                    return Err(self.err(s, &format!("{prefix}.{field_name}"), format!("`{name}` is a `{kind}` function; a key may set {}", allowed.join(" or "))));
+                }
+            }
+            let def = match base {
+                FunctionDef::Grid { points: base_points } => match &f.points {
+                    None => base.clone(),
+                    Some(pts) => {
+                        if pts.get_ref().len() != base_points.len() {
+                            return Err(self.err(pts.span(), &format!("{prefix}.points"), format!("has {} points, the grid has {}", pts.get_ref().len(), base_points.len())));
+                        }
+                        let points = pts
+                            .get_ref()
+                            .iter()
+                            .enumerate()
+                            .map(|(n, p)| self.vec3(p, &format!("{prefix}.points[{n}]"), dim))
+                            .collect::<Res<Vec<_>>>()?;
+                        FunctionDef::Grid { points }
+                    }
+                },
+                FunctionDef::Builder { resolution, .. } => match &f.steps {
+                    None => base.clone(),
+                    Some(steps) => {
+                        let centre = 0.5 * (domain.min() + domain.max());
+                        let mut out = Vec::new();
+                        for (n, s) in steps.get_ref().iter().enumerate() {
+                            out.push(self.step(&format!("{prefix}.steps[{n}]"), s, domain, centre)?);
+                        }
+                        FunctionDef::Builder { resolution: *resolution, builder: Builder { steps: out } }
+                    }
+                },
+                FunctionDef::Affine(a) => {
+                    let matrix = match &f.matrix {
+                        None => a.matrix,
+                        Some(m) => self.matrix(m, &format!("{prefix}.matrix"), dim)?,
+                    };
+                    let offset = match &f.offset {
+                        None => a.offset,
+                        Some(o) => self.vec3(o, &format!("{prefix}.offset"), dim)?,
+                    };
+                    FunctionDef::Affine(AffineMap { matrix, offset })
+                }
+                FunctionDef::Julia(jm) => {
+                    let c = match &f.c {
+                        None => jm.c,
+                        Some(c) => {
+                            let v = self.vec3(c, &format!("{prefix}.c"), 2)?;
+                            [v.x, v.y]
+                        }
+                    };
+                    FunctionDef::Julia(JuliaMap { c, sign: jm.sign })
+                }
+            };
+            if let Err(msg) = timeline::same_structure(base, &def) {
+                return Err(self.err(f.steps.as_ref().map_or(span.clone(), |s| s.span()), &format!("{prefix}.steps"), msg));
+            }
+            keyed.push(FunctionKey { function: index, def });
+        }
+        keyed.sort_by_key(|f| f.function);
+        let camera = match &k.camera {
+            None => CameraSpec::default(),
+            Some(c) => self.camera(&field("camera"), c, dim)?,
+        };
+        let mut render = RenderKey::default();
+        if let Some(r) = &k.render {
+            if let Some(p) = &r.points {
+                let x = *p.get_ref();
+                if !(1..=1 << 40).contains(&x) {
+                    return Err(self.err(p.span(), &field("render.points"), format!("must lie in 1..={}, found {x}", 1u64 << 40)));
+                }
+                render.points = Some(x as u64);
+            }
+            if let Some(b) = &r.background {
+                render.background = Some(self.color(b, &field("render.background"))?);
+            }
+            if let Some(d) = &r.depth_cue {
+                let v = self.finite(d, &field("render.depth_cue"))?;
+                if !(0.0..=1.0).contains(&v) {
+                    return Err(self.err(d.span(), &field("render.depth_cue"), "must lie in 0..1"));
+                }
+                render.depth_cue = Some(v as f32);
+            }
+        }
+        Ok(Key { t_secs, interpolation, ease, functions: keyed, camera, render })
+    }
+
+    fn camera(&self, prefix: &str, c: &CameraToml, dim: usize) -> Res<CameraSpec> {
         let mut out = CameraSpec { yaw_deg: c.yaw_deg, ..Default::default() };
         if let Some(t) = &c.target {
-            out.target = Some(self.vec3(t, "camera.target", 3.min(t.get_ref().len().max(dim)))?);
+            out.target = Some(self.vec3(t, &format!("{prefix}.target"), 3.min(t.get_ref().len().max(dim)))?);
         }
         if let Some(p) = &c.pitch_deg {
-            let v = self.finite(p, "camera.pitch_deg")?;
+            let v = self.finite(p, &format!("{prefix}.pitch_deg"))?;
             if !(-89.9..=89.9).contains(&v) {
-                return Err(self.err(p.span(), "camera.pitch_deg", "must lie in -89.9..89.9"));
+                return Err(self.err(p.span(), &format!("{prefix}.pitch_deg"), "must lie in -89.9..89.9"));
             }
             out.pitch_deg = Some(v);
         }
         if let Some(d) = &c.distance {
-            let v = self.finite(d, "camera.distance")?;
+            let v = self.finite(d, &format!("{prefix}.distance"))?;
             if v <= 0.0 {
-                return Err(self.err(d.span(), "camera.distance", "must be positive"));
+                return Err(self.err(d.span(), &format!("{prefix}.distance"), "must be positive"));
             }
             out.distance = Some(v);
         }
         if let Some(f) = &c.fov_y_deg {
-            let v = self.finite(f, "camera.fov_y_deg")?;
+            let v = self.finite(f, &format!("{prefix}.fov_y_deg"))?;
             if !(1.0..=170.0).contains(&v) {
-                return Err(self.err(f.span(), "camera.fov_y_deg", "must lie in 1..170"));
+                return Err(self.err(f.span(), &format!("{prefix}.fov_y_deg"), "must lie in 1..170"));
             }
             out.fov_y_deg = Some(v);
         }
@@ -756,7 +1045,7 @@ impl Checker<'_> {
             out.projection = Some(match p.get_ref().as_str() {
                 "perspective" => Projection::Perspective,
                 "parallel" => Projection::Parallel,
-                other => return Err(self.err(p.span(), "camera.projection", format!("`{other}` is not a projection; use \"perspective\" or \"parallel\""))),
+                other => return Err(self.err(p.span(), &format!("{prefix}.projection"), format!("`{other}` is not a projection; use \"perspective\" or \"parallel\""))),
             });
         }
         Ok(out)
@@ -799,5 +1088,214 @@ impl Checker<'_> {
             out.depth_cue = v as f32;
         }
         Ok(out)
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Writing scenes back (for the viewer's save): every field explicit, so parse(to_toml(s)) == s.
+
+/// TOML text of a number that reads back to the same f64 (Rust's shortest round-trip form).
+fn num(x: f64) -> String {
+    format!("{x:?}")
+}
+
+fn nums(xs: &[f64]) -> String {
+    format!("[{}]", xs.iter().map(|&x| num(x)).collect::<Vec<_>>().join(", "))
+}
+
+fn vec_dim(v: DVec3, dim: usize) -> String {
+    nums(&v.to_array()[..dim])
+}
+
+fn toml_string(s: &str) -> String {
+    toml::Value::String(s.to_string()).to_string()
+}
+
+/// A linear colour as "#rrggbb" when that reads back exactly, else as sRGB [r, g, b].
+fn color_text(c: [f32; 3]) -> String {
+    let srgb = c.map(linear_to_srgb);
+    let bytes = srgb.map(|v| (v * 255.0).round().clamp(0.0, 255.0) as u8);
+    if srgb_to_linear(bytes.map(|b| b as f32 / 255.0)) == c {
+        format!("\"#{:02x}{:02x}{:02x}\"", bytes[0], bytes[1], bytes[2])
+    } else {
+        format!("[{}]", srgb.iter().map(|v| format!("{v:?}")).collect::<Vec<_>>().join(", "))
+    }
+}
+
+fn matrix_text(m: &DMat3, dim: usize) -> String {
+    let rows: Vec<String> = (0..dim).map(|r| nums(&(0..dim).map(|c| m.col(c)[r]).collect::<Vec<_>>())).collect();
+    format!("[{}]", rows.join(", "))
+}
+
+fn step_text(s: &Step, dim: usize) -> String {
+    let v = |p: DVec3| vec_dim(p, dim);
+    match s {
+        Step::Scale { by, center } => format!("{{ op = \"scale\", by = {}, center = {} }}", v(*by), v(*center)),
+        Step::Rotate { axis, degrees, center } => {
+            format!("{{ op = \"rotate\", axis = \"{}\", degrees = {}, center = {} }}", axis.name(), num(*degrees), v(*center))
+        }
+        Step::Translate { by } => format!("{{ op = \"translate\", by = {} }}", v(*by)),
+        Step::Taper { axis, amount, range, center } => {
+            format!("{{ op = \"taper\", axis = \"{}\", amount = {}, range = {}, center = {} }}", axis.name(), num(*amount), nums(range), v(*center))
+        }
+        Step::Twist { axis, along, degrees, range, center } => format!(
+            "{{ op = \"twist\", axis = \"{}\", along = \"{}\", degrees = {}, range = {}, center = {} }}",
+            axis.name(),
+            along.name(),
+            num(*degrees),
+            nums(range),
+            v(*center)
+        ),
+        Step::Bend { axis, toward, degrees, range, center } => format!(
+            "{{ op = \"bend\", axis = \"{}\", toward = \"{}\", degrees = {}, range = {}, center = {} }}",
+            axis.name(),
+            toward.name(),
+            num(*degrees),
+            nums(range),
+            v(*center)
+        ),
+        Step::Affine { matrix, offset } => format!("{{ op = \"affine\", matrix = {}, offset = {} }}", matrix_text(matrix, dim), v(*offset)),
+    }
+}
+
+/// The number-holding fields of a definition (what a key may override), one per line.
+fn def_fields(def: &FunctionDef, dim: usize) -> String {
+    use std::fmt::Write;
+    let mut out = String::new();
+    match def {
+        FunctionDef::Grid { points } => {
+            out += "points = [\n";
+            for p in points {
+                let _ = writeln!(out, "  {},", vec_dim(*p, dim));
+            }
+            out += "]\n";
+        }
+        FunctionDef::Builder { builder, .. } => {
+            out += "steps = [\n";
+            for s in &builder.steps {
+                let _ = writeln!(out, "  {},", step_text(s, dim));
+            }
+            out += "]\n";
+        }
+        FunctionDef::Affine(a) => {
+            let _ = writeln!(out, "matrix = {}", matrix_text(&a.matrix, dim));
+            let _ = writeln!(out, "offset = {}", vec_dim(a.offset, dim));
+        }
+        FunctionDef::Julia(j) => {
+            let _ = writeln!(out, "c = {}", nums(&j.c));
+        }
+    }
+    out
+}
+
+fn camera_fields(c: &CameraSpec) -> String {
+    use std::fmt::Write;
+    let mut out = String::new();
+    if let Some(t) = c.target {
+        let _ = writeln!(out, "target = {}", nums(&t.to_array()));
+    }
+    for (name, v) in [("yaw_deg", c.yaw_deg), ("pitch_deg", c.pitch_deg), ("distance", c.distance), ("fov_y_deg", c.fov_y_deg)] {
+        if let Some(v) = v {
+            let _ = writeln!(out, "{name} = {}", num(v));
+        }
+    }
+    if let Some(p) = c.projection {
+        let _ = writeln!(out, "projection = \"{}\"", if p == Projection::Perspective { "perspective" } else { "parallel" });
+    }
+    out
+}
+
+impl Scene {
+    /// Writes [`Scene::to_toml`] to `path` atomically.
+    pub fn save(&self, path: &Path) -> std::io::Result<()> {
+        let text = self.to_toml();
+        crate::io::write_atomic(path, |w| std::io::Write::write_all(w, text.as_bytes()))
+    }
+
+    /// The scene as format-version-1 TOML, with every setting explicit; reading it back gives
+    /// an equal scene (colours are written as hex when that is exact, else as sRGB floats).
+    pub fn to_toml(&self) -> String {
+        use std::fmt::Write;
+        let dim = self.domain.dimension();
+        let mut out = String::new();
+        let _ = writeln!(out, "version = {FORMAT_VERSION}");
+        let _ = writeln!(out, "name = {}", toml_string(&self.name));
+        if !self.description.is_empty() {
+            let _ = writeln!(out, "description = {}", toml_string(&self.description));
+        }
+        let _ = writeln!(out, "probabilities = \"{}\"", self.probability_mode.name());
+        out += "\n[grid]\n";
+        for (a, name) in self.domain.axes.iter().zip(["x", "y", "z"]).take(dim) {
+            let _ = writeln!(out, "{name} = {}", nums(a));
+        }
+        for f in &self.functions {
+            out += "\n[[function]]\n";
+            let _ = writeln!(out, "name = {}", toml_string(&f.name));
+            let kind = match &f.def {
+                FunctionDef::Grid { .. } => "grid",
+                FunctionDef::Builder { .. } => "builder",
+                FunctionDef::Affine(_) => "affine",
+                FunctionDef::Julia(_) => "julia",
+            };
+            let _ = writeln!(out, "kind = \"{kind}\"");
+            let _ = writeln!(out, "color = {}", color_text(f.color));
+            if let Some(p) = f.probability {
+                let _ = writeln!(out, "probability = {}", num(p));
+            }
+            if !f.enabled {
+                out += "enabled = false\n";
+            }
+            match &f.def {
+                FunctionDef::Builder { resolution, .. } => {
+                    let _ = writeln!(out, "resolution = [{}]", resolution[..dim].iter().map(|n| n.to_string()).collect::<Vec<_>>().join(", "));
+                }
+                FunctionDef::Julia(j) => {
+                    let _ = writeln!(out, "sign = {}", num(j.sign));
+                }
+                _ => {}
+            }
+            out += &def_fields(&f.def, dim);
+        }
+        let camera = camera_fields(&self.camera);
+        if !camera.is_empty() {
+            out += "\n[camera]\n";
+            out += &camera;
+        }
+        let r = &self.render;
+        out += "\n[render]\n";
+        let _ = writeln!(out, "width = {}\nheight = {}\npoints = {}\nseed = {}", r.width, r.height, r.points, r.seed);
+        let _ = writeln!(out, "mode = \"{}\"\nbackground = {}\ndepth_cue = {:?}", r.mode.name(), color_text(r.background), r.depth_cue);
+        if let Some(tl) = &self.timeline {
+            out += "\n[timeline]\n";
+            let _ = writeln!(out, "loop = \"{}\"\nduration_secs = {}", tl.loop_mode.name(), num(tl.duration_secs));
+            for k in &tl.keys {
+                out += "\n[[key]]\n";
+                let _ = writeln!(out, "t_secs = {}\ninterpolation = \"{}\"\nease = \"{}\"", num(k.t_secs), k.interpolation.name(), k.ease.name());
+                for fk in &k.functions {
+                    out += "[[key.function]]\n";
+                    let _ = writeln!(out, "name = {}", toml_string(&self.functions[fk.function].name));
+                    out += &def_fields(&fk.def, dim);
+                }
+                let camera = camera_fields(&k.camera);
+                if !camera.is_empty() {
+                    out += "[key.camera]\n";
+                    out += &camera;
+                }
+                let kr = &k.render;
+                if kr != &RenderKey::default() {
+                    out += "[key.render]\n";
+                    if let Some(p) = kr.points {
+                        let _ = writeln!(out, "points = {p}");
+                    }
+                    if let Some(b) = kr.background {
+                        let _ = writeln!(out, "background = {}", color_text(b));
+                    }
+                    if let Some(d) = kr.depth_cue {
+                        let _ = writeln!(out, "depth_cue = {d:?}");
+                    }
+                }
+            }
+        }
+        out
     }
 }
