@@ -12,3 +12,4 @@ pub mod render;
 pub mod rng;
 pub mod scene;
 pub mod splat;
+pub mod raytrace;
