@@ -553,3 +553,29 @@ fn bound_entry(ray: &Ray, centre: Vec3, radius: f32, t_min: f32, t_max: f32) -> 
     let (t0, t1) = sphere_roots(ray, centre, radius)?;
     (t1 > t_min && t0 < t_max).then_some(t0.max(t_min))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::rng::Pcg32;
+
+    /// Against the closed form: a ray at offset h from the centre of a sphere of radius r at
+    /// distance D enters at D − √(r² − h²). Tolerance: a few f32 ulps of D.
+    #[test]
+    fn sphere_roots_match_closed_form() {
+        for i in 0..1000u32 {
+            let mut rng = Pcg32::for_stream(3, 0, i);
+            let distance = 10.0 + 500.0 * rng.next_f32();
+            let radius = 0.01 + 5.0 * rng.next_f32();
+            let offset = radius * rng.next_f32();
+            let ray = Ray { origin: Vec3::new(offset, 0.0, distance), dir: Vec3::NEG_Z };
+            let (t0, t1) = sphere_roots(&ray, Vec3::ZERO, radius).expect("hits");
+            let half = ((radius * radius - offset * offset) as f64).sqrt();
+            let tol = 8.0 * f32::EPSILON as f64 * distance as f64;
+            assert!((t0 as f64 - (distance as f64 - half)).abs() <= tol, "case {i}: t0 {t0}");
+            assert!((t1 as f64 - (distance as f64 + half)).abs() <= tol, "case {i}: t1 {t1}");
+            let miss = Ray { origin: Vec3::new(radius * 1.001, 0.0, distance), dir: Vec3::NEG_Z };
+            assert!(sphere_roots(&miss, Vec3::ZERO, radius).is_none(), "case {i}: grazing miss");
+        }
+    }
+}
