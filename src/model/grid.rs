@@ -172,7 +172,7 @@ impl GridMap {
     }
 
     /// Samples any point map onto the grid.
-    pub fn from_fn(grid: RectGrid, f: impl Fn(DVec3) -> DVec3) -> Self {
+    pub fn from_fn(grid: RectGrid, f: impl FnMut(DVec3) -> DVec3) -> Self {
         let points = grid.points().into_iter().map(f).collect();
         Self { grid, points }
     }
