@@ -220,3 +220,25 @@ fn bad_gltf_is_an_error_not_a_panic() {
     let missing = raytrace::build_fixed(&ifs, &Initial::Gltf(dir.join("missing.glb")), 1);
     assert!(matches!(missing, Err(RaytraceError::Gltf { .. })));
 }
+
+/// `export mesh` output read back by the gltf crate as an initial object: W^1(sphere) of
+/// tapering is 4 icospheres of 80 triangles, so W^1 of plant2 with it as A has 5 · 320.
+#[test]
+fn exported_mesh_round_trips_as_initial_object() {
+    let dir = std::env::temp_dir().join(format!("nlifs-raytrace-rt-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let tapering = scene("tapering").at(0.0);
+    let h = raytrace::build_fixed(&tapering, &Initial::Sphere, 1).unwrap();
+    let colors: Vec<[f32; 3]> = tapering.functions.iter().map(|f| f.color).collect();
+    let names: Vec<String> = tapering.functions.iter().map(|f| f.name.clone()).collect();
+    let path = dir.join("tapering_w1.glb");
+    nlifs::io::write_atomic(&path, |w| raytrace::export::write_glb_mesh(w, &h, &colors, &names)).unwrap();
+    let plant = scene("plant2").at(0.0);
+    let g = raytrace::build_fixed(&plant, &Initial::Gltf(path), 1).unwrap();
+    assert_eq!(g.leaf_count, 5);
+    assert_eq!(g.triangles.len(), 5 * 4 * 80);
+    // The fitted mesh lies in the grid's box, so its images lie in the plant's W^1 box.
+    let (lo, hi) = (plant.domain.min().as_vec3(), plant.domain.max().as_vec3());
+    let pad = 1e-3 * (hi - lo).length();
+    assert!(g.bounds.0.cmpge(lo - pad).all() && g.bounds.1.cmple(hi + pad).all(), "{:?} outside {lo} {hi}", g.bounds);
+}
