@@ -26,7 +26,6 @@ use crate::model::{Ifs, Map};
 pub const MAX_CHILDREN: usize = 16;
 const TILE_TRIANGLES: usize = 16;
 const TILE_FANOUT: usize = 4;
-const STACK_SIZE: usize = 1024;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[repr(u8)]
@@ -49,6 +48,13 @@ pub struct Node {
     /// The outermost function i1 of the node's composition (the part of the attractor it is in).
     pub function: u8,
     pub depth: u8,
+}
+
+/// Traversal stacks, kept between rays to avoid allocating per ray.
+#[derive(Clone, Debug, Default)]
+pub struct Scratch {
+    closest: Vec<(u32, f32)>,
+    any: Vec<u32>,
 }
 
 #[derive(Clone, Copy, Debug)]
@@ -361,18 +367,21 @@ impl Hierarchy {
 
     /// The nearest hit with t in (t_min, t_max).
     pub fn intersect(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<Hit> {
+        self.intersect_with(ray, t_min, t_max, &mut Scratch::default())
+    }
+
+    /// [`Self::intersect`] with a reused traversal stack (the tracer keeps one per thread).
+    pub fn intersect_with(&self, ray: &Ray, t_min: f32, t_max: f32, scratch: &mut Scratch) -> Option<Hit> {
         let mut best = Hit { t: t_max, node: u32::MAX, triangle: u32::MAX, u: 0.0, v: 0.0 };
         let root = self.nodes.first()?;
         if root.kind == NodeKind::Sphere {
             return sphere_surface(ray, root.centre, root.radius, t_min, t_max).map(|t| Hit { t, node: 0, ..best });
         }
-        let mut stack = [(0u32, 0f32); STACK_SIZE];
-        stack[0] = (0, bound_entry(ray, root.centre, root.radius, t_min, t_max)?);
-        let mut top = 1usize;
+        let stack = &mut scratch.closest;
+        stack.clear();
+        stack.push((0, bound_entry(ray, root.centre, root.radius, t_min, t_max)?));
         let mut near = [(0u32, 0f32); MAX_CHILDREN];
-        while top > 0 {
-            top -= 1;
-            let (index, t_enter) = stack[top];
+        while let Some((index, t_enter)) = stack.pop() {
             if t_enter >= best.t {
                 continue;
             }
@@ -391,15 +400,18 @@ impl Hierarchy {
                             found += 1;
                         }
                     }
-                    // Farthest pushed first so the nearest is visited first.
-                    let near = &mut near[..found];
-                    near.sort_unstable_by(|a, b| b.1.total_cmp(&a.1));
-                    for &e in near.iter() {
-                        if top < STACK_SIZE {
-                            stack[top] = e;
-                            top += 1;
+                    // Insertion sort by decreasing entry, pushed in that order so the nearest is
+                    // popped first.
+                    for i in 1..found {
+                        let e = near[i];
+                        let mut j = i;
+                        while j > 0 && near[j - 1].1 < e.1 {
+                            near[j] = near[j - 1];
+                            j -= 1;
                         }
+                        near[j] = e;
                     }
+                    stack.extend_from_slice(&near[..found]);
                 }
                 NodeKind::Triangles => {
                     for tri in node.first..node.first + node.count as u32 {
@@ -416,6 +428,11 @@ impl Hierarchy {
 
     /// Whether anything is hit with t in (t_min, t_max) (shadow rays).
     pub fn occluded(&self, ray: &Ray, t_min: f32, t_max: f32) -> bool {
+        self.occluded_with(ray, t_min, t_max, &mut Scratch::default())
+    }
+
+    /// [`Self::occluded`] with a reused traversal stack.
+    pub fn occluded_with(&self, ray: &Ray, t_min: f32, t_max: f32, scratch: &mut Scratch) -> bool {
         let Some(root) = self.nodes.first() else { return false };
         if bound_entry(ray, root.centre, root.radius, t_min, t_max).is_none() {
             return false;
@@ -423,11 +440,11 @@ impl Hierarchy {
         if root.kind == NodeKind::Sphere {
             return sphere_surface(ray, root.centre, root.radius, t_min, t_max).is_some();
         }
-        let mut stack = [0u32; STACK_SIZE];
-        let mut top = 1usize;
-        while top > 0 {
-            top -= 1;
-            let node = self.nodes[stack[top] as usize];
+        let stack = &mut scratch.any;
+        stack.clear();
+        stack.push(0);
+        while let Some(index) = stack.pop() {
+            let node = self.nodes[index as usize];
             match node.kind {
                 NodeKind::Inner => {
                     for k in node.first..node.first + node.count as u32 {
@@ -436,9 +453,8 @@ impl Hierarchy {
                             if sphere_surface(ray, child.centre, child.radius, t_min, t_max).is_some() {
                                 return true;
                             }
-                        } else if bound_entry(ray, child.centre, child.radius, t_min, t_max).is_some() && top < STACK_SIZE {
-                            stack[top] = k;
-                            top += 1;
+                        } else if bound_entry(ray, child.centre, child.radius, t_min, t_max).is_some() {
+                            stack.push(k);
                         }
                     }
                 }

@@ -8,7 +8,7 @@ use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use glam::Vec3;
 use rayon::prelude::*;
 
-use super::hierarchy::{Hierarchy, Hit, Ray};
+use super::hierarchy::{Hierarchy, Hit, Ray, Scratch};
 use super::RaytraceError;
 use crate::camera::{OrbitCamera, Projection};
 use crate::rng::Pcg32;
@@ -149,23 +149,23 @@ impl Tracer<'_> {
         }
     }
 
-    fn visible(&self, p: Vec3, n: Vec3, light: &Light, stats: &mut TraceStats) -> f32 {
+    fn visible(&self, p: Vec3, n: Vec3, light: &Light, stats: &mut TraceStats, scratch: &mut Scratch) -> f32 {
         if !self.shading.shadows || n.dot(light.to_light) <= 0.0 {
             return 1.0;
         }
         stats.shadow_rays += 1;
         let ray = Ray { origin: p + n * self.eps, dir: light.to_light };
-        if self.hierarchy.occluded(&ray, 0.0, f32::INFINITY) { 0.0 } else { 1.0 }
+        if self.hierarchy.occluded_with(&ray, 0.0, f32::INFINITY, scratch) { 0.0 } else { 1.0 }
     }
 
-    fn light(&self, p: Vec3, n: Vec3, view: Vec3, albedo: Vec3, specular: f32, stats: &mut TraceStats) -> Vec3 {
+    fn light(&self, p: Vec3, n: Vec3, view: Vec3, albedo: Vec3, specular: f32, stats: &mut TraceStats, scratch: &mut Scratch) -> Vec3 {
         let mut c = albedo * self.shading.ambient;
         for light in &self.shading.lights {
             let cos = n.dot(light.to_light);
             if cos <= 0.0 {
                 continue;
             }
-            let vis = self.visible(p, n, light, stats);
+            let vis = self.visible(p, n, light, stats, scratch);
             if vis == 0.0 {
                 continue;
             }
@@ -175,17 +175,17 @@ impl Tracer<'_> {
         c
     }
 
-    fn radiance(&self, ray: &Ray, stats: &mut TraceStats) -> Vec3 {
+    fn radiance(&self, ray: &Ray, stats: &mut TraceStats, scratch: &mut Scratch) -> Vec3 {
         stats.primary_rays += 1;
         let t_ground = if self.shading.ground && ray.dir.y < -1e-6 { (self.ground_y - ray.origin.y) / ray.dir.y } else { f32::INFINITY };
         let t_ground = if t_ground > 0.0 { t_ground } else { f32::INFINITY };
-        if let Some(hit) = self.hierarchy.intersect(ray, 0.0, t_ground) {
+        if let Some(hit) = self.hierarchy.intersect_with(ray, 0.0, t_ground, scratch) {
             let (p, n) = self.hierarchy.surface(ray, &hit);
-            return self.light(p, n, -ray.dir, self.albedo(&hit), 0.25, stats);
+            return self.light(p, n, -ray.dir, self.albedo(&hit), 0.25, stats, scratch);
         }
         if t_ground.is_finite() {
             let p = ray.origin + t_ground * ray.dir;
-            let c = self.light(p, Vec3::Y, -ray.dir, Vec3::splat(0.55), 0.0, stats);
+            let c = self.light(p, Vec3::Y, -ray.dir, Vec3::splat(0.55), 0.0, stats, scratch);
             let d = (p - self.centre).length() / (2.5 * self.radius);
             let fade = (-d * d).exp();
             return self.shading.background.lerp(c, fade);
@@ -220,6 +220,7 @@ pub fn trace(
             return Err(RaytraceError::Cancelled);
         }
         let mut stats = TraceStats::default();
+        let mut scratch = Scratch::default();
         let mut strata: Vec<u32> = (0..spp).collect();
         for x in 0..w as usize {
             let mut rng = Pcg32::for_stream(shading.seed, 0, (y * w as usize + x) as u32);
@@ -233,7 +234,7 @@ pub fn trace(
                 let sx = (i as f32 + rng.next_f32()) / spp as f32;
                 let sy = (strata[i as usize] as f32 + rng.next_f32()) / spp as f32;
                 let ray = rays.ray(x as f32 + sx, y as f32 + sy);
-                sum += tracer.radiance(&ray, &mut stats);
+                sum += tracer.radiance(&ray, &mut stats, &mut scratch);
             }
             let c = sum / spp as f32;
             row[3 * x..3 * x + 3].copy_from_slice(&c.to_array().map(|v| (linear_to_srgb(v) * 255.0 + 0.5) as u8));
