@@ -351,12 +351,16 @@ impl Hierarchy {
                     let children = &self.nodes[n.first as usize..n.first as usize + n.count as usize];
                     // Centre: the node's own sphere centre, or for tile groups the mean of the
                     // children; radius: the farthest child bound, with slack for rounding.
-                    let c = if n.radius > 0.0 {
-                        n.centre
+                    let (blo, bhi) = children
+                        .iter()
+                        .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), ch| (lo.min(ch.centre - ch.radius), hi.max(ch.centre + ch.radius)));
+                    let enclose = |c: Vec3| children.iter().map(|ch| (ch.centre - c).length() + ch.radius).fold(0.0, f32::max);
+                    let box_centre = 0.5 * (blo + bhi);
+                    let (c, r) = if n.radius > 0.0 && enclose(n.centre) < enclose(box_centre) {
+                        (n.centre, enclose(n.centre))
                     } else {
-                        children.iter().map(|c| c.centre).sum::<Vec3>() / children.len() as f32
+                        (box_centre, enclose(box_centre))
                     };
-                    let r = children.iter().map(|ch| (ch.centre - c).length() + ch.radius).fold(0.0, f32::max);
                     self.nodes[k].centre = c;
                     self.nodes[k].radius = r * (1.0 + 1e-5) + c.abs().max_element() * 1e-6;
                 }
@@ -428,17 +432,16 @@ impl Hierarchy {
 
     /// Whether anything is hit with t in (t_min, t_max) (shadow rays).
     pub fn occluded(&self, ray: &Ray, t_min: f32, t_max: f32) -> bool {
-        self.occluded_with(ray, t_min, t_max, &mut Scratch::default())
+        self.occluder(ray, t_min, t_max, &mut Scratch::default()).is_some()
     }
 
-    /// [`Self::occluded`] with a reused traversal stack.
-    pub fn occluded_with(&self, ray: &Ray, t_min: f32, t_max: f32, scratch: &mut Scratch) -> bool {
-        let Some(root) = self.nodes.first() else { return false };
-        if bound_entry(ray, root.centre, root.radius, t_min, t_max).is_none() {
-            return false;
-        }
-        if root.kind == NodeKind::Sphere {
-            return sphere_surface(ray, root.centre, root.radius, t_min, t_max).is_some();
+    /// Some leaf (sphere node or triangle tile) hit with t in (t_min, t_max), found by
+    /// depth-first search without ordering (shadow rays need any hit, not the nearest).
+    pub fn occluder(&self, ray: &Ray, t_min: f32, t_max: f32, scratch: &mut Scratch) -> Option<u32> {
+        let root = self.nodes.first()?;
+        bound_entry(ray, root.centre, root.radius, t_min, t_max)?;
+        if root.kind != NodeKind::Inner {
+            return self.leaf_hit(0, ray, t_min, t_max).then_some(0);
         }
         let stack = &mut scratch.any;
         stack.clear();
@@ -451,7 +454,7 @@ impl Hierarchy {
                         let child = &self.nodes[k as usize];
                         if child.kind == NodeKind::Sphere {
                             if sphere_surface(ray, child.centre, child.radius, t_min, t_max).is_some() {
-                                return true;
+                                return Some(k);
                             }
                         } else if bound_entry(ray, child.centre, child.radius, t_min, t_max).is_some() {
                             stack.push(k);
@@ -459,16 +462,25 @@ impl Hierarchy {
                     }
                 }
                 NodeKind::Triangles => {
-                    for tri in node.first..node.first + node.count as u32 {
-                        if self.triangle_hit(ray, tri, t_min, t_max).is_some() {
-                            return true;
-                        }
+                    if self.leaf_hit(index, ray, t_min, t_max) {
+                        return Some(index);
                     }
                 }
                 NodeKind::Sphere => {}
             }
         }
-        false
+        None
+    }
+
+    /// Whether leaf `index` (a sphere or a triangle tile) is hit with t in (t_min, t_max); the
+    /// tracer's shadow cache tries the last occluder this way before a full search.
+    pub fn leaf_hit(&self, index: u32, ray: &Ray, t_min: f32, t_max: f32) -> bool {
+        let node = &self.nodes[index as usize];
+        match node.kind {
+            NodeKind::Sphere => sphere_surface(ray, node.centre, node.radius, t_min, t_max).is_some(),
+            NodeKind::Triangles => (node.first..node.first + node.count as u32).any(|tri| self.triangle_hit(ray, tri, t_min, t_max).is_some()),
+            NodeKind::Inner => false,
+        }
     }
 
     /// The oracle: every leaf tested, nearest kept (ties to the lower index).

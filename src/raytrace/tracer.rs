@@ -122,6 +122,12 @@ pub struct TraceStats {
     pub shadow_rays: u64,
 }
 
+/// Per-row state: traversal stacks and the last occluder per light.
+struct RowScratch {
+    stacks: Scratch,
+    last_occluder: Vec<u32>,
+}
+
 struct Tracer<'a> {
     hierarchy: &'a Hierarchy,
     shading: &'a Shading,
@@ -149,23 +155,36 @@ impl Tracer<'_> {
         }
     }
 
-    fn visible(&self, p: Vec3, n: Vec3, light: &Light, stats: &mut TraceStats, scratch: &mut Scratch) -> f32 {
-        if !self.shading.shadows || n.dot(light.to_light) <= 0.0 {
+    fn visible(&self, p: Vec3, n: Vec3, light: usize, stats: &mut TraceStats, scratch: &mut RowScratch) -> f32 {
+        let to_light = self.shading.lights[light].to_light;
+        if !self.shading.shadows || n.dot(to_light) <= 0.0 {
             return 1.0;
         }
         stats.shadow_rays += 1;
-        let ray = Ray { origin: p + n * self.eps, dir: light.to_light };
-        if self.hierarchy.occluded_with(&ray, 0.0, f32::INFINITY, scratch) { 0.0 } else { 1.0 }
+        let ray = Ray { origin: p + n * self.eps, dir: to_light };
+        // Shadow cache (Haines & Greenberg): neighbouring shadow rays are mostly blocked by the
+        // same leaf, so it is tried before a full search.
+        let cached = scratch.last_occluder[light];
+        if cached != u32::MAX && self.hierarchy.leaf_hit(cached, &ray, 0.0, f32::INFINITY) {
+            return 0.0;
+        }
+        match self.hierarchy.occluder(&ray, 0.0, f32::INFINITY, &mut scratch.stacks) {
+            Some(leaf) => {
+                scratch.last_occluder[light] = leaf;
+                0.0
+            }
+            None => 1.0,
+        }
     }
 
-    fn light(&self, p: Vec3, n: Vec3, view: Vec3, albedo: Vec3, specular: f32, stats: &mut TraceStats, scratch: &mut Scratch) -> Vec3 {
+    fn light(&self, p: Vec3, n: Vec3, view: Vec3, albedo: Vec3, specular: f32, stats: &mut TraceStats, scratch: &mut RowScratch) -> Vec3 {
         let mut c = albedo * self.shading.ambient;
-        for light in &self.shading.lights {
+        for (k, light) in self.shading.lights.iter().enumerate() {
             let cos = n.dot(light.to_light);
             if cos <= 0.0 {
                 continue;
             }
-            let vis = self.visible(p, n, light, stats, scratch);
+            let vis = self.visible(p, n, k, stats, scratch);
             if vis == 0.0 {
                 continue;
             }
@@ -175,11 +194,11 @@ impl Tracer<'_> {
         c
     }
 
-    fn radiance(&self, ray: &Ray, stats: &mut TraceStats, scratch: &mut Scratch) -> Vec3 {
+    fn radiance(&self, ray: &Ray, stats: &mut TraceStats, scratch: &mut RowScratch) -> Vec3 {
         stats.primary_rays += 1;
         let t_ground = if self.shading.ground && ray.dir.y < -1e-6 { (self.ground_y - ray.origin.y) / ray.dir.y } else { f32::INFINITY };
         let t_ground = if t_ground > 0.0 { t_ground } else { f32::INFINITY };
-        if let Some(hit) = self.hierarchy.intersect_with(ray, 0.0, t_ground, scratch) {
+        if let Some(hit) = self.hierarchy.intersect_with(ray, 0.0, t_ground, &mut scratch.stacks) {
             let (p, n) = self.hierarchy.surface(ray, &hit);
             return self.light(p, n, -ray.dir, self.albedo(&hit), 0.25, stats, scratch);
         }
@@ -220,7 +239,7 @@ pub fn trace(
             return Err(RaytraceError::Cancelled);
         }
         let mut stats = TraceStats::default();
-        let mut scratch = Scratch::default();
+        let mut scratch = RowScratch { stacks: Scratch::default(), last_occluder: vec![u32::MAX; shading.lights.len()] };
         let mut strata: Vec<u32> = (0..spp).collect();
         for x in 0..w as usize {
             let mut rng = Pcg32::for_stream(shading.seed, 0, (y * w as usize + x) as u32);
