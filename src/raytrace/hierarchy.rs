@@ -17,6 +17,7 @@
 use std::collections::HashMap;
 
 use glam::{DVec3, Vec3};
+use rayon::prelude::*;
 
 use super::mesh::Mesh;
 use super::RaytraceError;
@@ -125,7 +126,7 @@ struct DSphere {
 /// Caches Lipschitz bounds per function and touched cell range (the bound depends on nothing
 /// else), which makes building deep hierarchies cheap.
 struct LipschitzCache<'a> {
-    maps: Vec<&'a Map>,
+    maps: &'a [&'a Map],
     cache: HashMap<(usize, [usize; 6], [bool; 3]), f64>,
 }
 
@@ -190,7 +191,8 @@ impl Hierarchy {
         if active.len() > MAX_CHILDREN {
             return Err(RaytraceError::TooManyFunctions(active.len()));
         }
-        let mut lip = LipschitzCache { maps: active.iter().map(|&i| &ifs.functions[i].map).collect(), cache: HashMap::new() };
+        let maps: Vec<&Map> = active.iter().map(|&i| &ifs.functions[i].map).collect();
+        let m = maps.len();
         let (lo, hi) = (ifs.domain.min(), ifs.domain.max());
         let sphere_a = match initial {
             InitialObject::Sphere => DSphere { centre: 0.5 * (lo + hi), radius: 0.5 * (hi - lo).length() },
@@ -207,13 +209,28 @@ impl Hierarchy {
         h.nodes.push(Node { centre: Vec3::ZERO, radius: 0.0, first: 0, count: 0, kind: NodeKind::Inner, function: 0, depth: 0 });
         let mut leaves: Vec<(u32, Vec<u8>)> = Vec::new();
         const NODE_LIMIT: usize = 20_000_000;
+        // Spheres of the previous level, in path-number order when that level is complete (no
+        // adaptive leaf above it), so that S(i1 i2…ik) = w_i1(S(i2…ik)) costs one map.
+        let mut prev: Option<Vec<DSphere>> = None;
         while !level.is_empty() {
+            let depth = level[0].1.len();
+            let complete = (m as f64).powi(depth as i32) == level.len() as f64;
+            let spheres: Vec<DSphere> = level
+                .par_iter()
+                .map_init(
+                    || LipschitzCache { maps: &maps, cache: HashMap::new() },
+                    |lip, (_, path)| {
+                        let Some((&first, rest)) = path.split_first() else { return Ok(sphere_a) };
+                        if let Some(prev) = &prev {
+                            let q = rest.iter().fold(0usize, |q, &f| q * m + f as usize);
+                            return lip.map_sphere(first as usize, prev[q]);
+                        }
+                        path.iter().rev().try_fold(sphere_a, |s, &f| lip.map_sphere(f as usize, s))
+                    },
+                )
+                .collect::<Result<_, _>>()?;
             let mut next = Vec::new();
-            for (index, path) in level {
-                let mut s = sphere_a;
-                for &f in path.iter().rev() {
-                    s = lip.map_sphere(f as usize, s)?;
-                }
+            for ((index, path), s) in level.into_iter().zip(spheres.iter().copied()) {
                 let (centre, radius) = to_f32(s);
                 let depth = path.len() as u32;
                 let node = &mut h.nodes[index as usize];
@@ -240,6 +257,7 @@ impl Hierarchy {
                 }
             }
             level = next;
+            prev = complete.then_some(spheres);
         }
         h.leaf_count = leaves.len();
         h.max_depth = leaves.iter().map(|(_, p)| p.len() as u32).max().unwrap_or(0);
@@ -255,7 +273,7 @@ impl Hierarchy {
                     return Err(RaytraceError::TooLarge(format!("{total} triangles; lower --depth")));
                 }
                 for (index, path) in &leaves {
-                    h.add_mesh_leaf(*index, path, mesh, &lip.maps);
+                    h.add_mesh_leaf(*index, path, mesh, &maps);
                 }
             }
         }
