@@ -83,6 +83,23 @@ fn sphere_hierarchy_matches_brute_force_on_paper_scenes() {
     }
 }
 
+/// The adaptive stop gives leaves at mixed depths; the traversal must still agree.
+#[test]
+fn adaptive_hierarchy_matches_brute_force() {
+    use nlifs::raytrace::hierarchy::PixelFootprint;
+    for (k, name) in ["plant2", "fantasy"].iter().enumerate() {
+        let ifs = scene(name).at(0.0);
+        let (lo, hi) = (ifs.domain.min().as_vec3(), ifs.domain.max().as_vec3());
+        let eye = 0.5 * (lo + hi) + Vec3::new(1.0, 0.6, 1.5) * (hi - lo).length();
+        let pixel = PixelFootprint { eye, perspective: true, per_pixel: 0.1 };
+        let h = Hierarchy::build(&ifs, &InitialObject::Sphere, Stop { max_depth: 6, pixel: Some(pixel) }).unwrap();
+        let depths: std::collections::BTreeSet<u8> = h.leaf_spheres().map(|n| n.depth).collect();
+        assert!(depths.len() >= 2, "{name}: the adaptive stop should give mixed depths, got {depths:?}");
+        let hits = check_against_brute_force(&h, &format!("{name} adaptive"), 200 + k as u32);
+        assert!(hits > 3000, "{name}: only {hits} of 10000 rays hit");
+    }
+}
+
 #[test]
 fn mesh_hierarchy_matches_brute_force_on_paper_scenes() {
     for (k, name) in SCENES.iter().enumerate() {

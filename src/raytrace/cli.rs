@@ -54,6 +54,9 @@ pub struct SnapshotArgs {
     /// Stop refining where a node projects smaller than a pixel (--depth becomes the cap).
     #[arg(long)]
     pub adaptive: bool,
+    /// With --adaptive: stop where a node's sphere projects smaller than this many pixels.
+    #[arg(long, default_value_t = 1.0)]
+    pub stop_pixels: f32,
     #[arg(long, value_enum, default_value = "function")]
     pub color: ColorArg,
     /// No shadow rays.
@@ -148,6 +151,7 @@ pub fn snapshot(args: SnapshotArgs) -> anyhow::Result<()> {
         spp: args.spp,
         depth: args.geometry.depth,
         adaptive: args.adaptive,
+        stop_pixels: args.stop_pixels,
         initial: parse_initial(&args.geometry.initial)?,
         color_mode: match args.color {
             ColorArg::Function => ColorMode::Function,

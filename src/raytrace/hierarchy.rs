@@ -208,7 +208,7 @@ impl Hierarchy {
         let mut level: Vec<(u32, Vec<u8>)> = vec![(0, Vec::new())];
         h.nodes.push(Node { centre: Vec3::ZERO, radius: 0.0, first: 0, count: 0, kind: NodeKind::Inner, function: 0, depth: 0 });
         let mut leaves: Vec<(u32, Vec<u8>)> = Vec::new();
-        const NODE_LIMIT: usize = 20_000_000;
+        const NODE_LIMIT: usize = 8_000_000;
         // Spheres of the previous level, in path-number order when that level is complete (no
         // adaptive leaf above it), so that S(i1 i2…ik) = w_i1(S(i2…ik)) costs one map.
         let mut prev: Option<Vec<DSphere>> = None;
@@ -253,7 +253,7 @@ impl Hierarchy {
                     h.nodes.push(Node { centre, radius, first: 0, count: 0, kind: NodeKind::Inner, function: 0, depth: 0 });
                 }
                 if h.nodes.len() > NODE_LIMIT {
-                    return Err(RaytraceError::TooLarge(format!("more than {NODE_LIMIT} nodes")));
+                    return Err(RaytraceError::TooLarge(format!("more than {NODE_LIMIT} nodes; lower --depth or raise --stop-pixels")));
                 }
             }
             level = next;

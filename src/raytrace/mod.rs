@@ -78,8 +78,10 @@ pub struct RaytraceSettings {
     pub spp: u32,
     /// n of W^n(A); with `adaptive`, the cap.
     pub depth: u32,
-    /// Stop refining where a node projects smaller than a pixel.
+    /// Stop refining where a node's sphere projects smaller than `stop_pixels` pixels.
     pub adaptive: bool,
+    /// Projected diameter (pixels) below which the adaptive stop leaves a node unrefined.
+    pub stop_pixels: f32,
     pub initial: Initial,
     pub color_mode: ColorMode,
     pub shadows: bool,
@@ -97,6 +99,7 @@ impl Default for RaytraceSettings {
             spp: 4,
             depth: 6,
             adaptive: false,
+            stop_pixels: 1.0,
             initial: Initial::Sphere,
             color_mode: ColorMode::Function,
             shadows: true,
@@ -170,7 +173,7 @@ pub fn render(
             None => scene.camera_for(framing_bounds(&ifs, &settings.initial, settings.depth)?),
         };
         let rays = tracer::CameraRays::new(&camera, settings.width, settings.height, 1.0);
-        let pixel = PixelFootprint { eye: camera.eye(), perspective: camera.projection == Projection::Perspective, per_pixel: rays.per_pixel() };
+        let pixel = PixelFootprint { eye: camera.eye(), perspective: camera.projection == Projection::Perspective, per_pixel: rays.per_pixel() * settings.stop_pixels.max(1e-3) };
         let m = ifs.active().len().max(1) as f64;
         let object = initial_object(&ifs, &settings.initial, m.powi(settings.depth as i32))?;
         (Hierarchy::build(&ifs, &object, Stop { max_depth: settings.depth, pixel: Some(pixel) })?, camera)
