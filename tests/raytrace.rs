@@ -259,3 +259,11 @@ fn exported_mesh_round_trips_as_initial_object() {
     let pad = 1e-3 * (hi - lo).length();
     assert!(g.bounds.0.cmpge(lo - pad).all() && g.bounds.1.cmple(hi + pad).all(), "{:?} outside {lo} {hi}", g.bounds);
 }
+
+/// A raised cancel flag stops the render with `Cancelled` (the viewer's background thread).
+#[test]
+fn cancel_stops_the_render() {
+    let settings = RaytraceSettings { width: 32, height: 24, spp: 1, depth: 2, ..Default::default() };
+    let r = raytrace::render(&scene("plant2"), 0.0, None, &settings, &|_, _| {}, &AtomicBool::new(true));
+    assert!(matches!(r, Err(RaytraceError::Cancelled)), "expected Cancelled");
+}
