@@ -134,10 +134,13 @@ pub fn build_fixed(ifs: &Ifs, initial: &Initial, depth: u32) -> Result<Hierarchy
     Hierarchy::build(ifs, &object, Stop { max_depth: depth, pixel: None })
 }
 
-/// Axis-aligned bounds of W^k(A) for a small k, which contain every deeper W^n(A) (n ≥ k)
-/// because W(A) ⊆ A: what the camera frames when the adaptive build needs a camera first.
+/// Axis-aligned bounds of W^k(A) for the deepest k ≤ depth with at most 4,096 leaves; they
+/// contain every deeper W^n(A) because W(A) ⊆ A. What the camera frames when the adaptive
+/// build needs a camera first.
 fn framing_bounds(ifs: &Ifs, initial: &Initial, depth: u32) -> Result<(DVec3, DVec3), RaytraceError> {
-    let h = build_fixed(ifs, initial, depth.min(3))?;
+    let m = ifs.active().len().max(2) as f64;
+    let k = (4096f64.ln() / m.ln()).floor() as u32;
+    let h = build_fixed(ifs, initial, depth.min(k.max(1)))?;
     Ok((h.bounds.0.as_dvec3(), h.bounds.1.as_dvec3()))
 }
 
