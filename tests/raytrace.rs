@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 use std::sync::atomic::AtomicBool;
 
 use glam::{DVec3, Vec3};
-use nlifs::raytrace::hierarchy::{Hierarchy, InitialObject, Ray, Stop};
+use nlifs::raytrace::hierarchy::{Hierarchy, InitialObject, NodeKind, Ray, Scratch, Stop};
 use nlifs::raytrace::mesh::Mesh;
 use nlifs::raytrace::{self, Initial, RaytraceError, RaytraceSettings};
 use nlifs::rng::Pcg32;
@@ -63,6 +63,11 @@ fn check_against_brute_force(h: &Hierarchy, what: &str, seed: u32) -> usize {
             }
             _ => panic!("{what}: ray {i} (seed {seed}): hierarchy {fast:?} vs brute force {slow:?}"),
         }
+        // With any leaf as hint (the tracer passes the previous sample's), the same nearest t.
+        let leaves: Vec<u32> = (0..h.nodes.len() as u32).filter(|&k| h.nodes[k as usize].kind != NodeKind::Inner).collect();
+        let hint = leaves[(i * 7919) % leaves.len()];
+        let hinted = h.intersect_hinted(ray, 0.0, f32::INFINITY, hint, &mut Scratch::default());
+        assert_eq!(hinted.map(|x| x.t), slow.map(|x| x.t), "{what}: ray {i} (seed {seed}): hinted with leaf {hint}");
         assert_eq!(h.occluded(ray, 0.0, f32::INFINITY), slow.is_some(), "{what}: ray {i} (seed {seed}): occlusion");
         if let Some(b) = slow {
             // A segment ending before the first hit is not occluded.

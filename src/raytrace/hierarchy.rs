@@ -394,14 +394,41 @@ impl Hierarchy {
 
     /// [`Self::intersect`] with a reused traversal stack (the tracer keeps one per thread).
     pub fn intersect_with(&self, ray: &Ray, t_min: f32, t_max: f32, scratch: &mut Scratch) -> Option<Hit> {
+        self.intersect_hinted(ray, t_min, t_max, u32::MAX, scratch)
+    }
+
+    /// [`Self::intersect_with`] that first tries leaf `hint` (the tracer passes the previous
+    /// sample's leaf): a hit there shortens the ray before the search, which then skips every
+    /// bound entered farther away. The result is the same nearest hit.
+    pub fn intersect_hinted(&self, ray: &Ray, t_min: f32, t_max: f32, hint: u32, scratch: &mut Scratch) -> Option<Hit> {
         let mut best = Hit { t: t_max, node: u32::MAX, triangle: u32::MAX, u: 0.0, v: 0.0 };
-        let root = self.nodes.first()?;
+        if let Some(leaf) = self.nodes.get(hint as usize) {
+            match leaf.kind {
+                NodeKind::Sphere => {
+                    if let Some(t) = sphere_surface(ray, leaf.centre, leaf.radius, t_min, t_max) {
+                        best = Hit { t, node: hint, ..best };
+                    }
+                }
+                NodeKind::Triangles => {
+                    for tri in leaf.first..leaf.first + leaf.count as u32 {
+                        if let Some((t, u, v)) = self.triangle_hit(ray, tri, t_min, best.t) {
+                            best = Hit { t, node: hint, triangle: tri, u, v };
+                        }
+                    }
+                }
+                NodeKind::Inner => {}
+            }
+        }
+        let Some(root) = self.nodes.first() else { return None };
         if root.kind == NodeKind::Sphere {
             return sphere_surface(ray, root.centre, root.radius, t_min, t_max).map(|t| Hit { t, node: 0, ..best });
         }
         let stack = &mut scratch.closest;
         stack.clear();
-        stack.push((0, bound_entry(ray, root.centre, root.radius, t_min, t_max)?));
+        match bound_entry(ray, root.centre, root.radius, t_min, best.t) {
+            Some(t) => stack.push((0, t)),
+            None => return (best.node != u32::MAX).then_some(best),
+        }
         let mut near = [(0u32, 0f32); MAX_CHILDREN];
         while let Some((index, t_enter)) = stack.pop() {
             if t_enter >= best.t {

@@ -126,6 +126,8 @@ pub struct TraceStats {
 struct RowScratch {
     stacks: Scratch,
     last_occluder: Vec<u32>,
+    /// The leaf the previous primary ray hit (tried first by the next one).
+    last_hit: u32,
 }
 
 struct Tracer<'a> {
@@ -188,8 +190,12 @@ impl Tracer<'_> {
             if vis == 0.0 {
                 continue;
             }
-            let h = (light.to_light + view).normalize();
-            c += vis * light.intensity * (albedo * cos + Vec3::splat(specular * n.dot(h).max(0.0).powi(32)));
+            let mut lit = albedo * cos;
+            if specular > 0.0 {
+                let h = (light.to_light + view).normalize();
+                lit += Vec3::splat(specular * n.dot(h).max(0.0).powi(32));
+            }
+            c += vis * light.intensity * lit;
         }
         c
     }
@@ -198,7 +204,8 @@ impl Tracer<'_> {
         stats.primary_rays += 1;
         let t_ground = if self.shading.ground && ray.dir.y < -1e-6 { (self.ground_y - ray.origin.y) / ray.dir.y } else { f32::INFINITY };
         let t_ground = if t_ground > 0.0 { t_ground } else { f32::INFINITY };
-        if let Some(hit) = self.hierarchy.intersect_with(ray, 0.0, t_ground, &mut scratch.stacks) {
+        if let Some(hit) = self.hierarchy.intersect_hinted(ray, 0.0, t_ground, scratch.last_hit, &mut scratch.stacks) {
+            scratch.last_hit = hit.node;
             let (p, n) = self.hierarchy.surface(ray, &hit);
             return self.light(p, n, -ray.dir, self.albedo(&hit), 0.25, stats, scratch);
         }
@@ -239,13 +246,14 @@ pub fn trace(
             return Err(RaytraceError::Cancelled);
         }
         let mut stats = TraceStats::default();
-        let mut scratch = RowScratch { stacks: Scratch::default(), last_occluder: vec![u32::MAX; shading.lights.len()] };
+        let mut scratch = RowScratch { stacks: Scratch::default(), last_occluder: vec![u32::MAX; shading.lights.len()], last_hit: u32::MAX };
         let mut strata: Vec<u32> = (0..spp).collect();
         for x in 0..w as usize {
             let mut rng = Pcg32::for_stream(shading.seed, 0, (y * w as usize + x) as u32);
             // Latin hypercube: sample i takes x-stratum i and a shuffled y-stratum.
             for i in (1..strata.len()).rev() {
-                let j = (rng.next_u32() % (i as u32 + 1)) as usize;
+                // Lemire's multiply-shift: an index in 0..=i without a division.
+                let j = ((rng.next_u32() as u64 * (i as u64 + 1)) >> 32) as usize;
                 strata.swap(i, j);
             }
             let mut sum = Vec3::ZERO;
