@@ -590,7 +590,8 @@ impl Hierarchy {
         (p, if n.dot(ray.dir) > 0.0 { -n } else { n })
     }
 
-    /// Leaf spheres (sphere initial object) as (centre, radius, function, depth).
+    /// The leaf sphere nodes (sphere initial object), in node order: for a fixed depth, in path
+    /// order with the outermost function most significant.
     pub fn leaf_spheres(&self) -> impl Iterator<Item = &Node> {
         self.nodes.iter().filter(|n| n.kind == NodeKind::Sphere)
     }
