@@ -15,4 +15,5 @@ pub mod render;
 pub mod rng;
 pub mod scene;
 pub mod splat;
+pub mod raytrace;
 pub mod timeline;

@@ -50,6 +50,8 @@ enum Command {
     Export(ExportCommand),
     /// Render an animated scene to DIR/frame_00000.png, ... (optionally a video).
     Record(RecordArgs),
+    /// Ray-trace a still of the deterministic approximation W^n(A) (spheres or meshes).
+    Snapshot(raytrace_cli::SnapshotArgs),
     /// Benchmarks (throughput figures for the README).
     #[command(subcommand)]
     Bench(BenchCommand),
@@ -57,6 +59,8 @@ enum Command {
 
 #[derive(Subcommand)]
 enum BenchCommand {
+    #[command(flatten)]
+    Raytrace(raytrace_cli::BenchCommand),
     /// CPU chaos game on one core: map only and map + splat at 1920×1080.
     Cpu {
         /// Scene to run (default: the paper's tapering).
@@ -185,12 +189,20 @@ enum ExportCommand {
         #[arg(long, default_value_t = 0.0)]
         time: f64,
     },
+    /// The deterministic approximation W^n(A) as a glTF 2.0 binary mesh (.glb).
+    Mesh(raytrace_cli::ExportMeshArgs),
+    /// W^n(A) of spheres as a POV-Ray 3.7 scene (for benchmarks).
+    #[command(hide = true)]
+    Pov(raytrace_cli::ExportPovArgs),
 }
 
 /// An error caused by the user's input: exit code 2.
 #[derive(Debug, thiserror::Error)]
 #[error("{0}")]
 struct BadInput(String);
+
+#[path = "raytrace/cli.rs"]
+mod raytrace_cli;
 
 fn main() -> ExitCode {
     env_logger::Builder::from_env(env_logger::Env::default().default_filter_or("warn")).init();
@@ -206,7 +218,7 @@ fn main() -> ExitCode {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("error: {e:#}");
-            let bad_input = e.chain().any(|c| c.is::<BadInput>() || c.is::<nlifs::scene::LoadError>() || c.is::<nlifs::scene::SceneError>());
+            let bad_input = e.chain().any(|c| c.is::<BadInput>() || c.downcast_ref::<nlifs::raytrace::RaytraceError>().is_some_and(|e| e.is_bad_input()) || c.is::<nlifs::scene::LoadError>() || c.is::<nlifs::scene::SceneError>());
             ExitCode::from(if bad_input { 2 } else { 1 })
         }
     }
@@ -235,6 +247,10 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             Ok(())
         }
         Some(Command::Record(args)) => record(args),
+        Some(Command::Export(ExportCommand::Mesh(args))) => raytrace_cli::export_mesh(args),
+        Some(Command::Export(ExportCommand::Pov(args))) => raytrace_cli::export_pov(args),
+        Some(Command::Snapshot(args)) => raytrace_cli::snapshot(args),
+        Some(Command::Bench(BenchCommand::Raytrace(cmd))) => raytrace_cli::bench(cmd),
     }
 }
 

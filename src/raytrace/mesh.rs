@@ -1,0 +1,195 @@
+//! Triangle meshes used as initial objects A of the deterministic algorithm: the initial grid
+//! box's outer surface (the paper's "tessellated outer surface of the grid") and meshes read
+//! from glTF files, fitted into the grid's box. A leaf w_i1∘…∘w_ik(A) of the hierarchy is such a
+//! mesh with every vertex mapped; its smooth normals are recomputed from the mapped triangles.
+
+use std::path::Path;
+
+use glam::{DMat4, DVec3, Vec3};
+
+use super::RaytraceError;
+
+/// An indexed triangle mesh in the scene's coordinates (f64 so that deep compositions of maps
+/// stay accurate before they are rounded for tracing).
+#[derive(Clone, Debug, Default)]
+pub struct Mesh {
+    pub positions: Vec<DVec3>,
+    pub triangles: Vec<[u32; 3]>,
+}
+
+impl Mesh {
+    /// The outer surface of the box [lo, hi], each face cut into `subdivisions`² quads (two
+    /// triangles each). Faces do not share vertices, so the box's edges stay creased after
+    /// smoothing. A flat box (2D grid, zero extent along z) gives one double-sided rectangle.
+    /// Triangles are emitted in 2×2-quad blocks so that consecutive runs are compact tiles.
+    pub fn box_surface(lo: DVec3, hi: DVec3, subdivisions: usize) -> Self {
+        let s = subdivisions.max(1);
+        let mut mesh = Mesh::default();
+        let flat_z = (hi.z - lo.z).abs() < 1e-12;
+        // (fixed axis, side, u axis, v axis) with u × v pointing outwards.
+        let faces: &[(usize, bool, usize, usize)] = if flat_z {
+            &[(2, true, 0, 1)]
+        } else {
+            &[(0, false, 2, 1), (0, true, 1, 2), (1, false, 0, 2), (1, true, 2, 0), (2, false, 1, 0), (2, true, 0, 1)]
+        };
+        for &(axis, high, ua, va) in faces {
+            let base = mesh.positions.len() as u32;
+            for i in 0..=s {
+                for j in 0..=s {
+                    let mut p = DVec3::ZERO;
+                    p[axis] = if high { hi[axis] } else { lo[axis] };
+                    p[ua] = lo[ua] + (hi[ua] - lo[ua]) * i as f64 / s as f64;
+                    p[va] = lo[va] + (hi[va] - lo[va]) * j as f64 / s as f64;
+                    mesh.positions.push(p);
+                }
+            }
+            let at = |i: usize, j: usize| base + (i * (s + 1) + j) as u32;
+            for bi in (0..s).step_by(2) {
+                for bj in (0..s).step_by(2) {
+                    for i in bi..(bi + 2).min(s) {
+                        for j in bj..(bj + 2).min(s) {
+                            mesh.triangles.push([at(i, j), at(i + 1, j), at(i + 1, j + 1)]);
+                            mesh.triangles.push([at(i, j), at(i + 1, j + 1), at(i, j + 1)]);
+                        }
+                    }
+                }
+            }
+        }
+        mesh
+    }
+
+    /// Axis-aligned bounds of the vertices.
+    pub fn bounds(&self) -> (DVec3, DVec3) {
+        self.positions.iter().fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), p| (lo.min(*p), hi.max(*p)))
+    }
+
+    /// Area-weighted vertex normals of the mesh with its vertices replaced by `positions`.
+    pub fn vertex_normals(&self, positions: &[Vec3]) -> Vec<Vec3> {
+        let mut normals = vec![Vec3::ZERO; positions.len()];
+        for t in &self.triangles {
+            let [a, b, c] = t.map(|i| positions[i as usize]);
+            let n = (b - a).cross(c - a);
+            for i in t {
+                normals[*i as usize] += n;
+            }
+        }
+        normals.into_iter().map(|n| n.try_normalize().unwrap_or(Vec3::Y)).collect()
+    }
+}
+
+/// Reads every triangle primitive of the default scene (or of all meshes, when the file has no
+/// scene) with its node transforms, and fits the result into the box [lo, hi]: uniformly
+/// scaled to the box's largest extent that it fits, centred. Any problem is an error, never a
+/// panic.
+pub fn load_gltf(path: &Path, lo: DVec3, hi: DVec3) -> Result<Mesh, RaytraceError> {
+    let bad = |message: String| RaytraceError::Gltf { path: path.display().to_string(), message };
+    let bytes = std::fs::read(path).map_err(|e| bad(e.to_string()))?;
+    let gltf = gltf::Gltf::from_slice(&bytes).map_err(|e| bad(e.to_string()))?;
+    let base = path.parent();
+    let buffers = gltf::import_buffers(&gltf.document, base, gltf.blob.clone()).map_err(|e| bad(e.to_string()))?;
+    // The gltf crate validates the document but its accessor readers can still panic on
+    // inconsistent data; such a file is reported like any other bad input.
+    let read = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| read_document(&gltf.document, &buffers)));
+    let mut mesh = match read {
+        Ok(r) => r.map_err(bad)?,
+        Err(_) => return Err(bad("inconsistent accessor or buffer data".into())),
+    };
+    if mesh.triangles.is_empty() {
+        return Err(bad("no triangle primitives with positions".into()));
+    }
+    let (mlo, mhi) = mesh.bounds();
+    let extent = mhi - mlo;
+    if !extent.is_finite() {
+        return Err(bad("vertex positions are not finite".into()));
+    }
+    let target = hi - lo;
+    let scale = [0, 1, 2]
+        .iter()
+        .filter(|&&a| extent[a] > 1e-12 && target[a] > 1e-12)
+        .map(|&a| target[a] / extent[a])
+        .fold(f64::INFINITY, f64::min);
+    let scale = if scale.is_finite() { scale } else { 1.0 };
+    let (mc, tc) = (0.5 * (mlo + mhi), 0.5 * (lo + hi));
+    for p in &mut mesh.positions {
+        *p = tc + (*p - mc) * scale;
+        // 2D grids: flatten into the grid's plane.
+        if target.z.abs() < 1e-12 {
+            p.z = lo.z;
+        }
+    }
+    Ok(mesh)
+}
+
+fn read_document(doc: &gltf::Document, buffers: &[gltf::buffer::Data]) -> Result<Mesh, String> {
+    let mut mesh = Mesh::default();
+    let add = |m: gltf::Mesh, world: DMat4, mesh: &mut Mesh| -> Result<(), String> {
+        for prim in m.primitives() {
+            if prim.mode() != gltf::mesh::Mode::Triangles {
+                continue;
+            }
+            let reader = prim.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
+            let Some(positions) = reader.read_positions() else { continue };
+            let base = mesh.positions.len() as u32;
+            let count_before = mesh.positions.len();
+            mesh.positions.extend(positions.map(|p| world.transform_point3(Vec3::from(p).as_dvec3())));
+            let n = (mesh.positions.len() - count_before) as u32;
+            let indices: Vec<u32> = match reader.read_indices() {
+                Some(ix) => ix.into_u32().collect(),
+                None => (0..n).collect(),
+            };
+            if let Some(bad) = indices.iter().find(|&&i| i >= n) {
+                return Err(format!("mesh {:?}: index {bad} out of range ({n} vertices)", m.name().unwrap_or("")));
+            }
+            for t in indices.chunks_exact(3) {
+                mesh.triangles.push([base + t[0], base + t[1], base + t[2]]);
+            }
+        }
+        Ok(())
+    };
+    let scene = doc.default_scene().or_else(|| doc.scenes().next());
+    match scene {
+        Some(scene) => {
+            let mut stack: Vec<(gltf::Node, DMat4)> = scene.nodes().map(|n| (n, DMat4::IDENTITY)).collect();
+            let mut visited = 0usize;
+            while let Some((node, parent)) = stack.pop() {
+                visited += 1;
+                if visited > 1_000_000 {
+                    return Err("node hierarchy too deep or cyclic".into());
+                }
+                let local = DMat4::from_cols_array_2d(&node.transform().matrix().map(|c| c.map(f64::from)));
+                let world = parent * local;
+                if let Some(m) = node.mesh() {
+                    add(m, world, &mut mesh)?;
+                }
+                stack.extend(node.children().map(|c| (c, world)));
+            }
+        }
+        None => {
+            for m in doc.meshes() {
+                add(m, DMat4::IDENTITY, &mut mesh)?;
+            }
+        }
+    }
+    Ok(mesh)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn box_surface_is_closed_and_outward() {
+        let mesh = Mesh::box_surface(DVec3::ZERO, DVec3::new(1.0, 2.0, 3.0), 3);
+        assert_eq!(mesh.triangles.len(), 6 * 9 * 2);
+        // Divergence theorem: a closed outward surface encloses volume Σ (a · (b × c)) / 6.
+        let volume: f64 = mesh
+            .triangles
+            .iter()
+            .map(|t| {
+                let [a, b, c] = t.map(|i| mesh.positions[i as usize]);
+                a.dot(b.cross(c)) / 6.0
+            })
+            .sum();
+        assert!((volume - 6.0).abs() < 1e-9, "volume {volume}");
+    }
+}

@@ -1,0 +1,274 @@
+//! Ray tracer against its oracles: hierarchy traversal against brute force over every leaf on
+//! seeded rays for each paper scene; the Lipschitz spheres against mapped samples (the
+//! superset property); a small golden image from the deterministic CPU tracer; bad glTF.
+
+use std::path::{Path, PathBuf};
+use std::sync::atomic::AtomicBool;
+
+use glam::{DVec3, Vec3};
+use nlifs::raytrace::hierarchy::{Hierarchy, InitialObject, NodeKind, Ray, Scratch, Stop};
+use nlifs::raytrace::mesh::Mesh;
+use nlifs::raytrace::{self, Initial, RaytraceError, RaytraceSettings};
+use nlifs::rng::Pcg32;
+use nlifs::scene::Scene;
+
+const SCENES: [&str; 5] = ["tapering", "twisting", "fantasy", "plant1", "plant2"];
+
+fn scene(name: &str) -> Scene {
+    Scene::load(&Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes").join(format!("{name}.toml"))).expect("paper scene loads")
+}
+
+fn unit_vector(rng: &mut Pcg32) -> Vec3 {
+    loop {
+        let v = Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 2.0 - 1.0;
+        let l = v.length_squared();
+        if l > 1e-4 && l <= 1.0 {
+            return v / l.sqrt();
+        }
+    }
+}
+
+/// Rays from a sphere around the geometry towards random points of its box (most hit
+/// something, many graze), plus rays starting inside the box in random directions.
+fn seeded_rays(h: &Hierarchy, seed: u32, count: u32) -> Vec<Ray> {
+    let (lo, hi) = h.bounds;
+    let centre = 0.5 * (lo + hi);
+    let radius = 0.5 * (hi - lo).length();
+    (0..count)
+        .map(|i| {
+            let mut rng = Pcg32::for_stream(seed, 0, i);
+            let target = lo + (hi - lo) * Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32());
+            if i % 4 == 3 {
+                Ray { origin: target, dir: unit_vector(&mut rng) }
+            } else {
+                let origin = centre + 2.0 * radius * unit_vector(&mut rng);
+                Ray { origin, dir: (target - origin).normalize() }
+            }
+        })
+        .collect()
+}
+
+/// The hierarchy's closest hit must be brute force's: the same t exactly (the same
+/// intersection routine runs on the same leaf) and the same leaf unless two leaves tie.
+fn check_against_brute_force(h: &Hierarchy, what: &str, seed: u32) -> usize {
+    let mut hits = 0;
+    for (i, ray) in seeded_rays(h, seed, 10_000).iter().enumerate() {
+        let fast = h.intersect(ray, 0.0, f32::INFINITY);
+        let slow = h.intersect_brute_force(ray, 0.0, f32::INFINITY);
+        match (fast, slow) {
+            (None, None) => {}
+            (Some(a), Some(b)) => {
+                assert_eq!(a.t, b.t, "{what}: ray {i} (seed {seed}): t {} vs brute force {}", a.t, b.t);
+                hits += 1;
+            }
+            _ => panic!("{what}: ray {i} (seed {seed}): hierarchy {fast:?} vs brute force {slow:?}"),
+        }
+        // With any leaf as hint (the tracer passes the previous sample's), the same nearest t.
+        let leaves: Vec<u32> = (0..h.nodes.len() as u32).filter(|&k| h.nodes[k as usize].kind != NodeKind::Inner).collect();
+        let hint = leaves[(i * 7919) % leaves.len()];
+        let hinted = h.intersect_hinted(ray, 0.0, f32::INFINITY, hint, &mut Scratch::default());
+        assert_eq!(hinted.map(|x| x.t), slow.map(|x| x.t), "{what}: ray {i} (seed {seed}): hinted with leaf {hint}");
+        assert_eq!(h.occluded(ray, 0.0, f32::INFINITY), slow.is_some(), "{what}: ray {i} (seed {seed}): occlusion");
+        if let Some(b) = slow {
+            // A segment ending before the first hit is not occluded.
+            assert!(!h.occluded(ray, 0.0, b.t * 0.999), "{what}: ray {i}: occluded before the first hit");
+        }
+    }
+    hits
+}
+
+#[test]
+fn sphere_hierarchy_matches_brute_force_on_paper_scenes() {
+    for (k, name) in SCENES.iter().enumerate() {
+        let ifs = scene(name).at(0.0);
+        let h = raytrace::build_fixed(&ifs, &Initial::Sphere, 4).unwrap();
+        let hits = check_against_brute_force(&h, name, k as u32);
+        // A test that cannot fail is no test: most rays must hit.
+        assert!(hits > 3000, "{name}: only {hits} of 10000 rays hit");
+    }
+}
+
+/// The adaptive stop gives leaves at mixed depths; the traversal must still agree.
+#[test]
+fn adaptive_hierarchy_matches_brute_force() {
+    use nlifs::raytrace::hierarchy::PixelFootprint;
+    for (k, name) in ["plant2", "fantasy"].iter().enumerate() {
+        let ifs = scene(name).at(0.0);
+        let (lo, hi) = (ifs.domain.min().as_vec3(), ifs.domain.max().as_vec3());
+        let eye = 0.5 * (lo + hi) + Vec3::new(1.0, 0.6, 1.5) * (hi - lo).length();
+        let pixel = PixelFootprint { eye, perspective: true, per_pixel: 0.1 };
+        let h = Hierarchy::build(&ifs, &InitialObject::Sphere, Stop { max_depth: 6, pixel: Some(pixel) }).unwrap();
+        let depths: std::collections::BTreeSet<u8> = h.leaf_spheres().map(|n| n.depth).collect();
+        assert!(depths.len() >= 2, "{name}: the adaptive stop should give mixed depths, got {depths:?}");
+        let hits = check_against_brute_force(&h, &format!("{name} adaptive"), 200 + k as u32);
+        assert!(hits > 3000, "{name}: only {hits} of 10000 rays hit");
+    }
+}
+
+#[test]
+fn mesh_hierarchy_matches_brute_force_on_paper_scenes() {
+    for (k, name) in SCENES.iter().enumerate() {
+        let ifs = scene(name).at(0.0);
+        let mesh = Mesh::box_surface(ifs.domain.min(), ifs.domain.max(), 3);
+        let h = Hierarchy::build(&ifs, &InitialObject::Mesh(mesh), Stop { max_depth: 2, pixel: None }).unwrap();
+        let hits = check_against_brute_force(&h, &format!("{name} grid surface"), 100 + k as u32);
+        assert!(hits > 1000, "{name}: only {hits} of 10000 rays hit");
+    }
+}
+
+/// S(i1 i2…ik) must contain w_i1 of every point of S(i2…ik): sample points uniformly in the
+/// depth-(k−1) leaf spheres, map them, and look them up in the depth-k leaf spheres (leaves are
+/// in path order, outermost function most significant). Tolerance: the f32 rounding slack that
+/// the build adds, 1e-6 of the coordinates' magnitude.
+#[test]
+fn lipschitz_spheres_contain_mapped_samples() {
+    for (k, name) in SCENES.iter().enumerate() {
+        let ifs = scene(name).at(0.0);
+        let active = ifs.active();
+        let m = active.len();
+        let depth = 3;
+        let inner = raytrace::build_fixed(&ifs, &Initial::Sphere, depth - 1).unwrap();
+        let outer = raytrace::build_fixed(&ifs, &Initial::Sphere, depth).unwrap();
+        let inner: Vec<_> = inner.leaf_spheres().copied().collect();
+        let outer: Vec<_> = outer.leaf_spheres().copied().collect();
+        assert_eq!(outer.len(), inner.len() * m);
+        let mut rng = Pcg32::for_stream(7, k as u32, 0);
+        for sample in 0..20_000 {
+            let f = sample % m;
+            let p = (rng.next_u32() as usize) % inner.len();
+            let s = inner[p];
+            let x = s.centre.as_dvec3() + s.radius as f64 * rng.next_f32().cbrt() as f64 * unit_vector(&mut rng).as_dvec3();
+            let y = ifs.functions[active[f]].map.eval(x);
+            let t = outer[f * inner.len() + p];
+            let d = (y - t.centre.as_dvec3()).length();
+            let slack = 1e-6 * t.centre.abs().max_element() as f64 + 1e-9;
+            assert!(d <= t.radius as f64 + slack, "{name}: sample {sample}: w_{f}(x) at distance {d} from a sphere of radius {}", t.radius);
+        }
+    }
+}
+
+/// Points of A mapped through a leaf's whole composition lie inside the bound of every node on
+/// the way down (what makes culling by the hierarchy correct).
+#[test]
+fn mapped_points_stay_inside_their_ancestors() {
+    for (k, name) in SCENES.iter().enumerate() {
+        let ifs = scene(name).at(0.0);
+        let active = ifs.active();
+        let h = raytrace::build_fixed(&ifs, &Initial::Sphere, 4).unwrap();
+        let (lo, hi) = (ifs.domain.min(), ifs.domain.max());
+        let mut rng = Pcg32::for_stream(11, k as u32, 0);
+        for sample in 0..2000 {
+            let mut x = lo + (hi - lo) * DVec3::new(rng.next_f32() as f64, rng.next_f32() as f64, rng.next_f32() as f64);
+            let path: Vec<usize> = (0..4).map(|_| rng.next_u32() as usize % active.len()).collect();
+            for &f in path.iter().rev() {
+                x = ifs.functions[active[f]].map.eval(x);
+            }
+            let mut node = 0usize;
+            for &f in &path {
+                let n = h.nodes[node];
+                let d = (x - n.centre.as_dvec3()).length();
+                assert!(d <= n.radius as f64 * (1.0 + 1e-6), "{name}: sample {sample} outside node {node}");
+                node = n.first as usize + f;
+            }
+        }
+    }
+}
+
+fn golden_dir() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests").join("golden")
+}
+
+/// A 128×96 still of tapering W^3(sphere) at 2 spp. Tolerance: the image is a deterministic
+/// function of the inputs on one build, but libm's sqrt/pow and FMA contraction may differ
+/// across platforms by a few ulps, which moves silhouette and shadow-edge samples. So: mean
+/// absolute channel difference ≤ 0.5 levels and at most 1% of pixels off by more than 16 levels.
+#[test]
+fn golden_image_tapering_spheres() {
+    let scene = scene("tapering");
+    let settings = RaytraceSettings { width: 128, height: 96, spp: 2, depth: 3, ..Default::default() };
+    let traced = raytrace::render(&scene, 0.0, None, &settings, &|_, _| {}, &AtomicBool::new(false)).unwrap();
+    let actual = traced.image;
+    let path = golden_dir().join("tapering_n3_spheres.png");
+    if std::env::var_os("REPLACE").is_some() || !path.exists() {
+        nlifs::io::save_png(&path, &actual).unwrap();
+        eprintln!("wrote golden image {}", path.display());
+        if std::env::var_os("REPLACE").is_none() {
+            panic!("golden image {} was missing and has been written; check it and rerun", path.display());
+        }
+        return;
+    }
+    let expected = image::open(&path).unwrap().to_rgb8();
+    assert_eq!(expected.dimensions(), actual.dimensions());
+    let mut sum = 0u64;
+    let mut bad = 0usize;
+    let mut diff = image::RgbImage::new(actual.width(), actual.height());
+    for ((a, e), d) in actual.pixels().zip(expected.pixels()).zip(diff.pixels_mut()) {
+        let delta = [0, 1, 2].map(|c| (a[c] as i32 - e[c] as i32).unsigned_abs() as u8);
+        sum += delta.iter().map(|&v| v as u64).sum::<u64>();
+        if delta.iter().any(|&v| v > 16) {
+            bad += 1;
+        }
+        *d = image::Rgb(delta.map(|v| v.saturating_mul(8)));
+    }
+    let mean = sum as f64 / (3 * actual.width() * actual.height()) as f64;
+    let pixels = (actual.width() * actual.height()) as usize;
+    if mean > 0.5 || bad * 100 > pixels {
+        let out = std::env::temp_dir();
+        let (a, d) = (out.join("tapering_n3_spheres.actual.png"), out.join("tapering_n3_spheres.diff.png"));
+        nlifs::io::save_png(&a, &actual).unwrap();
+        nlifs::io::save_png(&d, &diff).unwrap();
+        panic!("golden image differs: mean {mean:.3} levels, {bad} pixels > 16 levels; actual {}, diff ×8 {}", a.display(), d.display());
+    }
+}
+
+#[test]
+fn bad_gltf_is_an_error_not_a_panic() {
+    let dir = std::env::temp_dir().join(format!("nlifs-raytrace-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let ifs = scene("tapering").at(0.0);
+    let cases: [(&str, &[u8]); 3] = [
+        ("garbage.glb", b"this is not a glTF file"),
+        ("truncated.glb", b"glTF\x02\x00\x00\x00\xff\x00\x00\x00"),
+        ("empty.gltf", br#"{"asset":{"version":"2.0"}}"#),
+    ];
+    for (name, bytes) in cases {
+        let path = dir.join(name);
+        std::fs::write(&path, bytes).unwrap();
+        match raytrace::build_fixed(&ifs, &Initial::Gltf(path.clone()), 1) {
+            Err(RaytraceError::Gltf { .. }) => {}
+            other => panic!("{name}: expected a glTF error, got {:?}", other.map(|h| h.leaf_count)),
+        }
+    }
+    let missing = raytrace::build_fixed(&ifs, &Initial::Gltf(dir.join("missing.glb")), 1);
+    assert!(matches!(missing, Err(RaytraceError::Gltf { .. })));
+}
+
+/// `export mesh` output read back by the gltf crate as an initial object: W^1(sphere) of
+/// tapering is 4 icospheres of 80 triangles, so W^1 of plant2 with it as A has 5 · 320.
+#[test]
+fn exported_mesh_round_trips_as_initial_object() {
+    let dir = std::env::temp_dir().join(format!("nlifs-raytrace-rt-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let tapering = scene("tapering").at(0.0);
+    let h = raytrace::build_fixed(&tapering, &Initial::Sphere, 1).unwrap();
+    let colors: Vec<[f32; 3]> = tapering.functions.iter().map(|f| f.color).collect();
+    let names: Vec<String> = tapering.functions.iter().map(|f| f.name.clone()).collect();
+    let path = dir.join("tapering_w1.glb");
+    nlifs::io::write_atomic(&path, |w| raytrace::export::write_glb_mesh(w, &h, &colors, &names)).unwrap();
+    let plant = scene("plant2").at(0.0);
+    let g = raytrace::build_fixed(&plant, &Initial::Gltf(path), 1).unwrap();
+    assert_eq!(g.leaf_count, 5);
+    assert_eq!(g.triangles.len(), 5 * 4 * 80);
+    // The fitted mesh lies in the grid's box, so its images lie in the plant's W^1 box.
+    let (lo, hi) = (plant.domain.min().as_vec3(), plant.domain.max().as_vec3());
+    let pad = 1e-3 * (hi - lo).length();
+    assert!(g.bounds.0.cmpge(lo - pad).all() && g.bounds.1.cmple(hi + pad).all(), "{:?} outside {lo} {hi}", g.bounds);
+}
+
+/// A raised cancel flag stops the render with `Cancelled` (the viewer's background thread).
+#[test]
+fn cancel_stops_the_render() {
+    let settings = RaytraceSettings { width: 32, height: 24, spp: 1, depth: 2, ..Default::default() };
+    let r = raytrace::render(&scene("plant2"), 0.0, None, &settings, &|_, _| {}, &AtomicBool::new(true));
+    assert!(matches!(r, Err(RaytraceError::Cancelled)), "expected Cancelled");
+}
