@@ -12,3 +12,5 @@ pub mod render;
 pub mod rng;
 pub mod scene;
 pub mod splat;
+pub mod gpu;
+pub mod viewer;

@@ -74,6 +74,16 @@ struct RenderArgs {
     /// Splat mode (default: the scene's).
     #[arg(long, value_enum)]
     mode: Option<ModeArg>,
+    /// Where the chaos game runs: gpu, cpu, or auto (gpu when an adapter exists).
+    #[arg(long, value_enum, default_value_t = BackendArg::Cpu)]
+    backend: BackendArg,
+}
+
+#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
+enum BackendArg {
+    Gpu,
+    Cpu,
+    Auto,
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -240,9 +250,25 @@ fn render(args: RenderArgs) -> anyhow::Result<()> {
     let (chunks, _, _) = chaos_game::chunking(settings.points);
     let bar = progress_bar(chunks as u64, "render");
     let start = std::time::Instant::now();
-    let out = render_cpu(&scene, args.time, &settings, None, &|d, _| bar.set_position(d)).map_err(|e| BadInput(e.to_string()))?;
+    // GPU: explicit `gpu` fails without an adapter; `auto` falls back to the CPU.
+    let gpu = match args.backend {
+        BackendArg::Cpu => None,
+        BackendArg::Gpu => Some(nlifs::gpu::GpuContext::headless()?),
+        BackendArg::Auto => nlifs::gpu::GpuContext::headless().ok(),
+    };
+    let image = match &gpu {
+        Some(ctx) => {
+            bar.finish_and_clear();
+            eprintln!("rendering on {}", ctx.describe());
+            nlifs::gpu::render::render_gpu(ctx, &scene, args.time, &settings, None).map_err(|e| match e {
+                nlifs::gpu::GpuError::NoFunctions => anyhow::Error::new(BadInput(e.to_string())),
+                e => e.into(),
+            })?.image
+        }
+        None => render_cpu(&scene, args.time, &settings, None, &|d, _| bar.set_position(d)).map_err(|e| BadInput(e.to_string()))?.image,
+    };
     bar.finish_and_clear();
-    save_png(&args.output, &out.image).with_context(|| format!("cannot write {}", args.output.display()))?;
+    save_png(&args.output, &image).with_context(|| format!("cannot write {}", args.output.display()))?;
     eprintln!(
         "wrote {} ({}×{}, {} points, {:.2} s)",
         args.output.display(),
