@@ -113,7 +113,7 @@ pub struct GpuChaosGame {
     cells: wgpu::Buffer,
     thresholds: wgpu::Buffer,
     pub colors: wgpu::Buffer,
-    points: wgpu::Buffer,
+    pub points: wgpu::Buffer,
     pub accum: wgpu::Buffer,
     bind_group: Option<wgpu::BindGroup>,
     ifs: Option<IfsUniforms>,
@@ -182,7 +182,7 @@ impl GpuChaosGame {
             cells: storage(device, "cells", 0, none),
             thresholds: storage(device, "thresholds", 0, none),
             colors: storage(device, "colors", 0, none),
-            points: storage(device, "points", point_count as u64 * 16, none),
+            points: storage(device, "points", point_count as u64 * 16, wgpu::BufferUsages::COPY_SRC),
             accum: storage(device, "accum", width as u64 * height as u64 * 16, wgpu::BufferUsages::COPY_SRC),
             bind_group: None,
             ifs: None,
@@ -237,7 +237,7 @@ impl GpuChaosGame {
             return;
         }
         self.point_count = point_count;
-        self.points = storage(device, "points", point_count as u64 * 16, wgpu::BufferUsages::empty());
+        self.points = storage(device, "points", point_count as u64 * 16, wgpu::BufferUsages::COPY_SRC);
         self.bind_group = None;
     }
 
