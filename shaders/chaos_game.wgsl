@@ -77,12 +77,13 @@ fn complex_sqrt(re: f32, im: f32) -> vec2<f32> {
     return vec2<f32>(a, select(b, -b, im < 0.0));
 }
 
-// Cell index and local coordinate along axis `a` of a clamped coordinate `x`
-// (`CompiledIfs::locate_axis`).
-fn locate_axis(f: KernelFunction, a: u32, x: f32) -> vec2<f32> {
-    let n = f.cells[a];
-    let base = f.coord_offset[a];
-    let guess = u32(max((x - f.lo[a]) * f.inv_bin[a], 0.0));
+// Cell index (bit pattern in x) and local coordinate (y) along one axis of a clamped
+// coordinate `x` (`CompiledIfs::locate_axis`): `n` cells, the axis at `base` in the coordinate
+// pool, first guess from the axis origin `lo` and bins per unit `inv_bin`. Scalars rather than
+// the function struct so that nothing is indexed dynamically in private memory (slow on
+// software rasterizers).
+fn locate_axis(n: u32, base: u32, lo: f32, inv_bin: f32, x: f32) -> vec2<f32> {
+    let guess = u32(max((x - lo) * inv_bin, 0.0));
     var i = min(guess, n - 1u);
     while i > 0u && x < coords[base + i].x {
         i -= 1u;
@@ -96,26 +97,30 @@ fn locate_axis(f: KernelFunction, a: u32, x: f32) -> vec2<f32> {
 
 // Maps `p` by compiled function `fi` (`CompiledIfs::map`).
 fn map_point(fi: u32, p: vec3<f32>) -> vec3<f32> {
-    let f = functions[fi];
-    if f.coord_offset.w == KIND_JULIA {
-        let z = complex_sqrt(p.x - f.julia.x, p.y - f.julia.y);
-        return vec3<f32>(f.julia.z * z.x, f.julia.z * z.y, 0.0);
+    let kind = functions[fi].coord_offset.w;
+    if kind == KIND_JULIA {
+        let julia = functions[fi].julia;
+        let z = complex_sqrt(p.x - julia.x, p.y - julia.y);
+        return vec3<f32>(julia.z * z.x, julia.z * z.y, 0.0);
     }
-    let q = clamp(p, f.lo.xyz, f.hi.xyz);
-    let lx = locate_axis(f, 0u, q.x);
-    let ly = locate_axis(f, 1u, q.y);
-    let lz = locate_axis(f, 2u, q.z);
+    let lo = functions[fi].lo.xyz;
+    let inv_bin = functions[fi].inv_bin.xyz;
+    let n = functions[fi].cells;
+    let base = functions[fi].coord_offset.xyz;
+    let q = clamp(p, lo, functions[fi].hi.xyz);
+    let lx = locate_axis(n.x, base.x, lo.x, inv_bin.x, q.x);
+    let ly = locate_axis(n.y, base.y, lo.y, inv_bin.y, q.y);
+    let lz = locate_axis(n.z, base.z, lo.z, inv_bin.z, q.z);
     let ix = bitcast<u32>(lx.x);
     let iy = bitcast<u32>(ly.x);
     let iz = bitcast<u32>(lz.x);
     let u = lx.y;
     let v = ly.y;
     let w = lz.y;
-    let cell_index = f.cells.w + (ix * f.cells.y + iy) * f.cells.z + iz;
-    let c = cells[cell_index].coef;
+    let cell = n.w + (ix * n.y + iy) * n.z + iz;
     // a + u b + v (c + u e) + w (d + u f + v (g + u h))
-    let inner = c[3].xyz + u * c[5].xyz + v * (c[6].xyz + u * c[7].xyz);
-    return c[0].xyz + u * c[1].xyz + v * (c[2].xyz + u * c[4].xyz) + w * inner;
+    let inner = cells[cell].coef[3].xyz + u * cells[cell].coef[5].xyz + v * (cells[cell].coef[6].xyz + u * cells[cell].coef[7].xyz);
+    return cells[cell].coef[0].xyz + u * cells[cell].coef[1].xyz + v * (cells[cell].coef[2].xyz + u * cells[cell].coef[4].xyz) + w * inner;
 }
 
 // Coarse selection cell of `p` (`SelectionTable::cell_of`).

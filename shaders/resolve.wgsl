@@ -23,7 +23,8 @@ struct ResolveParams {
     // World units per pixel at unit view distance (perspective) or per pixel (parallel).
     pixel_size: f32,
     perspective: u32,
-    _pad0: u32,
+    // Closest mode: each pixel shows the nearest key within this radius (point size).
+    point_radius_px: u32,
     _pad1: u32,
     _pad2: u32,
 }
@@ -150,13 +151,24 @@ fn resolve(in: VertexOutput) -> @location(0) vec4<f32> {
     if x < params.width && y < params.height {
         let slot = 4u * (y * params.width + x);
         if params.mode == MODE_CLOSEST {
-            let key = accum[slot];
+            var key = accum[slot];
+            var at = vec2<i32>(i32(x), i32(y));
+            let r = i32(params.point_radius_px);
+            for (var dy = -r; dy <= r; dy += 1) {
+                for (var dx = -r; dx <= r; dx += 1) {
+                    let k = key_at(i32(x) + dx, i32(y) + dy);
+                    if dx * dx + dy * dy <= r * r && k < key {
+                        key = k;
+                        at = vec2<i32>(i32(x) + dx, i32(y) + dy);
+                    }
+                }
+            }
             if key != EMPTY {
                 let fi = key & 0xffu;
                 let t = depth_of(key);
                 var base = colors[fi].rgb;
                 if params.shading > 0.0 {
-                    base *= mix(1.0, shade(i32(x), i32(y), t), params.shading);
+                    base *= mix(1.0, shade(at.x, at.y, t), params.shading);
                 }
                 c = cue(base, t);
             }

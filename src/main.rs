@@ -48,6 +48,47 @@ enum Command {
     /// Export geometry.
     #[command(subcommand)]
     Export(ExportCommand),
+    /// Open the interactive viewer (GPU) on a scene; `nlifs` alone opens it on a built-in scene.
+    View(ViewArgs),
+    /// Benchmarks.
+    #[command(subcommand)]
+    Bench(BenchCommand),
+}
+
+#[derive(Args, Default)]
+struct ViewArgs {
+    scene: Option<PathBuf>,
+    /// Persistent GPU points (default 2^20).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=(1 << 26)))]
+    points: Option<u32>,
+    /// Chaos-game steps per point per frame.
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=256))]
+    steps: Option<u32>,
+    /// Testing: close after this many seconds and print frame statistics.
+    #[arg(long, hide = true)]
+    exit_after_secs: Option<f64>,
+    /// Testing: save the attractor to this PNG before closing.
+    #[arg(long, hide = true)]
+    screenshot: Option<PathBuf>,
+}
+
+#[derive(Subcommand)]
+enum BenchCommand {
+    /// GPU chaos game: points/s (map + splat) and frames/s at 1280×720, and frames to converge
+    /// after a scene edit.
+    Gpu {
+        #[arg(default_value = "scenes/plant2.toml")]
+        scene: PathBuf,
+        /// Persistent GPU points.
+        #[arg(long, default_value_t = 1 << 20)]
+        points: u32,
+        /// Steps per point per frame.
+        #[arg(long, default_value_t = 1)]
+        steps: u32,
+        /// Frames to time.
+        #[arg(long, default_value_t = 60)]
+        frames: u32,
+    },
 }
 
 #[derive(Args)]
@@ -148,10 +189,12 @@ fn main() -> ExitCode {
 
 fn run(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
-        None => {
-            use clap::CommandFactory;
-            Cli::command().print_help()?;
-            println!();
+        None => view(ViewArgs::default()),
+        Some(Command::View(args)) => view(args),
+        Some(Command::Bench(BenchCommand::Gpu { scene, points, steps, frames })) => {
+            let scene = load(&scene)?;
+            let report = nlifs::gpu::bench::run(&scene, points, steps, frames)?;
+            println!("{report}");
             Ok(())
         }
         Some(Command::Info { scene, json, time }) => info(&scene, json, time),
@@ -160,6 +203,19 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             export_points(&scene, &output, points, seed, time)
         }
     }
+}
+
+fn view(args: ViewArgs) -> anyhow::Result<()> {
+    let mut live = nlifs::gpu::live::LiveSettings::default();
+    if let Some(n) = args.points {
+        live.point_count = n;
+    }
+    if let Some(k) = args.steps {
+        live.steps_per_frame = k;
+    }
+    let options = nlifs::viewer::ViewerOptions { scene: args.scene, live, exit_after_secs: args.exit_after_secs, screenshot: args.screenshot };
+    nlifs::viewer::run(options).context("viewer")?;
+    Ok(())
 }
 
 fn load(path: &Path) -> anyhow::Result<Scene> {

@@ -29,6 +29,8 @@ pub struct LiveSettings {
     pub background: [f32; 3],
     /// Screen-space shading strength in [0, 1] (closest mode).
     pub shading: f32,
+    /// Drawn point radius in pixels (closest mode: the nearest key within the radius).
+    pub point_radius_px: u32,
     /// Splats after which accumulation stops (keeps the u32 sums far from overflow).
     pub max_splats: u64,
     /// Steps not splatted after a scene edit while the kept points settle on the new attractor.
@@ -39,12 +41,13 @@ impl Default for LiveSettings {
     fn default() -> Self {
         Self {
             point_count: 1 << 20,
-            steps_per_frame: 2,
+            steps_per_frame: 1,
             seed: 1,
             mode: SplatMode::Closest,
             depth_cue: 0.75,
             background: crate::scene::RenderSettings::default().background,
             shading: 0.0,
+            point_radius_px: 0,
             max_splats: 1 << 30,
             settle_steps: 8,
         }
@@ -121,6 +124,7 @@ impl LiveView {
         self.skip_steps = if self.restart { ifs.transient } else { self.settings.settle_steps.min(ifs.transient) };
         self.clear = true;
         self.view = None;
+        self.update_view();
     }
 
     pub fn set_camera(&mut self, camera: &OrbitCamera) {
@@ -206,7 +210,7 @@ impl LiveView {
             Some(c) => (2.0 * c.half_height_at_target() / self.game.height as f32, false),
             None => (1.0, false),
         };
-        let args = ResolveArgs { mode: s.mode, background: s.background, depth_cue: s.depth_cue, shading: s.shading, near, far, pixel_size, perspective };
+        let args = ResolveArgs { mode: s.mode, background: s.background, depth_cue: s.depth_cue, shading: s.shading, point_radius_px: s.point_radius_px, near, far, pixel_size, perspective };
         self.resolve.draw(&ctx.device, &ctx.queue, encoder, &self.game, &args, target, format);
     }
 

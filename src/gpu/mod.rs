@@ -5,6 +5,7 @@
 //! Without an adapter everything here returns [`GpuError::NoAdapter`]; callers fall back to the
 //! CPU path (`render --backend auto`) or report it.
 
+pub mod bench;
 pub mod chaos_game;
 pub mod live;
 pub mod render;

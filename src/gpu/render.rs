@@ -126,6 +126,7 @@ pub fn headless_settings(settings: &RenderSettings) -> LiveSettings {
         depth_cue: settings.depth_cue,
         background: settings.background,
         shading: 0.0,
+        point_radius_px: 0,
         max_splats: u64::MAX,
         settle_steps: 0,
     }

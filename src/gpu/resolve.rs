@@ -24,7 +24,8 @@ pub struct ResolveParams {
     pub far: f32,
     pub pixel_size: f32,
     pub perspective: u32,
-    pub _pad: [u32; 3],
+    pub point_radius_px: u32,
+    pub _pad: [u32; 2],
 }
 const _: () = assert!(std::mem::size_of::<ResolveParams>() == 64);
 
@@ -36,6 +37,8 @@ pub struct ResolveArgs {
     pub depth_cue: f32,
     /// 0: flat colours; 1: full screen-space shading (closest mode only).
     pub shading: f32,
+    /// Closest mode: each pixel shows the nearest key within this radius.
+    pub point_radius_px: u32,
     pub near: f32,
     pub far: f32,
     /// View-space size of a pixel at unit distance (perspective) or absolute (parallel).
@@ -127,7 +130,8 @@ impl GpuResolve {
             far: args.far,
             pixel_size: args.pixel_size,
             perspective: args.perspective as u32,
-            _pad: [0; 3],
+            point_radius_px: if args.mode == SplatMode::Closest { args.point_radius_px.min(8) } else { 0 },
+            _pad: [0; 2],
         };
         queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
         let pipeline_index = self.draw_pipeline(device, format);
