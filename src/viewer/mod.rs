@@ -128,7 +128,9 @@ impl Gfx {
             .get_default_config(&ctx.adapter, width, height)
             .ok_or_else(|| ViewerError::Window("the surface is not supported by the adapter".into()))?;
         let caps = surface.get_capabilities(&ctx.adapter);
-        if let Some(f) = caps.formats.iter().find(|f| f.is_srgb()) {
+        // A unorm target: the resolve pass encodes sRGB itself (the CPU's exact maths) and egui
+        // prefers it.
+        if let Some(f) = caps.formats.iter().find(|f| !f.is_srgb()) {
             config.format = *f;
         }
         config.desired_maximum_frame_latency = 2;
