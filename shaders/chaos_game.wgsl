@@ -67,7 +67,8 @@ const COLOR_SCALE: f32 = 255.0;
 // Linear RGB per compiled function (w unused).
 @group(0) @binding(5) var<storage, read> colors: array<vec4<f32>>;
 @group(0) @binding(6) var<storage, read_write> points: array<vec4<f32>>;
-// Four u32 per pixel: closest mode uses the first as its key; the others r, g, b, count.
+// Closest mode: one key per pixel (compact, for cache locality of the random splats);
+// average and density modes: four u32 per pixel, r, g, b sums and the count.
 @group(0) @binding(7) var<storage, read_write> accum: array<atomic<u32>>;
 
 fn complex_sqrt(re: f32, im: f32) -> vec2<f32> {
@@ -179,11 +180,17 @@ fn splat(p: vec3<f32>, fi: u32) {
     let near = params.domain_lo.w;
     let far = params.domain_hi.w;
     let t = clamp((q.z - near) / (far - near), 0.0, 1.0);
-    let slot = 4u * (u32(y) * params.width + u32(x));
+    let pixel = u32(y) * params.width + u32(x);
     if params.mode == MODE_CLOSEST {
+        let slot = pixel;
         let key = (u32(t * DEPTH_SCALE) << 8u) | fi;
-        atomicMin(&accum[slot], key);
+        // Most splats of a converging image lose: test with a plain load first, as atomics
+        // are slow (serialized per lane on software rasterizers). The result is the same min.
+        if key < atomicLoad(&accum[slot]) {
+            atomicMin(&accum[slot], key);
+        }
     } else {
+        let slot = 4u * pixel;
         let c = colors[fi].rgb * COLOR_SCALE;
         let bg = params.background.rgb * COLOR_SCALE;
         let k = params.background.w * t;
@@ -225,6 +232,6 @@ fn clear(@builtin(global_invocation_id) id: vec3<u32>) {
     if slot >= 4u * params.width * params.height {
         return;
     }
-    let empty = select(0u, 0xffffffffu, params.mode == MODE_CLOSEST && slot % 4u == 0u);
+    let empty = select(0u, 0xffffffffu, params.mode == MODE_CLOSEST);
     atomicStore(&accum[slot], empty);
 }

@@ -36,7 +36,8 @@ const DEPTH_SCALE: f32 = 16777215.0;
 const COLOR_SCALE: f32 = 255.0;
 
 @group(0) @binding(0) var<uniform> params: ResolveParams;
-// The accumulation buffer of `chaos_game.wgsl`, read-only here: four u32 per pixel.
+// The accumulation buffer of `chaos_game.wgsl`, read-only here: one key per pixel (closest) or
+// four u32 per pixel (r, g, b, count).
 @group(0) @binding(1) var<storage, read> accum: array<u32>;
 // Linear RGB per compiled function.
 @group(0) @binding(2) var<storage, read> colors: array<vec4<f32>>;
@@ -102,7 +103,7 @@ fn key_at(x: i32, y: i32) -> u32 {
     if x < 0 || y < 0 || x >= i32(params.width) || y >= i32(params.height) {
         return EMPTY;
     }
-    return accum[4u * (u32(y) * params.width + u32(x))];
+    return accum[u32(y) * params.width + u32(x)];
 }
 
 fn depth_of(key: u32) -> f32 {
@@ -149,9 +150,10 @@ fn resolve(in: VertexOutput) -> @location(0) vec4<f32> {
     let y = u32(in.position.y);
     var c = params.background.rgb;
     if x < params.width && y < params.height {
-        let slot = 4u * (y * params.width + x);
+        let pixel = y * params.width + x;
+        let slot = 4u * pixel;
         if params.mode == MODE_CLOSEST {
-            var key = accum[slot];
+            var key = accum[pixel];
             var at = vec2<i32>(i32(x), i32(y));
             let r = i32(params.point_radius_px);
             for (var dy = -r; dy <= r; dy += 1) {

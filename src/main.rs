@@ -64,6 +64,9 @@ struct ViewArgs {
     /// Chaos-game steps per point per frame.
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..=256))]
     steps: Option<u32>,
+    /// Screen-space shading strength 0..1 (closest mode).
+    #[arg(long)]
+    shading: Option<f32>,
     /// Testing: close after this many seconds and print frame statistics.
     #[arg(long, hide = true)]
     exit_after_secs: Option<f64>,
@@ -212,6 +215,9 @@ fn view(args: ViewArgs) -> anyhow::Result<()> {
     }
     if let Some(k) = args.steps {
         live.steps_per_frame = k;
+    }
+    if let Some(s) = args.shading {
+        live.shading = s.clamp(0.0, 1.0);
     }
     let options = nlifs::viewer::ViewerOptions { scene: args.scene, live, exit_after_secs: args.exit_after_secs, screenshot: args.screenshot };
     nlifs::viewer::run(options).context("viewer")?;

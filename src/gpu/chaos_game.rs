@@ -283,7 +283,8 @@ impl GpuChaosGame {
         pass.set_bind_group(0, bind_group, &[]);
         if args.clear {
             pass.set_pipeline(&self.clear_pipeline);
-            let (x, y) = dispatch_size(4 * self.width as u64 * self.height as u64);
+            let per_pixel = if v.mode == SplatMode::Closest { 1 } else { 4 };
+            let (x, y) = dispatch_size(per_pixel * self.width as u64 * self.height as u64);
             pass.dispatch_workgroups(x, y, 1);
         }
         if args.steps > 0 {
