@@ -15,5 +15,7 @@ pub mod render;
 pub mod rng;
 pub mod scene;
 pub mod splat;
+pub mod gpu;
 pub mod raytrace;
 pub mod timeline;
+pub mod viewer;

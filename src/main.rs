@@ -52,15 +52,52 @@ enum Command {
     Record(RecordArgs),
     /// Ray-trace a still of the deterministic approximation W^n(A) (spheres or meshes).
     Snapshot(raytrace_cli::SnapshotArgs),
+    /// Open the interactive viewer (GPU) on a scene; `nlifs` alone opens it on a built-in scene.
+    View(ViewArgs),
     /// Benchmarks (throughput figures for the README).
     #[command(subcommand)]
     Bench(BenchCommand),
+}
+
+#[derive(Args, Default)]
+struct ViewArgs {
+    scene: Option<PathBuf>,
+    /// Persistent GPU points (default 2^20).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=(1 << 26)))]
+    points: Option<u32>,
+    /// Chaos-game steps per point per frame.
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=256))]
+    steps: Option<u32>,
+    /// Screen-space shading strength 0..1 (closest mode).
+    #[arg(long)]
+    shading: Option<f32>,
+    /// Testing: close after this many seconds and print frame statistics.
+    #[arg(long, hide = true)]
+    exit_after_secs: Option<f64>,
+    /// Testing: save the attractor to this PNG before closing.
+    #[arg(long, hide = true)]
+    screenshot: Option<PathBuf>,
 }
 
 #[derive(Subcommand)]
 enum BenchCommand {
     #[command(flatten)]
     Raytrace(raytrace_cli::BenchCommand),
+    /// GPU chaos game: points/s (map + splat) and frames/s at 1280×720, and frames to converge
+    /// after a scene edit.
+    Gpu {
+        #[arg(default_value = "scenes/plant2.toml")]
+        scene: PathBuf,
+        /// Persistent GPU points.
+        #[arg(long, default_value_t = 1 << 20)]
+        points: u32,
+        /// Steps per point per frame.
+        #[arg(long, default_value_t = 1)]
+        steps: u32,
+        /// Frames to time.
+        #[arg(long, default_value_t = 60)]
+        frames: u32,
+    },
     /// CPU chaos game on one core: map only and map + splat at 1920×1080.
     Cpu {
         /// Scene to run (default: the paper's tapering).
@@ -154,6 +191,9 @@ struct RenderArgs {
     /// Splat mode (default: the scene's).
     #[arg(long, value_enum)]
     mode: Option<ModeArg>,
+    /// Where the chaos game runs: gpu, cpu, or auto (gpu when an adapter exists).
+    #[arg(long, value_enum, default_value_t = BackendArg::Cpu)]
+    backend: BackendArg,
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -226,10 +266,12 @@ fn main() -> ExitCode {
 
 fn run(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
-        None => {
-            use clap::CommandFactory;
-            Cli::command().print_help()?;
-            println!();
+        None => view(ViewArgs::default()),
+        Some(Command::View(args)) => view(args),
+        Some(Command::Bench(BenchCommand::Gpu { scene, points, steps, frames })) => {
+            let scene = load(&scene)?;
+            let report = nlifs::gpu::bench::run(&scene, points, steps, frames)?;
+            println!("{report}");
             Ok(())
         }
         Some(Command::Info { scene, json, time }) => info(&scene, json, time),
@@ -316,6 +358,22 @@ fn record(args: RecordArgs) -> anyhow::Result<()> {
         record::encode_video(&args.output, frames, args.fps, video)?;
         eprintln!("wrote {}", video.display());
     }
+    Ok(())
+}
+
+fn view(args: ViewArgs) -> anyhow::Result<()> {
+    let mut live = nlifs::gpu::live::LiveSettings::default();
+    if let Some(n) = args.points {
+        live.point_count = n;
+    }
+    if let Some(k) = args.steps {
+        live.steps_per_frame = k;
+    }
+    if let Some(s) = args.shading {
+        live.shading = s.clamp(0.0, 1.0);
+    }
+    let options = nlifs::viewer::ViewerOptions { scene: args.scene, live, exit_after_secs: args.exit_after_secs, screenshot: args.screenshot };
+    nlifs::viewer::run(options).context("viewer")?;
     Ok(())
 }
 
@@ -430,9 +488,25 @@ fn render(args: RenderArgs) -> anyhow::Result<()> {
     let (chunks, _, _) = chaos_game::chunking(settings.points);
     let bar = progress_bar(chunks as u64, "render");
     let start = std::time::Instant::now();
-    let out = render_cpu(&scene, args.time, &settings, None, &|d, _| bar.set_position(d)).map_err(|e| BadInput(e.to_string()))?;
+    // GPU: explicit `gpu` fails without an adapter; `auto` falls back to the CPU.
+    let gpu = match args.backend {
+        BackendArg::Cpu => None,
+        BackendArg::Gpu => Some(nlifs::gpu::GpuContext::headless()?),
+        BackendArg::Auto => nlifs::gpu::GpuContext::headless().ok(),
+    };
+    let image = match &gpu {
+        Some(ctx) => {
+            bar.finish_and_clear();
+            eprintln!("rendering on {}", ctx.describe());
+            nlifs::gpu::render::render_gpu(ctx, &scene, args.time, &settings, None).map_err(|e| match e {
+                nlifs::gpu::GpuError::NoFunctions => anyhow::Error::new(BadInput(e.to_string())),
+                e => e.into(),
+            })?.image
+        }
+        None => render_cpu(&scene, args.time, &settings, None, &|d, _| bar.set_position(d)).map_err(|e| BadInput(e.to_string()))?.image,
+    };
     bar.finish_and_clear();
-    save_png(&args.output, &out.image).with_context(|| format!("cannot write {}", args.output.display()))?;
+    save_png(&args.output, &image).with_context(|| format!("cannot write {}", args.output.display()))?;
     eprintln!(
         "wrote {} ({}×{}, {} points, {:.2} s)",
         args.output.display(),

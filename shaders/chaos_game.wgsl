@@ -1,0 +1,237 @@
+// The chaos game on the GPU, twin of `src/chaos_game.rs` (the map, the function selection and
+// the start point) fused with the splat, twin of `src/splat.rs` (`Framebuffer::consume`).
+// Prepended with `rng.wgsl` by `src/gpu/shaders.rs`.
+//
+// Every invocation owns one persistent point (xyz, w: the function that mapped it last). Per
+// frame it draws from stream (seed, frame, thread), advances `steps` times and splats every step
+// from `skip_steps` on into the accumulation buffer: closest mode keeps the minimum of
+// (depth24 << 8) | function per pixel, average and density modes add depth-cued colour × 255 and
+// a count. Points are restarted at a random point of the domain on `restart` or when they have
+// left the finite floats.
+
+// Mirrors `KernelFunction` in src/chaos_game.rs: keep the two in sync.
+struct KernelFunction {
+    lo: vec4<f32>,
+    hi: vec4<f32>,
+    inv_bin: vec4<f32>,
+    // xyz: cells per axis; w: first cell in the cell pool.
+    cells: vec4<u32>,
+    // xyz: offset of each axis in the coordinate pool; w: kind.
+    coord_offset: vec4<u32>,
+    julia: vec4<f32>,
+}
+
+// Mirrors `Cell` in src/chaos_game.rs.
+struct Cell {
+    coef: array<vec4<f32>, 8>,
+}
+
+// Mirrors `ChaosParams` in src/gpu/chaos_game.rs.
+struct ChaosParams {
+    // Rows: pixel x · w, pixel y · w, view distance, w (as `SplatView::pixel_from_world`).
+    pixel_from_world: mat4x4<f32>,
+    // rgb: linear background; w: depth cue.
+    background: vec4<f32>,
+    // xyz: domain box; w: near (lo) and far (hi) view distances.
+    domain_lo: vec4<f32>,
+    domain_hi: vec4<f32>,
+    selection_lo: vec4<f32>,
+    selection_inv_cell: vec4<f32>,
+    // xyz: coarse selection cells per axis; w: function count.
+    selection_cells: vec4<u32>,
+    seed: u32,
+    frame: u32,
+    steps: u32,
+    skip_steps: u32,
+    point_count: u32,
+    width: u32,
+    height: u32,
+    mode: u32,
+    dimension: u32,
+    restart: u32,
+    threads_per_row: u32,
+    _pad: u32,
+}
+
+const KIND_JULIA: u32 = 1u;
+const SELECT_BITS: u32 = 24u;
+const MODE_CLOSEST: u32 = 0u;
+const DEPTH_SCALE: f32 = 16777215.0; // 2^24 - 1
+const COLOR_SCALE: f32 = 255.0;
+
+@group(0) @binding(0) var<uniform> params: ChaosParams;
+@group(0) @binding(1) var<storage, read> functions: array<KernelFunction>;
+@group(0) @binding(2) var<storage, read> coords: array<vec2<f32>>;
+@group(0) @binding(3) var<storage, read> cells: array<Cell>;
+@group(0) @binding(4) var<storage, read> thresholds: array<u32>;
+// Linear RGB per compiled function (w unused).
+@group(0) @binding(5) var<storage, read> colors: array<vec4<f32>>;
+@group(0) @binding(6) var<storage, read_write> points: array<vec4<f32>>;
+// Closest mode: one key per pixel (compact, for cache locality of the random splats);
+// average and density modes: four u32 per pixel, r, g, b sums and the count.
+@group(0) @binding(7) var<storage, read_write> accum: array<atomic<u32>>;
+
+fn complex_sqrt(re: f32, im: f32) -> vec2<f32> {
+    let r = sqrt(re * re + im * im);
+    let a = sqrt(max((r + re) * 0.5, 0.0));
+    let b = sqrt(max((r - re) * 0.5, 0.0));
+    return vec2<f32>(a, select(b, -b, im < 0.0));
+}
+
+// Cell index (bit pattern in x) and local coordinate (y) along one axis of a clamped
+// coordinate `x` (`CompiledIfs::locate_axis`): `n` cells, the axis at `base` in the coordinate
+// pool, first guess from the axis origin `lo` and bins per unit `inv_bin`. Scalars rather than
+// the function struct so that nothing is indexed dynamically in private memory (slow on
+// software rasterizers).
+fn locate_axis(n: u32, base: u32, lo: f32, inv_bin: f32, x: f32) -> vec2<f32> {
+    let guess = u32(max((x - lo) * inv_bin, 0.0));
+    var i = min(guess, n - 1u);
+    while i > 0u && x < coords[base + i].x {
+        i -= 1u;
+    }
+    while i + 1u < n && x >= coords[base + i + 1u].x {
+        i += 1u;
+    }
+    let c = coords[base + i];
+    return vec2<f32>(bitcast<f32>(i), (x - c.x) * c.y);
+}
+
+// Maps `p` by compiled function `fi` (`CompiledIfs::map`).
+fn map_point(fi: u32, p: vec3<f32>) -> vec3<f32> {
+    let kind = functions[fi].coord_offset.w;
+    if kind == KIND_JULIA {
+        let julia = functions[fi].julia;
+        let z = complex_sqrt(p.x - julia.x, p.y - julia.y);
+        return vec3<f32>(julia.z * z.x, julia.z * z.y, 0.0);
+    }
+    let lo = functions[fi].lo.xyz;
+    let inv_bin = functions[fi].inv_bin.xyz;
+    let n = functions[fi].cells;
+    let base = functions[fi].coord_offset.xyz;
+    let q = clamp(p, lo, functions[fi].hi.xyz);
+    let lx = locate_axis(n.x, base.x, lo.x, inv_bin.x, q.x);
+    let ly = locate_axis(n.y, base.y, lo.y, inv_bin.y, q.y);
+    let lz = locate_axis(n.z, base.z, lo.z, inv_bin.z, q.z);
+    let ix = bitcast<u32>(lx.x);
+    let iy = bitcast<u32>(ly.x);
+    let iz = bitcast<u32>(lz.x);
+    let u = lx.y;
+    let v = ly.y;
+    let w = lz.y;
+    let cell = n.w + (ix * n.y + iy) * n.z + iz;
+    // a + u b + v (c + u e) + w (d + u f + v (g + u h))
+    let inner = cells[cell].coef[3].xyz + u * cells[cell].coef[5].xyz + v * (cells[cell].coef[6].xyz + u * cells[cell].coef[7].xyz);
+    return cells[cell].coef[0].xyz + u * cells[cell].coef[1].xyz + v * (cells[cell].coef[2].xyz + u * cells[cell].coef[4].xyz) + w * inner;
+}
+
+// Coarse selection cell of `p` (`SelectionTable::cell_of`).
+fn selection_cell(p: vec3<f32>) -> u32 {
+    let n = params.selection_cells.xyz;
+    if all(n == vec3<u32>(1u)) {
+        return 0u;
+    }
+    let q = (p - params.selection_lo.xyz) * params.selection_inv_cell.xyz;
+    let ix = min(u32(max(q.x, 0.0)), n.x - 1u);
+    let iy = min(u32(max(q.y, 0.0)), n.y - 1u);
+    let iz = min(u32(max(q.z, 0.0)), n.z - 1u);
+    return (ix * n.y + iy) * n.z + iz;
+}
+
+// The function chosen by random bits `r` in coarse cell `cell` (`SelectionTable::select`).
+fn select_function(cell: u32, r: u32) -> u32 {
+    let n = params.selection_cells.w;
+    let r24 = r >> (32u - SELECT_BITS);
+    var chosen = 0u;
+    for (var k = 0u; k + 1u < n; k += 1u) {
+        chosen += select(0u, 1u, thresholds[cell * n + k] <= r24);
+    }
+    return chosen;
+}
+
+// Random start point in the domain box (`CompiledIfs::start_point`).
+fn start_point(rng: ptr<function, u32>) -> vec3<f32> {
+    let tx = pcg_next_f32(rng);
+    let ty = pcg_next_f32(rng);
+    var tz = 0.0;
+    if params.dimension == 3u {
+        tz = pcg_next_f32(rng);
+    }
+    let lo = params.domain_lo.xyz;
+    return lo + vec3<f32>(tx, ty, tz) * (params.domain_hi.xyz - lo);
+}
+
+fn is_finite3(p: vec3<f32>) -> bool {
+    // NaN fails every comparison.
+    return all(abs(p) < vec3<f32>(3.0e38));
+}
+
+// Splats one point (`Framebuffer::consume` with `SplatView::project`).
+fn splat(p: vec3<f32>, fi: u32) {
+    let q = params.pixel_from_world * vec4<f32>(p, 1.0);
+    if !(q.w > 0.0) {
+        return;
+    }
+    let inv_w = 1.0 / q.w;
+    let x = q.x * inv_w;
+    let y = q.y * inv_w;
+    if !(x >= 0.0 && y >= 0.0 && x < f32(params.width) && y < f32(params.height)) {
+        return;
+    }
+    let near = params.domain_lo.w;
+    let far = params.domain_hi.w;
+    let t = clamp((q.z - near) / (far - near), 0.0, 1.0);
+    let pixel = u32(y) * params.width + u32(x);
+    if params.mode == MODE_CLOSEST {
+        let slot = pixel;
+        let key = (u32(t * DEPTH_SCALE) << 8u) | fi;
+        // Most splats of a converging image lose: test with a plain load first, as atomics
+        // are slow (serialized per lane on software rasterizers). The result is the same min.
+        if key < atomicLoad(&accum[slot]) {
+            atomicMin(&accum[slot], key);
+        }
+    } else {
+        let slot = 4u * pixel;
+        let c = colors[fi].rgb * COLOR_SCALE;
+        let bg = params.background.rgb * COLOR_SCALE;
+        let k = params.background.w * t;
+        let v = c + (bg - c) * k + 0.5;
+        atomicAdd(&accum[slot], u32(v.x));
+        atomicAdd(&accum[slot + 1u], u32(v.y));
+        atomicAdd(&accum[slot + 2u], u32(v.z));
+        atomicAdd(&accum[slot + 3u], 1u);
+    }
+}
+
+@compute @workgroup_size(64)
+fn chaos_game(@builtin(global_invocation_id) id: vec3<u32>) {
+    let thread = id.x + id.y * params.threads_per_row;
+    if thread >= params.point_count {
+        return;
+    }
+    var rng = pcg_for_stream(params.seed, params.frame, thread);
+    let stored = points[thread];
+    var p = stored.xyz;
+    var fi = u32(stored.w);
+    if params.restart != 0u || !is_finite3(p) {
+        p = start_point(&rng);
+    }
+    for (var s = 0u; s < params.steps; s += 1u) {
+        fi = select_function(selection_cell(p), pcg_next_u32(&rng));
+        p = map_point(fi, p);
+        if s >= params.skip_steps {
+            splat(p, fi);
+        }
+    }
+    points[thread] = vec4<f32>(p, f32(fi));
+}
+
+// Empties the accumulation buffer: the closest key to u32::MAX, sums to zero.
+@compute @workgroup_size(64)
+fn clear(@builtin(global_invocation_id) id: vec3<u32>) {
+    let slot = id.x + id.y * params.threads_per_row;
+    if slot >= 4u * params.width * params.height {
+        return;
+    }
+    let empty = select(0u, 0xffffffffu, params.mode == MODE_CLOSEST);
+    atomicStore(&accum[slot], empty);
+}

@@ -1,0 +1,178 @@
+//! `nlifs bench gpu`: throughput of the live view (chaos-game steps with their splat, per
+//! second, and frames per second including the resolve at 1280×720), and how many frames
+//! after a scene edit the image is back within sampling noise of converged.
+
+use std::fmt;
+use std::time::Instant;
+
+use glam::DVec3;
+
+use crate::chaos_game::{self, CompiledIfs};
+use crate::model::builder::Step;
+use crate::scene::{FunctionDef, Scene};
+use crate::splat::SplatMode;
+
+use super::live::{LiveSettings, LiveView};
+use super::{GpuContext, GpuError};
+
+pub struct BenchReport {
+    pub adapter: String,
+    pub points: u32,
+    pub steps: u32,
+    pub frames: u32,
+    pub secs: f64,
+    /// Frames until the image after an edit is within noise; None if not within the window.
+    pub frames_to_converge: Option<u32>,
+    /// (frame, L1 distance after the edit, L1 distance of a fresh run of as many splats).
+    pub convergence: Vec<(u32, f64, f64)>,
+}
+
+impl fmt::Display for BenchReport {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let steps = self.points as f64 * self.steps as f64 * self.frames as f64;
+        writeln!(f, "adapter: {}", self.adapter)?;
+        writeln!(f, "{} points × {} steps per frame at 1280×720, {} frames in {:.3} s", self.points, self.steps, self.frames, self.secs)?;
+        writeln!(f, "  {:.1} fps, {:.1} M points/s (map + splat + resolve)", self.frames as f64 / self.secs, steps / self.secs / 1e6)?;
+        writeln!(f, "after an edit (coarse-grid L1 distance to the converged image: edited vs fresh run of equal splats):")?;
+        for (k, d_edit, d_fresh) in &self.convergence {
+            writeln!(f, "  frame {k:>2}: {d_edit:.4} vs {d_fresh:.4}")?;
+        }
+        match self.frames_to_converge {
+            Some(k) => write!(f, "within noise of converged after {k} frame(s)"),
+            None => write!(f, "not within noise in {} frames", self.convergence.len()),
+        }
+    }
+}
+
+fn submit_frame(ctx: &GpuContext, live: &mut LiveView, target: Option<(&wgpu::TextureView, wgpu::TextureFormat)>) -> u64 {
+    let mut encoder = ctx.device.create_command_encoder(&Default::default());
+    let n = live.advance(ctx, &mut encoder);
+    if let Some((view, format)) = target {
+        live.draw(ctx, &mut encoder, view, format);
+    }
+    ctx.queue.submit([encoder.finish()]);
+    n
+}
+
+fn wait(ctx: &GpuContext) {
+    let _ = ctx.device.poll(wgpu::PollType::Wait { submission_index: None, timeout: None });
+}
+
+/// The scene with its first grid or builder function shrunk by 5% about the domain's centre:
+/// a typical interactive edit.
+fn edited(scene: &Scene) -> Scene {
+    let mut s = scene.clone();
+    let center = 0.5 * (s.domain.min() + s.domain.max());
+    for f in &mut s.functions {
+        match &mut f.def {
+            FunctionDef::Grid { points } => {
+                for p in points.iter_mut() {
+                    *p = center + 0.95 * (*p - center);
+                }
+                break;
+            }
+            FunctionDef::Builder { builder, .. } => {
+                builder.steps.push(Step::Scale { by: DVec3::splat(0.95), center });
+                break;
+            }
+            _ => {}
+        }
+    }
+    s
+}
+
+/// Normalized counts on a coarse grid of the density accumulation.
+fn coarse_density(accum: &[u32], width: u32, height: u32, cells: (u32, u32)) -> Vec<f64> {
+    let mut out = vec![0.0; (cells.0 * cells.1) as usize];
+    for y in 0..height {
+        for x in 0..width {
+            let c = accum[4 * (y * width + x) as usize + 3] as f64;
+            out[((y * cells.1 / height) * cells.0 + x * cells.0 / width) as usize] += c;
+        }
+    }
+    let total: f64 = out.iter().sum::<f64>().max(1.0);
+    out.iter().map(|c| c / total).collect()
+}
+
+fn l1(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| (x - y).abs()).sum()
+}
+
+pub fn run(scene: &Scene, points: u32, steps: u32, frames: u32) -> Result<BenchReport, GpuError> {
+    let ctx = GpuContext::headless()?;
+    let ifs = CompiledIfs::new(&scene.at(0.0)).ok_or(GpuError::NoFunctions)?;
+    let bounds = chaos_game::attractor_bounds(&ifs, scene.render.seed);
+    let camera = scene.camera_for(bounds);
+    let (width, height) = (1280, 720);
+    let settings = LiveSettings { point_count: points, steps_per_frame: steps, max_splats: u64::MAX, ..LiveSettings::default() };
+
+    // Throughput: frames into an offscreen target of the window's size.
+    let mut live = LiveView::new(&ctx, settings, width, height)?;
+    live.set_ifs(&ctx, &ifs, bounds, true);
+    live.set_camera(&camera);
+    let format = wgpu::TextureFormat::Rgba8UnormSrgb;
+    let texture = ctx.device.create_texture(&wgpu::TextureDescriptor {
+        label: Some("bench"),
+        size: wgpu::Extent3d { width, height, depth_or_array_layers: 1 },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format,
+        usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
+        view_formats: &[],
+    });
+    let view = texture.create_view(&Default::default());
+    for _ in 0..3 {
+        submit_frame(&ctx, &mut live, Some((&view, format)));
+    }
+    wait(&ctx);
+    let start = Instant::now();
+    for _ in 0..frames {
+        submit_frame(&ctx, &mut live, Some((&view, format)));
+        // One frame in flight at a time, as a window with vsync off would run.
+        wait(&ctx);
+    }
+    let secs = start.elapsed().as_secs_f64();
+
+    // Convergence after an edit, in density mode on a smaller view (readbacks every frame).
+    let (w, h) = (320, 180);
+    let cells = (32, 18);
+    let density = LiveSettings { mode: SplatMode::Density, ..settings };
+    let edited_scene = edited(scene);
+    let edited_ifs = CompiledIfs::new(&edited_scene.at(0.0)).ok_or(GpuError::NoFunctions)?;
+    // Both runs use the bounds of the original so that the views agree.
+    let reference = {
+        let mut r = LiveView::new(&ctx, LiveSettings { steps_per_frame: 16, seed: 99, ..density }, w, h)?;
+        r.set_ifs(&ctx, &edited_ifs, bounds, true);
+        r.set_camera(&camera);
+        for _ in 0..8 {
+            submit_frame(&ctx, &mut r, None);
+        }
+        coarse_density(&r.read_accum(&ctx)?, w, h, cells)
+    };
+    let mut live = LiveView::new(&ctx, density, w, h)?;
+    live.set_ifs(&ctx, &ifs, bounds, true);
+    live.set_camera(&camera);
+    for _ in 0..4 {
+        submit_frame(&ctx, &mut live, None);
+    }
+    live.set_ifs(&ctx, &edited_ifs, bounds, false);
+    let mut fresh = LiveView::new(&ctx, LiveSettings { seed: 7, ..density }, w, h)?;
+    fresh.set_ifs(&ctx, &edited_ifs, bounds, true);
+    fresh.set_camera(&camera);
+    let mut convergence = Vec::new();
+    let mut frames_to_converge = None;
+    for k in 1..=12 {
+        submit_frame(&ctx, &mut live, None);
+        submit_frame(&ctx, &mut fresh, None);
+        let d_edit = l1(&coarse_density(&live.read_accum(&ctx)?, w, h, cells), &reference);
+        let d_fresh = l1(&coarse_density(&fresh.read_accum(&ctx)?, w, h, cells), &reference);
+        convergence.push((k, d_edit, d_fresh));
+        // Within noise: no farther from converged than a run that started fully settled,
+        // allowing 20% for the noise of the distance itself.
+        if frames_to_converge.is_none() && d_edit <= 1.2 * d_fresh {
+            frames_to_converge = Some(k);
+        }
+    }
+    Ok(BenchReport { adapter: ctx.describe(), points, steps, frames, secs, frames_to_converge, convergence })
+}

@@ -1,0 +1,304 @@
+//! Host side of `shaders/chaos_game.wgsl`: the persistent point buffer, the compiled IFS in
+//! storage buffers (the same [`KernelFunction`], [`Cell`], coordinate and threshold layout as
+//! the CPU model in `src/chaos_game.rs`), the accumulation buffer, and the dispatch of one
+//! frame. Buffers are created when sizes grow (new scene, resize, point count), never per frame.
+
+use wgpu::util::DeviceExt;
+
+use crate::chaos_game::{Cell, CompiledIfs, KernelFunction};
+use crate::splat::{SplatMode, SplatView};
+
+/// Workgroups per dispatch row; rows extend the dispatch past the 65535-workgroup limit.
+pub const GROUPS_PER_ROW: u32 = 4096;
+pub const WORKGROUP_SIZE: u32 = 64;
+/// Threads per dispatch row (the shader's `threads_per_row`).
+pub const THREADS_PER_ROW: u32 = GROUPS_PER_ROW * WORKGROUP_SIZE;
+
+/// Per-frame uniforms. Mirrors `struct ChaosParams` in `shaders/chaos_game.wgsl`: keep in sync.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct ChaosParams {
+    pub pixel_from_world: [[f32; 4]; 4],
+    pub background: [f32; 4],
+    pub domain_lo: [f32; 4],
+    pub domain_hi: [f32; 4],
+    pub selection_lo: [f32; 4],
+    pub selection_inv_cell: [f32; 4],
+    pub selection_cells: [u32; 4],
+    pub seed: u32,
+    pub frame: u32,
+    pub steps: u32,
+    pub skip_steps: u32,
+    pub point_count: u32,
+    pub width: u32,
+    pub height: u32,
+    pub mode: u32,
+    pub dimension: u32,
+    pub restart: u32,
+    pub threads_per_row: u32,
+    pub _pad: u32,
+}
+const _: () = assert!(std::mem::size_of::<ChaosParams>() == 208);
+
+/// The shader's number for a splat mode.
+pub fn mode_index(mode: SplatMode) -> u32 {
+    match mode {
+        SplatMode::Closest => 0,
+        SplatMode::Average => 1,
+        SplatMode::Density => 2,
+    }
+}
+
+/// What one frame of the chaos game does.
+#[derive(Clone, Copy, Debug)]
+pub struct FrameArgs<'a> {
+    pub view: &'a SplatView,
+    pub seed: u32,
+    pub frame: u32,
+    /// Steps every point advances.
+    pub steps: u32,
+    /// Steps at the start of the frame that are not splatted (transient after a change).
+    pub skip_steps: u32,
+    /// Restart every point at a random point of the domain first.
+    pub restart: bool,
+    /// Empty the accumulation buffer first.
+    pub clear: bool,
+}
+
+/// The scene-dependent part of the uniforms, kept from the last upload.
+#[derive(Clone, Copy, Debug)]
+struct IfsUniforms {
+    domain_lo: [f32; 3],
+    domain_hi: [f32; 3],
+    selection_lo: [f32; 3],
+    selection_inv_cell: [f32; 3],
+    selection_cells: [u32; 4],
+    dimension: u32,
+}
+
+fn storage(device: &wgpu::Device, label: &str, size: u64, extra: wgpu::BufferUsages) -> wgpu::Buffer {
+    device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some(label),
+        size: size.max(16).next_multiple_of(16),
+        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST | extra,
+        mapped_at_creation: false,
+    })
+}
+
+/// Writes `data` to `buffer`, replacing the buffer with a bigger one when it does not fit.
+/// Returns true when the buffer was replaced (bind groups must be rebuilt).
+fn upload(device: &wgpu::Device, queue: &wgpu::Queue, buffer: &mut wgpu::Buffer, label: &str, data: &[u8]) -> bool {
+    if data.len() as u64 > buffer.size() {
+        *buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some(label),
+            contents: &[data, &vec![0u8; data.len().next_multiple_of(16) - data.len()]].concat(),
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+        });
+        true
+    } else {
+        if !data.is_empty() {
+            queue.write_buffer(buffer, 0, data);
+        }
+        false
+    }
+}
+
+pub struct GpuChaosGame {
+    layout: wgpu::BindGroupLayout,
+    chaos_pipeline: wgpu::ComputePipeline,
+    clear_pipeline: wgpu::ComputePipeline,
+    params: wgpu::Buffer,
+    functions: wgpu::Buffer,
+    coords: wgpu::Buffer,
+    cells: wgpu::Buffer,
+    thresholds: wgpu::Buffer,
+    pub colors: wgpu::Buffer,
+    pub points: wgpu::Buffer,
+    pub accum: wgpu::Buffer,
+    bind_group: Option<wgpu::BindGroup>,
+    ifs: Option<IfsUniforms>,
+    pub point_count: u32,
+    pub width: u32,
+    pub height: u32,
+    /// Bumped whenever `accum` or `colors` is replaced (the resolve pass rebinds).
+    pub generation: u64,
+}
+
+impl GpuChaosGame {
+    pub fn new(device: &wgpu::Device, point_count: u32, width: u32, height: u32) -> Self {
+        let entry = |binding: u32, ty: wgpu::BufferBindingType| wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility: wgpu::ShaderStages::COMPUTE,
+            ty: wgpu::BindingType::Buffer { ty, has_dynamic_offset: false, min_binding_size: None },
+            count: None,
+        };
+        let read = wgpu::BufferBindingType::Storage { read_only: true };
+        let write = wgpu::BufferBindingType::Storage { read_only: false };
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("chaos_game"),
+            entries: &[
+                entry(0, wgpu::BufferBindingType::Uniform),
+                entry(1, read),
+                entry(2, read),
+                entry(3, read),
+                entry(4, read),
+                entry(5, read),
+                entry(6, write),
+                entry(7, write),
+            ],
+        });
+        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("chaos_game"),
+            bind_group_layouts: &[Some(&layout)],
+            immediate_size: 0,
+        });
+        let module = super::shaders::module(device, "chaos_game");
+        let pipeline = |entry: &str| {
+            device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some(entry),
+                layout: Some(&pipeline_layout),
+                module: &module,
+                entry_point: Some(entry),
+                compilation_options: Default::default(),
+                cache: None,
+            })
+        };
+        let chaos_pipeline = pipeline("chaos_game");
+        let clear_pipeline = pipeline("clear");
+        let params = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("chaos_params"),
+            size: std::mem::size_of::<ChaosParams>() as u64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let none = wgpu::BufferUsages::empty();
+        Self {
+            layout,
+            chaos_pipeline,
+            clear_pipeline,
+            params,
+            functions: storage(device, "functions", 0, none),
+            coords: storage(device, "coords", 0, none),
+            cells: storage(device, "cells", 0, none),
+            thresholds: storage(device, "thresholds", 0, none),
+            colors: storage(device, "colors", 0, none),
+            points: storage(device, "points", point_count as u64 * 16, wgpu::BufferUsages::COPY_SRC),
+            accum: storage(device, "accum", width as u64 * height as u64 * 16, wgpu::BufferUsages::COPY_SRC),
+            bind_group: None,
+            ifs: None,
+            point_count,
+            width,
+            height,
+            generation: 0,
+        }
+    }
+
+    /// Uploads a compiled IFS (the points are kept).
+    pub fn set_ifs(&mut self, device: &wgpu::Device, queue: &wgpu::Queue, ifs: &CompiledIfs) {
+        let colors: Vec<[f32; 4]> = ifs.colors.iter().map(|c| [c[0], c[1], c[2], 0.0]).collect();
+        let mut replaced = false;
+        replaced |= upload(device, queue, &mut self.functions, "functions", bytemuck::cast_slice::<KernelFunction, u8>(&ifs.functions));
+        replaced |= upload(device, queue, &mut self.coords, "coords", bytemuck::cast_slice(&ifs.coords));
+        replaced |= upload(device, queue, &mut self.cells, "cells", bytemuck::cast_slice::<Cell, u8>(&ifs.cells));
+        replaced |= upload(device, queue, &mut self.thresholds, "thresholds", bytemuck::cast_slice(&ifs.selection.thresholds));
+        let colors_replaced = upload(device, queue, &mut self.colors, "colors", bytemuck::cast_slice(&colors));
+        if replaced || colors_replaced {
+            self.bind_group = None;
+        }
+        if colors_replaced {
+            self.generation += 1;
+        }
+        let s = &ifs.selection;
+        self.ifs = Some(IfsUniforms {
+            domain_lo: ifs.domain_lo.to_array(),
+            domain_hi: ifs.domain_hi.to_array(),
+            selection_lo: s.lo.to_array(),
+            selection_inv_cell: s.inv_cell.to_array(),
+            selection_cells: [s.cells[0], s.cells[1], s.cells[2], s.function_count],
+            dimension: ifs.dimension as u32,
+        });
+    }
+
+    /// Resizes the accumulation buffer (its contents are lost: clear before the next frame).
+    pub fn resize(&mut self, device: &wgpu::Device, width: u32, height: u32) {
+        if (width, height) == (self.width, self.height) {
+            return;
+        }
+        self.width = width;
+        self.height = height;
+        self.accum = storage(device, "accum", width as u64 * height as u64 * 16, wgpu::BufferUsages::COPY_SRC);
+        self.bind_group = None;
+        self.generation += 1;
+    }
+
+    /// Changes the number of points (they must be restarted before the next splat).
+    pub fn set_point_count(&mut self, device: &wgpu::Device, point_count: u32) {
+        if point_count == self.point_count {
+            return;
+        }
+        self.point_count = point_count;
+        self.points = storage(device, "points", point_count as u64 * 16, wgpu::BufferUsages::COPY_SRC);
+        self.bind_group = None;
+    }
+
+    /// Writes the frame's uniforms and records the frame (clear, then the chaos game) into
+    /// `encoder`. The uniforms are written through the queue, so submit `encoder` before
+    /// recording the next frame. Does nothing before an IFS was uploaded.
+    pub fn encode(&mut self, device: &wgpu::Device, queue: &wgpu::Queue, encoder: &mut wgpu::CommandEncoder, args: &FrameArgs) {
+        let Some(ifs) = self.ifs else { return };
+        let v = args.view;
+        let params = ChaosParams {
+            pixel_from_world: v.pixel_from_world.to_cols_array_2d(),
+            background: [v.background[0], v.background[1], v.background[2], v.depth_cue],
+            domain_lo: [ifs.domain_lo[0], ifs.domain_lo[1], ifs.domain_lo[2], v.near],
+            domain_hi: [ifs.domain_hi[0], ifs.domain_hi[1], ifs.domain_hi[2], v.far],
+            selection_lo: [ifs.selection_lo[0], ifs.selection_lo[1], ifs.selection_lo[2], 0.0],
+            selection_inv_cell: [ifs.selection_inv_cell[0], ifs.selection_inv_cell[1], ifs.selection_inv_cell[2], 0.0],
+            selection_cells: ifs.selection_cells,
+            seed: args.seed,
+            frame: args.frame,
+            steps: args.steps,
+            skip_steps: args.skip_steps,
+            point_count: self.point_count,
+            width: self.width,
+            height: self.height,
+            mode: mode_index(v.mode),
+            dimension: ifs.dimension,
+            restart: args.restart as u32,
+            threads_per_row: THREADS_PER_ROW,
+            _pad: 0,
+        };
+        queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
+        if self.bind_group.is_none() {
+            let buffers = [&self.params, &self.functions, &self.coords, &self.cells, &self.thresholds, &self.colors, &self.points, &self.accum];
+            let entries: Vec<wgpu::BindGroupEntry> = buffers
+                .iter()
+                .enumerate()
+                .map(|(i, b)| wgpu::BindGroupEntry { binding: i as u32, resource: b.as_entire_binding() })
+                .collect();
+            self.bind_group = Some(device.create_bind_group(&wgpu::BindGroupDescriptor { label: Some("chaos_game"), layout: &self.layout, entries: &entries }));
+        }
+        let Some(bind_group) = &self.bind_group else { return };
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("chaos_game"), timestamp_writes: None });
+        pass.set_bind_group(0, bind_group, &[]);
+        if args.clear {
+            pass.set_pipeline(&self.clear_pipeline);
+            let per_pixel = if v.mode == SplatMode::Closest { 1 } else { 4 };
+            let (x, y) = dispatch_size(per_pixel * self.width as u64 * self.height as u64);
+            pass.dispatch_workgroups(x, y, 1);
+        }
+        if args.steps > 0 {
+            pass.set_pipeline(&self.chaos_pipeline);
+            let (x, y) = dispatch_size(self.point_count as u64);
+            pass.dispatch_workgroups(x, y, 1);
+        }
+    }
+}
+
+/// Workgroups (x, y) covering `threads` with rows of [`THREADS_PER_ROW`].
+pub fn dispatch_size(threads: u64) -> (u32, u32) {
+    let groups = threads.div_ceil(WORKGROUP_SIZE as u64).max(1);
+    let x = groups.min(GROUPS_PER_ROW as u64) as u32;
+    let y = groups.div_ceil(GROUPS_PER_ROW as u64) as u32;
+    (x, y)
+}

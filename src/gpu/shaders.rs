@@ -1,0 +1,31 @@
+//! The one place WGSL enters the program. Every file under `shaders/` is included here, and a
+//! program is the concatenation of its files in order (`rng.wgsl` holds functions only, shared
+//! by the programs that draw random numbers). `tests/shader_validation.rs` validates every
+//! program with naga and checks that every file under `shaders/` belongs to one.
+
+pub const RNG: &str = include_str!("../../shaders/rng.wgsl");
+pub const CHAOS_GAME: &str = include_str!("../../shaders/chaos_game.wgsl");
+pub const RESOLVE: &str = include_str!("../../shaders/resolve.wgsl");
+
+/// The programs: a name and the files it is made of, in order.
+pub const PROGRAMS: [(&str, &[(&str, &str)]); 3] = [
+    ("rng", &[("rng.wgsl", RNG)]),
+    ("chaos_game", &[("rng.wgsl", RNG), ("chaos_game.wgsl", CHAOS_GAME)]),
+    ("resolve", &[("resolve.wgsl", RESOLVE)]),
+];
+
+/// The source text of program `name` (one of [`PROGRAMS`]); empty for an unknown name.
+pub fn program(name: &str) -> String {
+    PROGRAMS
+        .iter()
+        .find(|(n, _)| *n == name)
+        .map(|(_, files)| files.iter().map(|(_, text)| *text).collect::<Vec<_>>().join("\n"))
+        .unwrap_or_default()
+}
+
+pub fn module(device: &wgpu::Device, name: &str) -> wgpu::ShaderModule {
+    device.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some(name),
+        source: wgpu::ShaderSource::Wgsl(program(name).into()),
+    })
+}

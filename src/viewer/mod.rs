@@ -1,0 +1,402 @@
+//! The interactive viewer: a winit window showing the live GPU chaos game with egui panels.
+//!
+//! How a frame goes: window events go to egui first; what egui did not consume drives the
+//! orbit camera as [`Command`]s. Once per frame the egui panels (`ui.rs`) emit more commands,
+//! [`ViewerState::apply`] applies them all and reports what changed, the [`LiveView`] is told
+//! (scene edits keep the points, view changes clear the accumulation), one chaos-game frame is
+//! recorded, resolved onto the surface with the same `draw` that screenshots use, and egui is
+//! drawn on top. A bad scene, a lost or outdated surface or a minimized window never panic: the
+//! error is shown and the last good state kept.
+
+pub mod state;
+pub mod ui;
+
+use std::path::PathBuf;
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+use winit::application::ApplicationHandler;
+use winit::event::{ElementState, MouseButton, MouseScrollDelta, WindowEvent};
+use winit::event_loop::{ActiveEventLoop, ControlFlow, EventLoop};
+use winit::keyboard::{Key, NamedKey};
+use winit::window::{Window, WindowId};
+
+use crate::camera::Projection;
+use crate::gpu::live::{LiveSettings, LiveView};
+use crate::gpu::{GpuContext, GpuError};
+
+pub use state::{Command, ViewerState};
+
+#[derive(Debug, thiserror::Error)]
+pub enum ViewerError {
+    #[error("cannot start the window system: {0}")]
+    EventLoop(#[from] winit::error::EventLoopError),
+    #[error("cannot open a window: {0}")]
+    Window(String),
+    #[error(transparent)]
+    Gpu(#[from] GpuError),
+}
+
+/// How the viewer starts.
+#[derive(Clone, Debug, Default)]
+pub struct ViewerOptions {
+    /// Scene file (None: the built-in default scene).
+    pub scene: Option<PathBuf>,
+    pub live: LiveSettings,
+    /// Testing: close after this many seconds and print frame statistics.
+    pub exit_after_secs: Option<f64>,
+    /// Testing: save the attractor (offscreen, same draw) to this PNG before closing.
+    pub screenshot: Option<PathBuf>,
+}
+
+/// Opens the viewer and runs until the window closes.
+pub fn run(options: ViewerOptions) -> Result<(), ViewerError> {
+    let mut state = ViewerState::new(ViewerState::default_scene(), None, options.live);
+    if let Some(path) = &options.scene {
+        state.apply([Command::OpenScene(path.clone())]);
+        // A bad scene leaves the default one on screen with the error in the panel.
+    }
+    let event_loop = EventLoop::new()?;
+    let mut app = App {
+        state,
+        options,
+        gfx: None,
+        commands: Vec::with_capacity(64),
+        drag: None,
+        cursor: None,
+        last_frame: None,
+        last_poll: Instant::now(),
+        started: Instant::now(),
+        frames: 0,
+        splats: 0,
+        fatal: None,
+    };
+    event_loop.run_app(&mut app)?;
+    if app.options.exit_after_secs.is_some() {
+        let secs = app.started.elapsed().as_secs_f64();
+        eprintln!(
+            "viewer: {} frames in {:.2} s ({:.1} fps), {:.1} M points/s, {} points × {} steps per frame",
+            app.frames,
+            secs,
+            app.frames as f64 / secs,
+            app.splats as f64 / secs / 1e6,
+            app.state.live.point_count,
+            app.state.live.steps_per_frame
+        );
+    }
+    app.fatal.map_or(Ok(()), Err)
+}
+
+struct Gfx {
+    window: Arc<Window>,
+    surface: wgpu::Surface<'static>,
+    config: wgpu::SurfaceConfiguration,
+    ctx: GpuContext,
+    live: LiveView,
+    egui_ctx: egui::Context,
+    egui_state: egui_winit::State,
+    egui_renderer: egui_wgpu::Renderer,
+}
+
+struct App {
+    state: ViewerState,
+    options: ViewerOptions,
+    gfx: Option<Gfx>,
+    commands: Vec<Command>,
+    drag: Option<MouseButton>,
+    cursor: Option<(f64, f64)>,
+    last_frame: Option<Instant>,
+    last_poll: Instant,
+    started: Instant,
+    frames: u64,
+    splats: u64,
+    fatal: Option<ViewerError>,
+}
+
+impl Gfx {
+    fn new(event_loop: &ActiveEventLoop, state: &ViewerState) -> Result<Self, ViewerError> {
+        let attributes = Window::default_attributes()
+            .with_title(format!("nlifs — {}", state.scene.name))
+            .with_inner_size(winit::dpi::PhysicalSize::new(1280u32, 720u32));
+        let window = Arc::new(event_loop.create_window(attributes).map_err(|e| ViewerError::Window(e.to_string()))?);
+        let instance = wgpu::Instance::new(wgpu::InstanceDescriptor::new_with_display_handle_from_env(Box::new(event_loop.owned_display_handle())));
+        let surface = instance.create_surface(window.clone()).map_err(|e| ViewerError::Window(e.to_string()))?;
+        let ctx = GpuContext::with_instance(instance, Some(&surface))?;
+        let size = window.inner_size();
+        let (width, height) = (size.width.max(1), size.height.max(1));
+        let mut config = surface
+            .get_default_config(&ctx.adapter, width, height)
+            .ok_or_else(|| ViewerError::Window("the surface is not supported by the adapter".into()))?;
+        let caps = surface.get_capabilities(&ctx.adapter);
+        // A unorm target: the resolve pass encodes sRGB itself (the CPU's exact maths) and egui
+        // prefers it.
+        if let Some(f) = caps.formats.iter().find(|f| !f.is_srgb()) {
+            config.format = *f;
+        }
+        config.desired_maximum_frame_latency = 2;
+        // On a software adapter, waiting for vsync in the present costs about half the frame
+        // rate (measured under Xvfb on lavapipe): present immediately there.
+        if ctx.adapter.get_info().device_type == wgpu::DeviceType::Cpu {
+            config.present_mode = wgpu::PresentMode::AutoNoVsync;
+        }
+        surface.configure(&ctx.device, &config);
+        let mut live = LiveView::new(&ctx, state.live, width, height)?;
+        if let Some(c) = &state.compiled {
+            live.set_ifs(&ctx, c, state.bounds, true);
+        }
+        live.set_camera(&state.camera);
+        let egui_ctx = egui::Context::default();
+        let egui_state = egui_winit::State::new(
+            egui_ctx.clone(),
+            egui::ViewportId::ROOT,
+            &window,
+            Some(window.scale_factor() as f32),
+            None,
+            Some(ctx.device.limits().max_texture_dimension_2d as usize),
+        );
+        let egui_renderer = egui_wgpu::Renderer::new(&ctx.device, config.format, egui_wgpu::RendererOptions::default());
+        Ok(Self { window, surface, config, ctx, live, egui_ctx, egui_state, egui_renderer })
+    }
+
+    fn reconfigure(&mut self) {
+        if self.config.width > 0 && self.config.height > 0 {
+            self.surface.configure(&self.ctx.device, &self.config);
+        }
+    }
+}
+
+impl ApplicationHandler for App {
+    fn resumed(&mut self, event_loop: &ActiveEventLoop) {
+        if self.gfx.is_some() {
+            return;
+        }
+        match Gfx::new(event_loop, &self.state) {
+            Ok(gfx) => {
+                gfx.window.request_redraw();
+                self.gfx = Some(gfx);
+            }
+            Err(e) => {
+                self.fatal = Some(e);
+                event_loop.exit();
+            }
+        }
+    }
+
+    fn window_event(&mut self, event_loop: &ActiveEventLoop, _id: WindowId, event: WindowEvent) {
+        let Some(gfx) = &mut self.gfx else { return };
+        let response = gfx.egui_state.on_window_event(&gfx.window, &event);
+        if response.repaint {
+            gfx.window.request_redraw();
+        }
+        let egui_wants_pointer = response.consumed || gfx.egui_ctx.egui_wants_pointer_input();
+        match event {
+            WindowEvent::CloseRequested => event_loop.exit(),
+            WindowEvent::Resized(size) => {
+                gfx.config.width = size.width;
+                gfx.config.height = size.height;
+                if size.width > 0 && size.height > 0 {
+                    gfx.reconfigure();
+                    gfx.live.resize(&gfx.ctx, size.width, size.height);
+                    self.state.height_px = size.height as f32;
+                    gfx.window.request_redraw();
+                }
+            }
+            WindowEvent::RedrawRequested => self.frame(),
+            WindowEvent::DroppedFile(path) => self.commands.push(Command::OpenScene(path)),
+            WindowEvent::MouseInput { state: ElementState::Pressed, button, .. } if !egui_wants_pointer => self.drag = Some(button),
+            WindowEvent::MouseInput { state: ElementState::Released, button, .. } if self.drag == Some(button) => self.drag = None,
+            WindowEvent::CursorMoved { position, .. } => {
+                if let (Some(button), Some((x, y))) = (self.drag, self.cursor) {
+                    let (dx_px, dy_px) = ((position.x - x) as f32, (position.y - y) as f32);
+                    self.commands.push(match button {
+                        MouseButton::Left => Command::Orbit { dx_px, dy_px },
+                        _ => Command::Pan { dx_px, dy_px },
+                    });
+                    gfx.window.request_redraw();
+                }
+                self.cursor = Some((position.x, position.y));
+            }
+            WindowEvent::MouseWheel { delta, .. } if !egui_wants_pointer => {
+                let steps = match delta {
+                    MouseScrollDelta::LineDelta(_, y) => y,
+                    MouseScrollDelta::PixelDelta(p) => p.y as f32 / 40.0,
+                };
+                self.commands.push(Command::Zoom { steps });
+                gfx.window.request_redraw();
+            }
+            WindowEvent::KeyboardInput { event, .. } if !response.consumed && !gfx.egui_ctx.egui_wants_keyboard_input() && event.state == ElementState::Pressed => {
+                match event.logical_key.as_ref() {
+                    Key::Character(c) if c.eq_ignore_ascii_case("f") => self.commands.push(Command::FrameAttractor),
+                    Key::Character(c) if c.eq_ignore_ascii_case("p") => {
+                        let next = match self.state.camera.projection {
+                            Projection::Perspective => Projection::Parallel,
+                            Projection::Parallel => Projection::Perspective,
+                        };
+                        self.commands.push(Command::SetProjection(next));
+                    }
+                    Key::Named(NamedKey::Escape) => event_loop.exit(),
+                    _ => {}
+                }
+                gfx.window.request_redraw();
+            }
+            _ => {}
+        }
+    }
+
+    fn about_to_wait(&mut self, event_loop: &ActiveEventLoop) {
+        if let Some(limit) = self.options.exit_after_secs
+            && self.started.elapsed().as_secs_f64() >= limit
+        {
+            if let (Some(path), Some(gfx)) = (&self.options.screenshot, &mut self.gfx) {
+                match crate::gpu::render::snapshot(&gfx.ctx, &mut gfx.live) {
+                    Ok(image) => {
+                        if let Err(e) = crate::io::save_png(path, &image) {
+                            eprintln!("cannot write {}: {e}", path.display());
+                        }
+                    }
+                    Err(e) => eprintln!("screenshot failed: {e}"),
+                }
+            }
+            event_loop.exit();
+            return;
+        }
+        let Some(gfx) = &self.gfx else { return };
+        // Converged and idle: wake a few times a second (file polling), else draw continuously.
+        let idle = gfx.live.converged() && self.commands.is_empty() && self.drag.is_none();
+        if idle {
+            let next = self.last_frame.unwrap_or_else(Instant::now) + Duration::from_millis(250);
+            if Instant::now() >= next {
+                gfx.window.request_redraw();
+            }
+            event_loop.set_control_flow(ControlFlow::WaitUntil(next));
+        } else {
+            event_loop.set_control_flow(ControlFlow::Poll);
+            gfx.window.request_redraw();
+        }
+    }
+}
+
+impl App {
+    fn frame(&mut self) {
+        let Some(gfx) = &mut self.gfx else { return };
+        if self.last_poll.elapsed() >= Duration::from_millis(500) {
+            self.last_poll = Instant::now();
+            if let Some(c) = self.state.poll_file() {
+                self.commands.push(c);
+            }
+        }
+        let raw_input = gfx.egui_state.take_egui_input(&gfx.window);
+        let state = &self.state;
+        let commands = &mut self.commands;
+        let full_output = gfx.egui_ctx.run_ui(raw_input, |ui| ui::panels_ui(ui, state, commands));
+        gfx.egui_state.handle_platform_output(&gfx.window, full_output.platform_output);
+
+        let changes = self.state.apply(self.commands.drain(..));
+        if changes.scene_replaced || changes.scene_edited {
+            if let Some(c) = &self.state.compiled {
+                gfx.live.set_ifs(&gfx.ctx, c, self.state.bounds, changes.scene_replaced);
+            }
+            gfx.window.set_title(&format!("nlifs — {}", self.state.scene.name));
+        }
+        if changes.live_settings
+            && let Err(e) = gfx.live.set_settings(&gfx.ctx, self.state.live)
+        {
+            self.state.error = Some(e.to_string());
+            self.state.live = gfx.live.settings;
+        }
+        gfx.live.set_camera(&self.state.camera);
+        if let Some(path) = changes.screenshot {
+            self.state.message = Some(match crate::gpu::render::snapshot(&gfx.ctx, &mut gfx.live) {
+                Ok(image) => match crate::io::save_png(&path, &image) {
+                    Ok(()) => format!("saved {}", path.display()),
+                    Err(e) => format!("cannot write {}: {e}", path.display()),
+                },
+                Err(e) => format!("screenshot failed: {e}"),
+            });
+        }
+
+        // Textures must be applied every frame even when nothing is drawn.
+        for (id, deltas) in &full_output.textures_delta.set {
+            for delta in deltas {
+                gfx.egui_renderer.update_texture(&gfx.ctx.device, &gfx.ctx.queue, *id, delta);
+            }
+        }
+        let free = |gfx: &mut Gfx| {
+            for id in &full_output.textures_delta.free {
+                gfx.egui_renderer.free_texture(id);
+            }
+        };
+        if gfx.config.width == 0 || gfx.config.height == 0 {
+            free(gfx);
+            return;
+        }
+        let frame = match gfx.surface.get_current_texture() {
+            wgpu::CurrentSurfaceTexture::Success(t) => Some((t, false)),
+            wgpu::CurrentSurfaceTexture::Suboptimal(t) => Some((t, true)),
+            wgpu::CurrentSurfaceTexture::Timeout | wgpu::CurrentSurfaceTexture::Occluded | wgpu::CurrentSurfaceTexture::Validation => None,
+            wgpu::CurrentSurfaceTexture::Outdated => {
+                gfx.reconfigure();
+                None
+            }
+            wgpu::CurrentSurfaceTexture::Lost => {
+                match gfx.ctx.instance.create_surface(gfx.window.clone()) {
+                    Ok(surface) => {
+                        gfx.surface = surface;
+                        gfx.reconfigure();
+                    }
+                    Err(e) => self.state.error = Some(format!("lost the window surface: {e}")),
+                }
+                None
+            }
+        };
+        let Some((frame, suboptimal)) = frame else {
+            free(gfx);
+            gfx.window.request_redraw();
+            return;
+        };
+        let view = frame.texture.create_view(&Default::default());
+        let mut encoder = gfx.ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("frame") });
+        let splats = gfx.live.advance(&gfx.ctx, &mut encoder);
+        gfx.live.draw(&gfx.ctx, &mut encoder, &view, gfx.config.format);
+
+        let paint_jobs = gfx.egui_ctx.tessellate(full_output.shapes, full_output.pixels_per_point);
+        let screen = egui_wgpu::ScreenDescriptor { size_in_pixels: [gfx.config.width, gfx.config.height], pixels_per_point: full_output.pixels_per_point };
+        let extra = gfx.egui_renderer.update_buffers(&gfx.ctx.device, &gfx.ctx.queue, &mut encoder, &paint_jobs, &screen);
+        {
+            let pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("egui"),
+                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                    view: &view,
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: wgpu::Operations { load: wgpu::LoadOp::Load, store: wgpu::StoreOp::Store },
+                })],
+                depth_stencil_attachment: None,
+                timestamp_writes: None,
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+            gfx.egui_renderer.render(&mut pass.forget_lifetime(), &paint_jobs, &screen);
+        }
+        gfx.ctx.queue.submit(extra.into_iter().chain([encoder.finish()]));
+        gfx.ctx.queue.present(frame);
+        free(gfx);
+        if suboptimal {
+            gfx.reconfigure();
+        }
+
+        let now = Instant::now();
+        if let Some(last) = self.last_frame {
+            let dt = (now - last).as_secs_f64();
+            let s = &mut self.state.stats;
+            // Exponential smoothing over ~20 frames.
+            let a = if s.frames == 0 { 1.0 } else { 0.05 };
+            s.frame_secs += a * (dt - s.frame_secs);
+            s.points_per_sec += a * (splats as f64 / dt.max(1e-6) - s.points_per_sec);
+            s.frames += 1;
+        }
+        self.last_frame = Some(now);
+        self.frames += 1;
+        self.splats += splats;
+    }
+}

@@ -1,0 +1,209 @@
+//! The viewer's egui panels. Each `*_ui` function reads the [`ViewerState`] and pushes
+//! [`Command`]s; none of them changes the state directly.
+
+use egui::{Color32, RichText};
+
+use crate::camera::Projection;
+use crate::model::builder::Step;
+use crate::scene::FunctionDef;
+use crate::splat::SplatMode;
+
+use super::state::{Command, ViewerState};
+
+/// The left side panel with every section.
+pub fn panels_ui(ui: &mut egui::Ui, state: &ViewerState, commands: &mut Vec<Command>) {
+    egui::Panel::left("nlifs_panel").default_size(310.0).resizable(true).show(ui, |ui| {
+        egui::ScrollArea::vertical().show(ui, |ui| {
+            ui.heading("nlifs");
+            scene_ui(ui, state, commands);
+            functions_ui(ui, state, commands);
+            builder_ui(ui, state, commands);
+            render_ui(ui, state, commands);
+            statistics_ui(ui, state);
+            screenshot_ui(ui, state, commands);
+        });
+    });
+}
+
+fn scene_ui(ui: &mut egui::Ui, state: &ViewerState, commands: &mut Vec<Command>) {
+    egui::CollapsingHeader::new("Scene").default_open(true).show(ui, |ui| {
+        ui.label(format!("{} — {}", state.scene.name, state.scene_path.as_ref().map_or("built in".into(), |p| p.display().to_string())));
+        let mut text = state.path_text.clone();
+        ui.horizontal(|ui| {
+            let edit = ui.text_edit_singleline(&mut text);
+            if edit.changed() {
+                commands.push(Command::SetPathText(text.clone()));
+            }
+            let enter = edit.lost_focus() && ui.input(|i| i.key_pressed(egui::Key::Enter));
+            if ui.button("Open").clicked() || enter {
+                commands.push(Command::OpenScene(text.trim().into()));
+            }
+        });
+        ui.small("…or drop a .toml file onto the window. The file is reloaded when it changes.");
+        if let Some(e) = &state.error {
+            ui.colored_label(Color32::from_rgb(255, 110, 90), format!("error: {e}"));
+        }
+        if let Some(m) = &state.message {
+            ui.small(m);
+        }
+    });
+}
+
+fn functions_ui(ui: &mut egui::Ui, state: &ViewerState, commands: &mut Vec<Command>) {
+    egui::CollapsingHeader::new("Functions").default_open(true).show(ui, |ui| {
+        for (i, f) in state.scene.functions.iter().enumerate() {
+            ui.horizontal(|ui| {
+                let mut enabled = f.enabled;
+                if ui.checkbox(&mut enabled, &f.name).changed() {
+                    commands.push(Command::SetFunctionEnabled { function: i, enabled });
+                }
+                let mut color = f.color;
+                if ui.color_edit_button_rgb(&mut color).changed() {
+                    commands.push(Command::SetFunctionColor { function: i, color });
+                }
+                let mut explicit = f.probability.is_some();
+                let mut p = f.probability.unwrap_or(0.0);
+                if ui.checkbox(&mut explicit, "p").changed() {
+                    commands.push(Command::SetFunctionProbability { function: i, probability: explicit.then_some(p.max(0.01)) });
+                }
+                if explicit && ui.add(egui::Slider::new(&mut p, 0.0..=1.0).max_decimals(3)).changed() {
+                    commands.push(Command::SetFunctionProbability { function: i, probability: Some(p) });
+                }
+            });
+        }
+    });
+}
+
+/// Sliders for the amounts of every builder step (taper, twist, bend, rotate, scale,
+/// translate); a change is applied live.
+fn builder_ui(ui: &mut egui::Ui, state: &ViewerState, commands: &mut Vec<Command>) {
+    let builders: Vec<_> = state
+        .scene
+        .functions
+        .iter()
+        .enumerate()
+        .filter_map(|(i, f)| match &f.def {
+            FunctionDef::Builder { builder, .. } => Some((i, &f.name, builder)),
+            _ => None,
+        })
+        .collect();
+    if builders.is_empty() {
+        return;
+    }
+    egui::CollapsingHeader::new("Builder parameters").default_open(true).show(ui, |ui| {
+        for (function, name, builder) in builders {
+            ui.label(RichText::new(name.as_str()).strong());
+            for (k, step) in builder.steps.iter().enumerate() {
+                let mut value = step.clone();
+                let changed = match &mut value {
+                    Step::Taper { axis, amount, .. } => ui.add(egui::Slider::new(amount, -1.0..=1.0).text(format!("taper {}", axis.name()))).changed(),
+                    Step::Twist { axis, degrees, .. } => ui.add(egui::Slider::new(degrees, -360.0..=360.0).text(format!("twist {} °", axis.name()))).changed(),
+                    Step::Bend { axis, degrees, .. } => ui.add(egui::Slider::new(degrees, -180.0..=180.0).text(format!("bend {} °", axis.name()))).changed(),
+                    Step::Rotate { axis, degrees, .. } => ui.add(egui::Slider::new(degrees, -180.0..=180.0).text(format!("rotate {} °", axis.name()))).changed(),
+                    Step::Scale { by, .. } => {
+                        let mut c = false;
+                        for (a, label) in ["scale x", "scale y", "scale z"].iter().enumerate() {
+                            c |= ui.add(egui::Slider::new(&mut by[a], 0.0..=1.5).text(*label)).changed();
+                        }
+                        c
+                    }
+                    Step::Translate { by } => {
+                        let mut c = false;
+                        for (a, label) in ["move x", "move y", "move z"].iter().enumerate() {
+                            let r = 2.0 * (state.scene.domain.max() - state.scene.domain.min())[a].abs().max(1.0);
+                            c |= ui.add(egui::Slider::new(&mut by[a], -r..=r).text(*label)).changed();
+                        }
+                        c
+                    }
+                    Step::Affine { .. } => false,
+                };
+                if changed {
+                    commands.push(Command::SetBuilderStep { function, step: k, value });
+                }
+            }
+        }
+    });
+}
+
+fn render_ui(ui: &mut egui::Ui, state: &ViewerState, commands: &mut Vec<Command>) {
+    egui::CollapsingHeader::new("Render").default_open(true).show(ui, |ui| {
+        let mut live = state.live;
+        let mut log2_points = (live.point_count as f32).log2().round() as u32;
+        ui.add(egui::Slider::new(&mut log2_points, 12..=24).text("points (log2)"));
+        live.point_count = 1 << log2_points;
+        ui.add(egui::Slider::new(&mut live.steps_per_frame, 1..=64).text("steps / frame"));
+        egui::ComboBox::from_label("splat").selected_text(live.mode.name()).show_ui(ui, |ui| {
+            for mode in SplatMode::ALL {
+                ui.selectable_value(&mut live.mode, mode, mode.name());
+            }
+        });
+        ui.add(egui::Slider::new(&mut live.depth_cue, 0.0..=1.0).text("depth cue"));
+        ui.add(egui::Slider::new(&mut live.point_radius_px, 0..=3).text("point size (radius px)"));
+        ui.add(egui::Slider::new(&mut live.shading, 0.0..=1.0).text("shading (closest)"));
+        ui.horizontal(|ui| {
+            ui.color_edit_button_rgb(&mut live.background);
+            ui.label("background");
+        });
+        if live != state.live {
+            commands.push(Command::SetLiveSettings(live));
+        }
+        let mut perspective = state.camera.projection == Projection::Perspective;
+        ui.horizontal(|ui| {
+            if ui.checkbox(&mut perspective, "perspective (P)").changed() {
+                commands.push(Command::SetProjection(if perspective { Projection::Perspective } else { Projection::Parallel }));
+            }
+            if ui.button("Frame (F)").clicked() {
+                commands.push(Command::FrameAttractor);
+            }
+        });
+        ui.small("left-drag: orbit · right/middle-drag: pan · wheel: zoom");
+    });
+}
+
+fn statistics_ui(ui: &mut egui::Ui, state: &ViewerState) {
+    egui::CollapsingHeader::new("Statistics").default_open(true).show(ui, |ui| {
+        let s = &state.stats;
+        ui.label(format!("frame {:.1} ms ({:.0} fps)", 1e3 * s.frame_secs, 1.0 / s.frame_secs.max(1e-6)));
+        ui.label(format!("{:.1} M points/s", s.points_per_sec / 1e6));
+        let Some(report) = &state.report else { return };
+        egui::Grid::new("report").striped(true).show(ui, |ui| {
+            ui.label("function");
+            ui.label("Lipschitz");
+            ui.label("contained");
+            ui.end_row();
+            for f in &report.functions {
+                ui.label(&f.name);
+                match f.lipschitz_bound {
+                    Some(l) if l >= 1.0 => ui.colored_label(Color32::from_rgb(255, 110, 90), format!("{l:.3} ⚠")),
+                    Some(l) => ui.label(format!("{l:.3}")),
+                    None => ui.label("—"),
+                };
+                match f.contained {
+                    Some(false) => ui.colored_label(Color32::from_rgb(255, 180, 80), "no"),
+                    Some(true) => ui.label("yes"),
+                    None => ui.label("n/a"),
+                };
+                ui.end_row();
+            }
+        });
+        for f in &report.functions {
+            if let Some(l) = f.lipschitz_bound
+                && l >= 1.0
+            {
+                ui.colored_label(Color32::from_rgb(255, 110, 90), format!("warning: {} may not be contractive (bound {l:.3} ≥ 1)", f.name));
+            }
+        }
+    });
+}
+
+fn screenshot_ui(ui: &mut egui::Ui, state: &ViewerState, commands: &mut Vec<Command>) {
+    egui::CollapsingHeader::new("Screenshot").default_open(false).show(ui, |ui| {
+        let mut text = state.screenshot_text.clone();
+        if ui.text_edit_singleline(&mut text).changed() {
+            commands.push(Command::SetScreenshotText(text.clone()));
+        }
+        if ui.button("Save PNG").clicked() {
+            commands.push(Command::SaveScreenshot(text.trim().into()));
+        }
+    });
+}

@@ -1,0 +1,141 @@
+//! The GPU chaos game against its CPU twin. Runs on any adapter (lavapipe in CI); without one it
+//! skips loudly, unless NLIFS_REQUIRE_GPU=1, in which case it fails.
+//!
+//! 1. One step from the start point: the GPU's random streams, function selection and map agree
+//!    with the CPU's for every thread (f32 maps agree to rounding).
+//! 2. Normalized densities of the same scene on a coarse grid agree within a tolerance derived
+//!    from the sample counts.
+
+use glam::Vec3;
+use nlifs::chaos_game::{self, CompiledIfs, run_chunk, ORBITS_PER_CHUNK};
+use nlifs::gpu::chaos_game::{FrameArgs, GpuChaosGame};
+use nlifs::gpu::live::{LiveSettings, LiveView};
+use nlifs::gpu::render::read_buffer;
+use nlifs::gpu::GpuContext;
+use nlifs::rng::Pcg32;
+use nlifs::scene::Scene;
+use nlifs::splat::{Framebuffer, SplatMode, SplatView};
+
+fn gpu() -> Option<GpuContext> {
+    match GpuContext::headless() {
+        Ok(ctx) => Some(ctx),
+        Err(e) if std::env::var("NLIFS_REQUIRE_GPU").as_deref() == Ok("1") => panic!("NLIFS_REQUIRE_GPU=1 but {e}"),
+        Err(e) => {
+            eprintln!("\n*** SKIPPING GPU TEST: {e} ***\n");
+            None
+        }
+    }
+}
+
+fn scene(name: &str, adaptive: bool) -> Scene {
+    let path = format!("{}/scenes/{name}.toml", env!("CARGO_MANIFEST_DIR"));
+    let mut text = std::fs::read_to_string(&path).unwrap();
+    if adaptive {
+        text = text.replacen("\n[grid]", "\nprobabilities = \"adaptive\"\n\n[grid]", 1);
+    }
+    Scene::parse(&text, &path).unwrap()
+}
+
+#[test]
+fn first_step_matches_cpu_bit_for_bit_streams() {
+    let Some(ctx) = gpu() else { return };
+    for (name, adaptive) in [("plant2", false), ("twisting", true)] {
+        let scene = scene(name, adaptive);
+        let compiled = CompiledIfs::new(&scene.at(0.0)).unwrap();
+        let bounds = chaos_game::attractor_bounds(&compiled, 1);
+        let camera = scene.camera_for(bounds);
+        let view = SplatView::new(&camera, 64, 48, bounds, SplatMode::Closest, 0.5, [0.0; 3]);
+        let n = 4096u32;
+        let (seed, frame) = (9u32, 5u32);
+        let mut game = GpuChaosGame::new(&ctx.device, n, 64, 48);
+        game.set_ifs(&ctx.device, &ctx.queue, &compiled);
+        let mut encoder = ctx.device.create_command_encoder(&Default::default());
+        let args = FrameArgs { view: &view, seed, frame, steps: 1, skip_steps: 0, restart: true, clear: true };
+        game.encode(&ctx.device, &ctx.queue, &mut encoder, &args);
+        ctx.queue.submit([encoder.finish()]);
+        let gpu_points: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&read_buffer(&ctx, &game.points).unwrap());
+        let (lo, hi) = (compiled.domain_lo, compiled.domain_hi);
+        // Relative rounding allowance: the map is a handful of f32 multiply-adds that a GPU
+        // compiler may fuse; 1e-5 of the domain size is ~100 ulps.
+        let tol = 1e-5 * (hi - lo).length();
+        for thread in 0..n {
+            let mut rng = Pcg32::for_stream(seed, frame, thread);
+            let t = Vec3::new(rng.next_f32(), rng.next_f32(), if compiled.dimension == 3 { rng.next_f32() } else { 0.0 });
+            let start = lo + t * (hi - lo);
+            let fi = compiled.selection.select(compiled.selection.cell_of(start), rng.next_u32());
+            let p = compiled.map(fi, start);
+            let g = gpu_points[thread as usize];
+            assert_eq!(g[3] as usize, fi, "{name}: thread {thread} chose function {} on the GPU, {fi} on the CPU", g[3]);
+            let d = (Vec3::new(g[0], g[1], g[2]) - p).length();
+            assert!(d <= tol, "{name}: thread {thread}: GPU {g:?} vs CPU {p} (distance {d} > {tol})");
+        }
+    }
+}
+
+/// Counts per coarse cell of a per-pixel count image, normalized to sum 1.
+fn coarse(counts: &[u32], width: usize, height: usize, cells: (usize, usize)) -> Vec<f64> {
+    let mut out = vec![0.0; cells.0 * cells.1];
+    for y in 0..height {
+        for x in 0..width {
+            out[(y * cells.1 / height) * cells.0 + x * cells.0 / width] += counts[y * width + x] as f64;
+        }
+    }
+    let total: f64 = out.iter().sum();
+    assert!(total > 0.0);
+    out.iter().map(|c| c / total).collect()
+}
+
+#[test]
+fn densities_match_cpu() {
+    let Some(ctx) = gpu() else { return };
+    let (width, height) = (160u32, 120u32);
+    let cells = (16usize, 12usize);
+    // Steps per orbit on both sides. Samples of one orbit are correlated, at worst perfectly:
+    // the variance of a cell's frequency is then at most k·p(1−p)/N for orbits of k steps
+    // (Cauchy–Schwarz bound on the covariances), which the tolerance uses.
+    let k = 4u32;
+    for (name, adaptive) in [("plant2", false), ("tapering", false), ("fantasy", true)] {
+        let scene = scene(name, adaptive);
+        let compiled = CompiledIfs::new(&scene.at(0.0)).unwrap();
+        let bounds = chaos_game::attractor_bounds(&compiled, 1);
+        let camera = scene.camera_for(bounds);
+        let bg = [0.0; 3];
+
+        // GPU: 2^18 independent orbits of k steps after the transient.
+        let gpu_orbits = 1u32 << 18;
+        let settings = LiveSettings { point_count: gpu_orbits, steps_per_frame: k, seed: 3, mode: SplatMode::Density, depth_cue: 0.0, background: bg, shading: 0.0, point_radius_px: 0, max_splats: u64::MAX, settle_steps: 0 };
+        let mut live = LiveView::new(&ctx, settings, width, height).unwrap();
+        live.set_ifs(&ctx, &compiled, bounds, true);
+        live.set_camera(&camera);
+        let mut encoder = ctx.device.create_command_encoder(&Default::default());
+        live.advance(&ctx, &mut encoder);
+        ctx.queue.submit([encoder.finish()]);
+        let accum = live.read_accum(&ctx).unwrap();
+        let gpu_counts: Vec<u32> = accum.chunks(4).map(|a| a[3]).collect();
+
+        // CPU: the same number of orbits of k steps, in chunks of ORBITS_PER_CHUNK.
+        let view = SplatView::new(&camera, width, height, bounds, SplatMode::Density, 0.0, bg);
+        let mut fb = Framebuffer::new(view, compiled.colors.clone());
+        for c in 0..gpu_orbits / ORBITS_PER_CHUNK as u32 {
+            run_chunk(&compiled, 77, 0, c, k as usize, &mut fb);
+        }
+        let cpu_counts: Vec<u32> = fb.accum.iter().map(|a| a[3]).collect();
+
+        let n_gpu: f64 = gpu_counts.iter().map(|&c| c as f64).sum();
+        let n_cpu: f64 = cpu_counts.iter().map(|&c| c as f64).sum();
+        let pg = coarse(&gpu_counts, width as usize, height as usize, cells);
+        let pc = coarse(&cpu_counts, width as usize, height as usize, cells);
+        let mut worst: f64 = 0.0;
+        for i in 0..pg.len() {
+            let p = 0.5 * (pg[i] + pc[i]);
+            // 6 standard deviations of the difference of two frequencies with variance
+            // ≤ k p (1 − p) / N each.
+            let sigma = (k as f64 * p * (1.0 - p) * (1.0 / n_gpu + 1.0 / n_cpu)).sqrt();
+            let tol = 6.0 * sigma + 1e-12;
+            let d = (pg[i] - pc[i]).abs();
+            worst = worst.max(d / tol);
+            assert!(d <= tol, "{name}: cell {i}: GPU {} vs CPU {} (|Δ| {d:.3e} > tolerance {tol:.3e}; {n_gpu} vs {n_cpu} samples)", pg[i], pc[i]);
+        }
+        eprintln!("{name}: {n_gpu} GPU / {n_cpu} CPU samples, worst |Δ|/tolerance {worst:.3}");
+    }
+}

@@ -1,0 +1,78 @@
+//! Every WGSL program parses and validates with naga (no GPU needed), every file under
+//! `shaders/` belongs to a program, and every WGSL struct's size matches its one `#[repr(C)]`
+//! mirror in Rust.
+
+use nlifs::chaos_game::{Cell, KernelFunction};
+use nlifs::gpu::chaos_game::ChaosParams;
+use nlifs::gpu::resolve::ResolveParams;
+use nlifs::gpu::shaders::{PROGRAMS, program};
+
+/// (program, WGSL struct, size of its Rust mirror). Shader-interface structs (vertex outputs)
+/// have no memory layout and no mirror.
+const MIRRORS: [(&str, &str, usize); 4] = [
+    ("chaos_game", "KernelFunction", size_of::<KernelFunction>()),
+    ("chaos_game", "Cell", size_of::<Cell>()),
+    ("chaos_game", "ChaosParams", size_of::<ChaosParams>()),
+    ("resolve", "ResolveParams", size_of::<ResolveParams>()),
+];
+const INTERFACE_STRUCTS: [&str; 1] = ["VertexOutput"];
+
+fn validate(name: &str) -> (naga::Module, naga::valid::ModuleInfo) {
+    let source = program(name);
+    let module = naga::front::wgsl::parse_str(&source).unwrap_or_else(|e| panic!("{name}: {}", e.emit_to_string(&source)));
+    let info = naga::valid::Validator::new(naga::valid::ValidationFlags::all(), naga::valid::Capabilities::default())
+        .validate(&module)
+        .unwrap_or_else(|e| panic!("{name}: {}", e.emit_to_string(&source)));
+    (module, info)
+}
+
+#[test]
+fn every_program_validates() {
+    for (name, _) in PROGRAMS {
+        validate(name);
+    }
+}
+
+#[test]
+fn every_shader_file_is_in_a_program() {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("shaders");
+    let mut files: Vec<String> = std::fs::read_dir(&dir)
+        .unwrap()
+        .filter_map(|e| e.ok())
+        .map(|e| e.file_name().to_string_lossy().into_owned())
+        .filter(|n| n.ends_with(".wgsl"))
+        .collect();
+    files.sort();
+    assert!(!files.is_empty());
+    for f in &files {
+        let text = std::fs::read_to_string(dir.join(f)).unwrap();
+        let included = PROGRAMS.iter().flat_map(|(_, parts)| parts.iter()).find(|(n, _)| n == f);
+        let (_, embedded) = included.unwrap_or_else(|| panic!("shaders/{f} is not part of any program in src/gpu/shaders.rs"));
+        assert_eq!(*embedded, text, "shaders/{f}: embedded text differs (rebuild)");
+    }
+}
+
+#[test]
+fn struct_sizes_match_rust_mirrors() {
+    for (name, _) in PROGRAMS {
+        let (module, _) = validate(name);
+        let mut layouter = naga::proc::Layouter::default();
+        layouter.update(module.to_ctx()).unwrap();
+        for (handle, ty) in module.types.iter() {
+            let naga::TypeInner::Struct { .. } = ty.inner else { continue };
+            let struct_name = ty.name.clone().unwrap_or_default();
+            if INTERFACE_STRUCTS.contains(&struct_name.as_str()) {
+                continue;
+            }
+            let mirrors: Vec<_> = MIRRORS.iter().filter(|(p, s, _)| *p == name && *s == struct_name).collect();
+            assert_eq!(mirrors.len(), 1, "{name}: struct {struct_name} needs exactly one Rust mirror");
+            let wgsl_size = layouter[handle].size as usize;
+            assert_eq!(wgsl_size, mirrors[0].2, "{name}: struct {struct_name} is {wgsl_size} bytes in WGSL, its mirror {} bytes", mirrors[0].2);
+        }
+    }
+    // Every mirror names a struct that exists.
+    for (p, s, _) in MIRRORS {
+        let (module, _) = validate(p);
+        assert!(module.types.iter().any(|(_, t)| t.name.as_deref() == Some(s)), "{p}: no struct {s}");
+    }
+}

@@ -1,0 +1,167 @@
+//! The viewer in a real window under a virtual X display: it starts on a paper scene, a
+//! screenshot of the screen (`import -window root`) shows the attractor (not a blank or
+//! uniform image), and a mouse drag (xdotool) on the view changes what is shown.
+//!
+//! Needs Xvfb, xdotool, imagemagick and a GPU adapter (lavapipe will do); without them it skips
+//! loudly, unless NLIFS_REQUIRE_GPU=1, in which case it fails. Failing screenshots are kept in
+//! the temporary directory printed by the test.
+
+use std::io::{BufRead, BufReader};
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Stdio};
+use std::time::{Duration, Instant};
+
+/// The view area: right of the egui side panel.
+const VIEW_X0: u32 = 420;
+/// A pixel "differs" when a channel moves by more than this (8-bit).
+const DIFF: i32 = 30;
+
+fn require() -> bool {
+    std::env::var("NLIFS_REQUIRE_GPU").as_deref() == Ok("1")
+}
+
+fn skip(why: &str) {
+    assert!(!require(), "NLIFS_REQUIRE_GPU=1 but {why}");
+    eprintln!("\n*** SKIPPING WINDOW TEST: {why} ***\n");
+}
+
+fn have(tool: &str) -> bool {
+    Command::new("sh").arg("-c").arg(format!("command -v {tool}")).stdout(Stdio::null()).status().is_ok_and(|s| s.success())
+}
+
+/// Kills and reaps a child we started when dropped.
+struct Guard(Child);
+impl Drop for Guard {
+    fn drop(&mut self) {
+        let _ = self.0.kill();
+        let _ = self.0.wait();
+    }
+}
+
+fn screenshot(display: &str, path: &Path) -> Option<image::RgbImage> {
+    let ok = Command::new("import").args(["-window", "root"]).arg(path).env("DISPLAY", display).status().ok()?.success();
+    if !ok {
+        return None;
+    }
+    image::open(path).ok().map(|i| i.to_rgb8())
+}
+
+/// Fraction of view-area pixels that differ from the most common colour there.
+fn non_background_fraction(img: &image::RgbImage) -> f64 {
+    let mut counts = std::collections::BTreeMap::new();
+    for y in 0..img.height() {
+        for x in VIEW_X0..img.width() {
+            *counts.entry(img.get_pixel(x, y).0).or_insert(0u64) += 1;
+        }
+    }
+    let Some((bg, _)) = counts.iter().max_by_key(|(_, n)| **n) else { return 0.0 };
+    let total: u64 = counts.values().sum();
+    let differ: u64 = counts.iter().filter(|(c, _)| (0..3).any(|k| (c[k] as i32 - bg[k] as i32).abs() > DIFF)).map(|(_, n)| n).sum();
+    differ as f64 / total as f64
+}
+
+fn changed_fraction(a: &image::RgbImage, b: &image::RgbImage) -> f64 {
+    let mut changed = 0u64;
+    let mut total = 0u64;
+    for y in 0..a.height().min(b.height()) {
+        for x in VIEW_X0..a.width().min(b.width()) {
+            let (p, q) = (a.get_pixel(x, y).0, b.get_pixel(x, y).0);
+            total += 1;
+            changed += (0..3).any(|k| (p[k] as i32 - q[k] as i32).abs() > DIFF) as u64;
+        }
+    }
+    changed as f64 / total.max(1) as f64
+}
+
+#[test]
+fn viewer_shows_the_attractor_and_drag_orbits() {
+    for tool in ["Xvfb", "xdotool", "import"] {
+        if !have(tool) {
+            return skip(&format!("{tool} is not installed"));
+        }
+    }
+    if !nlifs::gpu::adapter_available() {
+        return skip("no GPU adapter");
+    }
+    let dir: PathBuf = std::env::temp_dir().join(format!("nlifs-window-smoke-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let runtime = dir.join("xdg");
+    std::fs::create_dir_all(&runtime).unwrap();
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt;
+        std::fs::set_permissions(&runtime, std::fs::Permissions::from_mode(0o700)).unwrap();
+    }
+
+    // Xvfb picks a free display and writes its number to stdout (-displayfd 1).
+    let mut xvfb = Command::new("Xvfb")
+        .args(["-displayfd", "1", "-screen", "0", "1280x720x24", "-nolisten", "tcp"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::null())
+        .spawn()
+        .expect("start Xvfb");
+    let mut line = String::new();
+    BufReader::new(xvfb.stdout.take().unwrap()).read_line(&mut line).unwrap();
+    let _xvfb = Guard(xvfb);
+    let display = format!(":{}", line.trim());
+
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/plant2.toml");
+    let viewer = Command::new(env!("CARGO_BIN_EXE_nlifs"))
+        .arg("view")
+        .arg(&scene)
+        .args(["--points", "262144", "--exit-after-secs", "240"])
+        .env("DISPLAY", &display)
+        .env("XDG_RUNTIME_DIR", &runtime)
+        .env("LIBGL_ALWAYS_SOFTWARE", "1")
+        .stdout(Stdio::null())
+        .stderr(Stdio::inherit())
+        .spawn()
+        .expect("start the viewer");
+    let mut viewer = Guard(viewer);
+
+    // 1. The attractor appears (software rendering is slow: poll).
+    let first = dir.join("before.png");
+    let deadline = Instant::now() + Duration::from_secs(120);
+    let before = loop {
+        std::thread::sleep(Duration::from_secs(2));
+        if let Ok(Some(status)) = viewer.0.try_wait() {
+            panic!("the viewer exited early: {status}");
+        }
+        if let Some(img) = screenshot(&display, &first)
+            && non_background_fraction(&img) > 0.01
+        {
+            // One more frame of accumulation so that the next comparison sees only the drag.
+            std::thread::sleep(Duration::from_secs(2));
+            break screenshot(&display, &first).unwrap();
+        }
+        assert!(Instant::now() < deadline, "no attractor on screen after 120 s; last screenshot {}", first.display());
+    };
+    let covered = non_background_fraction(&before);
+    // The plant covers about a tenth of the view area; blank or uniform images give ~0.
+    assert!(covered > 0.01, "attractor covers {covered:.4} of the view; see {}", first.display());
+
+    // 2. A left drag on the view orbits the camera: the image changes.
+    let drag = Command::new("xdotool")
+        .args(["mousemove", "850", "360", "mousedown", "1"])
+        .args(["mousemove", "870", "362", "sleep", "0.2", "mousemove", "920", "365", "sleep", "0.2", "mousemove", "990", "370", "sleep", "0.2"])
+        .args(["mouseup", "1"])
+        .env("DISPLAY", &display)
+        .status()
+        .expect("run xdotool");
+    assert!(drag.success());
+    let second = dir.join("after.png");
+    let deadline = Instant::now() + Duration::from_secs(60);
+    let changed = loop {
+        std::thread::sleep(Duration::from_secs(2));
+        let after = screenshot(&display, &second).expect("screenshot");
+        let changed = changed_fraction(&before, &after);
+        // The orbit moves a plant covering ~10% of the area: well over 1% of pixels change.
+        if changed > 0.01 || Instant::now() > deadline {
+            break changed;
+        }
+    };
+    assert!(changed > 0.01, "a drag changed only {changed:.4} of the view; see {} and {}", first.display(), second.display());
+    eprintln!("window smoke: attractor covers {covered:.3} of the view, a drag changed {changed:.3}");
+    drop(viewer);
+    let _ = std::fs::remove_dir_all(&dir);
+}
