@@ -90,8 +90,10 @@ pub struct CompiledIfs {
     lanes: Option<LaneKernel>,
 }
 
-/// Most functions the lane kernel handles (its selection thresholds are a fixed-size array).
+/// Most functions the lane kernel handles.
 const LANE_FUNCTIONS: usize = 8;
+/// Buckets of the lane kernel's function selection: 2^SELECT_BUCKET_BITS.
+const SELECT_BUCKET_BITS: u32 = 10;
 
 /// The CPU's fastest chaos-game step, for the common case: at most [`LANE_FUNCTIONS`]
 /// multilinear or affine functions, a global selection table and no capped bin table (no
@@ -102,8 +104,11 @@ const LANE_FUNCTIONS: usize = 8;
 /// one [`CompiledIfs::map`] performs, in the same order, so the result is bit-identical.
 #[derive(Clone, Debug, PartialEq)]
 struct LaneKernel {
-    /// Cumulative 24-bit thresholds t_0..t_{n-2}, the rest u32::MAX (never ≤ a 24-bit r).
-    thresholds: [u32; LANE_FUNCTIONS],
+    /// Function selection by the top [`SELECT_BUCKET_BITS`] bits of r: per bucket, the
+    /// function chosen at the bucket's start and the one threshold inside the bucket (or
+    /// u32::MAX); the chosen function is the first plus (r24 ≥ threshold). Exactly
+    /// [`SelectionTable::select`]; built only when no bucket holds two thresholds.
+    buckets: Vec<(u32, u32)>,
     functions: Vec<LaneFunction>,
     /// Per bin: the cell at the bin's start and the coordinate where the next cell begins
     /// (+inf for an axis's last cell), see [`FastAxis`].
@@ -404,8 +409,19 @@ impl LaneKernel {
         if fast.functions.iter().any(|f| f.julia || f.axes.iter().any(|a| a.capped)) {
             return None;
         }
-        let mut thresholds = [u32::MAX; LANE_FUNCTIONS];
-        thresholds[..n - 1].copy_from_slice(&selection.thresholds[..n - 1]);
+        let inner = &selection.thresholds[..n - 1];
+        let width = 1u32 << (SELECT_BITS - SELECT_BUCKET_BITS);
+        let mut buckets = Vec::with_capacity(1 << SELECT_BUCKET_BITS);
+        for b in 0..1u32 << SELECT_BUCKET_BITS {
+            let start = b * width;
+            let first = inner.iter().filter(|&&t| t <= start).count() as u32;
+            let mut within = inner.iter().filter(|&&t| t > start && t < start + width);
+            let next = within.next().copied().unwrap_or(u32::MAX);
+            if within.next().is_some() {
+                return None;
+            }
+            buckets.push((first, next));
+        }
         let mut bins = Vec::new();
         let mut functions = Vec::new();
         for f in &fast.functions {
@@ -432,7 +448,7 @@ impl LaneKernel {
             });
         }
         Some(Self {
-            thresholds,
+            buckets,
             functions,
             bins,
             coords: fast.coords.clone(),
@@ -444,7 +460,10 @@ impl LaneKernel {
     #[inline(always)]
     fn select(&self, r: u32) -> usize {
         let r24 = r >> (32 - SELECT_BITS);
-        self.thresholds.iter().map(|&t| (t <= r24) as usize).sum()
+        // SAFETY: r >> (32 - SELECT_BUCKET_BITS) < 2^SELECT_BUCKET_BITS = buckets.len().
+        #[allow(unsafe_code)]
+        let (first, next) = unsafe { *self.buckets.get_unchecked((r >> (32 - SELECT_BUCKET_BITS)) as usize) };
+        (first + (r24 >= next) as u32) as usize
     }
 
     /// The same map as [`CompiledIfs::map`], bit for bit.
@@ -897,6 +916,25 @@ mod tests {
                 let want = c.map(fi, p);
                 assert_eq!(got.to_array().map(f32::to_bits), want.to_array().map(f32::to_bits), "f{fi} at {p:?}");
             }
+        }
+    }
+
+    /// The lane kernel's bucketed selection equals the table's threshold count for every
+    /// r near each threshold and at random.
+    #[test]
+    fn lane_select_matches_table() {
+        let c = CompiledIfs::new(&warped_ifs()).unwrap();
+        let lanes = c.lanes.as_ref().unwrap();
+        let mut r = Pcg32::for_stream(6, 0, 0);
+        let mut rs: Vec<u32> = (0..100_000).map(|_| r.next_u32()).collect();
+        for &t in &c.selection.thresholds {
+            for d in -3i64..=3 {
+                let r24 = (t as i64 + d).clamp(0, (1 << 24) - 1) as u32;
+                rs.extend([r24 << 8, r24 << 8 | 0xff]);
+            }
+        }
+        for r in rs {
+            assert_eq!(lanes.select(r), c.selection.select(0, r), "r = {r:#x}");
         }
     }
 
