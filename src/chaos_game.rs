@@ -115,10 +115,16 @@ struct LaneKernel {
     bins: Vec<(u32, f32)>,
     coords: Vec<[f32; 2]>,
     cells: Vec<[Vec3A; 8]>,
+    /// Per axis: some function has more than one cell along it. Along the other axes every
+    /// function's cell is cell 0 and the search is skipped (see [`LaneKernel::map`]).
+    multi: [bool; 3],
 }
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 struct LaneFunction {
+    /// Start coordinate and inverse width of cell 0 per axis.
+    origin: Vec3A,
+    inv_width: Vec3A,
     lo: Vec3A,
     hi: Vec3A,
     inv_bin: Vec3A,
@@ -435,7 +441,10 @@ impl LaneKernel {
                 }
             }
             let v = |g: fn(&FastAxis) -> f32| Vec3A::new(g(&f.axes[0]), g(&f.axes[1]), g(&f.axes[2]));
+            let cell0 = |a: &FastAxis| fast.coords[a.coord_offset as usize];
             functions.push(LaneFunction {
+                origin: Vec3A::from_array(f.axes.map(|a| cell0(&a)[0])),
+                inv_width: Vec3A::from_array(f.axes.map(|a| cell0(&a)[1])),
                 lo: v(|a| a.lo),
                 hi: v(|a| a.hi),
                 inv_bin: v(|a| a.inv_bin),
@@ -453,6 +462,7 @@ impl LaneKernel {
             bins,
             coords: fast.coords.clone(),
             cells: cells.iter().map(|c| c.coef.map(|k| Vec3A::new(k[0], k[1], k[2]))).collect(),
+            multi: std::array::from_fn(|a| fast.functions.iter().any(|f| f.axes[a].last_cell > 0)),
         })
     }
 
@@ -466,16 +476,19 @@ impl LaneKernel {
         (first + (r24 >= next) as u32) as usize
     }
 
-    /// The same map as [`CompiledIfs::map`], bit for bit.
+    /// The same map as [`CompiledIfs::map`], bit for bit. `MX`, `MY`, `MZ` must equal
+    /// `self.multi`: along an axis where every function has one cell, the cell is 0 and
+    /// the local coordinate is (x − origin) · inv_width, what the bin search would give.
     #[inline(always)]
-    fn map(&self, fi: usize, p: Vec3A) -> Vec3A {
+    fn map<const MX: bool, const MY: bool, const MZ: bool>(&self, fi: usize, p: Vec3A) -> Vec3A {
+        debug_assert_eq!([MX, MY, MZ], self.multi);
         let f = &self.functions[fi];
         // _mm_max_ps / _mm_min_ps: x > lo ? x : lo, then x < hi ? x : hi; NaN goes to lo,
         // as in FastKernel::locate.
         let q = p.max(f.lo).min(f.hi);
         // See FastKernel::locate: ≥ 0 and ≤ last_bin, NaN mapped to last_bin = 0.
         let b = ((q - f.lo) * f.inv_bin).min(f.last_bin);
-        let locate = |a: usize, x: f32, b: f32| -> (usize, f32) {
+        let locate = |a: usize, x: f32, b: f32| -> (usize, [f32; 2]) {
             // SAFETY: b is finite and in [0, last_bin] (see above), so the conversion is
             // exact; LaneKernel::new copied last_bin + 1 bins at bin_offset from FastKernel's
             // checked table, whose cells are ≤ last_cell; the +1 step happens only below
@@ -486,22 +499,72 @@ impl LaneKernel {
                 let bin = b.to_int_unchecked::<u32>() as usize;
                 let (cell, next) = *self.bins.get_unchecked(f.bin_offset[a] as usize + bin);
                 let i = cell as usize + (x >= next) as usize;
-                let e = self.coords.get_unchecked(f.coord_offset[a] as usize + i);
-                (i, (x - e[0]) * e[1])
+                (i, *self.coords.get_unchecked(f.coord_offset[a] as usize + i))
             }
         };
-        let (ix, u) = locate(0, q.x, b.x);
-        let (iy, v) = locate(1, q.y, b.y);
-        let (iz, w) = locate(2, q.z, b.z);
-        let cell = f.cell_base as usize + ix * f.stride_x as usize + iy * f.stride_y as usize + iz;
+        let mut start = f.origin;
+        let mut inv_width = f.inv_width;
+        let mut cell = f.cell_base as usize;
+        if MX {
+            let (i, e) = locate(0, q.x, b.x);
+            (start.x, inv_width.x) = (e[0], e[1]);
+            cell += i * f.stride_x as usize;
+        }
+        if MY {
+            let (i, e) = locate(1, q.y, b.y);
+            (start.y, inv_width.y) = (e[0], e[1]);
+            cell += i * f.stride_y as usize;
+        }
+        if MZ {
+            let (i, e) = locate(2, q.z, b.z);
+            (start.z, inv_width.z) = (e[0], e[1]);
+            cell += i;
+        }
+        let uvw = (q - start) * inv_width;
         debug_assert!(cell < self.cells.len());
         // SAFETY: as in CompiledIfs::map_fast, checked by FastKernel::new.
         #[allow(unsafe_code)]
         let c = unsafe { self.cells.get_unchecked(cell) };
-        let (u, v, w) = (Vec3A::splat(u), Vec3A::splat(v), Vec3A::splat(w));
+        let (u, v, w) = (Vec3A::splat(uvw.x), Vec3A::splat(uvw.y), Vec3A::splat(uvw.z));
         let inner = c[3] + u * c[5] + v * (c[6] + u * c[7]);
         c[0] + u * c[1] + v * (c[2] + u * c[4]) + w * inner
     }
+
+    /// [`Self::map`] with the axis flags taken from `self.multi` (for tests).
+    #[cfg(test)]
+    fn map_any(&self, fi: usize, p: Vec3A) -> Vec3A {
+        match self.multi {
+            [false, false, false] => self.map::<false, false, false>(fi, p),
+            [false, false, true] => self.map::<false, false, true>(fi, p),
+            [false, true, false] => self.map::<false, true, false>(fi, p),
+            [false, true, true] => self.map::<false, true, true>(fi, p),
+            [true, false, false] => self.map::<true, false, false>(fi, p),
+            [true, false, true] => self.map::<true, false, true>(fi, p),
+            [true, true, false] => self.map::<true, true, false>(fi, p),
+            [true, true, true] => self.map::<true, true, true>(fi, p),
+        }
+    }
+}
+
+/// Runs the orbits with the lane kernel, specialized for its multi-cell axes.
+fn run_lanes(lanes: &LaneKernel, orbits: Orbits, sink: &mut impl PointSink) {
+    match lanes.multi {
+        [false, false, false] => run_lanes_for::<false, false, false>(lanes, orbits, sink),
+        [false, false, true] => run_lanes_for::<false, false, true>(lanes, orbits, sink),
+        [false, true, false] => run_lanes_for::<false, true, false>(lanes, orbits, sink),
+        [false, true, true] => run_lanes_for::<false, true, true>(lanes, orbits, sink),
+        [true, false, false] => run_lanes_for::<true, false, false>(lanes, orbits, sink),
+        [true, false, true] => run_lanes_for::<true, false, true>(lanes, orbits, sink),
+        [true, true, false] => run_lanes_for::<true, true, false>(lanes, orbits, sink),
+        [true, true, true] => run_lanes_for::<true, true, true>(lanes, orbits, sink),
+    }
+}
+
+fn run_lanes_for<const MX: bool, const MY: bool, const MZ: bool>(lanes: &LaneKernel, orbits: Orbits, sink: &mut impl PointSink) {
+    orbits.run(sink, |rng, p| {
+        let fi = lanes.select(rng.next_u32());
+        (lanes.map::<MX, MY, MZ>(fi, p), fi)
+    })
 }
 
 fn fast_axis(f: &KernelFunction, a: usize, coords: &[[f32; 2]], bin_cells: &mut Vec<u32>) -> FastAxis {
@@ -705,10 +768,7 @@ pub fn run_chunk(ifs: &CompiledIfs, seed: u32, frame: u32, chunk: u32, steps: us
     let mut pos: [Vec3A; ORBITS_PER_CHUNK] = std::array::from_fn(|k| ifs.start_point(&mut rngs[k]).into());
     let orbits = Orbits { rngs: &mut rngs, pos: &mut pos, transient: ifs.transient, steps };
     match &ifs.lanes {
-        Some(lanes) => orbits.run(sink, |rng, p| {
-            let fi = lanes.select(rng.next_u32());
-            (lanes.map(fi, p), fi)
-        }),
+        Some(lanes) => run_lanes(lanes, orbits, sink),
         None => {
             let sel = &ifs.selection;
             let adaptive = sel.cells != [1, 1, 1];
@@ -896,9 +956,24 @@ mod tests {
     /// on and near cell faces and outside the grid, and is the path the warped IFS takes.
     #[test]
     fn lane_map_is_bit_identical() {
-        let ifs = warped_ifs();
-        let c = CompiledIfs::new(&ifs).unwrap();
-        let lanes = c.lanes.as_ref().expect("warped IFS takes the lane path");
+        // The warped IFS has several cells along every axis; its variant on a 1×2×1 grid
+        // (as the paper's tapering, 1×3×1) takes the kernel specialized for y alone.
+        let mut y_only = warped_ifs();
+        let grid = RectGrid { axes: [vec![0.0, 1.0], vec![0.0, 0.3, 1.0], vec![0.0, 1.0]] };
+        for (i, f) in y_only.functions.iter_mut().enumerate().take(3) {
+            let o = DVec3::new(0.1 * i as f64, 0.5, 0.2);
+            f.map = Map::Grid(GridMap::from_fn(grid.clone(), |p| 0.4 * p + o + DVec3::new(0.0, 0.1 * p.x * p.y, 0.0)));
+        }
+        y_only.domain = grid;
+        for (ifs, multi) in [(warped_ifs(), [true; 3]), (y_only, [false, true, false])] {
+            check_lane_map(&ifs, multi);
+        }
+    }
+
+    fn check_lane_map(ifs: &Ifs, multi: [bool; 3]) {
+        let c = CompiledIfs::new(ifs).unwrap();
+        let lanes = c.lanes.as_ref().expect("the IFS takes the lane path");
+        assert_eq!(lanes.multi, multi);
         let mut r = Pcg32::for_stream(4, 0, 1);
         let faces = [0.0f32, 0.3, 0.5, 0.8, 0.4, 1.0];
         for k in 0..20_000 {
@@ -912,7 +987,7 @@ mod tests {
                 p = Vec3::new(f32::NAN, 1e30, -1e30);
             }
             for fi in 0..4 {
-                let got = Vec3::from(lanes.map(fi, p.into()));
+                let got = Vec3::from(lanes.map_any(fi, p.into()));
                 let want = c.map(fi, p);
                 assert_eq!(got.to_array().map(f32::to_bits), want.to_array().map(f32::to_bits), "f{fi} at {p:?}");
             }
