@@ -8,10 +8,17 @@
 //! A 2D map has a single cell along z whose local coordinate is always 0.
 //!
 //! Work is split into chunks of [`ORBITS_PER_CHUNK`] orbits advanced together (independent
-//! orbits give the CPU instruction-level parallelism); chunk `c` draws from the random stream
-//! (seed, frame, c), so the points are a pure function of (IFS, seed, frame, count) whatever the
+//! orbits give the CPU instruction-level parallelism); orbit `k` of chunk `c` is chain
+//! `c · ORBITS_PER_CHUNK + k` and draws from the random stream (seed, frame, chain), as chain i
+//! of the GPU does, so the points are a pure function of (IFS, seed, frame, count) whatever the
 //! number of threads. Each orbit starts at a random point of the domain and its first
 //! `transient` points are discarded.
+//!
+//! Three implementations of one step, bit-identical per point: [`CompiledIfs::map`] (the
+//! reference the GPU mirrors, linear cell search), [`CompiledIfs::map_fast`] (cell search by
+//! bins; any IFS), and the private lane kernel (the common case: few multilinear or affine
+//! functions with global probabilities; bucketed selection, 4-wide arithmetic, and a variant
+//! per set of axes that have more than one cell). See docs/perf.md for measurements.
 
 use glam::{DVec3, Vec3, Vec3A};
 use rayon::prelude::*;
