@@ -489,7 +489,11 @@ impl LaneKernel {
     #[inline(always)]
     fn map<const MX: bool, const MY: bool, const MZ: bool>(&self, fi: usize, p: Vec3A) -> Vec3A {
         debug_assert_eq!([MX, MY, MZ], self.multi);
-        let f = &self.functions[fi];
+        debug_assert!(fi < self.functions.len());
+        // SAFETY: fi comes from `select`, whose buckets hold at most n − 1 thresholds below
+        // the bucket's start plus at most one inside it: fi ≤ n − 1 (n functions).
+        #[allow(unsafe_code)]
+        let f = unsafe { self.functions.get_unchecked(fi) };
         // _mm_max_ps / _mm_min_ps: x > lo ? x : lo, then x < hi ? x : hi; NaN goes to lo,
         // as in FastKernel::locate.
         let q = p.max(f.lo).min(f.hi);
@@ -509,30 +513,35 @@ impl LaneKernel {
                 (i, *self.coords.get_unchecked(f.coord_offset[a] as usize + i))
             }
         };
-        let mut start = f.origin;
-        let mut inv_width = f.inv_width;
+        // The local coordinates along one-cell axes (the other lanes are replaced below).
+        let uvw = (q - f.origin) * f.inv_width;
         let mut cell = f.cell_base as usize;
-        if MX {
+        let u = if MX {
             let (i, e) = locate(0, q.x, b.x);
-            (start.x, inv_width.x) = (e[0], e[1]);
             cell += i * f.stride_x as usize;
-        }
-        if MY {
+            (q.x - e[0]) * e[1]
+        } else {
+            uvw.x
+        };
+        let v = if MY {
             let (i, e) = locate(1, q.y, b.y);
-            (start.y, inv_width.y) = (e[0], e[1]);
             cell += i * f.stride_y as usize;
-        }
-        if MZ {
+            (q.y - e[0]) * e[1]
+        } else {
+            uvw.y
+        };
+        let w = if MZ {
             let (i, e) = locate(2, q.z, b.z);
-            (start.z, inv_width.z) = (e[0], e[1]);
             cell += i;
-        }
-        let uvw = (q - start) * inv_width;
+            (q.z - e[0]) * e[1]
+        } else {
+            uvw.z
+        };
         debug_assert!(cell < self.cells.len());
         // SAFETY: as in CompiledIfs::map_fast, checked by FastKernel::new.
         #[allow(unsafe_code)]
         let c = unsafe { self.cells.get_unchecked(cell) };
-        let (u, v, w) = (Vec3A::splat(uvw.x), Vec3A::splat(uvw.y), Vec3A::splat(uvw.z));
+        let (u, v, w) = (Vec3A::splat(u), Vec3A::splat(v), Vec3A::splat(w));
         let inner = c[3] + u * c[5] + v * (c[6] + u * c[7]);
         c[0] + u * c[1] + v * (c[2] + u * c[4]) + w * inner
     }
