@@ -29,6 +29,8 @@ pub struct CpuBench {
 
 /// Runs `points` chaos-game points of `scene` on the current thread, map only and then map +
 /// splat into a `width`×`height` framebuffer in each mode; the best of `repeats` runs each.
+/// For profiling one of them alone (e.g. under callgrind), env `NLIFS_BENCH_ONLY` = `map`,
+/// `closest`, `average` or `density` skips the others (their rate is reported as 0).
 pub fn cpu(scene: &Scene, points: u64, width: u32, height: u32, repeats: usize) -> CpuBench {
     let ifs = scene.at(0.0);
     let compiled = CompiledIfs::new(&ifs).expect("scene has functions");
@@ -46,11 +48,17 @@ pub fn cpu(scene: &Scene, points: u64, width: u32, height: u32, repeats: usize) 
         }
         points as f64 / best
     };
+    let only = std::env::var("NLIFS_BENCH_ONLY").ok();
+    let wanted = |name: &str| only.as_deref().is_none_or(|o| o == name);
     let mut map_only = MapOnly { acc: Vec3::ZERO };
-    let map_points_per_sec = time(&mut |c, n| chaos_game::run_chunk(&compiled, 1, 0, c, n, &mut map_only));
+    let map_points_per_sec = if !wanted("map") { 0.0 } else { time(&mut |c, n| chaos_game::run_chunk(&compiled, 1, 0, c, n, &mut map_only)) };
     std::hint::black_box(map_only.acc);
     let mut splat_points_per_sec = Vec::new();
     for mode in SplatMode::ALL {
+        if !wanted(mode.name()) {
+            splat_points_per_sec.push((mode, 0.0));
+            continue;
+        }
         let view = SplatView::new(&camera, width, height, bounds, mode, 0.75, [0.0; 3]);
         let mut fb = Framebuffer::new(view, compiled.colors.clone());
         let rate = time(&mut |c, n| chaos_game::run_chunk(&compiled, 1, 0, c, n, &mut fb));

@@ -8,12 +8,19 @@
 //! A 2D map has a single cell along z whose local coordinate is always 0.
 //!
 //! Work is split into chunks of [`ORBITS_PER_CHUNK`] orbits advanced together (independent
-//! orbits give the CPU instruction-level parallelism); chunk `c` draws from the random stream
-//! (seed, frame, c), so the points are a pure function of (IFS, seed, frame, count) whatever the
+//! orbits give the CPU instruction-level parallelism); orbit `k` of chunk `c` is chain
+//! `c · ORBITS_PER_CHUNK + k` and draws from the random stream (seed, frame, chain), as chain i
+//! of the GPU does, so the points are a pure function of (IFS, seed, frame, count) whatever the
 //! number of threads. Each orbit starts at a random point of the domain and its first
 //! `transient` points are discarded.
+//!
+//! Three implementations of one step, bit-identical per point: [`CompiledIfs::map`] (the
+//! reference the GPU mirrors, linear cell search), [`CompiledIfs::map_fast`] (cell search by
+//! bins; any IFS), and the private lane kernel (the common case: few multilinear or affine
+//! functions with global probabilities; bucketed selection, 4-wide arithmetic, and a variant
+//! per set of axes that have more than one cell). See docs/perf.md for measurements.
 
-use glam::{DVec3, Vec3};
+use glam::{DVec3, Vec3, Vec3A};
 use rayon::prelude::*;
 
 use crate::model::{Ifs, Map, ProbabilityMode};
@@ -86,6 +93,54 @@ pub struct CompiledIfs {
     pub transient: u32,
     /// The CPU's packed copy of the kernel, see [`FastKernel`].
     fast: FastKernel,
+    /// The CPU's fastest path, when the IFS allows it, see [`LaneKernel`].
+    lanes: Option<LaneKernel>,
+}
+
+/// Most functions the lane kernel handles.
+const LANE_FUNCTIONS: usize = 8;
+/// Buckets of the lane kernel's function selection: 2^SELECT_BUCKET_BITS.
+const SELECT_BUCKET_BITS: u32 = 10;
+
+/// The CPU's fastest chaos-game step, for the common case: at most [`LANE_FUNCTIONS`]
+/// multilinear or affine functions, a global selection table and no capped bin table (no
+/// Julia function, no adaptive probabilities). One step is branch-free: select by a
+/// fixed-size threshold comparison, clamp and bin the point as one 4-wide vector, finish each
+/// axis's cell search with one comparison against the boundary stored next to the bin's cell,
+/// and evaluate the interpolant with 4-wide vectors (xyz, w unused). Every operation is the
+/// one [`CompiledIfs::map`] performs, in the same order, so the result is bit-identical.
+#[derive(Clone, Debug, PartialEq)]
+struct LaneKernel {
+    /// Function selection by the top [`SELECT_BUCKET_BITS`] bits of r: per bucket, the
+    /// function chosen at the bucket's start and the one threshold inside the bucket (or
+    /// u32::MAX); the chosen function is the first plus (r24 ≥ threshold). Exactly
+    /// [`SelectionTable::select`]; built only when no bucket holds two thresholds.
+    buckets: Vec<(u32, u32)>,
+    functions: Vec<LaneFunction>,
+    /// Per bin: the cell at the bin's start and the coordinate where the next cell begins
+    /// (+inf for an axis's last cell), see [`FastAxis`].
+    bins: Vec<(u32, f32)>,
+    coords: Vec<[f32; 2]>,
+    cells: Vec<[Vec3A; 8]>,
+    /// Per axis: some function has more than one cell along it. Along the other axes every
+    /// function's cell is cell 0 and the search is skipped (see [`LaneKernel::map`]).
+    multi: [bool; 3],
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct LaneFunction {
+    /// Start coordinate and inverse width of cell 0 per axis.
+    origin: Vec3A,
+    inv_width: Vec3A,
+    lo: Vec3A,
+    hi: Vec3A,
+    inv_bin: Vec3A,
+    last_bin: Vec3A,
+    bin_offset: [u32; 3],
+    coord_offset: [u32; 3],
+    cell_base: u32,
+    stride_x: u32,
+    stride_y: u32,
 }
 
 /// The CPU's private, packed copy of the compiled IFS: the same data with the cell search by
@@ -198,6 +253,7 @@ impl CompiledIfs {
         let domain_hi = ifs.domain.max().as_vec3();
         let selection = selection_table(ifs, &active, domain_lo, domain_hi);
         let fast = FastKernel::new(&functions, &coords, &cells);
+        let lanes = LaneKernel::new(&fast, &selection, &cells);
         let worst = active
             .iter()
             .filter_map(|&i| ifs.functions[i].map.lipschitz_bound())
@@ -216,6 +272,7 @@ impl CompiledIfs {
             domain_hi,
             transient,
             fast,
+            lanes,
         })
     }
 
@@ -353,6 +410,177 @@ impl FastKernel {
             (i, (x - e[0]) * e[1])
         }
     }
+}
+
+impl LaneKernel {
+    /// The lane kernel of `fast`, or None when the IFS needs the general path.
+    fn new(fast: &FastKernel, selection: &SelectionTable, cells: &[Cell]) -> Option<Self> {
+        let n = fast.functions.len();
+        if n == 0 || n > LANE_FUNCTIONS || selection.cells != [1, 1, 1] || selection.thresholds.len() != n {
+            return None;
+        }
+        if fast.functions.iter().any(|f| f.julia || f.axes.iter().any(|a| a.capped)) {
+            return None;
+        }
+        let inner = &selection.thresholds[..n - 1];
+        let width = 1u32 << (SELECT_BITS - SELECT_BUCKET_BITS);
+        let mut buckets = Vec::with_capacity(1 << SELECT_BUCKET_BITS);
+        for b in 0..1u32 << SELECT_BUCKET_BITS {
+            let start = b * width;
+            let first = inner.iter().filter(|&&t| t <= start).count() as u32;
+            let mut within = inner.iter().filter(|&&t| t > start && t < start + width);
+            let next = within.next().copied().unwrap_or(u32::MAX);
+            if within.next().is_some() {
+                return None;
+            }
+            buckets.push((first, next));
+        }
+        let mut bins = Vec::new();
+        let mut functions = Vec::new();
+        for f in &fast.functions {
+            let mut bin_offset = [0u32; 3];
+            for (a, axis) in f.axes.iter().enumerate() {
+                bin_offset[a] = bins.len() as u32;
+                let table = &fast.bin_cells[axis.bin_offset as usize..=axis.bin_offset as usize + axis.last_bin as usize];
+                for &cell in table {
+                    let next = if cell < axis.last_cell { fast.coords[(axis.coord_offset + cell + 1) as usize][0] } else { f32::INFINITY };
+                    bins.push((cell, next));
+                }
+            }
+            let v = |g: fn(&FastAxis) -> f32| Vec3A::new(g(&f.axes[0]), g(&f.axes[1]), g(&f.axes[2]));
+            let cell0 = |a: &FastAxis| fast.coords[a.coord_offset as usize];
+            functions.push(LaneFunction {
+                origin: Vec3A::from_array(f.axes.map(|a| cell0(&a)[0])),
+                inv_width: Vec3A::from_array(f.axes.map(|a| cell0(&a)[1])),
+                lo: v(|a| a.lo),
+                hi: v(|a| a.hi),
+                inv_bin: v(|a| a.inv_bin),
+                last_bin: v(|a| a.last_bin),
+                bin_offset,
+                coord_offset: f.axes.map(|a| a.coord_offset),
+                cell_base: f.cell_base,
+                stride_x: f.stride_x,
+                stride_y: f.stride_y,
+            });
+        }
+        Some(Self {
+            buckets,
+            functions,
+            bins,
+            coords: fast.coords.clone(),
+            cells: cells.iter().map(|c| c.coef.map(|k| Vec3A::new(k[0], k[1], k[2]))).collect(),
+            multi: std::array::from_fn(|a| fast.functions.iter().any(|f| f.axes[a].last_cell > 0)),
+        })
+    }
+
+    /// The function chosen by random bits `r`: the number of thresholds ≤ its top 24 bits.
+    #[inline(always)]
+    fn select(&self, r: u32) -> usize {
+        let r24 = r >> (32 - SELECT_BITS);
+        // SAFETY: r >> (32 - SELECT_BUCKET_BITS) < 2^SELECT_BUCKET_BITS = buckets.len().
+        #[allow(unsafe_code)]
+        let (first, next) = unsafe { *self.buckets.get_unchecked((r >> (32 - SELECT_BUCKET_BITS)) as usize) };
+        (first + (r24 >= next) as u32) as usize
+    }
+
+    /// The same map as [`CompiledIfs::map`], bit for bit. `MX`, `MY`, `MZ` must equal
+    /// `self.multi`: along an axis where every function has one cell, the cell is 0 and
+    /// the local coordinate is (x − origin) · inv_width, what the bin search would give.
+    #[inline(always)]
+    fn map<const MX: bool, const MY: bool, const MZ: bool>(&self, fi: usize, p: Vec3A) -> Vec3A {
+        debug_assert_eq!([MX, MY, MZ], self.multi);
+        debug_assert!(fi < self.functions.len());
+        // SAFETY: fi comes from `select`, whose buckets hold at most n − 1 thresholds below
+        // the bucket's start plus at most one inside it: fi ≤ n − 1 (n functions).
+        #[allow(unsafe_code)]
+        let f = unsafe { self.functions.get_unchecked(fi) };
+        // _mm_max_ps / _mm_min_ps: x > lo ? x : lo, then x < hi ? x : hi; NaN goes to lo,
+        // as in FastKernel::locate.
+        let q = p.max(f.lo).min(f.hi);
+        // See FastKernel::locate: ≥ 0 and ≤ last_bin, NaN mapped to last_bin = 0.
+        let b = ((q - f.lo) * f.inv_bin).min(f.last_bin);
+        let locate = |a: usize, x: f32, b: f32| -> (usize, [f32; 2]) {
+            // SAFETY: b is finite and in [0, last_bin] (see above), so the conversion is
+            // exact; LaneKernel::new copied last_bin + 1 bins at bin_offset from FastKernel's
+            // checked table, whose cells are ≤ last_cell; the +1 step happens only below
+            // last_cell (next is +inf there, and x ≤ hi is finite); FastKernel::new checked
+            // that last_cell + 2 coordinates follow coord_offset.
+            #[allow(unsafe_code)]
+            unsafe {
+                let bin = b.to_int_unchecked::<u32>() as usize;
+                let (cell, next) = *self.bins.get_unchecked(f.bin_offset[a] as usize + bin);
+                let i = cell as usize + (x >= next) as usize;
+                (i, *self.coords.get_unchecked(f.coord_offset[a] as usize + i))
+            }
+        };
+        // The local coordinates along one-cell axes (the other lanes are replaced below).
+        let uvw = (q - f.origin) * f.inv_width;
+        let mut cell = f.cell_base as usize;
+        let u = if MX {
+            let (i, e) = locate(0, q.x, b.x);
+            cell += i * f.stride_x as usize;
+            (q.x - e[0]) * e[1]
+        } else {
+            uvw.x
+        };
+        let v = if MY {
+            let (i, e) = locate(1, q.y, b.y);
+            cell += i * f.stride_y as usize;
+            (q.y - e[0]) * e[1]
+        } else {
+            uvw.y
+        };
+        let w = if MZ {
+            let (i, e) = locate(2, q.z, b.z);
+            cell += i;
+            (q.z - e[0]) * e[1]
+        } else {
+            uvw.z
+        };
+        debug_assert!(cell < self.cells.len());
+        // SAFETY: as in CompiledIfs::map_fast, checked by FastKernel::new.
+        #[allow(unsafe_code)]
+        let c = unsafe { self.cells.get_unchecked(cell) };
+        let (u, v, w) = (Vec3A::splat(u), Vec3A::splat(v), Vec3A::splat(w));
+        let inner = c[3] + u * c[5] + v * (c[6] + u * c[7]);
+        c[0] + u * c[1] + v * (c[2] + u * c[4]) + w * inner
+    }
+
+    /// [`Self::map`] with the axis flags taken from `self.multi` (for tests).
+    #[cfg(test)]
+    fn map_any(&self, fi: usize, p: Vec3A) -> Vec3A {
+        match self.multi {
+            [false, false, false] => self.map::<false, false, false>(fi, p),
+            [false, false, true] => self.map::<false, false, true>(fi, p),
+            [false, true, false] => self.map::<false, true, false>(fi, p),
+            [false, true, true] => self.map::<false, true, true>(fi, p),
+            [true, false, false] => self.map::<true, false, false>(fi, p),
+            [true, false, true] => self.map::<true, false, true>(fi, p),
+            [true, true, false] => self.map::<true, true, false>(fi, p),
+            [true, true, true] => self.map::<true, true, true>(fi, p),
+        }
+    }
+}
+
+/// Runs the orbits with the lane kernel, specialized for its multi-cell axes.
+fn run_lanes(lanes: &LaneKernel, orbits: Orbits, sink: &mut impl PointSink) {
+    match lanes.multi {
+        [false, false, false] => run_lanes_for::<false, false, false>(lanes, orbits, sink),
+        [false, false, true] => run_lanes_for::<false, false, true>(lanes, orbits, sink),
+        [false, true, false] => run_lanes_for::<false, true, false>(lanes, orbits, sink),
+        [false, true, true] => run_lanes_for::<false, true, true>(lanes, orbits, sink),
+        [true, false, false] => run_lanes_for::<true, false, false>(lanes, orbits, sink),
+        [true, false, true] => run_lanes_for::<true, false, true>(lanes, orbits, sink),
+        [true, true, false] => run_lanes_for::<true, true, false>(lanes, orbits, sink),
+        [true, true, true] => run_lanes_for::<true, true, true>(lanes, orbits, sink),
+    }
+}
+
+fn run_lanes_for<const MX: bool, const MY: bool, const MZ: bool>(lanes: &LaneKernel, orbits: Orbits, sink: &mut impl PointSink) {
+    orbits.run(sink, |rng, p| {
+        let fi = lanes.select(rng.next_u32());
+        (lanes.map::<MX, MY, MZ>(fi, p), fi)
+    })
 }
 
 fn fast_axis(f: &KernelFunction, a: usize, coords: &[[f32; 2]], bin_cells: &mut Vec<u32>) -> FastAxis {
@@ -548,40 +776,63 @@ impl PointSink for CollectSink {
 }
 
 /// Runs chunk `chunk` of a chaos game: [`ORBITS_PER_CHUNK`] orbits, `steps` points each after
-/// the transient, into `sink`.
+/// the transient, into `sink`. Orbit (lane) `k` of chunk `c` is chain `c · ORBITS_PER_CHUNK + k`
+/// and draws from the random stream (seed, frame, chain), as chain i of the GPU does.
 pub fn run_chunk(ifs: &CompiledIfs, seed: u32, frame: u32, chunk: u32, steps: usize, sink: &mut impl PointSink) {
-    const K: usize = ORBITS_PER_CHUNK;
-    let mut rng = Pcg32::for_stream(seed, frame, chunk);
-    let mut pos = [Vec3::ZERO; K];
-    for p in pos.iter_mut() {
-        *p = ifs.start_point(&mut rng);
-    }
-    let sel = &ifs.selection;
-    let adaptive = sel.cells != [1, 1, 1];
-    for _ in 0..ifs.transient {
-        for p in pos.iter_mut() {
-            let cell = if adaptive { sel.cell_of(*p) } else { 0 };
-            let fi = sel.select(cell, rng.next_u32());
-            *p = ifs.map_fast(fi, *p);
+    let first_chain = chunk.wrapping_mul(ORBITS_PER_CHUNK as u32);
+    let mut rngs: [Pcg32; ORBITS_PER_CHUNK] = std::array::from_fn(|k| Pcg32::for_stream(seed, frame, first_chain.wrapping_add(k as u32)));
+    let mut pos: [Vec3A; ORBITS_PER_CHUNK] = std::array::from_fn(|k| ifs.start_point(&mut rngs[k]).into());
+    let orbits = Orbits { rngs: &mut rngs, pos: &mut pos, transient: ifs.transient, steps };
+    match &ifs.lanes {
+        Some(lanes) => run_lanes(lanes, orbits, sink),
+        None => {
+            let sel = &ifs.selection;
+            let adaptive = sel.cells != [1, 1, 1];
+            orbits.run(sink, |rng, p| {
+                let cell = if adaptive { sel.cell_of(p.into()) } else { 0 };
+                let fi = sel.select(cell, rng.next_u32());
+                (ifs.map_fast(fi, p.into()).into(), fi)
+            })
         }
     }
-    let mut out_pos = vec![Vec3::ZERO; K * STEPS_PER_BATCH];
-    let mut out_fn = vec![0u8; K * STEPS_PER_BATCH];
-    let mut done = 0;
-    while done < steps {
-        let batch = STEPS_PER_BATCH.min(steps - done);
-        for s in 0..batch {
-            let row = s * K;
-            for (k, p) in pos.iter_mut().enumerate() {
-                let cell = if adaptive { sel.cell_of(*p) } else { 0 };
-                let fi = sel.select(cell, rng.next_u32());
-                *p = ifs.map_fast(fi, *p);
-                out_pos[row + k] = *p;
-                out_fn[row + k] = fi as u8;
+}
+
+/// The orbits of one chunk, advanced one step at a time across all lanes (independent lanes
+/// give the CPU instruction-level parallelism).
+struct Orbits<'a> {
+    rngs: &'a mut [Pcg32; ORBITS_PER_CHUNK],
+    pos: &'a mut [Vec3A; ORBITS_PER_CHUNK],
+    transient: u32,
+    steps: usize,
+}
+
+impl Orbits<'_> {
+    #[inline(always)]
+    fn run(self, sink: &mut impl PointSink, step: impl Fn(&mut Pcg32, Vec3A) -> (Vec3A, usize)) {
+        const K: usize = ORBITS_PER_CHUNK;
+        for _ in 0..self.transient {
+            for (rng, p) in self.rngs.iter_mut().zip(self.pos.iter_mut()) {
+                *p = step(rng, *p).0;
             }
         }
-        sink.consume(&out_pos[..batch * K], &out_fn[..batch * K]);
-        done += batch;
+        let mut out_pos = vec![Vec3::ZERO; K * STEPS_PER_BATCH];
+        let mut out_fn = vec![0u8; K * STEPS_PER_BATCH];
+        let mut done = 0;
+        while done < self.steps {
+            let batch = STEPS_PER_BATCH.min(self.steps - done);
+            for s in 0..batch {
+                let row = s * K;
+                let (out_p, out_f) = (&mut out_pos[row..row + K], &mut out_fn[row..row + K]);
+                for (k, (rng, p)) in self.rngs.iter_mut().zip(self.pos.iter_mut()).enumerate() {
+                    let (q, fi) = step(rng, *p);
+                    *p = q;
+                    out_p[k] = q.into();
+                    out_f[k] = fi as u8;
+                }
+            }
+            sink.consume(&out_pos[..batch * K], &out_fn[..batch * K]);
+            done += batch;
+        }
     }
 }
 
@@ -714,6 +965,103 @@ mod tests {
             for fi in 0..4 {
                 assert_eq!(c.map_fast(fi, p), c.map(fi, p), "f{fi} at {p:?}");
             }
+        }
+    }
+
+    /// The lane kernel (the common case's fast path) is bit-identical to the reference map,
+    /// on and near cell faces and outside the grid, and is the path the warped IFS takes.
+    #[test]
+    fn lane_map_is_bit_identical() {
+        // The warped IFS has several cells along every axis; its variant on a 1×2×1 grid
+        // (as the paper's tapering, 1×3×1) takes the kernel specialized for y alone.
+        let mut y_only = warped_ifs();
+        let grid = RectGrid { axes: [vec![0.0, 1.0], vec![0.0, 0.3, 1.0], vec![0.0, 1.0]] };
+        for (i, f) in y_only.functions.iter_mut().enumerate().take(3) {
+            let o = DVec3::new(0.1 * i as f64, 0.5, 0.2);
+            f.map = Map::Grid(GridMap::from_fn(grid.clone(), |p| 0.4 * p + o + DVec3::new(0.0, 0.1 * p.x * p.y, 0.0)));
+        }
+        y_only.domain = grid;
+        for (ifs, multi) in [(warped_ifs(), [true; 3]), (y_only, [false, true, false])] {
+            check_lane_map(&ifs, multi);
+        }
+    }
+
+    fn check_lane_map(ifs: &Ifs, multi: [bool; 3]) {
+        let c = CompiledIfs::new(ifs).unwrap();
+        let lanes = c.lanes.as_ref().expect("the IFS takes the lane path");
+        assert_eq!(lanes.multi, multi);
+        let mut r = Pcg32::for_stream(4, 0, 1);
+        let faces = [0.0f32, 0.3, 0.5, 0.8, 0.4, 1.0];
+        for k in 0..20_000 {
+            let mut p = Vec3::new(r.next_f32(), r.next_f32(), r.next_f32()) * 1.4 - 0.2;
+            if k % 2 == 0 {
+                let f = faces[k / 2 % faces.len()];
+                let g = match k % 3 { 0 => f, 1 => f.next_up(), _ => f.next_down() };
+                match k % 5 { 0 => p.x = g, 1 | 2 => p.y = g, _ => p.z = g }
+            }
+            if k % 97 == 0 {
+                p = Vec3::new(f32::NAN, 1e30, -1e30);
+            }
+            for fi in 0..4 {
+                let got = Vec3::from(lanes.map_any(fi, p.into()));
+                let want = c.map(fi, p);
+                assert_eq!(got.to_array().map(f32::to_bits), want.to_array().map(f32::to_bits), "f{fi} at {p:?}");
+            }
+        }
+    }
+
+    /// The lane kernel's bucketed selection equals the table's threshold count for every
+    /// r near each threshold and at random.
+    #[test]
+    fn lane_select_matches_table() {
+        let c = CompiledIfs::new(&warped_ifs()).unwrap();
+        let lanes = c.lanes.as_ref().unwrap();
+        let mut r = Pcg32::for_stream(6, 0, 0);
+        let mut rs: Vec<u32> = (0..100_000).map(|_| r.next_u32()).collect();
+        for &t in &c.selection.thresholds {
+            for d in -3i64..=3 {
+                let r24 = (t as i64 + d).clamp(0, (1 << 24) - 1) as u32;
+                rs.extend([r24 << 8, r24 << 8 | 0xff]);
+            }
+        }
+        for r in rs {
+            assert_eq!(lanes.select(r), c.selection.select(0, r), "r = {r:#x}");
+        }
+    }
+
+    /// `run_chunk` against a plain oracle: lane k of chunk c draws from stream (seed, frame,
+    /// 64c + k), starts at a random domain point, selects with the table and maps with the
+    /// reference `map`; every point must be bit-identical, on the lane path (global
+    /// probabilities) and on the general path (adaptive probabilities).
+    #[test]
+    fn run_chunk_matches_reference_orbits() {
+        for mode in [ProbabilityMode::Contractivity, ProbabilityMode::Adaptive] {
+            let mut ifs = warped_ifs();
+            ifs.probability_mode = mode;
+            let c = CompiledIfs::new(&ifs).unwrap();
+            assert_eq!(c.lanes.is_some(), mode == ProbabilityMode::Contractivity);
+            let (seed, frame, chunk, steps) = (11, 2, 5u32, 40);
+            let mut got = CollectSink::default();
+            run_chunk(&c, seed, frame, chunk, steps, &mut got);
+            let k_n = ORBITS_PER_CHUNK;
+            let mut want = vec![Vec3::ZERO; k_n * steps];
+            let mut want_fn = vec![0u8; k_n * steps];
+            for k in 0..k_n {
+                let mut rng = Pcg32::for_stream(seed, frame, chunk * k_n as u32 + k as u32);
+                let mut p = c.start_point(&mut rng);
+                for s in 0..c.transient as usize + steps {
+                    let fi = c.selection.select(c.selection.cell_of(p), rng.next_u32());
+                    p = c.map(fi, p);
+                    if s >= c.transient as usize {
+                        let row = s - c.transient as usize;
+                        want[row * k_n + k] = p;
+                        want_fn[row * k_n + k] = fi as u8;
+                    }
+                }
+            }
+            assert_eq!(got.functions, want_fn, "{mode:?}");
+            let bits = |v: &[Vec3]| v.iter().map(|p| p.to_array().map(f32::to_bits)).collect::<Vec<_>>();
+            assert_eq!(bits(&got.points), bits(&want), "{mode:?}");
         }
     }
 

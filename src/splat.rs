@@ -97,7 +97,11 @@ impl SplatView {
             return None;
         }
         let t = ((q.z - self.near) / (self.far - self.near)).clamp(0.0, 1.0);
-        Some((y as usize * self.width as usize + x as usize, t))
+        // SAFETY: 0 ≤ x < width and 0 ≤ y < height (checked above, NaN fails the check), so
+        // the truncations are exact; the same values as `as usize`.
+        #[allow(unsafe_code)]
+        let (ix, iy) = unsafe { (x.to_int_unchecked::<u32>() as usize, y.to_int_unchecked::<u32>() as usize) };
+        Some((iy * self.width as usize + ix, t))
     }
 
     /// A colour faded towards the background by depth fraction t.
@@ -204,7 +208,13 @@ impl PointSink for Framebuffer {
                 let scale = ((1u32 << DEPTH_BITS) - 1) as f32;
                 for (p, &fi) in points.iter().zip(functions) {
                     if let Some((idx, t)) = v.project(*p) {
-                        let key = ((t * scale) as u32) << 8 | fi as u32;
+                        // t is in [0, 1] or NaN (a non-finite point); NaN goes to 0 as
+                        // with a saturating `as u32`.
+                        let d = t * scale;
+                        let d = if d > 0.0 { d } else { 0.0 };
+                        // SAFETY: 0 ≤ d ≤ scale < 2^24, so the truncation is exact.
+                        #[allow(unsafe_code)]
+                        let key = unsafe { d.to_int_unchecked::<u32>() } << 8 | fi as u32;
                         let slot = &mut self.closest[idx];
                         if key < *slot {
                             *slot = key;
