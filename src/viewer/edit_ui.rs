@@ -82,10 +82,10 @@ pub fn grid_edit_ui(ui: &mut egui::Ui, state: &ViewerState, commands: &mut Vec<C
             ));
         }
         ui.horizontal(|ui| {
-            if ui.add_enabled(state.history.can_undo() || e.gesture.is_some(), egui::Button::new("↶ Undo")).on_hover_text("Ctrl+Z").clicked() {
+            if ui.add_enabled(state.history.can_undo() || e.gesture.is_some(), egui::Button::new("Undo")).on_hover_text("Ctrl+Z").clicked() {
                 commands.push(Command::Undo);
             }
-            if ui.add_enabled(state.history.can_redo(), egui::Button::new("↷ Redo")).on_hover_text("Ctrl+Shift+Z / Ctrl+Y").clicked() {
+            if ui.add_enabled(state.history.can_redo(), egui::Button::new("Redo")).on_hover_text("Ctrl+Shift+Z / Ctrl+Y").clicked() {
                 commands.push(Command::Redo);
             }
         });

@@ -4,11 +4,11 @@
 //!
 //! Everything projects with the [`SplatView`] that the live view uses (the same `OrbitCamera`
 //! matrices, window size and bounds), so lines sit exactly on the splatted points. A drag keeps
-//! the point's view distance: the start point is projected, moved by the cursor's pixel delta
-//! and unprojected with the inverse of `pixel_from_world`. With an axis lock the pixel delta
+//! the point's view distance: the start point is projected to clip space, moved by the cursor's
+//! pixel delta and unprojected. With an axis lock the pixel delta
 //! is projected onto the screen image of that world axis instead.
 
-use glam::{DVec3, Vec2, Vec4};
+use glam::{DVec3, Vec2};
 
 use crate::splat::SplatView;
 
@@ -50,18 +50,27 @@ pub fn dragged_position(state: &ViewerState, start: DVec3, delta_px: [f32; 2]) -
             p
         }
         None => {
-            let q = view.pixel_from_world * start.as_vec3().extend(1.0);
-            if !(q.w > 1e-6) {
+            // `pixel_from_world` is singular in perspective (its depth and w rows are both the
+            // view distance), so unproject through clip space: same NDC depth, moved NDC x, y.
+            let (near, far) = state.camera.depth_range(state.bounds);
+            let clip_from_world = state.camera.clip_from_view(view.width as f32 / view.height as f32, near, far) * state.camera.view_from_world();
+            let world_from_clip = clip_from_world.inverse();
+            let q = clip_from_world * start.as_vec3().extend(1.0);
+            if !(q.w.abs() > 1e-9) {
                 return start;
             }
-            let moved = Vec4::new(q.x + delta.x * q.w, q.y + delta.y * q.w, q.z, q.w);
-            let p = view.pixel_from_world.inverse() * moved;
-            if !(p.w.abs() > 1e-12) || !p.is_finite() {
+            let ndc = q.truncate() / q.w;
+            let moved = ndc + glam::Vec3::new(2.0 * delta.x / view.width as f32, -2.0 * delta.y / view.height as f32, 0.0);
+            let unproject = |n: glam::Vec3| {
+                let p = world_from_clip * n.extend(1.0);
+                p.truncate() / p.w
+            };
+            let offset = unproject(moved) - unproject(ndc);
+            if !offset.is_finite() {
                 return start;
             }
             // Offsets in double precision from the start, so an unmoved cursor leaves it exact.
-            let back = view.pixel_from_world.inverse() * q;
-            start + ((p.truncate() / p.w) - (back.truncate() / back.w)).as_dvec3()
+            start + offset.as_dvec3()
         }
     };
     if dim == 2 { DVec3::new(moved.x, moved.y, start.z) } else { moved }
@@ -135,11 +144,11 @@ fn draw_grid(painter: &egui::Painter, view: &SplatView, grid: &FunctionGrid, ppp
 /// Draws the initial grid, every enabled function's grid, the selected function's points
 /// (the selected one ringed) and, with a timeline, faint ghosts of the selected function's grid
 /// at the neighbouring keys. `ppp`: egui points per window pixel inverse (pixels per point).
-pub fn grid_overlay_ui(ctx: &egui::Context, state: &ViewerState, ppp: f32) {
+pub fn grid_overlay_ui(ctx: &egui::Context, clip: egui::Rect, state: &ViewerState, ppp: f32) {
     if !state.edit.grid_overlay {
         return;
     }
-    let painter = ctx.layer_painter(egui::LayerId::new(egui::Order::Background, egui::Id::unique("nlifs_grid_overlay")));
+    let painter = ctx.layer_painter(egui::LayerId::new(egui::Order::Background, egui::Id::unique("nlifs_grid_overlay"))).with_clip_rect(clip);
     let view = view_of(state);
     let initial = FunctionGrid { dims: state.scene.domain.dims(), points: state.scene.domain.points(), editable: false };
     draw_grid(&painter, &view, &initial, ppp, egui::Stroke::new(1.0, egui::Color32::from_white_alpha(110)));

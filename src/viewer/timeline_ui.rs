@@ -19,10 +19,10 @@ pub fn timeline_ui(ui: &mut egui::Ui, state: &ViewerState, commands: &mut Vec<Co
     let playhead = state.playhead_secs();
     ui.horizontal(|ui| {
         let playing = state.playback.playing;
-        if ui.button(if playing { "⏸ Pause" } else { "▶ Play" }).on_hover_text("Space").clicked() {
+        if ui.button(if playing { "Pause" } else { "Play" }).on_hover_text("Space").clicked() {
             commands.push(Command::SetPlaying(!playing));
         }
-        if ui.button("⏮").on_hover_text("to the start").clicked() {
+        if ui.button("|<").on_hover_text("to the start").clicked() {
             commands.push(Command::SetTime(0.0));
         }
         let mut t = playhead;

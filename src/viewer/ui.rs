@@ -34,7 +34,8 @@ pub fn panels_ui(ui: &mut egui::Ui, state: &ViewerState, jobs: &JobView, ppp: f3
             }
         });
     });
-    super::grid_edit::grid_overlay_ui(ui.ctx(), state, ppp);
+    // The overlay is clipped to what the panels leave of the view.
+    super::grid_edit::grid_overlay_ui(ui.ctx(), ui.available_rect_before_wrap(), state, ppp);
     super::edit_ui::raytrace_window_ui(ui.ctx(), jobs, commands);
 }
 
