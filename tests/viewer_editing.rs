@@ -186,3 +186,75 @@ fn save_writes_a_file_that_loads_back_equal() {
     assert!(s.error.is_some());
     assert_eq!(s.scene, before);
 }
+
+/// Polls the jobs the way the event loop does until none runs (at most 120 s).
+fn wait_jobs(jobs: &mut nlifs::viewer::jobs::Jobs, ctx: &egui::Context) {
+    let deadline = std::time::Instant::now() + std::time::Duration::from_secs(120);
+    while jobs.poll(ctx) {
+        assert!(std::time::Instant::now() < deadline, "job did not finish");
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+}
+
+#[test]
+fn ray_trace_and_record_jobs_run_in_the_background_and_cancel() {
+    use nlifs::viewer::state::{RaytraceForm, RecordForm};
+    let dir = std::env::temp_dir().join(format!("nlifs-viewer-jobs-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let ctx = egui::Context::default();
+    let mut jobs = nlifs::viewer::jobs::Jobs::default();
+
+    // Ray-trace this view: the viewer's camera, a small image, written as PNG and shown.
+    let mut s = state_for("tapering.toml");
+    let png = dir.join("rt.png");
+    let form = RaytraceForm { depth: 2, spp: 1, width: 64, height: 48, png_text: png.display().to_string() };
+    let changes = s.apply([Command::SetRaytraceForm(form), Command::Orbit { dx_px: 30.0, dy_px: 0.0 }, Command::StartRaytrace]);
+    for r in changes.jobs {
+        jobs.handle(r);
+    }
+    wait_jobs(&mut jobs, &ctx);
+    assert_eq!(jobs.view.raytrace_image.map(|(_, size)| size), Some([64, 48]), "{:?}", jobs.view.raytrace_message);
+    let img = image::open(&png).unwrap().to_rgb8();
+    assert_eq!(img.dimensions(), (64, 48));
+    // The same camera as the viewer's: identical to rendering with it directly.
+    let direct = nlifs::raytrace::render(
+        &s.scene,
+        0.0,
+        Some(s.camera),
+        &nlifs::raytrace::RaytraceSettings { width: 64, height: 48, spp: 1, depth: 2, ..Default::default() },
+        &|_, _| {},
+        &std::sync::atomic::AtomicBool::new(false),
+    )
+    .unwrap();
+    assert_eq!(img, direct.image);
+
+    // A cancelled ray-trace ends with a message and no new image.
+    let big = RaytraceForm { depth: 8, spp: 16, width: 1024, height: 768, png_text: dir.join("big.png").display().to_string() };
+    for r in s.apply([Command::SetRaytraceForm(big), Command::StartRaytrace, Command::CancelRaytrace]).jobs {
+        jobs.handle(r);
+    }
+    wait_jobs(&mut jobs, &ctx);
+    assert!(jobs.view.raytrace_message.as_deref().unwrap_or("").contains("ancel"), "{:?}", jobs.view.raytrace_message);
+    assert!(!dir.join("big.png").exists());
+
+    // Record the timeline (CPU): every frame written.
+    let mut s = state_for("twist-anim.toml");
+    let out = dir.join("frames");
+    let form = RecordForm { width: 32, height: 24, fps: 2.0, points_per_frame: 2000, dir_text: out.display().to_string() };
+    for r in s.apply([Command::SetRecordForm(form.clone()), Command::StartRecord]).jobs {
+        jobs.handle(r);
+    }
+    wait_jobs(&mut jobs, &ctx);
+    assert_eq!(jobs.view.record_message.as_deref(), Some(format!("recorded 8 frames to {}", out.display()).as_str()));
+    assert!((0..8).all(|k| nlifs::record::is_complete_frame(&nlifs::record::frame_path(&out, k), 32, 24)));
+    // Cancelled right away: stops between frames.
+    let out2 = dir.join("frames2");
+    let form = RecordForm { fps: 200.0, dir_text: out2.display().to_string(), ..form };
+    for r in s.apply([Command::SetRecordForm(form), Command::StartRecord, Command::CancelRecord]).jobs {
+        jobs.handle(r);
+    }
+    wait_jobs(&mut jobs, &ctx);
+    assert!(jobs.view.record_message.as_deref().unwrap_or("").starts_with("cancelled after"), "{:?}", jobs.view.record_message);
+    let _ = std::fs::remove_dir_all(&dir);
+}
