@@ -48,6 +48,9 @@ pub struct JobView {
     pub record_message: Option<String>,
 }
 
+/// The most leaves a ray-trace from the viewer may build (about 1 GB of hierarchy).
+const MAX_LEAVES: f64 = 8.0e6;
+
 type RaytraceResult = (Result<Traced, String>, PathBuf);
 
 #[derive(Default)]
@@ -68,6 +71,13 @@ impl Jobs {
                 }
                 let settings = RaytraceSettings { width: form.width.clamp(16, 4096), height: form.height.clamp(16, 4096), spp: form.spp.clamp(1, 64), depth: form.depth.min(12), ..RaytraceSettings::default() };
                 let png = PathBuf::from(form.png_text.trim());
+                // W^n(A) has m^n leaves: refuse what would not fit in memory rather than abort.
+                let m = scene.at(t_secs).active().len().max(1) as f64;
+                if m.powi(settings.depth as i32) > MAX_LEAVES {
+                    let depth = (MAX_LEAVES.ln() / m.ln()).floor();
+                    self.view.raytrace_message = Some(format!("depth {} gives {m}^{} leaves; at most depth {depth} here", settings.depth, settings.depth));
+                    return;
+                }
                 let job = Running::spawn(move |cancel, done, total| {
                     let progress = |d: u64, t: u64| {
                         done.store(d, Ordering::Relaxed);

@@ -503,6 +503,11 @@ impl ViewerState {
                     }
                 }
                 Command::SetDuration(d) => {
+                    // Keys stay inside the timeline: once / ping-pong end at or after the last
+                    // key; a loop's period ends after it (its end is the first key again).
+                    let last = self.scene.timeline.as_ref().and_then(|tl| tl.keys.last()).map_or(0.0, |k| k.t_secs);
+                    let looped = self.scene.timeline.as_ref().is_some_and(|tl| tl.loop_mode == LoopMode::Loop);
+                    let d = if looped { d.max(last + 1e-3) } else { d.max(last) };
                     if let Some(tl) = &self.scene.timeline
                         && d.is_finite()
                         && d > 0.0
@@ -653,6 +658,8 @@ impl ViewerState {
     /// Sets function `function`'s definition: at the playhead if the scene has a timeline (in the
     /// key there, created if needed), else in the base scene. Part of the running gesture.
     fn set_definition(&mut self, function: usize, def: FunctionDef) -> bool {
+        // Editing pauses playback: the edit belongs to one playhead.
+        self.playback.playing = false;
         let edit = if self.scene.timeline.is_some() {
             Edit::set_function_at_playhead(&self.scene, self.playhead_secs(), function, def)
         } else {
