@@ -258,3 +258,17 @@ fn ray_trace_and_record_jobs_run_in_the_background_and_cancel() {
     assert!(jobs.view.record_message.as_deref().unwrap_or("").starts_with("cancelled after"), "{:?}", jobs.view.record_message);
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn the_keyed_camera_is_followed_only_when_asked() {
+    let mut s = state_for("twist-anim.toml");
+    let yaw0 = s.camera.yaw_deg;
+    s.apply([Command::SetTime(1.0)]);
+    assert_eq!(s.camera.yaw_deg, yaw0, "the user's camera stays by default");
+    let c = s.apply([Command::SetFollowCamera(true)]);
+    assert!(c.camera);
+    // twist-anim's keys turn the camera 90° a second.
+    let expected = s.scene.camera_at(1.0).yaw_deg.unwrap() as f32;
+    assert!((s.camera.yaw_deg - expected).abs() < 1e-3, "{} vs {expected}", s.camera.yaw_deg);
+    assert!((s.camera.yaw_deg - yaw0).abs() > 45.0);
+}

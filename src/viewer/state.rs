@@ -75,6 +75,7 @@ pub enum Command {
     /// Scrub: scene time.
     SetTime(f64),
     SetSpeed(f64),
+    SetFollowCamera(bool),
     SetLoopMode(LoopMode),
     SetDuration(f64),
     /// Adds a key at the playhead holding every grid and builder function's current value,
@@ -167,6 +168,9 @@ pub struct Playback {
     pub playing: bool,
     /// Scene seconds per wall-clock second (negative plays backwards).
     pub speed: f64,
+    /// Take the camera from the scene's keys (fields they leave open from the attractor) at
+    /// every new time.
+    pub follow_camera: bool,
 }
 
 /// What the renderer must refresh after a batch of commands.
@@ -249,7 +253,7 @@ impl ViewerState {
             height_px: 720.0,
             edit: EditState { grid_overlay: false, selected_function: None, selected_point: None, axis_lock: None, gesture: None, save_text: String::new() },
             history: History::default(),
-            playback: Playback { playing: false, speed: 1.0 },
+            playback: Playback { playing: false, speed: 1.0, follow_camera: false },
             raytrace_form: RaytraceForm::default(),
             record_form: RecordForm::default(),
         };
@@ -327,6 +331,7 @@ impl ViewerState {
     pub fn apply(&mut self, commands: impl IntoIterator<Item = Command>) -> Changes {
         let mut changes = Changes::default();
         let mut edited = false;
+        let mut time_moved = false;
         for command in commands {
             match command {
                 Command::OpenScene(path) => {
@@ -480,13 +485,22 @@ impl ViewerState {
                         edited = true;
                     }
                 }
-                Command::Tick { dt_secs } => edited |= self.tick(dt_secs),
+                Command::Tick { dt_secs } => {
+                    let moved = self.tick(dt_secs);
+                    edited |= moved;
+                    time_moved |= moved;
+                }
                 Command::SetTime(t_secs) => {
                     if t_secs.is_finite() && t_secs != self.t_secs {
                         self.end_gesture();
                         self.t_secs = t_secs.max(0.0);
                         edited = true;
+                        time_moved = true;
                     }
+                }
+                Command::SetFollowCamera(follow) => {
+                    self.playback.follow_camera = follow;
+                    time_moved = follow;
                 }
                 Command::SetSpeed(speed) => {
                     if speed.is_finite() {
@@ -567,6 +581,10 @@ impl ViewerState {
         if edited {
             self.recompile();
             changes.scene_edited = true;
+        }
+        if time_moved && self.playback.follow_camera && self.scene.timeline.is_some() {
+            self.camera = self.framed_camera();
+            changes.camera = true;
         }
         changes
     }

@@ -43,6 +43,10 @@ pub fn timeline_ui(ui: &mut egui::Ui, state: &ViewerState, commands: &mut Vec<Co
         if mode != tl.loop_mode {
             commands.push(Command::SetLoopMode(mode));
         }
+        let mut follow = state.playback.follow_camera;
+        if ui.checkbox(&mut follow, "keyed camera").on_hover_text("take the camera from the scene's keys as time moves").changed() {
+            commands.push(Command::SetFollowCamera(follow));
+        }
         let mut duration = tl.duration_secs;
         if ui.add(egui::DragValue::new(&mut duration).speed(0.05).range(0.01..=3600.0).prefix("duration ").suffix(" s")).changed() {
             commands.push(Command::SetDuration(duration));
