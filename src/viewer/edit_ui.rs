@@ -74,7 +74,11 @@ pub fn grid_edit_ui(ui: &mut egui::Ui, state: &ViewerState, commands: &mut Vec<C
         } else if e.grid_overlay {
             ui.small("click-drag a grid function's point in the view, or choose a function.");
         }
-        if state.scene.timeline.is_some() {
+        if state.scene.timeline.is_none() {
+            if ui.button("Animate (key at 0 s, 4 s long)").on_hover_text("adds a timeline; edits at other times then create keys").clicked() {
+                commands.extend([Command::SetTime(0.0), Command::AddOrUpdateKey, Command::SetDuration(4.0)]);
+            }
+        } else {
             ui.small(format!(
                 "edits go to the key at t = {:.3} s{}",
                 state.playhead_secs(),
