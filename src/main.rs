@@ -77,6 +77,12 @@ struct ViewArgs {
     /// Testing: save the attractor to this PNG before closing.
     #[arg(long, hide = true)]
     screenshot: Option<PathBuf>,
+    /// Start with the grid overlay (initial and transformed grids) shown.
+    #[arg(long)]
+    grid: bool,
+    /// Start playing the timeline.
+    #[arg(long)]
+    play: bool,
 }
 
 #[derive(Subcommand)]
@@ -372,7 +378,14 @@ fn view(args: ViewArgs) -> anyhow::Result<()> {
     if let Some(s) = args.shading {
         live.shading = s.clamp(0.0, 1.0);
     }
-    let options = nlifs::viewer::ViewerOptions { scene: args.scene, live, exit_after_secs: args.exit_after_secs, screenshot: args.screenshot };
+    let options = nlifs::viewer::ViewerOptions {
+        scene: args.scene,
+        live,
+        exit_after_secs: args.exit_after_secs,
+        screenshot: args.screenshot,
+        grid_overlay: args.grid,
+        play: args.play,
+    };
     nlifs::viewer::run(options).context("viewer")?;
     Ok(())
 }

@@ -7,8 +7,17 @@
 //! recorded, resolved onto the surface with the same `draw` that screenshots use, and egui is
 //! drawn on top. A bad scene, a lost or outdated surface or a minimized window never panic: the
 //! error is shown and the last good state kept.
+//!
+//! The event loop is the only place that reads a clock: while the timeline plays it sends
+//! [`Command::Tick`] with the measured frame interval, and the scene edit that follows keeps the
+//! points (accumulation cleared). A left press near a grid point (grid overlay on) starts a point
+//! drag instead of an orbit. Ray-tracing and recording run on threads (`jobs.rs`).
 
+pub mod edit_ui;
+pub mod grid_edit;
+pub mod jobs;
 pub mod state;
+pub mod timeline_ui;
 pub mod ui;
 
 use std::path::PathBuf;
@@ -47,6 +56,10 @@ pub struct ViewerOptions {
     pub exit_after_secs: Option<f64>,
     /// Testing: save the attractor (offscreen, same draw) to this PNG before closing.
     pub screenshot: Option<PathBuf>,
+    /// Start with the grid overlay shown.
+    pub grid_overlay: bool,
+    /// Start playing the timeline (if the scene has one).
+    pub play: bool,
 }
 
 /// Opens the viewer and runs until the window closes.
@@ -56,6 +69,7 @@ pub fn run(options: ViewerOptions) -> Result<(), ViewerError> {
         state.apply([Command::OpenScene(path.clone())]);
         // A bad scene leaves the default one on screen with the error in the panel.
     }
+    state.apply([Command::SetGridOverlay(options.grid_overlay), Command::SetPlaying(options.play)]);
     let event_loop = EventLoop::new()?;
     let mut app = App {
         state,
@@ -63,6 +77,9 @@ pub fn run(options: ViewerOptions) -> Result<(), ViewerError> {
         gfx: None,
         commands: Vec::with_capacity(64),
         drag: None,
+        point_drag: None,
+        jobs: jobs::Jobs::default(),
+        last_tick: None,
         cursor: None,
         last_frame: None,
         last_poll: Instant::now(),
@@ -104,6 +121,11 @@ struct App {
     gfx: Option<Gfx>,
     commands: Vec<Command>,
     drag: Option<MouseButton>,
+    /// Cursor position at the press of a grid point drag.
+    point_drag: Option<(f64, f64)>,
+    jobs: jobs::Jobs,
+    /// When playback last advanced scene time.
+    last_tick: Option<Instant>,
     cursor: Option<(f64, f64)>,
     last_frame: Option<Instant>,
     last_poll: Instant,
@@ -173,6 +195,8 @@ impl ApplicationHandler for App {
         match Gfx::new(event_loop, &self.state) {
             Ok(gfx) => {
                 gfx.window.request_redraw();
+                self.state.width_px = gfx.config.width.max(1) as f32;
+                self.state.height_px = gfx.config.height.max(1) as f32;
                 self.gfx = Some(gfx);
             }
             Err(e) => {
@@ -197,16 +221,35 @@ impl ApplicationHandler for App {
                 if size.width > 0 && size.height > 0 {
                     gfx.reconfigure();
                     gfx.live.resize(&gfx.ctx, size.width, size.height);
+                    self.state.width_px = size.width as f32;
                     self.state.height_px = size.height as f32;
                     gfx.window.request_redraw();
                 }
             }
             WindowEvent::RedrawRequested => self.frame(),
             WindowEvent::DroppedFile(path) => self.commands.push(Command::OpenScene(path)),
-            WindowEvent::MouseInput { state: ElementState::Pressed, button, .. } if !egui_wants_pointer => self.drag = Some(button),
+            WindowEvent::MouseInput { state: ElementState::Pressed, button, .. } if !egui_wants_pointer => {
+                let picked = (button == MouseButton::Left).then_some(self.cursor).flatten().and_then(|(x, y)| grid_edit::pick_point(&self.state, [x as f32, y as f32]));
+                match picked {
+                    Some((function, point)) => {
+                        self.commands.push(Command::BeginPointDrag { function, point });
+                        self.point_drag = self.cursor;
+                    }
+                    None => self.drag = Some(button),
+                }
+                gfx.window.request_redraw();
+            }
+            WindowEvent::MouseInput { state: ElementState::Released, button: MouseButton::Left, .. } if self.point_drag.is_some() => {
+                self.point_drag = None;
+                self.commands.push(Command::EndGesture);
+                gfx.window.request_redraw();
+            }
             WindowEvent::MouseInput { state: ElementState::Released, button, .. } if self.drag == Some(button) => self.drag = None,
             WindowEvent::CursorMoved { position, .. } => {
-                if let (Some(button), Some((x, y))) = (self.drag, self.cursor) {
+                if let Some((x0, y0)) = self.point_drag {
+                    self.commands.push(Command::DragPoint { delta_px: [(position.x - x0) as f32, (position.y - y0) as f32] });
+                    gfx.window.request_redraw();
+                } else if let (Some(button), Some((x, y))) = (self.drag, self.cursor) {
                     let (dx_px, dy_px) = ((position.x - x) as f32, (position.y - y) as f32);
                     self.commands.push(match button {
                         MouseButton::Left => Command::Orbit { dx_px, dy_px },
@@ -262,7 +305,8 @@ impl ApplicationHandler for App {
         }
         let Some(gfx) = &self.gfx else { return };
         // Converged and idle: wake a few times a second (file polling), else draw continuously.
-        let idle = gfx.live.converged() && self.commands.is_empty() && self.drag.is_none();
+        let busy = self.state.playback.playing || self.state.edit.gesture.is_some() || self.jobs.view.raytrace.is_some() || self.jobs.view.record.is_some();
+        let idle = gfx.live.converged() && self.commands.is_empty() && self.drag.is_none() && !busy;
         if idle {
             let next = self.last_frame.unwrap_or_else(Instant::now) + Duration::from_millis(250);
             if Instant::now() >= next {
@@ -285,13 +329,29 @@ impl App {
                 self.commands.push(c);
             }
         }
+        // Playback: scene time advances by the wall-clock interval since the last frame (at most
+        // 0.25 s, so a stall does not jump the animation).
+        let now = Instant::now();
+        if self.state.playback.playing {
+            let dt_secs = self.last_tick.map_or(0.0, |t| (now - t).as_secs_f64().min(0.25));
+            self.commands.push(Command::Tick { dt_secs });
+            self.last_tick = Some(now);
+        } else {
+            self.last_tick = None;
+        }
+        self.jobs.poll(&gfx.egui_ctx);
         let raw_input = gfx.egui_state.take_egui_input(&gfx.window);
         let state = &self.state;
         let commands = &mut self.commands;
-        let full_output = gfx.egui_ctx.run_ui(raw_input, |ui| ui::panels_ui(ui, state, commands));
+        let job_view = &self.jobs.view;
+        let ppp = gfx.egui_ctx.pixels_per_point();
+        let full_output = gfx.egui_ctx.run_ui(raw_input, |ui| ui::panels_ui(ui, state, job_view, ppp, commands));
         gfx.egui_state.handle_platform_output(&gfx.window, full_output.platform_output);
 
-        let changes = self.state.apply(self.commands.drain(..));
+        let mut changes = self.state.apply(self.commands.drain(..));
+        for request in changes.jobs.drain(..) {
+            self.jobs.handle(request);
+        }
         if changes.scene_replaced || changes.scene_edited {
             if let Some(c) = &self.state.compiled {
                 gfx.live.set_ifs(&gfx.ctx, c, self.state.bounds, changes.scene_replaced);

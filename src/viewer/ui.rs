@@ -8,21 +8,71 @@ use crate::model::builder::Step;
 use crate::scene::FunctionDef;
 use crate::splat::SplatMode;
 
+use super::jobs::JobView;
 use super::state::{Command, ViewerState};
 
-/// The left side panel with every section.
-pub fn panels_ui(ui: &mut egui::Ui, state: &ViewerState, commands: &mut Vec<Command>) {
+/// The left side panel with every section, the timeline at the bottom, the grid overlay, the
+/// ray-traced image window and the keyboard shortcuts. `ppp`: pixels per egui point.
+pub fn panels_ui(ui: &mut egui::Ui, state: &ViewerState, jobs: &JobView, ppp: f32, commands: &mut Vec<Command>) {
+    shortcuts_ui(ui.ctx(), state, commands);
+    if state.scene.timeline.is_some() {
+        egui::Panel::bottom("nlifs_timeline").resizable(false).show(ui, |ui| super::timeline_ui::timeline_ui(ui, state, commands));
+    }
     egui::Panel::left("nlifs_panel").default_size(310.0).resizable(true).show(ui, |ui| {
         egui::ScrollArea::vertical().show(ui, |ui| {
             ui.heading("nlifs");
             scene_ui(ui, state, commands);
             functions_ui(ui, state, commands);
+            super::edit_ui::grid_edit_ui(ui, state, commands);
             builder_ui(ui, state, commands);
             render_ui(ui, state, commands);
             statistics_ui(ui, state);
             screenshot_ui(ui, state, commands);
+            super::edit_ui::raytrace_ui(ui, state, jobs, commands);
+            if state.scene.timeline.is_some() {
+                super::edit_ui::record_ui(ui, state, jobs, commands);
+            }
         });
     });
+    // The overlay is clipped to what the panels leave of the view.
+    super::grid_edit::grid_overlay_ui(ui.ctx(), ui.available_rect_before_wrap(), state, ppp);
+    super::edit_ui::raytrace_window_ui(ui.ctx(), jobs, commands);
+}
+
+/// Undo (Ctrl+Z), redo (Ctrl+Shift+Z, Ctrl+Y), save (Ctrl+S), axis lock (X, Y, Z, Esc-free),
+/// play/pause (Space); not while a text field has the keyboard (it has its own undo).
+fn shortcuts_ui(ctx: &egui::Context, state: &ViewerState, commands: &mut Vec<Command>) {
+    if ctx.egui_wants_keyboard_input() {
+        return;
+    }
+    use egui::{Key, KeyboardShortcut, Modifiers};
+    ctx.input_mut(|i| {
+        if i.consume_shortcut(&KeyboardShortcut::new(Modifiers::COMMAND | Modifiers::SHIFT, Key::Z)) || i.consume_shortcut(&KeyboardShortcut::new(Modifiers::COMMAND, Key::Y)) {
+            commands.push(Command::Redo);
+        }
+        if i.consume_shortcut(&KeyboardShortcut::new(Modifiers::COMMAND, Key::Z)) {
+            commands.push(Command::Undo);
+        }
+        if i.consume_shortcut(&KeyboardShortcut::new(Modifiers::COMMAND, Key::S)) {
+            commands.push(Command::SaveScene(state.edit.save_text.trim().into()));
+        }
+        if i.modifiers.is_none() {
+            for (key, axis) in [(Key::X, 0), (Key::Y, 1), (Key::Z, 2)] {
+                if i.key_pressed(key) {
+                    let lock = if state.edit.axis_lock == Some(axis) { None } else { Some(axis) };
+                    commands.push(Command::SetAxisLock(lock));
+                }
+            }
+            if i.key_pressed(Key::Space) && state.scene.timeline.is_some() {
+                commands.push(Command::SetPlaying(!state.playback.playing));
+            }
+        }
+    });
+    // A gesture ends when nothing holds it any more (no button down, no widget focused):
+    // covers sliders, number fields and drags that ended outside the window.
+    if state.edit.gesture.is_some() && !ctx.input(|i| i.pointer.any_down()) && ctx.memory(|m| m.focused().is_none()) {
+        commands.push(Command::EndGesture);
+    }
 }
 
 fn scene_ui(ui: &mut egui::Ui, state: &ViewerState, commands: &mut Vec<Command>) {
@@ -82,7 +132,7 @@ fn builder_ui(ui: &mut egui::Ui, state: &ViewerState, commands: &mut Vec<Command
         .functions
         .iter()
         .enumerate()
-        .filter_map(|(i, f)| match &f.def {
+        .filter_map(|(i, f)| match state.scene.function_def_at(i, state.t_secs) {
             FunctionDef::Builder { builder, .. } => Some((i, &f.name, builder)),
             _ => None,
         })
