@@ -39,8 +39,10 @@ const COLOR_SCALE: f32 = 255.0;
 // The accumulation buffer of `chaos_game.wgsl`, read-only here: one key per pixel (closest) or
 // four u32 per pixel (r, g, b, count).
 @group(0) @binding(1) var<storage, read> accum: array<u32>;
-// Linear RGB per compiled function.
-@group(0) @binding(2) var<storage, read> colors: array<vec4<f32>>;
+// Linear RGB per compiled function (at most 256: the key keeps 8 bits of function index). A
+// uniform buffer: on lavapipe a storage load with a per-pixel index is a scalar loop over the
+// SIMD lanes, a uniform load one gather.
+@group(0) @binding(2) var<uniform> colors: array<vec4<f32>, 256>;
 // [0]: the maximum count over the pixels (written by `max_count`).
 @group(0) @binding(3) var<storage, read> stats: array<u32>;
 
@@ -156,7 +158,9 @@ fn resolve(in: VertexOutput) -> @location(0) vec4<f32> {
             var key = accum[pixel];
             var at = vec2<i32>(i32(x), i32(y));
             let r = i32(params.point_radius_px);
-            for (var dy = -r; dy <= r; dy += 1) {
+            // r = 0 (the default) skips the loop: its bounds-checked neighbour reads cost as
+            // much as the rest of the resolve on a software rasterizer.
+            for (var dy = -r; dy <= r && r > 0; dy += 1) {
                 for (var dx = -r; dx <= r; dx += 1) {
                     let k = key_at(i32(x) + dx, i32(y) + dy);
                     if dx * dx + dy * dy <= r * r && k < key {

@@ -10,6 +10,9 @@ fn entry(binding: u32, buffer: &wgpu::Buffer) -> wgpu::BindGroupEntry<'_> {
     wgpu::BindGroupEntry { binding, resource: buffer.as_entire_binding() }
 }
 
+/// Bytes of the colour table bound as a uniform (`colors` in `shaders/resolve.wgsl`).
+const COLORS_BYTES: u64 = 256 * 16;
+
 /// Mirrors `struct ResolveParams` in `shaders/resolve.wgsl`: keep in sync.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
@@ -154,7 +157,15 @@ impl GpuResolve {
             let draw = device.create_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some("resolve"),
                 layout: &pipeline.get_bind_group_layout(0),
-                entries: &[entry(0, &self.params), entry(1, &game.accum), entry(2, &game.colors), entry(3, &self.stats)],
+                entries: &[
+                    entry(0, &self.params),
+                    entry(1, &game.accum),
+                    wgpu::BindGroupEntry {
+                        binding: 2,
+                        resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding { buffer: &game.colors, offset: 0, size: wgpu::BufferSize::new(COLORS_BYTES) }),
+                    },
+                    entry(3, &self.stats),
+                ],
             });
             *draw_bound = Some((game.generation, draw));
         }
