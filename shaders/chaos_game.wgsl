@@ -54,6 +54,13 @@ struct ChaosParams {
     _pad: u32,
 }
 
+// Pipeline constants (src/gpu/chaos_game.rs makes one pipeline per splat mode and per IFS with
+// or without Julia functions). As constants the compiler drops the branches not taken; a SIMD
+// software rasterizer would otherwise run both sides (atomics and table loads included) for
+// every lane. `params.mode` stays for the clear.
+override SPLAT_MODE: u32 = 0u;
+override HAS_JULIA: bool = true;
+
 const KIND_JULIA: u32 = 1u;
 const SELECT_BITS: u32 = 24u;
 const MODE_CLOSEST: u32 = 0u;
@@ -94,7 +101,7 @@ fn locate_axis(n: u32, base: u32, lo: f32, inv_bin: f32, x: f32) -> vec2<f32> {
 // Maps `p` by compiled function `fi` (`CompiledIfs::map`).
 fn map_point(fi: u32, p: vec3<f32>) -> vec3<f32> {
     let f = function_at(fi);
-    if f.coord_offset.w == KIND_JULIA {
+    if HAS_JULIA && f.coord_offset.w == KIND_JULIA {
         let julia = f.julia;
         let z = complex_sqrt(p.x - julia.x, p.y - julia.y);
         return vec3<f32>(julia.z * z.x, julia.z * z.y, 0.0);
@@ -176,7 +183,7 @@ fn splat(p: vec3<f32>, fi: u32) {
     let far = params.domain_hi.w;
     let t = clamp((q.z - near) / (far - near), 0.0, 1.0);
     let pixel = u32(y) * params.width + u32(x);
-    if params.mode == MODE_CLOSEST {
+    if SPLAT_MODE == MODE_CLOSEST {
         let slot = pixel;
         let key = (u32(t * DEPTH_SCALE) << 8u) | fi;
         // Most splats of a converging image lose: test with a plain load first, as atomics

@@ -121,11 +121,15 @@ fn upload(device: &wgpu::Device, queue: &wgpu::Queue, buffer: &mut wgpu::Buffer,
     }
 }
 
-/// The bind group layout and pipelines of one of the two chaos-game programs.
+/// The bind group layout and pipelines of one of the two chaos-game programs: the clear, and
+/// the chaos game specialized (pipeline constants) per splat mode and Julia functions present,
+/// made on first use.
 struct Program {
     layout: wgpu::BindGroupLayout,
-    chaos_pipeline: wgpu::ComputePipeline,
+    pipeline_layout: wgpu::PipelineLayout,
+    module: wgpu::ShaderModule,
     clear_pipeline: wgpu::ComputePipeline,
+    chaos_pipelines: Vec<((u32, bool), wgpu::ComputePipeline)>,
 }
 
 impl Program {
@@ -156,17 +160,34 @@ impl Program {
             immediate_size: 0,
         });
         let module = super::shaders::module(device, name);
-        let pipeline = |entry: &str| {
-            device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                label: Some(entry),
-                layout: Some(&pipeline_layout),
-                module: &module,
-                entry_point: Some(entry),
-                compilation_options: Default::default(),
-                cache: None,
-            })
-        };
-        Self { chaos_pipeline: pipeline("chaos_game"), clear_pipeline: pipeline("clear"), layout }
+        let clear_pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some("clear"),
+            layout: Some(&pipeline_layout),
+            module: &module,
+            entry_point: Some("clear"),
+            compilation_options: Default::default(),
+            cache: None,
+        });
+        Self { layout, pipeline_layout, module, clear_pipeline, chaos_pipelines: Vec::new() }
+    }
+
+    /// Index of the chaos-game pipeline for splat mode `mode` (shader number) and `has_julia`.
+    fn chaos_pipeline(&mut self, device: &wgpu::Device, mode: u32, has_julia: bool) -> usize {
+        let key = (mode, has_julia);
+        if let Some(i) = self.chaos_pipelines.iter().position(|(k, _)| *k == key) {
+            return i;
+        }
+        let constants = [("SPLAT_MODE", mode as f64), ("HAS_JULIA", has_julia as u32 as f64)];
+        let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some("chaos_game"),
+            layout: Some(&self.pipeline_layout),
+            module: &self.module,
+            entry_point: Some("chaos_game"),
+            compilation_options: wgpu::PipelineCompilationOptions { constants: &constants, ..Default::default() },
+            cache: None,
+        });
+        self.chaos_pipelines.push((key, pipeline));
+        self.chaos_pipelines.len() - 1
     }
 }
 
@@ -175,6 +196,8 @@ pub struct GpuChaosGame {
     storage_program: Program,
     /// The tables fit the uniform program's capacities (set by `set_ifs`).
     uniform_tables: bool,
+    /// Some compiled function is a Julia map (set by `set_ifs`).
+    has_julia: bool,
     /// Use the storage program even when the tables fit (tests compare both programs).
     pub force_storage_tables: bool,
     params: wgpu::Buffer,
@@ -210,6 +233,7 @@ impl GpuChaosGame {
             storage_program,
             uniform_tables: true,
             force_storage_tables: false,
+            has_julia: true,
             params,
             functions: table(device, "functions", functions),
             coords: table(device, "coords", coords),
@@ -238,6 +262,7 @@ impl GpuChaosGame {
             bytemuck::cast_slice(&colors),
         ];
         let uniform_tables = !self.force_storage_tables && tables.iter().zip(UNIFORM_CAPACITY).all(|(t, capacity)| t.len() as u64 <= capacity);
+        self.has_julia = ifs.functions.iter().any(|f| f.coord_offset[3] == crate::chaos_game::KIND_JULIA);
         let mut replaced = uniform_tables != self.uniform_tables;
         self.uniform_tables = uniform_tables;
         replaced |= upload(device, queue, &mut self.functions, "functions", tables[0]);
@@ -312,7 +337,9 @@ impl GpuChaosGame {
             _pad: 0,
         };
         queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
-        let program = if self.uniform_tables { &self.uniform_program } else { &self.storage_program };
+        let program = if self.uniform_tables { &mut self.uniform_program } else { &mut self.storage_program };
+        let chaos_index = program.chaos_pipeline(device, mode_index(v.mode), self.has_julia);
+        let program = &*program;
         if self.bind_group.is_none() {
             let buffers = [&self.params, &self.functions, &self.coords, &self.cells, &self.thresholds, &self.colors, &self.points, &self.accum];
             let entries: Vec<wgpu::BindGroupEntry> = buffers
@@ -336,7 +363,7 @@ impl GpuChaosGame {
             pass.dispatch_workgroups(x, y, 1);
         }
         if args.steps > 0 {
-            pass.set_pipeline(&program.chaos_pipeline);
+            pass.set_pipeline(&program.chaos_pipelines[chaos_index].1);
             let (x, y) = dispatch_size(self.point_count as u64);
             pass.dispatch_workgroups(x, y, 1);
         }
