@@ -51,6 +51,8 @@ pub struct ResolveArgs {
 
 /// What a draw pipeline is specialized for: target format, splat mode, shading on.
 type DrawKey = (wgpu::TextureFormat, SplatMode, bool);
+/// A bind group with the generation of the chaos game's buffers it binds.
+type Bound = Option<(u64, wgpu::BindGroup)>;
 
 pub struct GpuResolve {
     module: wgpu::ShaderModule,
@@ -58,7 +60,7 @@ pub struct GpuResolve {
     /// One draw pipeline per target format, mode and shading on/off (the shader's pipeline
     /// constants), made on first use, with its bind group and the generation of the chaos
     /// game's buffers it binds.
-    draw_pipelines: Vec<(DrawKey, wgpu::RenderPipeline, Option<(u64, wgpu::BindGroup)>)>,
+    draw_pipelines: Vec<(DrawKey, wgpu::RenderPipeline, Bound)>,
     params: wgpu::Buffer,
     stats: wgpu::Buffer,
     /// Generation of the chaos game's buffers and the max-count pass's two bind groups.
