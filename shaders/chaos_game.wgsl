@@ -1,6 +1,7 @@
 // The chaos game on the GPU, twin of `src/chaos_game.rs` (the map, the function selection and
 // the start point) fused with the splat, twin of `src/splat.rs` (`Framebuffer::consume`).
-// Prepended with `rng.wgsl` by `src/gpu/shaders.rs`.
+// Prepended with `rng.wgsl` and one of `ifs_tables_uniform.wgsl` / `ifs_tables_storage.wgsl`
+// (the compiled IFS tables and their accessors) by `src/gpu/shaders.rs`.
 //
 // Every invocation owns one persistent point (xyz, w: the function that mapped it last). Per
 // frame it draws from stream (seed, frame, thread), advances `steps` times and splats every step
@@ -53,6 +54,13 @@ struct ChaosParams {
     _pad: u32,
 }
 
+// Pipeline constants (src/gpu/chaos_game.rs makes one pipeline per splat mode and per IFS with
+// or without Julia functions). As constants the compiler drops the branches not taken; a SIMD
+// software rasterizer would otherwise run both sides (atomics and table loads included) for
+// every lane. `params.mode` stays for the clear.
+override SPLAT_MODE: u32 = 0u;
+override HAS_JULIA: bool = true;
+
 const KIND_JULIA: u32 = 1u;
 const SELECT_BITS: u32 = 24u;
 const MODE_CLOSEST: u32 = 0u;
@@ -60,12 +68,6 @@ const DEPTH_SCALE: f32 = 16777215.0; // 2^24 - 1
 const COLOR_SCALE: f32 = 255.0;
 
 @group(0) @binding(0) var<uniform> params: ChaosParams;
-@group(0) @binding(1) var<storage, read> functions: array<KernelFunction>;
-@group(0) @binding(2) var<storage, read> coords: array<vec2<f32>>;
-@group(0) @binding(3) var<storage, read> cells: array<Cell>;
-@group(0) @binding(4) var<storage, read> thresholds: array<u32>;
-// Linear RGB per compiled function (w unused).
-@group(0) @binding(5) var<storage, read> colors: array<vec4<f32>>;
 @group(0) @binding(6) var<storage, read_write> points: array<vec4<f32>>;
 // Closest mode: one key per pixel (compact, for cache locality of the random splats);
 // average and density modes: four u32 per pixel, r, g, b sums and the count.
@@ -86,29 +88,29 @@ fn complex_sqrt(re: f32, im: f32) -> vec2<f32> {
 fn locate_axis(n: u32, base: u32, lo: f32, inv_bin: f32, x: f32) -> vec2<f32> {
     let guess = u32(max((x - lo) * inv_bin, 0.0));
     var i = min(guess, n - 1u);
-    while i > 0u && x < coords[base + i].x {
+    while i > 0u && x < coord_at(base + i).x {
         i -= 1u;
     }
-    while i + 1u < n && x >= coords[base + i + 1u].x {
+    while i + 1u < n && x >= coord_at(base + i + 1u).x {
         i += 1u;
     }
-    let c = coords[base + i];
+    let c = coord_at(base + i);
     return vec2<f32>(bitcast<f32>(i), (x - c.x) * c.y);
 }
 
 // Maps `p` by compiled function `fi` (`CompiledIfs::map`).
 fn map_point(fi: u32, p: vec3<f32>) -> vec3<f32> {
-    let kind = functions[fi].coord_offset.w;
-    if kind == KIND_JULIA {
-        let julia = functions[fi].julia;
+    let f = function_at(fi);
+    if HAS_JULIA && f.coord_offset.w == KIND_JULIA {
+        let julia = f.julia;
         let z = complex_sqrt(p.x - julia.x, p.y - julia.y);
         return vec3<f32>(julia.z * z.x, julia.z * z.y, 0.0);
     }
-    let lo = functions[fi].lo.xyz;
-    let inv_bin = functions[fi].inv_bin.xyz;
-    let n = functions[fi].cells;
-    let base = functions[fi].coord_offset.xyz;
-    let q = clamp(p, lo, functions[fi].hi.xyz);
+    let lo = f.lo.xyz;
+    let inv_bin = f.inv_bin.xyz;
+    let n = f.cells;
+    let base = f.coord_offset.xyz;
+    let q = clamp(p, lo, f.hi.xyz);
     let lx = locate_axis(n.x, base.x, lo.x, inv_bin.x, q.x);
     let ly = locate_axis(n.y, base.y, lo.y, inv_bin.y, q.y);
     let lz = locate_axis(n.z, base.z, lo.z, inv_bin.z, q.z);
@@ -120,8 +122,8 @@ fn map_point(fi: u32, p: vec3<f32>) -> vec3<f32> {
     let w = lz.y;
     let cell = n.w + (ix * n.y + iy) * n.z + iz;
     // a + u b + v (c + u e) + w (d + u f + v (g + u h))
-    let inner = cells[cell].coef[3].xyz + u * cells[cell].coef[5].xyz + v * (cells[cell].coef[6].xyz + u * cells[cell].coef[7].xyz);
-    return cells[cell].coef[0].xyz + u * cells[cell].coef[1].xyz + v * (cells[cell].coef[2].xyz + u * cells[cell].coef[4].xyz) + w * inner;
+    let inner = cell_coef(cell, 3u) + u * cell_coef(cell, 5u) + v * (cell_coef(cell, 6u) + u * cell_coef(cell, 7u));
+    return cell_coef(cell, 0u) + u * cell_coef(cell, 1u) + v * (cell_coef(cell, 2u) + u * cell_coef(cell, 4u)) + w * inner;
 }
 
 // Coarse selection cell of `p` (`SelectionTable::cell_of`).
@@ -143,7 +145,7 @@ fn select_function(cell: u32, r: u32) -> u32 {
     let r24 = r >> (32u - SELECT_BITS);
     var chosen = 0u;
     for (var k = 0u; k + 1u < n; k += 1u) {
-        chosen += select(0u, 1u, thresholds[cell * n + k] <= r24);
+        chosen += select(0u, 1u, threshold_at(cell * n + k) <= r24);
     }
     return chosen;
 }
@@ -181,7 +183,7 @@ fn splat(p: vec3<f32>, fi: u32) {
     let far = params.domain_hi.w;
     let t = clamp((q.z - near) / (far - near), 0.0, 1.0);
     let pixel = u32(y) * params.width + u32(x);
-    if params.mode == MODE_CLOSEST {
+    if SPLAT_MODE == MODE_CLOSEST {
         let slot = pixel;
         let key = (u32(t * DEPTH_SCALE) << 8u) | fi;
         // Most splats of a converging image lose: test with a plain load first, as atomics
@@ -191,7 +193,7 @@ fn splat(p: vec3<f32>, fi: u32) {
         }
     } else {
         let slot = 4u * pixel;
-        let c = colors[fi].rgb * COLOR_SCALE;
+        let c = color_at(fi) * COLOR_SCALE;
         let bg = params.background.rgb * COLOR_SCALE;
         let k = params.background.w * t;
         let v = c + (bg - c) * k + 0.5;

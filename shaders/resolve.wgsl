@@ -29,6 +29,15 @@ struct ResolveParams {
     _pad2: u32,
 }
 
+// Pipeline constants (src/gpu/resolve.rs makes one pipeline per target format, mode and
+// shading on/off). The mode, the shading and the sRGB encoding as constants rather than
+// uniforms let the compiler drop the branches not taken: a SIMD software rasterizer runs both
+// sides of a branch it cannot prove uniform, storage loads and all (the dead branches were most
+// of the resolve's cost on lavapipe). The uniforms of the same names stay for the values.
+override RESOLVE_MODE: u32 = 0u;
+override SHADED: bool = false;
+override ENCODE_SRGB: bool = false;
+
 const MODE_CLOSEST: u32 = 0u;
 const MODE_AVERAGE: u32 = 1u;
 const EMPTY: u32 = 0xffffffffu;
@@ -39,8 +48,10 @@ const COLOR_SCALE: f32 = 255.0;
 // The accumulation buffer of `chaos_game.wgsl`, read-only here: one key per pixel (closest) or
 // four u32 per pixel (r, g, b, count).
 @group(0) @binding(1) var<storage, read> accum: array<u32>;
-// Linear RGB per compiled function.
-@group(0) @binding(2) var<storage, read> colors: array<vec4<f32>>;
+// Linear RGB per compiled function (at most 256: the key keeps 8 bits of function index). A
+// uniform buffer: on lavapipe a storage load with a per-pixel index is a scalar loop over the
+// SIMD lanes, a uniform load one gather.
+@group(0) @binding(2) var<uniform> colors: array<vec4<f32>, 256>;
 // [0]: the maximum count over the pixels (written by `max_count`).
 @group(0) @binding(3) var<storage, read> stats: array<u32>;
 
@@ -152,11 +163,13 @@ fn resolve(in: VertexOutput) -> @location(0) vec4<f32> {
     if x < params.width && y < params.height {
         let pixel = y * params.width + x;
         let slot = 4u * pixel;
-        if params.mode == MODE_CLOSEST {
+        if RESOLVE_MODE == MODE_CLOSEST {
             var key = accum[pixel];
             var at = vec2<i32>(i32(x), i32(y));
             let r = i32(params.point_radius_px);
-            for (var dy = -r; dy <= r; dy += 1) {
+            // r = 0 (the default) skips the loop: its bounds-checked neighbour reads cost as
+            // much as the rest of the resolve on a software rasterizer.
+            for (var dy = -r; dy <= r && r > 0; dy += 1) {
                 for (var dx = -r; dx <= r; dx += 1) {
                     let k = key_at(i32(x) + dx, i32(y) + dy);
                     if dx * dx + dy * dy <= r * r && k < key {
@@ -169,7 +182,7 @@ fn resolve(in: VertexOutput) -> @location(0) vec4<f32> {
                 let fi = key & 0xffu;
                 let t = depth_of(key);
                 var base = colors[fi].rgb;
-                if params.shading > 0.0 {
+                if SHADED && params.shading > 0.0 {
                     base *= mix(1.0, shade(at.x, at.y, t), params.shading);
                 }
                 c = cue(base, t);
@@ -179,7 +192,7 @@ fn resolve(in: VertexOutput) -> @location(0) vec4<f32> {
             if count > 0u {
                 let n = f32(count) * COLOR_SCALE;
                 let avg = vec3<f32>(f32(accum[slot]), f32(accum[slot + 1u]), f32(accum[slot + 2u])) / n;
-                if params.mode == MODE_AVERAGE {
+                if RESOLVE_MODE == MODE_AVERAGE {
                     c = avg;
                 } else {
                     let log_max = log(1.0 + f32(max(stats[0], 1u)));
@@ -189,7 +202,7 @@ fn resolve(in: VertexOutput) -> @location(0) vec4<f32> {
             }
         }
     }
-    if params.encode_srgb != 0u {
+    if ENCODE_SRGB {
         c = vec3<f32>(linear_to_srgb(c.x), linear_to_srgb(c.y), linear_to_srgb(c.z));
     }
     return vec4<f32>(c, 1.0);

@@ -9,10 +9,13 @@ use nlifs::gpu::shaders::{PROGRAMS, program};
 
 /// (program, WGSL struct, size of its Rust mirror). Shader-interface structs (vertex outputs)
 /// have no memory layout and no mirror.
-const MIRRORS: [(&str, &str, usize); 4] = [
+const MIRRORS: [(&str, &str, usize); 7] = [
     ("chaos_game", "KernelFunction", size_of::<KernelFunction>()),
     ("chaos_game", "Cell", size_of::<Cell>()),
     ("chaos_game", "ChaosParams", size_of::<ChaosParams>()),
+    ("chaos_game_storage", "KernelFunction", size_of::<KernelFunction>()),
+    ("chaos_game_storage", "Cell", size_of::<Cell>()),
+    ("chaos_game_storage", "ChaosParams", size_of::<ChaosParams>()),
     ("resolve", "ResolveParams", size_of::<ResolveParams>()),
 ];
 const INTERFACE_STRUCTS: [&str; 1] = ["VertexOutput"];
@@ -75,4 +78,29 @@ fn struct_sizes_match_rust_mirrors() {
         let (module, _) = validate(p);
         assert!(module.types.iter().any(|(_, t)| t.name.as_deref() == Some(s)), "{p}: no struct {s}");
     }
+}
+
+/// The uniform tables of program `chaos_game` (bindings 1..=5) are exactly the sizes the host
+/// binds (`UNIFORM_CAPACITY`), and the resolve's colour table is as large as the chaos game's.
+#[test]
+fn uniform_table_sizes_match_host_capacities() {
+    use nlifs::gpu::chaos_game::UNIFORM_CAPACITY;
+    let (module, _) = validate("chaos_game");
+    let mut layouter = naga::proc::Layouter::default();
+    layouter.update(module.to_ctx()).unwrap();
+    for (binding, capacity) in (1..=5).zip(UNIFORM_CAPACITY) {
+        let var = module
+            .global_variables
+            .iter()
+            .map(|(_, v)| v)
+            .find(|v| v.binding.as_ref().is_some_and(|b| b.group == 0 && b.binding == binding))
+            .unwrap_or_else(|| panic!("chaos_game: no binding {binding}"));
+        assert_eq!(var.space, naga::AddressSpace::Uniform, "chaos_game: binding {binding} is not a uniform");
+        assert_eq!(layouter[var.ty].size as u64, capacity, "chaos_game: binding {binding} ({:?})", var.name);
+    }
+    let (module, _) = validate("resolve");
+    let mut layouter = naga::proc::Layouter::default();
+    layouter.update(module.to_ctx()).unwrap();
+    let colors = module.global_variables.iter().map(|(_, v)| v).find(|v| v.name.as_deref() == Some("colors")).expect("resolve: colors");
+    assert_eq!(layouter[colors.ty].size as u64, UNIFORM_CAPACITY[4], "resolve: colors");
 }

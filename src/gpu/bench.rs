@@ -21,6 +21,13 @@ pub struct BenchReport {
     pub steps: u32,
     pub frames: u32,
     pub secs: f64,
+    /// Milliseconds per frame of each stage alone, [wall, CPU time of this process] (on a
+    /// software rasterizer the CPU time is the work, the wall time depends on the load): the
+    /// chaos game with its splat, the resolve onto the target, and a clear of the accumulation
+    /// (done only after a change).
+    pub chaos_ms: [f64; 2],
+    pub resolve_ms: [f64; 2],
+    pub clear_ms: [f64; 2],
     /// Frames until the image after an edit is within noise; None if not within the window.
     pub frames_to_converge: Option<u32>,
     /// (frame, L1 distance after the edit, L1 distance of a fresh run of as many splats).
@@ -33,6 +40,8 @@ impl fmt::Display for BenchReport {
         writeln!(f, "adapter: {}", self.adapter)?;
         writeln!(f, "{} points × {} steps per frame at 1280×720, {} frames in {:.3} s", self.points, self.steps, self.frames, self.secs)?;
         writeln!(f, "  {:.1} fps, {:.1} M points/s (map + splat + resolve)", self.frames as f64 / self.secs, steps / self.secs / 1e6)?;
+        writeln!(f, "  per stage alone, ms per frame (wall / process CPU):")?;
+        writeln!(f, "    chaos game + splat {:.1} / {:.1}, resolve {:.1} / {:.1}, clear {:.1} / {:.1}", self.chaos_ms[0], self.chaos_ms[1], self.resolve_ms[0], self.resolve_ms[1], self.clear_ms[0], self.clear_ms[1])?;
         writeln!(f, "after an edit (coarse-grid L1 distance to the converged image: edited vs fresh run of equal splats):")?;
         for (k, d_edit, d_fresh) in &self.convergence {
             writeln!(f, "  frame {k:>2}: {d_edit:.4} vs {d_fresh:.4}")?;
@@ -52,6 +61,15 @@ fn submit_frame(ctx: &GpuContext, live: &mut LiveView, target: Option<(&wgpu::Te
     }
     ctx.queue.submit([encoder.finish()]);
     n
+}
+
+/// User + system CPU seconds of this process (all threads, lavapipe's workers included), from
+/// /proc (Linux; 0 elsewhere). 10 ms resolution.
+fn process_cpu_secs() -> f64 {
+    let stat = std::fs::read_to_string("/proc/self/stat").unwrap_or_default();
+    let fields: Vec<&str> = stat.rsplit(')').next().unwrap_or("").split_whitespace().collect();
+    let ticks = |i: usize| fields.get(i).and_then(|f| f.parse::<f64>().ok()).unwrap_or(0.0);
+    (ticks(11) + ticks(12)) / 100.0
 }
 
 fn wait(ctx: &GpuContext) {
@@ -134,6 +152,27 @@ pub fn run(scene: &Scene, points: u32, steps: u32, frames: u32) -> Result<BenchR
     }
     let secs = start.elapsed().as_secs_f64();
 
+    // Each stage alone, to see where the time goes.
+    let stage_frames = (frames / 2).max(5);
+    let time_stage = |live: &mut LiveView, stage: &dyn Fn(&mut LiveView, &mut wgpu::CommandEncoder)| {
+        wait(&ctx);
+        let cpu0 = process_cpu_secs();
+        let start = Instant::now();
+        for _ in 0..stage_frames {
+            let mut encoder = ctx.device.create_command_encoder(&Default::default());
+            stage(live, &mut encoder);
+            ctx.queue.submit([encoder.finish()]);
+            wait(&ctx);
+        }
+        let per_frame = |secs: f64| 1e3 * secs / stage_frames as f64;
+        [per_frame(start.elapsed().as_secs_f64()), per_frame(process_cpu_secs() - cpu0)]
+    };
+    let chaos_ms = time_stage(&mut live, &|live, encoder| {
+        live.advance(&ctx, encoder);
+    });
+    let resolve_ms = time_stage(&mut live, &|live, encoder| live.draw(&ctx, encoder, &view, format));
+    let clear_ms = time_stage(&mut live, &|live, encoder| live.encode_clear(&ctx, encoder));
+
     // Convergence after an edit, in density mode on a smaller view (readbacks every frame).
     let (w, h) = (320, 180);
     let cells = (32, 18);
@@ -174,5 +213,5 @@ pub fn run(scene: &Scene, points: u32, steps: u32, frames: u32) -> Result<BenchR
             frames_to_converge = Some(k);
         }
     }
-    Ok(BenchReport { adapter: ctx.describe(), points, steps, frames, secs, frames_to_converge, convergence })
+    Ok(BenchReport { adapter: ctx.describe(), points, steps, frames, secs, chaos_ms, resolve_ms, clear_ms, frames_to_converge, convergence })
 }

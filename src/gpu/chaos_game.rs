@@ -2,6 +2,10 @@
 //! storage buffers (the same [`KernelFunction`], [`Cell`], coordinate and threshold layout as
 //! the CPU model in `src/chaos_game.rs`), the accumulation buffer, and the dispatch of one
 //! frame. Buffers are created when sizes grow (new scene, resize, point count), never per frame.
+//!
+//! The tables are bound as uniform buffers when they fit their fixed capacities (program
+//! `chaos_game`, `shaders/ifs_tables_uniform.wgsl`), else as storage buffers (program
+//! `chaos_game_storage`); the buffers are the same bytes either way.
 
 use wgpu::util::DeviceExt;
 
@@ -13,6 +17,10 @@ pub const GROUPS_PER_ROW: u32 = 4096;
 pub const WORKGROUP_SIZE: u32 = 64;
 /// Threads per dispatch row (the shader's `threads_per_row`).
 pub const THREADS_PER_ROW: u32 = GROUPS_PER_ROW * WORKGROUP_SIZE;
+
+/// Bytes of each IFS table binding in the uniform program (functions, coordinates, cells,
+/// thresholds, colours). Mirrors the capacities in `shaders/ifs_tables_uniform.wgsl`.
+pub const UNIFORM_CAPACITY: [u64; 5] = [256 * 96, 4096 * 16, 512 * 128, 4096 * 16, 256 * 16];
 
 /// Per-frame uniforms. Mirrors `struct ChaosParams` in `shaders/chaos_game.wgsl`: keep in sync.
 #[repr(C)]
@@ -76,6 +84,16 @@ struct IfsUniforms {
     dimension: u32,
 }
 
+/// A table buffer: bindable as storage or uniform, at least its uniform capacity.
+fn table(device: &wgpu::Device, label: &str, capacity: u64) -> wgpu::Buffer {
+    device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some(label),
+        size: capacity,
+        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    })
+}
+
 fn storage(device: &wgpu::Device, label: &str, size: u64, extra: wgpu::BufferUsages) -> wgpu::Buffer {
     device.create_buffer(&wgpu::BufferDescriptor {
         label: Some(label),
@@ -92,7 +110,7 @@ fn upload(device: &wgpu::Device, queue: &wgpu::Queue, buffer: &mut wgpu::Buffer,
         *buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some(label),
             contents: &[data, &vec![0u8; data.len().next_multiple_of(16) - data.len()]].concat(),
-            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
         });
         true
     } else {
@@ -103,10 +121,85 @@ fn upload(device: &wgpu::Device, queue: &wgpu::Queue, buffer: &mut wgpu::Buffer,
     }
 }
 
-pub struct GpuChaosGame {
+/// The bind group layout and pipelines of one of the two chaos-game programs: the clear, and
+/// the chaos game specialized (pipeline constants) per splat mode and Julia functions present,
+/// made on first use.
+struct Program {
     layout: wgpu::BindGroupLayout,
-    chaos_pipeline: wgpu::ComputePipeline,
+    pipeline_layout: wgpu::PipelineLayout,
+    module: wgpu::ShaderModule,
     clear_pipeline: wgpu::ComputePipeline,
+    chaos_pipelines: Vec<((u32, bool), wgpu::ComputePipeline)>,
+}
+
+impl Program {
+    fn new(device: &wgpu::Device, name: &str, tables: wgpu::BufferBindingType) -> Self {
+        let entry = |binding: u32, ty: wgpu::BufferBindingType| wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility: wgpu::ShaderStages::COMPUTE,
+            ty: wgpu::BindingType::Buffer { ty, has_dynamic_offset: false, min_binding_size: None },
+            count: None,
+        };
+        let write = wgpu::BufferBindingType::Storage { read_only: false };
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some(name),
+            entries: &[
+                entry(0, wgpu::BufferBindingType::Uniform),
+                entry(1, tables),
+                entry(2, tables),
+                entry(3, tables),
+                entry(4, tables),
+                entry(5, tables),
+                entry(6, write),
+                entry(7, write),
+            ],
+        });
+        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some(name),
+            bind_group_layouts: &[Some(&layout)],
+            immediate_size: 0,
+        });
+        let module = super::shaders::module(device, name);
+        let clear_pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some("clear"),
+            layout: Some(&pipeline_layout),
+            module: &module,
+            entry_point: Some("clear"),
+            compilation_options: Default::default(),
+            cache: None,
+        });
+        Self { layout, pipeline_layout, module, clear_pipeline, chaos_pipelines: Vec::new() }
+    }
+
+    /// Index of the chaos-game pipeline for splat mode `mode` (shader number) and `has_julia`.
+    fn chaos_pipeline(&mut self, device: &wgpu::Device, mode: u32, has_julia: bool) -> usize {
+        let key = (mode, has_julia);
+        if let Some(i) = self.chaos_pipelines.iter().position(|(k, _)| *k == key) {
+            return i;
+        }
+        let constants = [("SPLAT_MODE", mode as f64), ("HAS_JULIA", has_julia as u32 as f64)];
+        let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some("chaos_game"),
+            layout: Some(&self.pipeline_layout),
+            module: &self.module,
+            entry_point: Some("chaos_game"),
+            compilation_options: wgpu::PipelineCompilationOptions { constants: &constants, ..Default::default() },
+            cache: None,
+        });
+        self.chaos_pipelines.push((key, pipeline));
+        self.chaos_pipelines.len() - 1
+    }
+}
+
+pub struct GpuChaosGame {
+    uniform_program: Program,
+    storage_program: Program,
+    /// The tables fit the uniform program's capacities (set by `set_ifs`).
+    uniform_tables: bool,
+    /// Some compiled function is a Julia map (set by `set_ifs`).
+    has_julia: bool,
+    /// Use the storage program even when the tables fit (tests compare both programs).
+    pub force_storage_tables: bool,
     params: wgpu::Buffer,
     functions: wgpu::Buffer,
     coords: wgpu::Buffer,
@@ -126,62 +219,27 @@ pub struct GpuChaosGame {
 
 impl GpuChaosGame {
     pub fn new(device: &wgpu::Device, point_count: u32, width: u32, height: u32) -> Self {
-        let entry = |binding: u32, ty: wgpu::BufferBindingType| wgpu::BindGroupLayoutEntry {
-            binding,
-            visibility: wgpu::ShaderStages::COMPUTE,
-            ty: wgpu::BindingType::Buffer { ty, has_dynamic_offset: false, min_binding_size: None },
-            count: None,
-        };
-        let read = wgpu::BufferBindingType::Storage { read_only: true };
-        let write = wgpu::BufferBindingType::Storage { read_only: false };
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("chaos_game"),
-            entries: &[
-                entry(0, wgpu::BufferBindingType::Uniform),
-                entry(1, read),
-                entry(2, read),
-                entry(3, read),
-                entry(4, read),
-                entry(5, read),
-                entry(6, write),
-                entry(7, write),
-            ],
-        });
-        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("chaos_game"),
-            bind_group_layouts: &[Some(&layout)],
-            immediate_size: 0,
-        });
-        let module = super::shaders::module(device, "chaos_game");
-        let pipeline = |entry: &str| {
-            device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                label: Some(entry),
-                layout: Some(&pipeline_layout),
-                module: &module,
-                entry_point: Some(entry),
-                compilation_options: Default::default(),
-                cache: None,
-            })
-        };
-        let chaos_pipeline = pipeline("chaos_game");
-        let clear_pipeline = pipeline("clear");
+        let uniform_program = Program::new(device, "chaos_game", wgpu::BufferBindingType::Uniform);
+        let storage_program = Program::new(device, "chaos_game_storage", wgpu::BufferBindingType::Storage { read_only: true });
         let params = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("chaos_params"),
             size: std::mem::size_of::<ChaosParams>() as u64,
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        let none = wgpu::BufferUsages::empty();
+        let [functions, coords, cells, thresholds, colors] = UNIFORM_CAPACITY;
         Self {
-            layout,
-            chaos_pipeline,
-            clear_pipeline,
+            uniform_program,
+            storage_program,
+            uniform_tables: true,
+            force_storage_tables: false,
+            has_julia: true,
             params,
-            functions: storage(device, "functions", 0, none),
-            coords: storage(device, "coords", 0, none),
-            cells: storage(device, "cells", 0, none),
-            thresholds: storage(device, "thresholds", 0, none),
-            colors: storage(device, "colors", 0, none),
+            functions: table(device, "functions", functions),
+            coords: table(device, "coords", coords),
+            cells: table(device, "cells", cells),
+            thresholds: table(device, "thresholds", thresholds),
+            colors: table(device, "colors", colors),
             points: storage(device, "points", point_count as u64 * 16, wgpu::BufferUsages::COPY_SRC),
             accum: storage(device, "accum", width as u64 * height as u64 * 16, wgpu::BufferUsages::COPY_SRC),
             bind_group: None,
@@ -196,12 +254,22 @@ impl GpuChaosGame {
     /// Uploads a compiled IFS (the points are kept).
     pub fn set_ifs(&mut self, device: &wgpu::Device, queue: &wgpu::Queue, ifs: &CompiledIfs) {
         let colors: Vec<[f32; 4]> = ifs.colors.iter().map(|c| [c[0], c[1], c[2], 0.0]).collect();
-        let mut replaced = false;
-        replaced |= upload(device, queue, &mut self.functions, "functions", bytemuck::cast_slice::<KernelFunction, u8>(&ifs.functions));
-        replaced |= upload(device, queue, &mut self.coords, "coords", bytemuck::cast_slice(&ifs.coords));
-        replaced |= upload(device, queue, &mut self.cells, "cells", bytemuck::cast_slice::<Cell, u8>(&ifs.cells));
-        replaced |= upload(device, queue, &mut self.thresholds, "thresholds", bytemuck::cast_slice(&ifs.selection.thresholds));
-        let colors_replaced = upload(device, queue, &mut self.colors, "colors", bytemuck::cast_slice(&colors));
+        let tables: [&[u8]; 5] = [
+            bytemuck::cast_slice::<KernelFunction, u8>(&ifs.functions),
+            bytemuck::cast_slice(&ifs.coords),
+            bytemuck::cast_slice::<Cell, u8>(&ifs.cells),
+            bytemuck::cast_slice(&ifs.selection.thresholds),
+            bytemuck::cast_slice(&colors),
+        ];
+        let uniform_tables = !self.force_storage_tables && tables.iter().zip(UNIFORM_CAPACITY).all(|(t, capacity)| t.len() as u64 <= capacity);
+        self.has_julia = ifs.functions.iter().any(|f| f.coord_offset[3] == crate::chaos_game::KIND_JULIA);
+        let mut replaced = uniform_tables != self.uniform_tables;
+        self.uniform_tables = uniform_tables;
+        replaced |= upload(device, queue, &mut self.functions, "functions", tables[0]);
+        replaced |= upload(device, queue, &mut self.coords, "coords", tables[1]);
+        replaced |= upload(device, queue, &mut self.cells, "cells", tables[2]);
+        replaced |= upload(device, queue, &mut self.thresholds, "thresholds", tables[3]);
+        let colors_replaced = upload(device, queue, &mut self.colors, "colors", tables[4]);
         if replaced || colors_replaced {
             self.bind_group = None;
         }
@@ -269,26 +337,33 @@ impl GpuChaosGame {
             _pad: 0,
         };
         queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
+        let program = if self.uniform_tables { &mut self.uniform_program } else { &mut self.storage_program };
+        let chaos_index = program.chaos_pipeline(device, mode_index(v.mode), self.has_julia);
+        let program = &*program;
         if self.bind_group.is_none() {
             let buffers = [&self.params, &self.functions, &self.coords, &self.cells, &self.thresholds, &self.colors, &self.points, &self.accum];
             let entries: Vec<wgpu::BindGroupEntry> = buffers
                 .iter()
                 .enumerate()
-                .map(|(i, b)| wgpu::BindGroupEntry { binding: i as u32, resource: b.as_entire_binding() })
+                .map(|(i, b)| {
+                    // A uniform binding is exactly the shader's fixed-size array.
+                    let size = (self.uniform_tables && (1..=5).contains(&i)).then(|| wgpu::BufferSize::new(UNIFORM_CAPACITY[i - 1])).flatten();
+                    wgpu::BindGroupEntry { binding: i as u32, resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding { buffer: b, offset: 0, size }) }
+                })
                 .collect();
-            self.bind_group = Some(device.create_bind_group(&wgpu::BindGroupDescriptor { label: Some("chaos_game"), layout: &self.layout, entries: &entries }));
+            self.bind_group = Some(device.create_bind_group(&wgpu::BindGroupDescriptor { label: Some("chaos_game"), layout: &program.layout, entries: &entries }));
         }
         let Some(bind_group) = &self.bind_group else { return };
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("chaos_game"), timestamp_writes: None });
         pass.set_bind_group(0, bind_group, &[]);
         if args.clear {
-            pass.set_pipeline(&self.clear_pipeline);
+            pass.set_pipeline(&program.clear_pipeline);
             let per_pixel = if v.mode == SplatMode::Closest { 1 } else { 4 };
             let (x, y) = dispatch_size(per_pixel * self.width as u64 * self.height as u64);
             pass.dispatch_workgroups(x, y, 1);
         }
         if args.steps > 0 {
-            pass.set_pipeline(&self.chaos_pipeline);
+            pass.set_pipeline(&program.chaos_pipelines[chaos_index].1);
             let (x, y) = dispatch_size(self.point_count as u64);
             pass.dispatch_workgroups(x, y, 1);
         }

@@ -199,6 +199,16 @@ impl LiveView {
         splats
     }
 
+    /// Records only an emptying of the accumulation buffer (benchmarks time it alone).
+    pub fn encode_clear(&mut self, ctx: &GpuContext, encoder: &mut wgpu::CommandEncoder) {
+        let Some(view) = self.view else { return };
+        let args = FrameArgs { view: &view, seed: self.settings.seed, frame: self.frame, steps: 0, skip_steps: 0, restart: false, clear: true };
+        self.game.encode(&ctx.device, &ctx.queue, encoder, &args);
+        self.clear = false;
+        self.frames_since_clear = 0;
+        self.splats_since_clear = 0;
+    }
+
     /// Records the resolve onto `target` (the window's surface or an offscreen texture).
     pub fn draw(&mut self, ctx: &GpuContext, encoder: &mut wgpu::CommandEncoder, target: &wgpu::TextureView, format: wgpu::TextureFormat) {
         let s = &self.settings;

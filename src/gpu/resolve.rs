@@ -10,6 +10,9 @@ fn entry(binding: u32, buffer: &wgpu::Buffer) -> wgpu::BindGroupEntry<'_> {
     wgpu::BindGroupEntry { binding, resource: buffer.as_entire_binding() }
 }
 
+/// Bytes of the colour table bound as a uniform (`colors` in `shaders/resolve.wgsl`).
+const COLORS_BYTES: u64 = 256 * 16;
+
 /// Mirrors `struct ResolveParams` in `shaders/resolve.wgsl`: keep in sync.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
@@ -46,12 +49,18 @@ pub struct ResolveArgs {
     pub perspective: bool,
 }
 
+/// What a draw pipeline is specialized for: target format, splat mode, shading on.
+type DrawKey = (wgpu::TextureFormat, SplatMode, bool);
+/// A bind group with the generation of the chaos game's buffers it binds.
+type Bound = Option<(u64, wgpu::BindGroup)>;
+
 pub struct GpuResolve {
     module: wgpu::ShaderModule,
     max_pipeline: wgpu::ComputePipeline,
-    /// One draw pipeline per target format, made on first use, with its bind group and the
-    /// generation of the chaos game's buffers it binds.
-    draw_pipelines: Vec<(wgpu::TextureFormat, wgpu::RenderPipeline, Option<(u64, wgpu::BindGroup)>)>,
+    /// One draw pipeline per target format, mode and shading on/off (the shader's pipeline
+    /// constants), made on first use, with its bind group and the generation of the chaos
+    /// game's buffers it binds.
+    draw_pipelines: Vec<(DrawKey, wgpu::RenderPipeline, Bound)>,
     params: wgpu::Buffer,
     stats: wgpu::Buffer,
     /// Generation of the chaos game's buffers and the max-count pass's two bind groups.
@@ -84,10 +93,16 @@ impl GpuResolve {
         Self { module, max_pipeline, draw_pipelines: Vec::new(), params, stats, bound: None }
     }
 
-    fn draw_pipeline(&mut self, device: &wgpu::Device, format: wgpu::TextureFormat) -> usize {
-        if let Some(i) = self.draw_pipelines.iter().position(|(f, _, _)| *f == format) {
+    fn draw_pipeline(&mut self, device: &wgpu::Device, key: DrawKey) -> usize {
+        if let Some(i) = self.draw_pipelines.iter().position(|(k, _, _)| *k == key) {
             return i;
         }
+        let (format, mode, shaded) = key;
+        let constants = [
+            ("RESOLVE_MODE", mode_index(mode) as f64),
+            ("SHADED", shaded as u32 as f64),
+            ("ENCODE_SRGB", !format.is_srgb() as u32 as f64),
+        ];
         let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
             label: Some("resolve"),
             layout: None,
@@ -98,13 +113,13 @@ impl GpuResolve {
             fragment: Some(wgpu::FragmentState {
                 module: &self.module,
                 entry_point: Some("resolve"),
-                compilation_options: Default::default(),
+                compilation_options: wgpu::PipelineCompilationOptions { constants: &constants, ..Default::default() },
                 targets: &[Some(wgpu::ColorTargetState { format, blend: None, write_mask: wgpu::ColorWrites::ALL })],
             }),
             multiview_mask: None,
             cache: None,
         });
-        self.draw_pipelines.push((format, pipeline, None));
+        self.draw_pipelines.push((key, pipeline, None));
         self.draw_pipelines.len() - 1
     }
 
@@ -134,7 +149,7 @@ impl GpuResolve {
             _pad: [0; 2],
         };
         queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
-        let pipeline_index = self.draw_pipeline(device, format);
+        let pipeline_index = self.draw_pipeline(device, (format, args.mode, params.shading > 0.0));
         if self.bound.as_ref().is_none_or(|b| b.0 != game.generation) {
             let max_layout = self.max_pipeline.get_bind_group_layout(0);
             let max_input = device.create_bind_group(&wgpu::BindGroupDescriptor {
@@ -154,7 +169,15 @@ impl GpuResolve {
             let draw = device.create_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some("resolve"),
                 layout: &pipeline.get_bind_group_layout(0),
-                entries: &[entry(0, &self.params), entry(1, &game.accum), entry(2, &game.colors), entry(3, &self.stats)],
+                entries: &[
+                    entry(0, &self.params),
+                    entry(1, &game.accum),
+                    wgpu::BindGroupEntry {
+                        binding: 2,
+                        resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding { buffer: &game.colors, offset: 0, size: wgpu::BufferSize::new(COLORS_BYTES) }),
+                    },
+                    entry(3, &self.stats),
+                ],
             });
             *draw_bound = Some((game.generation, draw));
         }
