@@ -129,16 +129,7 @@ pub fn run(scene: &Scene, points: u32, steps: u32, frames: u32) -> Result<BenchR
     live.set_ifs(&ctx, &ifs, bounds, true);
     live.set_camera(&camera);
     let format = wgpu::TextureFormat::Rgba8UnormSrgb;
-    let texture = ctx.device.create_texture(&wgpu::TextureDescriptor {
-        label: Some("bench"),
-        size: wgpu::Extent3d { width, height, depth_or_array_layers: 1 },
-        mip_level_count: 1,
-        sample_count: 1,
-        dimension: wgpu::TextureDimension::D2,
-        format,
-        usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
-        view_formats: &[],
-    });
+    let texture = super::render::offscreen_texture(&ctx, "bench", width, height, format, wgpu::TextureUsages::empty());
     let view = texture.create_view(&Default::default());
     for _ in 0..3 {
         submit_frame(&ctx, &mut live, Some((&view, format)));

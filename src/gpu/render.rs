@@ -57,16 +57,7 @@ fn map_and_read(ctx: &GpuContext, staging: &wgpu::Buffer) -> Result<Vec<u8>, Gpu
 pub fn snapshot(ctx: &GpuContext, live: &mut LiveView) -> Result<image::RgbImage, GpuError> {
     let (width, height) = live.size();
     let format = wgpu::TextureFormat::Rgba8Unorm;
-    let texture = ctx.device.create_texture(&wgpu::TextureDescriptor {
-        label: Some("snapshot"),
-        size: wgpu::Extent3d { width, height, depth_or_array_layers: 1 },
-        mip_level_count: 1,
-        sample_count: 1,
-        dimension: wgpu::TextureDimension::D2,
-        format,
-        usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
-        view_formats: &[],
-    });
+    let texture = offscreen_texture(ctx, "snapshot", width, height, format, wgpu::TextureUsages::COPY_SRC);
     let view = texture.create_view(&Default::default());
     let bytes_per_row = (4 * width).next_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT);
     let staging = ctx.device.create_buffer(&wgpu::BufferDescriptor {
@@ -149,4 +140,19 @@ pub fn render_gpu(ctx: &GpuContext, scene: &Scene, t_secs: f64, settings: &Rende
     let splats = accumulate(ctx, &mut live, settings.points);
     let image = snapshot(ctx, &mut live)?;
     Ok(GpuRendered { image, camera, bounds, splats })
+}
+
+/// A 2D render target of `width`×`height` for offscreen drawing (snapshots, benchmarks), with
+/// `extra` usages beside RENDER_ATTACHMENT.
+pub fn offscreen_texture(ctx: &GpuContext, label: &str, width: u32, height: u32, format: wgpu::TextureFormat, extra: wgpu::TextureUsages) -> wgpu::Texture {
+    ctx.device.create_texture(&wgpu::TextureDescriptor {
+        label: Some(label),
+        size: wgpu::Extent3d { width, height, depth_or_array_layers: 1 },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format,
+        usage: wgpu::TextureUsages::RENDER_ATTACHMENT | extra,
+        view_formats: &[],
+    })
 }
