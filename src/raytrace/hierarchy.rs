@@ -20,6 +20,9 @@ use glam::{DVec3, Vec3};
 use rayon::prelude::*;
 
 use super::mesh::Mesh;
+#[cfg(target_arch = "x86_64")]
+use super::wide::Avx512;
+use super::wide::{self, LANES, Lanes, Portable, Simd, WideNode};
 use super::RaytraceError;
 use crate::model::{Ifs, Map};
 
@@ -27,6 +30,8 @@ use crate::model::{Ifs, Map};
 pub const MAX_CHILDREN: usize = 16;
 const TILE_TRIANGLES: usize = 16;
 const TILE_FANOUT: usize = 4;
+/// Marks a traversal stack entry as a triangle tile (a node index) rather than a wide node.
+const TILE: u32 = 1 << 31;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[repr(u8)]
@@ -172,6 +177,10 @@ pub struct Hierarchy {
     pub max_depth: u32,
     /// Axis-aligned bounds of the leaf geometry.
     pub bounds: (Vec3, Vec3),
+    /// The nodes below the root collapsed into wide nodes, what the searches traverse (empty
+    /// when the root is a leaf).
+    pub wide: Vec<WideNode>,
+    simd: Simd,
 }
 
 /// Rounds a sphere to f32 so that it still contains the f64 one.
@@ -278,6 +287,10 @@ impl Hierarchy {
             }
         }
         h.fit_bounds();
+        if h.nodes[0].kind == NodeKind::Inner {
+            h.wide = wide::collapse(&h.nodes);
+        }
+        h.simd = Simd::detect();
         Ok(h)
     }
 
@@ -397,10 +410,63 @@ impl Hierarchy {
         self.intersect_hinted(ray, t_min, t_max, u32::MAX, scratch)
     }
 
+    /// Which compiled form of the traversal runs ([`Simd::detect`] after a build).
+    pub fn simd(&self) -> Simd {
+        self.simd
+    }
+
+    /// Runs the traversal compiled for `simd`, or for the widest form this CPU runs if that is
+    /// narrower (to compare the forms against each other and against brute force).
+    pub fn set_simd(&mut self, simd: Simd) {
+        self.simd = simd.min(Simd::detect());
+    }
+
     /// [`Self::intersect_with`] that first tries leaf `hint` (the tracer passes the previous
     /// sample's leaf): a hit there shortens the ray before the search, which then skips every
     /// bound entered farther away. The result is the same nearest hit.
     pub fn intersect_hinted(&self, ray: &Ray, t_min: f32, t_max: f32, hint: u32, scratch: &mut Scratch) -> Option<Hit> {
+        match self.simd {
+            #[cfg(target_arch = "x86_64")]
+            #[allow(unsafe_code)]
+            // SAFETY: `simd` is only ever set to a form that `Simd::detect` found the CPU runs.
+            Simd::Avx512 => unsafe { self.closest_avx512(ray, t_min, t_max, hint, scratch) },
+            #[cfg(target_arch = "x86_64")]
+            #[allow(unsafe_code)]
+            // SAFETY: as above.
+            Simd::Avx2 => unsafe { self.closest_avx2(ray, t_min, t_max, hint, scratch) },
+            #[allow(unsafe_code)]
+            // SAFETY: the portable lanes use only the baseline target's instructions.
+            _ => unsafe { self.closest::<Portable>(ray, t_min, t_max, hint, scratch) },
+        }
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx512f")]
+    fn closest_avx512(&self, ray: &Ray, t_min: f32, t_max: f32, hint: u32, scratch: &mut Scratch) -> Option<Hit> {
+        #[allow(unsafe_code)]
+        // SAFETY: this function only runs where AVX-512F is enabled.
+        unsafe {
+            self.closest::<Avx512>(ray, t_min, t_max, hint, scratch)
+        }
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    fn closest_avx2(&self, ray: &Ray, t_min: f32, t_max: f32, hint: u32, scratch: &mut Scratch) -> Option<Hit> {
+        #[allow(unsafe_code)]
+        // SAFETY: the portable lanes need nothing beyond the baseline target.
+        unsafe {
+            self.closest::<Portable>(ray, t_min, t_max, hint, scratch)
+        }
+    }
+
+    /// The nearest-hit search over the wide nodes, nearest bound first.
+    ///
+    /// # Safety
+    /// The CPU must run the instructions of `L`.
+    #[allow(unsafe_code)]
+    #[inline(always)]
+    unsafe fn closest<L: Lanes>(&self, ray: &Ray, t_min: f32, t_max: f32, hint: u32, scratch: &mut Scratch) -> Option<Hit> {
         let mut best = Hit { t: t_max, node: u32::MAX, triangle: u32::MAX, u: 0.0, v: 0.0 };
         if let Some(leaf) = self.nodes.get(hint as usize) {
             match leaf.kind {
@@ -409,19 +475,20 @@ impl Hierarchy {
                         best = Hit { t, node: hint, ..best };
                     }
                 }
-                NodeKind::Triangles => {
-                    for tri in leaf.first..leaf.first + leaf.count as u32 {
-                        if let Some((t, u, v)) = self.triangle_hit(ray, tri, t_min, best.t) {
-                            best = Hit { t, node: hint, triangle: tri, u, v };
-                        }
-                    }
-                }
+                NodeKind::Triangles => self.tile_closest(ray, hint, t_min, &mut best),
                 NodeKind::Inner => {}
             }
         }
         let Some(root) = self.nodes.first() else { return None };
-        if root.kind == NodeKind::Sphere {
-            return sphere_surface(ray, root.centre, root.radius, t_min, t_max).map(|t| Hit { t, node: 0, ..best });
+        match root.kind {
+            NodeKind::Sphere => {
+                return sphere_surface(ray, root.centre, root.radius, t_min, t_max).map(|t| Hit { t, node: 0, ..best });
+            }
+            NodeKind::Triangles => {
+                self.tile_closest(ray, 0, t_min, &mut best);
+                return (best.node != u32::MAX).then_some(best);
+            }
+            NodeKind::Inner => {}
         }
         let stack = &mut scratch.closest;
         stack.clear();
@@ -429,50 +496,56 @@ impl Hierarchy {
             Some(t) => stack.push((0, t)),
             None => return (best.node != u32::MAX).then_some(best),
         }
-        let mut near = [(0u32, 0f32); MAX_CHILDREN];
-        while let Some((index, t_enter)) = stack.pop() {
+        let (origin, dir) = (ray.origin.to_array(), ray.dir.to_array());
+        let mut near = [(0u32, 0f32); LANES];
+        while let Some((id, t_enter)) = stack.pop() {
             if t_enter >= best.t {
                 continue;
             }
-            let node = self.nodes[index as usize];
-            match node.kind {
-                NodeKind::Inner => {
-                    let mut found = 0usize;
-                    for k in node.first..node.first + node.count as u32 {
-                        let child = &self.nodes[k as usize];
-                        if child.kind == NodeKind::Sphere {
-                            if let Some(t) = sphere_surface(ray, child.centre, child.radius, t_min, best.t) {
-                                best = Hit { t, node: k, triangle: u32::MAX, u: 0.0, v: 0.0 };
-                            }
-                        } else if let Some(t) = bound_entry(ray, child.centre, child.radius, t_min, best.t) {
-                            near[found] = (k, t);
-                            found += 1;
-                        }
-                    }
-                    // Insertion sort by decreasing entry, pushed in that order so the nearest is
-                    // popped first.
-                    for i in 1..found {
-                        let e = near[i];
-                        let mut j = i;
-                        while j > 0 && near[j - 1].1 < e.1 {
-                            near[j] = near[j - 1];
-                            j -= 1;
-                        }
-                        near[j] = e;
-                    }
-                    stack.extend_from_slice(&near[..found]);
-                }
-                NodeKind::Triangles => {
-                    for tri in node.first..node.first + node.count as u32 {
-                        if let Some((t, u, v)) = self.triangle_hit(ray, tri, t_min, best.t) {
-                            best = Hit { t, node: index, triangle: tri, u, v };
-                        }
-                    }
-                }
-                NodeKind::Sphere => {}
+            if id & TILE != 0 {
+                self.tile_closest(ray, id & !TILE, t_min, &mut best);
+                continue;
             }
+            let w = &self.wide[id as usize];
+            // SAFETY: the caller guarantees L's instructions.
+            let lanes = unsafe { L::closest(w, origin, dir, t_min, best.t) };
+            if let Some((t, lane)) = lanes.hit {
+                best = Hit { t, node: w.target[lane], triangle: u32::MAX, u: 0.0, v: 0.0 };
+            }
+            let mut enter = lanes.enter;
+            let mut found = 0usize;
+            while enter != 0 {
+                let lane = enter.trailing_zeros() as usize;
+                enter &= enter - 1;
+                let tag = if w.tiles & (1 << lane) != 0 { TILE } else { 0 };
+                near[found] = (w.target[lane] | tag, lanes.entry[lane]);
+                found += 1;
+            }
+            // Insertion sort by decreasing entry, pushed in that order so the nearest is
+            // popped first.
+            for i in 1..found {
+                let e = near[i];
+                let mut j = i;
+                while j > 0 && near[j - 1].1 < e.1 {
+                    near[j] = near[j - 1];
+                    j -= 1;
+                }
+                near[j] = e;
+            }
+            stack.extend_from_slice(&near[..found]);
         }
         (best.node != u32::MAX).then_some(best)
+    }
+
+    /// Tests the triangles of tile `index` against `best`.
+    #[inline]
+    fn tile_closest(&self, ray: &Ray, index: u32, t_min: f32, best: &mut Hit) {
+        let node = &self.nodes[index as usize];
+        for tri in node.first..node.first + node.count as u32 {
+            if let Some((t, u, v)) = self.triangle_hit(ray, tri, t_min, best.t) {
+                *best = Hit { t, node: index, triangle: tri, u, v };
+            }
+        }
     }
 
     /// Whether anything is hit with t in (t_min, t_max) (shadow rays).
@@ -483,35 +556,75 @@ impl Hierarchy {
     /// Some leaf (sphere node or triangle tile) hit with t in (t_min, t_max), found by
     /// depth-first search without ordering (shadow rays need any hit, not the nearest).
     pub fn occluder(&self, ray: &Ray, t_min: f32, t_max: f32, scratch: &mut Scratch) -> Option<u32> {
+        match self.simd {
+            #[cfg(target_arch = "x86_64")]
+            #[allow(unsafe_code)]
+            // SAFETY: `simd` is only ever set to a form that `Simd::detect` found the CPU runs.
+            Simd::Avx512 => unsafe { self.any_avx512(ray, t_min, t_max, scratch) },
+            #[cfg(target_arch = "x86_64")]
+            #[allow(unsafe_code)]
+            // SAFETY: as above.
+            Simd::Avx2 => unsafe { self.any_avx2(ray, t_min, t_max, scratch) },
+            #[allow(unsafe_code)]
+            // SAFETY: the portable lanes use only the baseline target's instructions.
+            _ => unsafe { self.any::<Portable>(ray, t_min, t_max, scratch) },
+        }
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx512f")]
+    fn any_avx512(&self, ray: &Ray, t_min: f32, t_max: f32, scratch: &mut Scratch) -> Option<u32> {
+        #[allow(unsafe_code)]
+        // SAFETY: this function only runs where AVX-512F is enabled.
+        unsafe {
+            self.any::<Avx512>(ray, t_min, t_max, scratch)
+        }
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    fn any_avx2(&self, ray: &Ray, t_min: f32, t_max: f32, scratch: &mut Scratch) -> Option<u32> {
+        #[allow(unsafe_code)]
+        // SAFETY: the portable lanes need nothing beyond the baseline target.
+        unsafe {
+            self.any::<Portable>(ray, t_min, t_max, scratch)
+        }
+    }
+
+    /// The any-hit search over the wide nodes.
+    ///
+    /// # Safety
+    /// The CPU must run the instructions of `L`.
+    #[allow(unsafe_code)]
+    #[inline(always)]
+    unsafe fn any<L: Lanes>(&self, ray: &Ray, t_min: f32, t_max: f32, scratch: &mut Scratch) -> Option<u32> {
         let root = self.nodes.first()?;
         bound_entry(ray, root.centre, root.radius, t_min, t_max)?;
         if root.kind != NodeKind::Inner {
             return self.leaf_hit(0, ray, t_min, t_max).then_some(0);
         }
+        let (origin, dir) = (ray.origin.to_array(), ray.dir.to_array());
         let stack = &mut scratch.any;
         stack.clear();
         stack.push(0);
-        while let Some(index) = stack.pop() {
-            let node = self.nodes[index as usize];
-            match node.kind {
-                NodeKind::Inner => {
-                    for k in node.first..node.first + node.count as u32 {
-                        let child = &self.nodes[k as usize];
-                        if child.kind == NodeKind::Sphere {
-                            if sphere_surface(ray, child.centre, child.radius, t_min, t_max).is_some() {
-                                return Some(k);
-                            }
-                        } else if bound_entry(ray, child.centre, child.radius, t_min, t_max).is_some() {
-                            stack.push(k);
-                        }
-                    }
+        while let Some(id) = stack.pop() {
+            if id & TILE != 0 {
+                if self.leaf_hit(id & !TILE, ray, t_min, t_max) {
+                    return Some(id & !TILE);
                 }
-                NodeKind::Triangles => {
-                    if self.leaf_hit(index, ray, t_min, t_max) {
-                        return Some(index);
-                    }
-                }
-                NodeKind::Sphere => {}
+                continue;
+            }
+            let w = &self.wide[id as usize];
+            // SAFETY: the caller guarantees L's instructions.
+            let (hit, mut enter) = unsafe { L::any(w, origin, dir, t_min, t_max) };
+            if let Some(lane) = hit {
+                return Some(w.target[lane]);
+            }
+            while enter != 0 {
+                let lane = enter.trailing_zeros() as usize;
+                enter &= enter - 1;
+                let tag = if w.tiles & (1 << lane) != 0 { TILE } else { 0 };
+                stack.push(w.target[lane] | tag);
             }
         }
         None

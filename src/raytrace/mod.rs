@@ -10,6 +10,7 @@ pub mod export;
 pub mod hierarchy;
 pub mod mesh;
 pub mod tracer;
+pub mod wide;
 
 use std::path::PathBuf;
 use std::sync::atomic::AtomicBool;

@@ -1,0 +1,337 @@
+//! The traversal form of the W^k(A) hierarchy: its nodes collapsed into wide nodes of up to
+//! [`LANES`] children, whose bounding spheres are stored lane by lane (structure of arrays) so
+//! that one pass of vector instructions tests a ray against all of them.
+//!
+//! How it works. Each wide node stands for an inner node of the hierarchy in
+//! [`super::hierarchy`]. Its lanes start as that node's children; then the inner child with the
+//! largest sphere is replaced by its own children while they fit, so a wide node covers one or
+//! more levels of W^k(A): with 4 functions (tapering) all 16 grandchildren, with 5 (plant2) 13
+//! lanes of mixed depth. The lane bounds are the hierarchy's own spheres (grown bottom-up to
+//! enclose their children), so the culling argument is unchanged: a skipped lane's bound holds
+//! every leaf below it. The lane test computes the closest-approach roots exactly as
+//! [`super::hierarchy::sphere_roots`] does, the same operations in the same order and no fused
+//! multiply-add, so a leaf's t is bit for bit what the scalar test (and brute force) gives. A
+//! miss leaves NaN roots, which fail every comparison, so no separate miss mask is needed.
+//!
+//! The lane loops are written over plain arrays for the compiler to vectorise; the traversal
+//! in `hierarchy` is compiled for the baseline target and again with AVX2 or AVX-512 enabled,
+//! chosen at run time ([`Simd::detect`]).
+
+use super::hierarchy::{Node, NodeKind};
+
+/// Children per wide node: one AVX-512 register of f32, two of AVX2.
+pub const LANES: usize = 16;
+/// Lane mask of a wide node.
+pub type Mask = u16;
+
+/// Up to [`LANES`] child bounds. A lane is a leaf sphere, a triangle tile or a wide node; unused
+/// lanes are in none of the masks.
+#[derive(Clone, Copy, Debug)]
+#[repr(C, align(64))]
+pub struct WideNode {
+    pub centre_x: [f32; LANES],
+    pub centre_y: [f32; LANES],
+    pub centre_z: [f32; LANES],
+    pub radius: [f32; LANES],
+    /// Leaf sphere and tile lanes: the index in `Hierarchy::nodes` (what a hit reports); wide
+    /// node lanes: the index in `Hierarchy::wide`.
+    pub target: [u32; LANES],
+    /// Lanes that are leaf spheres (the bound is the geometry).
+    pub spheres: Mask,
+    /// Lanes that are bounds to enter: wide nodes and triangle tiles.
+    pub bounds: Mask,
+    /// Of `bounds`, the triangle tiles.
+    pub tiles: Mask,
+}
+
+impl WideNode {
+    const EMPTY: WideNode = WideNode {
+        centre_x: [0.0; LANES],
+        centre_y: [0.0; LANES],
+        centre_z: [0.0; LANES],
+        radius: [0.0; LANES],
+        target: [0; LANES],
+        spheres: 0,
+        bounds: 0,
+        tiles: 0,
+    };
+
+    /// Both roots of the ray with every lane's sphere (NaN where it misses), as
+    /// `sphere_roots` computes them.
+    #[inline(always)]
+    pub fn roots(&self, origin: [f32; 3], dir: [f32; 3]) -> ([f32; LANES], [f32; LANES]) {
+        let mut t0 = [0.0f32; LANES];
+        let mut t1 = [0.0f32; LANES];
+        for i in 0..LANES {
+            let ox = origin[0] - self.centre_x[i];
+            let oy = origin[1] - self.centre_y[i];
+            let oz = origin[2] - self.centre_z[i];
+            let b = ox * dir[0] + oy * dir[1] + oz * dir[2];
+            let lx = ox - b * dir[0];
+            let ly = oy - b * dir[1];
+            let lz = oz - b * dir[2];
+            let r = self.radius[i];
+            let s = (r * r - (lx * lx + ly * ly + lz * lz)).sqrt();
+            t0[i] = -b - s;
+            t1[i] = -b + s;
+        }
+        (t0, t1)
+    }
+}
+
+/// What a lane pass gives the nearest-hit search.
+#[derive(Clone, Copy, Debug)]
+pub struct ClosestLanes {
+    /// The nearest leaf sphere surface in (t_min, t_max), as (t, lane); ties to the lower lane.
+    pub hit: Option<(f32, usize)>,
+    /// Bound lanes that overlap (t_min, t_max), where t_max is lowered to the hit's t.
+    pub enter: Mask,
+    /// Where the ray enters each bound lane of `enter` (clamped to t_min).
+    pub entry: [f32; LANES],
+}
+
+/// A compiled form of the lane pass. The decisions are those of `sphere_surface` (leaf
+/// spheres) and `bound_entry` (bounds) in `hierarchy`, on bit-identical roots.
+#[allow(unsafe_code)]
+pub trait Lanes {
+    /// The nearest-hit pass over `w`.
+    ///
+    /// # Safety
+    /// The CPU must run the instructions of `Self` (see [`Simd::detect`]).
+    unsafe fn closest(w: &WideNode, origin: [f32; 3], dir: [f32; 3], t_min: f32, t_max: f32) -> ClosestLanes;
+
+    /// The any-hit pass over `w`: some leaf sphere lane hit in (t_min, t_max), and the bound
+    /// lanes that overlap it.
+    ///
+    /// # Safety
+    /// As for [`Lanes::closest`].
+    unsafe fn any(w: &WideNode, origin: [f32; 3], dir: [f32; 3], t_min: f32, t_max: f32) -> (Option<usize>, Mask);
+}
+
+/// Plain loops over the lane arrays, which the compiler vectorises for the target it compiles
+/// the traversal for (the baseline or AVX2).
+pub struct Portable;
+
+#[allow(unsafe_code)]
+impl Lanes for Portable {
+    #[inline(always)]
+    unsafe fn closest(w: &WideNode, origin: [f32; 3], dir: [f32; 3], t_min: f32, t_max: f32) -> ClosestLanes {
+        let (t0, t1) = w.roots(origin, dir);
+        let mut hit = None;
+        let mut limit = t_max;
+        for i in 0..LANES {
+            let t = if t0[i] > t_min { t0[i] } else { t1[i] };
+            if w.spheres & (1 << i) != 0 && t > t_min && t < limit {
+                hit = Some((t, i));
+                limit = t;
+            }
+        }
+        let mut enter: Mask = 0;
+        let mut entry = [0.0f32; LANES];
+        for i in 0..LANES {
+            enter |= ((t1[i] > t_min && t0[i] < limit) as Mask) << i;
+            entry[i] = t0[i].max(t_min);
+        }
+        ClosestLanes { hit, enter: enter & w.bounds, entry }
+    }
+
+    #[inline(always)]
+    unsafe fn any(w: &WideNode, origin: [f32; 3], dir: [f32; 3], t_min: f32, t_max: f32) -> (Option<usize>, Mask) {
+        let (t0, t1) = w.roots(origin, dir);
+        let mut surface: Mask = 0;
+        let mut enter: Mask = 0;
+        for i in 0..LANES {
+            let t = if t0[i] > t_min { t0[i] } else { t1[i] };
+            surface |= ((t > t_min && t < t_max) as Mask) << i;
+            enter |= ((t1[i] > t_min && t0[i] < t_max) as Mask) << i;
+        }
+        let surface = surface & w.spheres;
+        ((surface != 0).then(|| surface.trailing_zeros() as usize), enter & w.bounds)
+    }
+}
+
+/// AVX-512F intrinsics: one 16-wide register per lane quantity, comparisons straight into
+/// mask registers.
+#[cfg(target_arch = "x86_64")]
+pub struct Avx512;
+
+#[cfg(target_arch = "x86_64")]
+#[allow(unsafe_code)]
+impl Lanes for Avx512 {
+    #[inline(always)]
+    unsafe fn closest(w: &WideNode, origin: [f32; 3], dir: [f32; 3], t_min: f32, t_max: f32) -> ClosestLanes {
+        // SAFETY: the caller guarantees AVX-512F.
+        unsafe { avx512::closest(w, origin, dir, t_min, t_max) }
+    }
+
+    #[inline(always)]
+    unsafe fn any(w: &WideNode, origin: [f32; 3], dir: [f32; 3], t_min: f32, t_max: f32) -> (Option<usize>, Mask) {
+        // SAFETY: the caller guarantees AVX-512F.
+        unsafe { avx512::any(w, origin, dir, t_min, t_max) }
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+#[allow(unsafe_code)]
+mod avx512 {
+    use std::arch::x86_64::*;
+
+    use super::{ClosestLanes, LANES, Mask, WideNode};
+
+    const _: () = assert!(LANES == 16, "one __m512 per lane quantity");
+
+    /// The roots of [`WideNode::roots`], the same operations in the same order.
+    #[target_feature(enable = "avx512f")]
+    #[inline]
+    fn roots(w: &WideNode, origin: [f32; 3], dir: [f32; 3]) -> (__m512, __m512) {
+        // SAFETY: each array is 16 f32 at a 64-byte aligned offset of the 64-byte aligned
+        // `WideNode` (repr(C), four 64-byte arrays first), so the aligned loads are in bounds.
+        let (cx, cy, cz, r) = unsafe {
+            (
+                _mm512_load_ps(w.centre_x.as_ptr()),
+                _mm512_load_ps(w.centre_y.as_ptr()),
+                _mm512_load_ps(w.centre_z.as_ptr()),
+                _mm512_load_ps(w.radius.as_ptr()),
+            )
+        };
+        let (dx, dy, dz) = (_mm512_set1_ps(dir[0]), _mm512_set1_ps(dir[1]), _mm512_set1_ps(dir[2]));
+        let ox = _mm512_sub_ps(_mm512_set1_ps(origin[0]), cx);
+        let oy = _mm512_sub_ps(_mm512_set1_ps(origin[1]), cy);
+        let oz = _mm512_sub_ps(_mm512_set1_ps(origin[2]), cz);
+        let b = _mm512_add_ps(_mm512_add_ps(_mm512_mul_ps(ox, dx), _mm512_mul_ps(oy, dy)), _mm512_mul_ps(oz, dz));
+        let lx = _mm512_sub_ps(ox, _mm512_mul_ps(b, dx));
+        let ly = _mm512_sub_ps(oy, _mm512_mul_ps(b, dy));
+        let lz = _mm512_sub_ps(oz, _mm512_mul_ps(b, dz));
+        let l2 = _mm512_add_ps(_mm512_add_ps(_mm512_mul_ps(lx, lx), _mm512_mul_ps(ly, ly)), _mm512_mul_ps(lz, lz));
+        let s = _mm512_sqrt_ps(_mm512_sub_ps(_mm512_mul_ps(r, r), l2));
+        // −b by flipping the sign bit, as scalar negation does (0 − b would differ at b = 0).
+        let minus_b = _mm512_castsi512_ps(_mm512_xor_si512(_mm512_castps_si512(b), _mm512_set1_epi32(i32::MIN)));
+        (_mm512_sub_ps(minus_b, s), _mm512_add_ps(minus_b, s))
+    }
+
+    #[target_feature(enable = "avx512f")]
+    #[inline]
+    pub fn closest(w: &WideNode, origin: [f32; 3], dir: [f32; 3], t_min: f32, t_max: f32) -> ClosestLanes {
+        let (t0, t1) = roots(w, origin, dir);
+        let lo = _mm512_set1_ps(t_min);
+        // Nearer root above t_min, else the farther (NaN roots of a miss fail every test).
+        let above = _mm512_cmp_ps_mask::<_CMP_GT_OQ>(t0, lo);
+        let t = _mm512_mask_blend_ps(above, t1, t0);
+        let surface = _mm512_mask_cmp_ps_mask::<_CMP_LT_OQ>(_mm512_cmp_ps_mask::<_CMP_GT_OQ>(t, lo), t, _mm512_set1_ps(t_max)) & w.spheres;
+        let mut hit = None;
+        let mut limit = t_max;
+        if surface != 0 {
+            let nearest = _mm512_mask_reduce_min_ps(surface, t);
+            let first = _mm512_mask_cmp_ps_mask::<_CMP_EQ_OQ>(surface, t, _mm512_set1_ps(nearest));
+            hit = Some((nearest, first.trailing_zeros() as usize));
+            limit = nearest;
+        }
+        let enter = _mm512_mask_cmp_ps_mask::<_CMP_LT_OQ>(_mm512_cmp_ps_mask::<_CMP_GT_OQ>(t1, lo), t0, _mm512_set1_ps(limit)) & w.bounds;
+        let mut entry = [0.0f32; LANES];
+        // SAFETY: `entry` is 16 f32; the unaligned store is in bounds.
+        unsafe { _mm512_storeu_ps(entry.as_mut_ptr(), _mm512_max_ps(t0, lo)) };
+        ClosestLanes { hit, enter, entry }
+    }
+
+    #[target_feature(enable = "avx512f")]
+    #[inline]
+    pub fn any(w: &WideNode, origin: [f32; 3], dir: [f32; 3], t_min: f32, t_max: f32) -> (Option<usize>, Mask) {
+        let (t0, t1) = roots(w, origin, dir);
+        let (lo, hi) = (_mm512_set1_ps(t_min), _mm512_set1_ps(t_max));
+        let above = _mm512_cmp_ps_mask::<_CMP_GT_OQ>(t0, lo);
+        let t = _mm512_mask_blend_ps(above, t1, t0);
+        let surface = _mm512_mask_cmp_ps_mask::<_CMP_LT_OQ>(_mm512_cmp_ps_mask::<_CMP_GT_OQ>(t, lo), t, hi) & w.spheres;
+        if surface != 0 {
+            return (Some(surface.trailing_zeros() as usize), 0);
+        }
+        (None, _mm512_mask_cmp_ps_mask::<_CMP_LT_OQ>(_mm512_cmp_ps_mask::<_CMP_GT_OQ>(t1, lo), t0, hi) & w.bounds)
+    }
+}
+
+/// Collapses the hierarchy below its root (which must be an inner node) into wide nodes; the
+/// root's wide node comes first.
+pub fn collapse(nodes: &[Node]) -> Vec<WideNode> {
+    let mut wide = vec![WideNode::EMPTY];
+    // (wide node to fill, hierarchy node it stands for)
+    let mut work = vec![(0usize, 0u32)];
+    while let Some((slot, index)) = work.pop() {
+        let children = |k: u32| {
+            let n = &nodes[k as usize];
+            n.first..n.first + n.count as u32
+        };
+        let mut lanes: Vec<u32> = children(index).collect();
+        // Open the largest inner child whose children still fit (radius order: a big bound is
+        // hit most often, so looking inside it at once saves the most visits).
+        loop {
+            let open = lanes
+                .iter()
+                .enumerate()
+                .filter(|&(_, &k)| {
+                    let n = &nodes[k as usize];
+                    n.kind == NodeKind::Inner && lanes.len() - 1 + n.count as usize <= LANES
+                })
+                .max_by(|a, b| nodes[*a.1 as usize].radius.total_cmp(&nodes[*b.1 as usize].radius))
+                .map(|(position, _)| position);
+            let Some(position) = open else { break };
+            let k = lanes.remove(position);
+            lanes.extend(children(k));
+        }
+        debug_assert!(lanes.len() <= LANES, "a node has more than {LANES} children");
+        let mut w = WideNode::EMPTY;
+        for (lane, &k) in lanes.iter().enumerate() {
+            let n = &nodes[k as usize];
+            w.centre_x[lane] = n.centre.x;
+            w.centre_y[lane] = n.centre.y;
+            w.centre_z[lane] = n.centre.z;
+            w.radius[lane] = n.radius;
+            let bit: Mask = 1 << lane;
+            match n.kind {
+                NodeKind::Sphere => {
+                    w.spheres |= bit;
+                    w.target[lane] = k;
+                }
+                NodeKind::Triangles => {
+                    w.bounds |= bit;
+                    w.tiles |= bit;
+                    w.target[lane] = k;
+                }
+                NodeKind::Inner => {
+                    w.bounds |= bit;
+                    w.target[lane] = wide.len() as u32;
+                    work.push((wide.len(), k));
+                    wide.push(WideNode::EMPTY);
+                }
+            }
+        }
+        wide[slot] = w;
+    }
+    wide
+}
+
+/// Which compiled form of the traversal runs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Default)]
+pub enum Simd {
+    /// The baseline target (SSE2 on x86-64), or any other architecture.
+    #[default]
+    Baseline,
+    /// x86-64 with AVX2: a lane pass is two 8-wide registers.
+    Avx2,
+    /// x86-64 with AVX-512F: a lane pass is one 16-wide register.
+    Avx512,
+}
+
+impl Simd {
+    /// The widest form this CPU runs.
+    pub fn detect() -> Self {
+        #[cfg(target_arch = "x86_64")]
+        {
+            if std::arch::is_x86_feature_detected!("avx512f") {
+                return Simd::Avx512;
+            }
+            if std::arch::is_x86_feature_detected!("avx2") {
+                return Simd::Avx2;
+            }
+        }
+        Simd::Baseline
+    }
+}
