@@ -69,6 +69,9 @@ fn check_against_brute_force(h: &Hierarchy, what: &str, seed: u32) -> usize {
         let hinted = h.intersect_hinted(ray, 0.0, f32::INFINITY, hint, &mut Scratch::default());
         assert_eq!(hinted.map(|x| x.t), slow.map(|x| x.t), "{what}: ray {i} (seed {seed}): hinted with leaf {hint}");
         assert_eq!(h.occluded(ray, 0.0, f32::INFINITY), slow.is_some(), "{what}: ray {i} (seed {seed}): occlusion");
+        // With any leaf as the shadow cache's guess, the same answer.
+        let cached = h.occluder_hinted(ray, 0.0, f32::INFINITY, hint, &mut Scratch::default());
+        assert_eq!(cached.is_some(), slow.is_some(), "{what}: ray {i} (seed {seed}): occlusion with cached leaf {hint}");
         if let Some(b) = slow {
             // A segment ending before the first hit is not occluded.
             assert!(!h.occluded(ray, 0.0, b.t * 0.999), "{what}: ray {i}: occluded before the first hit");

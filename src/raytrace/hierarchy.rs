@@ -425,60 +425,74 @@ impl Hierarchy {
     /// sample's leaf): a hit there shortens the ray before the search, which then skips every
     /// bound entered farther away. The result is the same nearest hit.
     pub fn intersect_hinted(&self, ray: &Ray, t_min: f32, t_max: f32, hint: u32, scratch: &mut Scratch) -> Option<Hit> {
+        let entry = self.root_entry(ray, t_min, t_max);
+        if entry == f32::INFINITY {
+            return None;
+        }
+        self.intersect_entered(ray, t_min, t_max, entry, hint, scratch)
+    }
+
+    /// Where the ray enters the root's bound within (t_min, t_max) (clamped to t_min), or
+    /// infinity where it does not and so hits nothing. Without branches, so that the tracer's
+    /// tests of a pixel's rays overlap in the processor.
+    #[inline]
+    pub fn root_entry(&self, ray: &Ray, t_min: f32, t_max: f32) -> f32 {
+        let Some(root) = self.nodes.first() else { return f32::INFINITY };
+        let oc = ray.origin - root.centre;
+        let b = oc.dot(ray.dir);
+        let l = oc - b * ray.dir;
+        // NaN where the line misses, so both comparisons below fail.
+        let s = (root.radius * root.radius - l.dot(l)).sqrt();
+        let (t0, t1) = (-b - s, -b + s);
+        if (t1 > t_min) & (t0 < t_max) { t0.max(t_min) } else { f32::INFINITY }
+    }
+
+    /// [`Self::intersect_hinted`] for a ray whose [`Self::root_entry`] is `root_entry` (finite).
+    pub fn intersect_entered(&self, ray: &Ray, t_min: f32, t_max: f32, root_entry: f32, hint: u32, scratch: &mut Scratch) -> Option<Hit> {
         match self.simd {
             #[cfg(target_arch = "x86_64")]
             #[allow(unsafe_code)]
             // SAFETY: `simd` is only ever set to a form that `Simd::detect` found the CPU runs.
-            Simd::Avx512 => unsafe { self.closest_avx512(ray, t_min, t_max, hint, scratch) },
+            Simd::Avx512 => unsafe { self.closest_avx512(ray, t_min, t_max, root_entry, hint, scratch) },
             #[cfg(target_arch = "x86_64")]
             #[allow(unsafe_code)]
             // SAFETY: as above.
-            Simd::Avx2 => unsafe { self.closest_avx2(ray, t_min, t_max, hint, scratch) },
+            Simd::Avx2 => unsafe { self.closest_avx2(ray, t_min, t_max, root_entry, hint, scratch) },
             #[allow(unsafe_code)]
             // SAFETY: the portable lanes use only the baseline target's instructions.
-            _ => unsafe { self.closest::<Portable>(ray, t_min, t_max, hint, scratch) },
+            _ => unsafe { self.closest::<Portable>(ray, t_min, t_max, root_entry, hint, scratch) },
         }
     }
 
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx512f")]
-    fn closest_avx512(&self, ray: &Ray, t_min: f32, t_max: f32, hint: u32, scratch: &mut Scratch) -> Option<Hit> {
+    fn closest_avx512(&self, ray: &Ray, t_min: f32, t_max: f32, root_entry: f32, hint: u32, scratch: &mut Scratch) -> Option<Hit> {
         #[allow(unsafe_code)]
         // SAFETY: this function only runs where AVX-512F is enabled.
         unsafe {
-            self.closest::<Avx512>(ray, t_min, t_max, hint, scratch)
+            self.closest::<Avx512>(ray, t_min, t_max, root_entry, hint, scratch)
         }
     }
 
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
-    fn closest_avx2(&self, ray: &Ray, t_min: f32, t_max: f32, hint: u32, scratch: &mut Scratch) -> Option<Hit> {
+    fn closest_avx2(&self, ray: &Ray, t_min: f32, t_max: f32, root_entry: f32, hint: u32, scratch: &mut Scratch) -> Option<Hit> {
         #[allow(unsafe_code)]
         // SAFETY: the portable lanes need nothing beyond the baseline target.
         unsafe {
-            self.closest::<Portable>(ray, t_min, t_max, hint, scratch)
+            self.closest::<Portable>(ray, t_min, t_max, root_entry, hint, scratch)
         }
     }
 
-    /// The nearest-hit search over the wide nodes, nearest bound first.
+    /// The nearest-hit search over the wide nodes, nearest bound first, for a ray that enters
+    /// the root's bound at `root_entry`.
     ///
     /// # Safety
     /// The CPU must run the instructions of `L`.
     #[allow(unsafe_code)]
     #[inline(always)]
-    unsafe fn closest<L: Lanes>(&self, ray: &Ray, t_min: f32, t_max: f32, hint: u32, scratch: &mut Scratch) -> Option<Hit> {
+    unsafe fn closest<L: Lanes>(&self, ray: &Ray, t_min: f32, t_max: f32, root_entry: f32, hint: u32, scratch: &mut Scratch) -> Option<Hit> {
         let mut best = Hit { t: t_max, node: u32::MAX, triangle: u32::MAX, u: 0.0, v: 0.0 };
-        if let Some(leaf) = self.nodes.get(hint as usize) {
-            match leaf.kind {
-                NodeKind::Sphere => {
-                    if let Some(t) = sphere_surface(ray, leaf.centre, leaf.radius, t_min, t_max) {
-                        best = Hit { t, node: hint, ..best };
-                    }
-                }
-                NodeKind::Triangles => self.tile_closest(ray, hint, t_min, &mut best),
-                NodeKind::Inner => {}
-            }
-        }
         let Some(root) = self.nodes.first() else { return None };
         match root.kind {
             NodeKind::Sphere => {
@@ -490,12 +504,20 @@ impl Hierarchy {
             }
             NodeKind::Inner => {}
         }
+        if let Some(leaf) = self.nodes.get(hint as usize) {
+            match leaf.kind {
+                NodeKind::Sphere => {
+                    if let Some(t) = sphere_surface(ray, leaf.centre, leaf.radius, t_min, t_max) {
+                        best = Hit { t, node: hint, ..best };
+                    }
+                }
+                NodeKind::Triangles => self.tile_closest(ray, hint, t_min, &mut best),
+                NodeKind::Inner => {}
+            }
+        }
         let stack = &mut scratch.closest;
         stack.clear();
-        match bound_entry(ray, root.centre, root.radius, t_min, best.t) {
-            Some(t) => stack.push((0, t)),
-            None => return (best.node != u32::MAX).then_some(best),
-        }
+        stack.push((0, root_entry));
         let (origin, dir) = (ray.origin.to_array(), ray.dir.to_array());
         let mut near = [(0u32, 0f32); LANES];
         while let Some((id, t_enter)) = stack.pop() {
@@ -556,6 +578,24 @@ impl Hierarchy {
     /// Some leaf (sphere node or triangle tile) hit with t in (t_min, t_max), found by
     /// depth-first search without ordering (shadow rays need any hit, not the nearest).
     pub fn occluder(&self, ray: &Ray, t_min: f32, t_max: f32, scratch: &mut Scratch) -> Option<u32> {
+        self.occluder_hinted(ray, t_min, t_max, u32::MAX, scratch)
+    }
+
+    /// [`Self::occluder`] that first tries leaf `hint` (the tracer's shadow cache, after
+    /// Haines & Greenberg: the last occluder of a light), once the ray is known to enter the
+    /// root's bound.
+    pub fn occluder_hinted(&self, ray: &Ray, t_min: f32, t_max: f32, hint: u32, scratch: &mut Scratch) -> Option<u32> {
+        if self.root_entry(ray, t_min, t_max) == f32::INFINITY {
+            return None;
+        }
+        self.occluder_entered(ray, t_min, t_max, hint, scratch)
+    }
+
+    /// [`Self::occluder_hinted`] for a ray whose [`Self::root_entry`] is finite.
+    pub fn occluder_entered(&self, ray: &Ray, t_min: f32, t_max: f32, hint: u32, scratch: &mut Scratch) -> Option<u32> {
+        if hint != u32::MAX && self.leaf_hit(hint, ray, t_min, t_max) {
+            return Some(hint);
+        }
         match self.simd {
             #[cfg(target_arch = "x86_64")]
             #[allow(unsafe_code)]
@@ -591,7 +631,7 @@ impl Hierarchy {
         }
     }
 
-    /// The any-hit search over the wide nodes.
+    /// The any-hit search over the wide nodes, for a ray that enters the root's bound.
     ///
     /// # Safety
     /// The CPU must run the instructions of `L`.
@@ -599,7 +639,6 @@ impl Hierarchy {
     #[inline(always)]
     unsafe fn any<L: Lanes>(&self, ray: &Ray, t_min: f32, t_max: f32, scratch: &mut Scratch) -> Option<u32> {
         let root = self.nodes.first()?;
-        bound_entry(ray, root.centre, root.radius, t_min, t_max)?;
         if root.kind != NodeKind::Inner {
             return self.leaf_hit(0, ray, t_min, t_max).then_some(0);
         }
@@ -731,14 +770,6 @@ fn sphere_surface(ray: &Ray, centre: Vec3, radius: f32, t_min: f32, t_max: f32) 
     let (t0, t1) = sphere_roots(ray, centre, radius)?;
     let t = if t0 > t_min { t0 } else { t1 };
     (t > t_min && t < t_max).then_some(t)
-}
-
-/// Where the ray enters a bound (clamped to t_min), if the overlap with (t_min, t_max) is
-/// non-empty.
-#[inline(always)]
-fn bound_entry(ray: &Ray, centre: Vec3, radius: f32, t_min: f32, t_max: f32) -> Option<f32> {
-    let (t0, t1) = sphere_roots(ray, centre, radius)?;
-    (t1 > t_min && t0 < t_max).then_some(t0.max(t_min))
 }
 
 #[cfg(test)]

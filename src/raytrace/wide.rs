@@ -91,7 +91,8 @@ pub struct ClosestLanes {
 }
 
 /// A compiled form of the lane pass. The decisions are those of `sphere_surface` (leaf
-/// spheres) and `bound_entry` (bounds) in `hierarchy`, on bit-identical roots.
+/// spheres) and of `Hierarchy::root_entry` (bounds: overlap with (t_min, t_max), entry clamped to t_min),
+/// on bit-identical roots.
 #[allow(unsafe_code)]
 pub trait Lanes {
     /// The nearest-hit pass over `w`.
