@@ -19,10 +19,12 @@
 
 use super::hierarchy::{Node, NodeKind};
 
-/// Children per wide node: one AVX-512 register of f32, two of AVX2.
-pub const LANES: usize = 16;
+/// f32 lanes of one AVX-512 register.
+const CHUNK: usize = 16;
+/// Children per wide node, a multiple of [`CHUNK`].
+pub const LANES: usize = CHUNK;
 /// Lane mask of a wide node.
-pub type Mask = u16;
+pub type Mask = u64;
 
 /// Up to [`LANES`] child bounds. A lane is a leaf sphere, a triangle tile or a wide node; unused
 /// lanes are in none of the masks.
@@ -179,20 +181,26 @@ mod avx512 {
 
     use super::{ClosestLanes, LANES, Mask, WideNode};
 
-    const _: () = assert!(LANES == 16, "one __m512 per lane quantity");
+    const CHUNKS: usize = LANES / CHUNK;
+    const _: () = assert!(LANES % CHUNK == 0 && LANES <= 64, "whole __m512 chunks, masks fit in u64");
 
-    /// The roots of [`WideNode::roots`], the same operations in the same order.
+    use super::CHUNK;
+
+    /// The roots of [`WideNode::roots`] for lanes `16 c .. 16 c + 16`, the same operations in
+    /// the same order.
     #[target_feature(enable = "avx512f")]
     #[inline]
-    fn roots(w: &WideNode, origin: [f32; 3], dir: [f32; 3]) -> (__m512, __m512) {
-        // SAFETY: each array is 16 f32 at a 64-byte aligned offset of the 64-byte aligned
-        // `WideNode` (repr(C), four 64-byte arrays first), so the aligned loads are in bounds.
+    fn roots(w: &WideNode, c: usize, origin: [f32; 3], dir: [f32; 3]) -> (__m512, __m512) {
+        let at = c * CHUNK;
+        assert!(at + CHUNK <= LANES);
+        // SAFETY: lanes at..at + 16 are in bounds (asserted) and 64-byte aligned: the arrays
+        // are 64-byte multiples at the start of the repr(C), align(64) `WideNode`.
         let (cx, cy, cz, r) = unsafe {
             (
-                _mm512_load_ps(w.centre_x.as_ptr()),
-                _mm512_load_ps(w.centre_y.as_ptr()),
-                _mm512_load_ps(w.centre_z.as_ptr()),
-                _mm512_load_ps(w.radius.as_ptr()),
+                _mm512_load_ps(w.centre_x.as_ptr().add(at)),
+                _mm512_load_ps(w.centre_y.as_ptr().add(at)),
+                _mm512_load_ps(w.centre_z.as_ptr().add(at)),
+                _mm512_load_ps(w.radius.as_ptr().add(at)),
             )
         };
         let (dx, dy, dz) = (_mm512_set1_ps(dir[0]), _mm512_set1_ps(dir[1]), _mm512_set1_ps(dir[2]));
@@ -210,42 +218,64 @@ mod avx512 {
         (_mm512_sub_ps(minus_b, s), _mm512_add_ps(minus_b, s))
     }
 
+    /// The lanes of one chunk, as a 16-bit mask.
+    fn chunk_mask(mask: Mask, c: usize) -> u16 {
+        (mask >> (c * CHUNK)) as u16
+    }
+
     #[target_feature(enable = "avx512f")]
     #[inline]
     pub fn closest(w: &WideNode, origin: [f32; 3], dir: [f32; 3], t_min: f32, t_max: f32) -> ClosestLanes {
-        let (t0, t1) = roots(w, origin, dir);
         let lo = _mm512_set1_ps(t_min);
-        // Nearer root above t_min, else the farther (NaN roots of a miss fail every test).
-        let above = _mm512_cmp_ps_mask::<_CMP_GT_OQ>(t0, lo);
-        let t = _mm512_mask_blend_ps(above, t1, t0);
-        let surface = _mm512_mask_cmp_ps_mask::<_CMP_LT_OQ>(_mm512_cmp_ps_mask::<_CMP_GT_OQ>(t, lo), t, _mm512_set1_ps(t_max)) & w.spheres;
+        let mut t0 = [_mm512_setzero_ps(); CHUNKS];
+        let mut t1 = [_mm512_setzero_ps(); CHUNKS];
         let mut hit = None;
         let mut limit = t_max;
-        if surface != 0 {
-            let nearest = _mm512_mask_reduce_min_ps(surface, t);
-            let first = _mm512_mask_cmp_ps_mask::<_CMP_EQ_OQ>(surface, t, _mm512_set1_ps(nearest));
-            hit = Some((nearest, first.trailing_zeros() as usize));
-            limit = nearest;
+        for c in 0..CHUNKS {
+            (t0[c], t1[c]) = roots(w, c, origin, dir);
+            // Nearer root above t_min, else the farther (NaN roots of a miss fail every test).
+            let above = _mm512_cmp_ps_mask::<_CMP_GT_OQ>(t0[c], lo);
+            let t = _mm512_mask_blend_ps(above, t1[c], t0[c]);
+            let ahead = _mm512_mask_cmp_ps_mask::<_CMP_GT_OQ>(chunk_mask(w.spheres, c), t, lo);
+            let surface = _mm512_mask_cmp_ps_mask::<_CMP_LT_OQ>(ahead, t, _mm512_set1_ps(limit));
+            if surface != 0 {
+                // Strictly nearer than every earlier chunk's hit: ties stay with the lower lane.
+                let nearest = _mm512_mask_reduce_min_ps(surface, t);
+                let first = _mm512_mask_cmp_ps_mask::<_CMP_EQ_OQ>(surface, t, _mm512_set1_ps(nearest));
+                hit = Some((nearest, c * CHUNK + first.trailing_zeros() as usize));
+                limit = nearest;
+            }
         }
-        let enter = _mm512_mask_cmp_ps_mask::<_CMP_LT_OQ>(_mm512_cmp_ps_mask::<_CMP_GT_OQ>(t1, lo), t0, _mm512_set1_ps(limit)) & w.bounds;
+        let mut enter: Mask = 0;
         let mut entry = [0.0f32; LANES];
-        // SAFETY: `entry` is 16 f32; the unaligned store is in bounds.
-        unsafe { _mm512_storeu_ps(entry.as_mut_ptr(), _mm512_max_ps(t0, lo)) };
+        for c in 0..CHUNKS {
+            let overlap = _mm512_mask_cmp_ps_mask::<_CMP_GT_OQ>(chunk_mask(w.bounds, c), t1[c], lo);
+            let overlap = _mm512_mask_cmp_ps_mask::<_CMP_LT_OQ>(overlap, t0[c], _mm512_set1_ps(limit));
+            enter |= (overlap as Mask) << (c * CHUNK);
+            // SAFETY: entry[c * 16..c * 16 + 16] is in bounds (c < CHUNKS).
+            unsafe { _mm512_storeu_ps(entry.as_mut_ptr().add(c * CHUNK), _mm512_max_ps(t0[c], lo)) };
+        }
         ClosestLanes { hit, enter, entry }
     }
 
     #[target_feature(enable = "avx512f")]
     #[inline]
     pub fn any(w: &WideNode, origin: [f32; 3], dir: [f32; 3], t_min: f32, t_max: f32) -> (Option<usize>, Mask) {
-        let (t0, t1) = roots(w, origin, dir);
         let (lo, hi) = (_mm512_set1_ps(t_min), _mm512_set1_ps(t_max));
-        let above = _mm512_cmp_ps_mask::<_CMP_GT_OQ>(t0, lo);
-        let t = _mm512_mask_blend_ps(above, t1, t0);
-        let surface = _mm512_mask_cmp_ps_mask::<_CMP_LT_OQ>(_mm512_cmp_ps_mask::<_CMP_GT_OQ>(t, lo), t, hi) & w.spheres;
-        if surface != 0 {
-            return (Some(surface.trailing_zeros() as usize), 0);
+        let mut enter: Mask = 0;
+        for c in 0..CHUNKS {
+            let (t0, t1) = roots(w, c, origin, dir);
+            let above = _mm512_cmp_ps_mask::<_CMP_GT_OQ>(t0, lo);
+            let t = _mm512_mask_blend_ps(above, t1, t0);
+            let ahead = _mm512_mask_cmp_ps_mask::<_CMP_GT_OQ>(chunk_mask(w.spheres, c), t, lo);
+            let surface = _mm512_mask_cmp_ps_mask::<_CMP_LT_OQ>(ahead, t, hi);
+            if surface != 0 {
+                return (Some(c * CHUNK + surface.trailing_zeros() as usize), 0);
+            }
+            let overlap = _mm512_mask_cmp_ps_mask::<_CMP_GT_OQ>(chunk_mask(w.bounds, c), t1, lo);
+            enter |= (_mm512_mask_cmp_ps_mask::<_CMP_LT_OQ>(overlap, t0, hi) as Mask) << (c * CHUNK);
         }
-        (None, _mm512_mask_cmp_ps_mask::<_CMP_LT_OQ>(_mm512_cmp_ps_mask::<_CMP_GT_OQ>(t1, lo), t0, hi) & w.bounds)
+        (None, enter)
     }
 }
 
