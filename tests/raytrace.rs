@@ -8,6 +8,7 @@ use std::sync::atomic::AtomicBool;
 use glam::{DVec3, Vec3};
 use nlifs::raytrace::hierarchy::{Hierarchy, InitialObject, NodeKind, Ray, Scratch, Stop};
 use nlifs::raytrace::mesh::Mesh;
+use nlifs::raytrace::wide::Simd;
 use nlifs::raytrace::{self, Initial, RaytraceError, RaytraceSettings};
 use nlifs::rng::Pcg32;
 use nlifs::scene::Scene;
@@ -80,14 +81,31 @@ fn check_against_brute_force(h: &Hierarchy, what: &str, seed: u32) -> usize {
     hits
 }
 
+/// Every compiled form of the traversal this CPU runs (the baseline one always; AVX2 and
+/// AVX-512 where present), so that each is checked against brute force.
+fn simd_forms(h: &Hierarchy) -> Vec<Hierarchy> {
+    let mut forms: Vec<Hierarchy> = Vec::new();
+    for simd in [Simd::Baseline, Simd::Avx2, Simd::Avx512] {
+        let mut form = h.clone();
+        form.set_simd(simd);
+        if forms.iter().all(|f| f.simd() != form.simd()) {
+            forms.push(form);
+        }
+    }
+    eprintln!("traversal forms checked: {:?}", forms.iter().map(Hierarchy::simd).collect::<Vec<_>>());
+    forms
+}
+
 #[test]
 fn sphere_hierarchy_matches_brute_force_on_paper_scenes() {
     for (k, name) in SCENES.iter().enumerate() {
         let ifs = scene(name).at(0.0);
         let h = raytrace::build_fixed(&ifs, &Initial::Sphere, 4).unwrap();
-        let hits = check_against_brute_force(&h, name, k as u32);
-        // A test that cannot fail is no test: most rays must hit.
-        assert!(hits > 3000, "{name}: only {hits} of 10000 rays hit");
+        for form in simd_forms(&h) {
+            let hits = check_against_brute_force(&form, &format!("{name} ({:?})", form.simd()), k as u32);
+            // A test that cannot fail is no test: most rays must hit.
+            assert!(hits > 3000, "{name}: only {hits} of 10000 rays hit");
+        }
     }
 }
 
@@ -114,8 +132,10 @@ fn mesh_hierarchy_matches_brute_force_on_paper_scenes() {
         let ifs = scene(name).at(0.0);
         let mesh = Mesh::box_surface(ifs.domain.min(), ifs.domain.max(), 3);
         let h = Hierarchy::build(&ifs, &InitialObject::Mesh(mesh), Stop { max_depth: 2, pixel: None }).unwrap();
-        let hits = check_against_brute_force(&h, &format!("{name} grid surface"), 100 + k as u32);
-        assert!(hits > 1000, "{name}: only {hits} of 10000 rays hit");
+        for form in simd_forms(&h) {
+            let hits = check_against_brute_force(&form, &format!("{name} grid surface ({:?})", form.simd()), 100 + k as u32);
+            assert!(hits > 1000, "{name}: only {hits} of 10000 rays hit");
+        }
     }
 }
 
