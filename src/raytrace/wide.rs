@@ -13,15 +13,18 @@
 //! multiply-add, so a leaf's t is bit for bit what the scalar test (and brute force) gives. A
 //! miss leaves NaN roots, which fail every comparison, so no separate miss mask is needed.
 //!
-//! The lane loops are written over plain arrays for the compiler to vectorise; the traversal
-//! in `hierarchy` is compiled for the baseline target and again with AVX2 or AVX-512 enabled,
-//! chosen at run time ([`Simd::detect`]).
+//! Two implementations of the lane pass ([`Lanes`]): [`Avx512`] with intrinsics, and
+//! [`Portable`] loops over plain arrays for the compiler to vectorise (left to the compiler with
+//! AVX-512 enabled they were no faster than the scalar search: it built the masks through
+//! shuffles and spilled). The traversal in `hierarchy` is compiled once per form, chosen at run
+//! time ([`Simd::detect`]): AVX-512F, AVX2 with the portable pass, or the baseline target.
 
 use super::hierarchy::{Node, NodeKind};
 
 /// f32 lanes of one AVX-512 register.
 const CHUNK: usize = 16;
-/// Children per wide node, a multiple of [`CHUNK`].
+/// Children per wide node, a multiple of [`CHUNK`]. 32 and 64 (fewer levels, more registers
+/// per pass) measured slower on tapering and no faster on plant2.
 pub const LANES: usize = CHUNK;
 /// Lane mask of a wide node.
 pub type Mask = u64;
