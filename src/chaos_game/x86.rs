@@ -84,15 +84,18 @@ struct SimdAxis {
 /// The lane kernel's data laid out for 8-wide vectors; see the module comment.
 #[derive(Clone, Debug, PartialEq)]
 pub(super) struct SimdKernel {
-    /// Inner cumulative thresholds minus one (r24 ≥ t ⇔ r24 > t − 1, a signed compare).
-    thresholds: Vec<i32>,
+    /// Inner cumulative thresholds minus one (r24 ≥ t ⇔ r24 > t − 1, a signed compare),
+    /// padded with 2^24 − 1, which no 24-bit draw exceeds (a fixed count unrolls, branch-free).
+    thresholds: [i32; LANES - 1],
     lo: [[f32; LANES]; 3],
     hi: [[f32; LANES]; 3],
     axes: [SimdAxis; 3],
     cell_base: [i32; LANES],
     /// Per coefficient j (3 · k + axis of coefficient k = a..h): its value in each cell, when
-    /// there are at most 16 cells (padded with zeros).
-    coef_tables: Vec<[f32; 16]>,
+    /// there are at most 16 cells (padded with zeros; all zeros with more cells).
+    coef_tables: Box<[[f32; 16]; COEFS]>,
+    /// At most 16 cells: `coef_tables` holds them.
+    small: bool,
     /// The cells' coefficients, 24 per cell (for the gather).
     cells: Vec<[f32; COEFS]>,
     /// The fastest lookup this CPU supports.
@@ -157,18 +160,17 @@ impl SimdKernel {
         } else {
             Lookup::Gather
         };
-        let coef_tables = if cell_count <= 16 {
-            (0..COEFS).map(|j| std::array::from_fn(|c| fast.cells.get(c).map_or(0.0, |cell| cell[j]))).collect()
-        } else {
-            Vec::new()
-        };
+        let small = cell_count <= 16;
+        let coef_tables = Box::new(std::array::from_fn(|j| std::array::from_fn(|c| fast.cells.get(c).filter(|_| small).map_or(0.0, |cell| cell[j]))));
+        let inner = &selection.thresholds[..n - 1];
         Some(Self {
-            thresholds: selection.thresholds[..n - 1].iter().map(|&t| t as i32 - 1).collect(),
+            thresholds: std::array::from_fn(|k| inner.get(k).map_or((1 << SELECT_BITS) - 1, |&t| t as i32 - 1)),
             lo: std::array::from_fn(|a| per_fn(&|f| f.axes[a].lo)),
             hi: std::array::from_fn(|a| per_fn(&|f| f.axes[a].hi)),
             axes,
             cell_base: std::array::from_fn(|l| fast.functions[lane_fn(l)].cell_base as i32),
             coef_tables,
+            small,
             cells: fast.cells.clone(),
             lookup,
         })
@@ -177,7 +179,7 @@ impl SimdKernel {
     /// The lookups this kernel can run with on this CPU (for tests).
     #[cfg(test)]
     pub(super) fn supported_lookups(&self) -> Vec<Lookup> {
-        let small = self.coef_tables.len() == COEFS;
+        let small = self.small;
         [Lookup::Permute8, Lookup::Permute16, Lookup::Permute16Avx512, Lookup::Gather]
             .into_iter()
             .filter(|l| l.supported())
@@ -192,7 +194,7 @@ impl SimdKernel {
     /// Runs the orbits of one chunk (lane k: generator `rngs[k]`, position `pos[k]`) for
     /// `transient` discarded steps and `steps` kept ones into `sink`, as `Orbits::run` does.
     pub(super) fn run(&self, lookup: Lookup, rngs: &[u32; ORBITS_PER_CHUNK], pos: &[[f32; 3]; ORBITS_PER_CHUNK], transient: u32, steps: usize, sink: &mut impl PointSink) {
-        assert!(lookup.supported() && (lookup == Lookup::Gather || self.coef_tables.len() == COEFS) && (lookup != Lookup::Permute8 || self.cells.len() <= 8));
+        assert!(lookup.supported() && (lookup == Lookup::Gather || self.small) && (lookup != Lookup::Permute8 || self.cells.len() <= 8));
         let mut state = Lanes { rng: *rngs, x: pos.map(|p| p[0]), y: pos.map(|p| p[1]), z: pos.map(|p| p[2]) };
         // SAFETY: the CPU has the features each entry point enables (asserted above), and the
         // lookup's tables exist (asserted above).
@@ -261,10 +263,11 @@ impl SimdKernel {
                 let mut inv_width = by_fn!(&axis.inv_width[0]);
                 if axis.boundaries > 0 {
                     let stride = _mm256_permutevar8x32_epi32(_mm256_loadu_si256(axis.stride.as_ptr().cast()), fi);
-                    for k in 0..axis.boundaries {
-                        let passed = _mm256_cmp_ps::<_CMP_GE_OQ>(q, by_fn!(&axis.next[k]));
-                        start = _mm256_blendv_ps(start, by_fn!(&axis.start[k + 1]), passed);
-                        inv_width = _mm256_blendv_ps(inv_width, by_fn!(&axis.inv_width[k + 1]), passed);
+                    let b = axis.boundaries;
+                    for ((next, next_start), next_inv_width) in axis.next[..b].iter().zip(&axis.start[1..=b]).zip(&axis.inv_width[1..=b]) {
+                        let passed = _mm256_cmp_ps::<_CMP_GE_OQ>(q, by_fn!(next));
+                        start = _mm256_blendv_ps(start, by_fn!(next_start), passed);
+                        inv_width = _mm256_blendv_ps(inv_width, by_fn!(next_inv_width), passed);
                         cell = _mm256_add_epi32(cell, _mm256_and_si256(_mm256_castps_si256(passed), stride));
                     }
                 }

@@ -14,6 +14,8 @@ use super::{DEPTH_BITS, EMPTY, SplatView};
 use crate::chaos_game::PointBatch;
 
 const LANES: usize = 8;
+/// Groups of 8 points between a pixel's prefetch and its update.
+const AHEAD: usize = 8;
 
 /// Whether [`splat_closest`] can run for this view and framebuffer length on this CPU.
 pub(super) fn closest_supported(view: &SplatView, len: usize) -> bool {
@@ -40,10 +42,25 @@ unsafe fn splat_closest_avx2(view: &SplatView, closest: &mut [u32], batch: Point
     let scale = ((1u32 << DEPTH_BITS) - 1) as f32;
     let depth_range = view.far - view.near;
     let vectors = n / LANES;
-    for g in 0..vectors {
+    // Group g's pixels are prefetched when it is projected and updated AHEAD groups later,
+    // so that many cache misses into the framebuffer are in flight at once.
+    let mut ring_keys = [[0u32; LANES]; AHEAD];
+    let mut ring_pixels = [[0u32; LANES]; AHEAD];
+    for g in 0..vectors + AHEAD {
+        let (keys, pixels) = (&mut ring_keys[g % AHEAD], &mut ring_pixels[g % AHEAD]);
+        if g >= AHEAD {
+            for l in 0..LANES {
+                // SAFETY: an inside lane's pixel is iy · width + ix with 0 ≤ ix < width and
+                // 0 ≤ iy < height (exact truncations of the checked coordinates), below
+                // width · height = closest.len(); an outside lane's is 0 < closest.len().
+                let slot = unsafe { closest.get_unchecked_mut(pixels[l] as usize) };
+                *slot = (*slot).min(keys[l]);
+            }
+        }
+        if g >= vectors {
+            continue;
+        }
         let o = g * LANES;
-        let mut keys = [0u32; LANES];
-        let mut pixels = [0u32; LANES];
         // SAFETY: o + 8 ≤ n, the length of each of the batch's slices; stores into local arrays.
         unsafe {
             let x = _mm256_loadu_ps(batch.x.as_ptr().add(o));
@@ -80,13 +97,10 @@ unsafe fn splat_closest_avx2(view: &SplatView, closest: &mut [u32], batch: Point
             let pixel = _mm256_and_si256(pixel, inside);
             _mm256_storeu_si256(keys.as_mut_ptr().cast(), key);
             _mm256_storeu_si256(pixels.as_mut_ptr().cast(), pixel);
-        }
-        for l in 0..LANES {
-            // SAFETY: an inside lane's pixel is iy · width + ix with 0 ≤ ix < width and
-            // 0 ≤ iy < height (exact truncations of the checked coordinates), below
-            // width · height = closest.len(); an outside lane's is 0 < closest.len().
-            let slot = unsafe { closest.get_unchecked_mut(pixels[l] as usize) };
-            *slot = (*slot).min(keys[l]);
+            for &pixel in pixels.iter() {
+                // A prefetch of any address is harmless; this one is inside `closest` (above).
+                _mm_prefetch::<_MM_HINT_T0>(closest.as_ptr().add(pixel as usize).cast());
+            }
         }
     }
     for i in vectors * LANES..n {
