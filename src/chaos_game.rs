@@ -1055,7 +1055,7 @@ mod tests {
         // The warped IFS has several cells along every axis; its variant on a 1×2×1 grid
         // (as the paper's tapering, 1×3×1) takes the kernel specialized for y alone.
         // With 2 cells along y the IFS has 7 cells (every vector lookup applies), with 3 it has
-        // 10 (the 16-entry lookups and the gather), the warped IFS 37 (the gather).
+        // 10 (the 16-entry lookups and the gathers), the warped IFS 37 (the gathers).
         for (ifs, multi) in [(warped_ifs(), [true; 3]), (y_only_ifs(&[0.0, 0.3, 1.0]), [false, true, false]), (y_only_ifs(&[0.0, 0.3, 0.8, 1.0]), [false, true, false])] {
             check_lane_map(&ifs, multi);
         }
@@ -1107,7 +1107,7 @@ mod tests {
             }
             points.push(p);
         }
-        // The vector kernel, 8 points at a time with mixed functions, every lookup.
+        // The vector kernel, a vector of points at a time with mixed functions, every lookup.
         let paths = simd_paths(&c);
         #[cfg(target_arch = "x86_64")]
         if is_x86_feature_detected!("avx2") {
@@ -1117,13 +1117,12 @@ mod tests {
             #[cfg(target_arch = "x86_64")]
             if let Path::Simd(lookup) = path {
                 let simd = c.simd.as_ref().unwrap();
-                for (g, group) in points.chunks_exact(8).enumerate() {
-                    let fi: [u32; 8] = std::array::from_fn(|l| ((g + l) % 4) as u32);
-                    let got = simd.map8(lookup, fi, std::array::from_fn(|l| group[l].to_array()));
-                    for l in 0..8 {
-                        let want = c.map(fi[l] as usize, group[l]);
-                        assert_eq!(got[l].map(f32::to_bits), want.to_array().map(f32::to_bits), "{lookup:?} f{} at {:?}", fi[l], group[l]);
-                    }
+                let fi: Vec<u32> = (0..points.len()).map(|i| ((i + i / 16) % 4) as u32).collect();
+                let p: Vec<[f32; 3]> = points.iter().map(|p| p.to_array()).collect();
+                let got = simd.map_points(lookup, &fi, &p);
+                for i in 0..points.len() {
+                    let want = c.map(fi[i] as usize, points[i]);
+                    assert_eq!(got[i].map(f32::to_bits), want.to_array().map(f32::to_bits), "{lookup:?} f{} at {:?}", fi[i], points[i]);
                 }
             }
             let _ = path;
@@ -1149,11 +1148,11 @@ mod tests {
         }
         #[cfg(target_arch = "x86_64")]
         if let Some(simd) = &c.simd {
-            for group in rs.chunks(8) {
-                let r: [u32; 8] = std::array::from_fn(|l| group[l % group.len()]);
-                let got = simd.select8(r);
-                for l in 0..8 {
-                    assert_eq!(got[l] as usize, c.selection.select(0, r[l]), "r = {:#x}", r[l]);
+            // Whole vectors: pad with a value already tested.
+            rs.resize(rs.len().next_multiple_of(16), rs[0]);
+            for got in simd.select_points(&rs) {
+                for (&r, &fi) in rs.iter().zip(&got) {
+                    assert_eq!(fi as usize, c.selection.select(0, r), "r = {r:#x}");
                 }
             }
         }
