@@ -206,8 +206,8 @@ impl Framebuffer {
 impl PointSink for Framebuffer {
     fn consume(&mut self, batch: PointBatch<'_>) {
         #[cfg(target_arch = "x86_64")]
-        if self.view.mode == SplatMode::Closest && x86::closest_supported(&self.view, self.closest.len()) {
-            x86::splat_closest(&self.view, &mut self.closest, batch);
+        if x86::supported(self) {
+            x86::splat(self, batch);
             return;
         }
         self.consume_portable(batch);
@@ -263,14 +263,20 @@ mod tests {
     use crate::rng::Pcg32;
     use glam::DVec3;
 
-    /// The vector closest-mode splat (where the CPU has it) leaves the same keys as the
-    /// portable one, for points inside, outside, behind the camera, on the image border and
-    /// non-finite, with batch lengths that are not multiples of 8.
+    /// The vector splat (where the CPU has it) leaves the same framebuffer as the portable
+    /// one in every mode, for points inside, outside, behind the camera, beyond the depth
+    /// range and non-finite, with batch lengths that are not multiples of 8.
     #[test]
     fn vector_splat_matches_portable() {
+        for mode in SplatMode::ALL {
+            check_vector_splat(mode);
+        }
+    }
+
+    fn check_vector_splat(mode: SplatMode) {
         let bounds = (DVec3::ZERO, DVec3::ONE);
         let camera = OrbitCamera::framing(bounds, 3);
-        let view = SplatView::new(&camera, 64, 48, bounds, SplatMode::Closest, 0.75, [0.0; 3]);
+        let view = SplatView::new(&camera, 64, 48, bounds, mode, 0.75, [0.1, 0.2, 0.3]);
         let mut r = Pcg32::for_stream(21, 0, 0);
         let n = 4003;
         let mut p: Vec<Vec3> = (0..n).map(|_| Vec3::new(r.next_f32(), r.next_f32(), r.next_f32()) * 3.0 - 1.0).collect();
@@ -280,7 +286,7 @@ mod tests {
         p[8] = camera.eye() + (camera.eye() - camera.target);
         let functions: Vec<u8> = (0..n).map(|i| (i % 5) as u8).collect();
         let (x, y, z): (Vec<f32>, Vec<f32>, Vec<f32>) = (p.iter().map(|p| p.x).collect(), p.iter().map(|p| p.y).collect(), p.iter().map(|p| p.z).collect());
-        let mut portable = Framebuffer::new(view, vec![[1.0; 3]; 5]);
+        let mut portable = Framebuffer::new(view, (0..5).map(|i| [0.2 * i as f32, 1.0, 0.5]).collect());
         let mut fastest = portable.clone();
         for start in (0..n).step_by(1000) {
             let end = (start + 1000).min(n);
@@ -289,6 +295,7 @@ mod tests {
             fastest.consume(batch);
         }
         assert!(portable.covered_pixels() > 500, "{}", portable.covered_pixels());
-        assert_eq!(portable.closest, fastest.closest);
+        assert_eq!(portable.closest, fastest.closest, "{mode:?}");
+        assert_eq!(portable.accum, fastest.accum, "{mode:?}");
     }
 }
