@@ -284,9 +284,11 @@ mod tests {
         p[6] = Vec3::new(0.5, f32::INFINITY, 0.5);
         p[7] = camera.eye();
         p[8] = camera.eye() + (camera.eye() - camera.target);
-        let functions: Vec<u8> = (0..n).map(|i| (i % 5) as u8).collect();
+        // Function 4 (whose colour needs the scalar arithmetic) only in every fourth run of 64.
+        let functions: Vec<u8> = (0..n).map(|i| if i / 64 % 4 == 3 { 4 } else { (i % 4) as u8 }).collect();
         let (x, y, z): (Vec<f32>, Vec<f32>, Vec<f32>) = (p.iter().map(|p| p.x).collect(), p.iter().map(|p| p.y).collect(), p.iter().map(|p| p.z).collect());
-        let mut portable = Framebuffer::new(view, (0..5).map(|i| [0.2 * i as f32, 1.0, 0.5]).collect());
+        // Function 4's red is beyond what a signed 32-bit truncation holds once scaled.
+        let mut portable = Framebuffer::new(view, (0..5).map(|i| [if i == 4 { 1e7 } else { 0.2 * i as f32 }, 1.0, 0.5]).collect());
         let mut fastest = portable.clone();
         for start in (0..n).step_by(1000) {
             let end = (start + 1000).min(n);

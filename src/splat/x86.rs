@@ -123,29 +123,71 @@ unsafe fn splat_accumulate_avx2(fb: &mut Framebuffer, batch: PointBatch<'_>) {
     let n = batch.len();
     let colors: Vec<[f32; 3]> = fb.colors.iter().map(|c| c.map(|x| x * COLOR_SCALE)).collect();
     let bg = view.background.map(|x| x * COLOR_SCALE);
+    // Per channel, the colours as an 8-entry table by function (up to 8 functions; more take
+    // the scalar colour arithmetic of the portable splat, lane by lane).
+    let vector_colors = !colors.is_empty() && colors.len() <= LANES;
+    let table: [[f32; LANES]; 3] = std::array::from_fn(|ch| std::array::from_fn(|f| colors.get(f.min(colors.len().saturating_sub(1))).map_or(0.0, |c| c[ch])));
     let vectors = n / LANES;
     for g in 0..vectors {
         let o = g * LANES;
         let mut pixels = [0u32; LANES];
         let mut ts = [0f32; LANES];
+        // Per lane: r, g, b, 1 to add (when the vector colour arithmetic applies).
+        let mut adds = [[0u32; 4]; LANES];
         // SAFETY: o + 8 ≤ n, the length of each of the batch's slices; stores into local arrays.
-        let mut inside = unsafe {
+        let (mut inside, vector) = unsafe {
+            let fi = _mm256_cvtepu8_epi32(_mm_loadl_epi64(batch.functions.as_ptr().add(o).cast()));
             let (inside, pixel, t) = project8(&view, _mm256_loadu_ps(batch.x.as_ptr().add(o)), _mm256_loadu_ps(batch.y.as_ptr().add(o)), _mm256_loadu_ps(batch.z.as_ptr().add(o)));
             _mm256_storeu_si256(pixels.as_mut_ptr().cast(), pixel);
             _mm256_storeu_ps(ts.as_mut_ptr(), t);
-            _mm256_movemask_ps(_mm256_castsi256_ps(inside)) as u32
+            let inside = _mm256_movemask_ps(_mm256_castsi256_ps(inside)) as u32;
+            // k = depth_cue · t; per channel (c + (bg − c) · k + 0.5) as u32, the saturating
+            // cast: NaN and negatives → 0 (the mask), values ≥ 2^31 (beyond the signed
+            // truncation) send the group to the scalar arithmetic.
+            let k = _mm256_mul_ps(_mm256_set1_ps(view.depth_cue), t);
+            let mut big = 0;
+            let mut channel = [_mm256_setzero_si256(); 3];
+            for ch in 0..3 {
+                let c = _mm256_permutevar8x32_ps(_mm256_loadu_ps(table[ch].as_ptr()), fi);
+                let v = _mm256_add_ps(_mm256_add_ps(c, _mm256_mul_ps(_mm256_sub_ps(_mm256_set1_ps(bg[ch]), c), k)), _mm256_set1_ps(0.5));
+                big |= _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_GE_OQ>(v, _mm256_set1_ps(2_147_483_648.0)));
+                let nonneg = _mm256_castps_si256(_mm256_cmp_ps::<_CMP_GE_OQ>(v, _mm256_setzero_ps()));
+                channel[ch] = _mm256_and_si256(_mm256_cvttps_epi32(v), nonneg);
+            }
+            // Transpose to r, g, b, 1 per lane: lane l in half l / 4 of vector l % 4.
+            let [r, gr, b] = channel;
+            let one = _mm256_set1_epi32(1);
+            let (rg_lo, rg_hi) = (_mm256_unpacklo_epi32(r, gr), _mm256_unpackhi_epi32(r, gr));
+            let (b1_lo, b1_hi) = (_mm256_unpacklo_epi32(b, one), _mm256_unpackhi_epi32(b, one));
+            let rows = [_mm256_unpacklo_epi64(rg_lo, b1_lo), _mm256_unpackhi_epi64(rg_lo, b1_lo), _mm256_unpacklo_epi64(rg_hi, b1_hi), _mm256_unpackhi_epi64(rg_hi, b1_hi)];
+            for (j, row) in rows.into_iter().enumerate() {
+                _mm_storeu_si128(adds[j].as_mut_ptr().cast(), _mm256_castsi256_si128(row));
+                _mm_storeu_si128(adds[j + 4].as_mut_ptr().cast(), _mm256_extracti128_si256::<1>(row));
+            }
+            (inside, vector_colors && big == 0)
         };
         while inside != 0 {
             let l = inside.trailing_zeros() as usize;
             inside &= inside - 1;
-            // The portable splat's arithmetic for one point.
-            let c = colors[batch.functions[o + l] as usize];
-            let k = view.depth_cue * ts[l];
             let a = &mut fb.accum[pixels[l] as usize];
-            for ch in 0..3 {
-                a[ch] = a[ch].saturating_add((c[ch] + (bg[ch] - c[ch]) * k + 0.5) as u32);
+            if vector {
+                // a + min(add, !a) = a.saturating_add(add), per channel and the count.
+                // SAFETY: 16-byte loads and stores of a [u32; 4] and a local [u32; 4].
+                unsafe {
+                    let acc = _mm_loadu_si128(a.as_ptr().cast());
+                    let add = _mm_loadu_si128(adds[l].as_ptr().cast());
+                    let sum = _mm_add_epi32(acc, _mm_min_epu32(add, _mm_xor_si128(acc, _mm_set1_epi32(-1))));
+                    _mm_storeu_si128(a.as_mut_ptr().cast(), sum);
+                }
+            } else {
+                // The portable splat's arithmetic for one point.
+                let c = colors[batch.functions[o + l] as usize];
+                let k = view.depth_cue * ts[l];
+                for ch in 0..3 {
+                    a[ch] = a[ch].saturating_add((c[ch] + (bg[ch] - c[ch]) * k + 0.5) as u32);
+                }
+                a[3] = a[3].saturating_add(1);
             }
-            a[3] = a[3].saturating_add(1);
         }
     }
     let tail = PointBatch { x: &batch.x[vectors * LANES..], y: &batch.y[vectors * LANES..], z: &batch.z[vectors * LANES..], functions: &batch.functions[vectors * LANES..] };
