@@ -290,11 +290,23 @@ mod tests {
         // Function 4's red is beyond what a signed 32-bit truncation holds once scaled.
         let mut portable = Framebuffer::new(view, (0..5).map(|i| [if i == 4 { 1e7 } else { 0.2 * i as f32 }, 1.0, 0.5]).collect());
         let mut fastest = portable.clone();
+        let mut narrow = portable.clone();
         for start in (0..n).step_by(1000) {
             let end = (start + 1000).min(n);
             let batch = PointBatch { x: &x[start..end], y: &y[start..end], z: &z[start..end], functions: &functions[start..end] };
             portable.consume_portable(batch);
             fastest.consume(batch);
+            #[cfg(target_arch = "x86_64")]
+            if x86::supported(&narrow) {
+                x86::splat_with(&mut narrow, batch, false);
+            }
+        }
+        // Where the CPU has AVX-512, `fastest` took the 16-wide closest splat and `narrow` the
+        // 8-wide one; both must match.
+        #[cfg(target_arch = "x86_64")]
+        if x86::supported(&narrow) {
+            assert_eq!(portable.closest, narrow.closest, "{mode:?}");
+            assert_eq!(portable.accum, narrow.accum, "{mode:?}");
         }
         assert!(portable.covered_pixels() > 500, "{}", portable.covered_pixels());
         assert_eq!(portable.closest, fastest.closest, "{mode:?}");

@@ -185,7 +185,6 @@ impl SimdKernel {
     /// The lookups this kernel can run with on this CPU (for tests).
     #[cfg(test)]
     pub(super) fn supported_lookups(&self) -> Vec<Lookup> {
-        let small = self.small;
         [Lookup::Permute8, Lookup::Permute16, Lookup::Gather, Lookup::Wide16, Lookup::WideGather]
             .into_iter()
             .filter(|l| l.supported() && self.has_tables(*l))

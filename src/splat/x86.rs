@@ -28,12 +28,18 @@ pub(super) fn supported(fb: &Framebuffer) -> bool {
 
 /// Splats `batch` into `fb`, exactly as the portable splat does.
 pub(super) fn splat(fb: &mut Framebuffer, batch: PointBatch<'_>) {
-    assert!(supported(fb));
+    splat_with(fb, batch, is_x86_feature_detected!("avx512f"));
+}
+
+/// [`splat`], with the closest mode's 16-wide AVX-512F projection if `wide` (for tests).
+pub(super) fn splat_with(fb: &mut Framebuffer, batch: PointBatch<'_>, wide: bool) {
+    assert!(supported(fb) && (!wide || is_x86_feature_detected!("avx512f")));
     assert!(batch.x.len() == batch.len() && batch.y.len() == batch.len() && batch.z.len() == batch.len());
-    // SAFETY: the CPU has AVX2 and the mode's buffer has width · height > 0 pixels
-    // (asserted); the batch's slices have equal lengths (asserted).
+    // SAFETY: the CPU has AVX2 (and AVX-512F if wide), and the mode's buffer has
+    // width · height > 0 pixels (asserted); the batch's slices have equal lengths (asserted).
     unsafe {
         match fb.view.mode {
+            SplatMode::Closest if wide => splat_closest_avx512(&fb.view, &mut fb.closest, batch),
             SplatMode::Closest => splat_closest_avx2(&fb.view, &mut fb.closest, batch),
             SplatMode::Average | SplatMode::Density => splat_accumulate_avx2(fb, batch),
         }
@@ -115,6 +121,62 @@ unsafe fn splat_closest_avx2(view: &SplatView, closest: &mut [u32], batch: Point
             closest[idx] = closest[idx].min(key);
         }
     }
+}
+
+/// The closest-mode splat with 16 points per vector: [`project8`] and [`splat_closest_avx2`]
+/// with AVX-512F, the same operations in the same order.
+#[target_feature(enable = "avx2,avx512f")]
+unsafe fn splat_closest_avx512(view: &SplatView, closest: &mut [u32], batch: PointBatch<'_>) {
+    const WIDE: usize = 16;
+    let n = batch.len();
+    let scale = ((1u32 << DEPTH_BITS) - 1) as f32;
+    let m = view.pixel_from_world;
+    let (c0, c1, c2, c3) = (m.x_axis, m.y_axis, m.z_axis, m.w_axis);
+    let vectors = n / WIDE;
+    for g in 0..vectors {
+        let o = g * WIDE;
+        let mut keys = [0u32; WIDE];
+        let mut pixels = [0u32; WIDE];
+        // SAFETY: o + 16 ≤ n, the length of each of the batch's slices; stores into local arrays.
+        unsafe {
+            let x = _mm512_loadu_ps(batch.x.as_ptr().add(o));
+            let y = _mm512_loadu_ps(batch.y.as_ptr().add(o));
+            let z = _mm512_loadu_ps(batch.z.as_ptr().add(o));
+            let fi = _mm512_cvtepu8_epi32(_mm_loadu_si128(batch.functions.as_ptr().add(o).cast()));
+            macro_rules! row {
+                ($c:ident) => {
+                    _mm512_add_ps(_mm512_add_ps(_mm512_add_ps(_mm512_mul_ps(_mm512_set1_ps(c0.$c), x), _mm512_mul_ps(_mm512_set1_ps(c1.$c), y)), _mm512_mul_ps(_mm512_set1_ps(c2.$c), z)), _mm512_set1_ps(c3.$c))
+                };
+            }
+            let (qx, qy, qz, qw) = (row!(x), row!(y), row!(z), row!(w));
+            let inv_w = _mm512_div_ps(_mm512_set1_ps(1.0), qw);
+            let (px, py) = (_mm512_mul_ps(qx, inv_w), _mm512_mul_ps(qy, inv_w));
+            let zero = _mm512_setzero_ps();
+            let inside = _mm512_cmp_ps_mask::<_CMP_GT_OQ>(qw, zero)
+                & _mm512_cmp_ps_mask::<_CMP_GE_OQ>(px, zero)
+                & _mm512_cmp_ps_mask::<_CMP_GE_OQ>(py, zero)
+                & _mm512_cmp_ps_mask::<_CMP_LT_OQ>(px, _mm512_set1_ps(view.width as f32))
+                & _mm512_cmp_ps_mask::<_CMP_LT_OQ>(py, _mm512_set1_ps(view.height as f32));
+            let pixel = _mm512_add_epi32(_mm512_mullo_epi32(_mm512_cvttps_epi32(py), _mm512_set1_epi32(view.width as i32)), _mm512_cvttps_epi32(px));
+            let t = _mm512_div_ps(_mm512_sub_ps(qz, _mm512_set1_ps(view.near)), _mm512_set1_ps(view.far - view.near));
+            let t = _mm512_mask_blend_ps(_mm512_cmp_ps_mask::<_CMP_LT_OQ>(t, zero), t, zero);
+            let t = _mm512_mask_blend_ps(_mm512_cmp_ps_mask::<_CMP_GT_OQ>(t, _mm512_set1_ps(1.0)), t, _mm512_set1_ps(1.0));
+            let d = _mm512_max_ps(_mm512_mul_ps(t, _mm512_set1_ps(scale)), zero);
+            let key = _mm512_or_si512(_mm512_slli_epi32::<8>(_mm512_cvttps_epi32(d)), fi);
+            let key = _mm512_mask_blend_epi32(inside, _mm512_set1_epi32(EMPTY as i32), key);
+            let pixel = _mm512_maskz_mov_epi32(inside, pixel);
+            _mm512_storeu_si512(keys.as_mut_ptr().cast(), key);
+            _mm512_storeu_si512(pixels.as_mut_ptr().cast(), pixel);
+        }
+        for l in 0..WIDE {
+            // SAFETY: as in splat_closest_avx2.
+            let slot = unsafe { closest.get_unchecked_mut(pixels[l] as usize) };
+            *slot = (*slot).min(keys[l]);
+        }
+    }
+    let rest = vectors * WIDE;
+    // SAFETY: AVX2 is enabled here too.
+    unsafe { splat_closest_avx2(view, closest, PointBatch { x: &batch.x[rest..], y: &batch.y[rest..], z: &batch.z[rest..], functions: &batch.functions[rest..] }) };
 }
 
 #[target_feature(enable = "avx2")]
