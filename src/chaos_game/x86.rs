@@ -37,7 +37,7 @@ const LANES: usize = 8;
 /// Orbits per AVX-512 vector, and the length of the per-function tables (entries past the
 /// function count repeat the last function, so that either width can load them whole).
 const WIDE: usize = 16;
-const _: () = assert!(ORBITS_PER_CHUNK % WIDE == 0 && LANE_FUNCTIONS <= LANES);
+const _: () = assert!(ORBITS_PER_CHUNK.is_multiple_of(WIDE) && LANE_FUNCTIONS <= LANES);
 /// Most cells of one function along one axis that the kernel handles.
 const MAX_AXIS_CELLS: usize = 8;
 /// Coefficients per cell: a..h, xyz each.
@@ -138,7 +138,7 @@ impl SimdKernel {
                 }
                 let coords = &fast.coords[fa.coord_offset as usize..=fa.coord_offset as usize + cells];
                 // Counting boundaries is the linear search only if they do not decrease.
-                if coords.windows(2).any(|w| !(w[0][0] <= w[1][0])) {
+                if coords.windows(2).any(|w| w[0][0].partial_cmp(&w[1][0]).is_none_or(std::cmp::Ordering::is_gt)) {
                     return None;
                 }
                 axis.boundaries = axis.boundaries.max(cells - 1);
@@ -222,7 +222,7 @@ impl SimdKernel {
     /// multiple of 16.
     #[cfg(test)]
     pub(super) fn map_points(&self, lookup: Lookup, fi: &[u32], p: &[[f32; 3]]) -> Vec<[f32; 3]> {
-        assert!(self.supported_lookups().contains(&lookup) && fi.len() == p.len() && p.len() % WIDE == 0);
+        assert!(self.supported_lookups().contains(&lookup) && fi.len() == p.len() && p.len().is_multiple_of(WIDE));
         let mut out = vec![[0f32; 3]; p.len()];
         // SAFETY: the CPU supports the lookup and its tables exist (asserted above); the
         // slices hold whole vectors (asserted above).
@@ -242,7 +242,7 @@ impl SimdKernel {
     /// where the CPU has them (for tests); the count must be a multiple of 16.
     #[cfg(test)]
     pub(super) fn select_points(&self, r: &[u32]) -> Vec<Vec<u32>> {
-        assert!(r.len() % WIDE == 0);
+        assert!(r.len().is_multiple_of(WIDE));
         let mut out = Vec::new();
         // SAFETY: each runs only where the CPU has its features; whole vectors (asserted).
         unsafe {
