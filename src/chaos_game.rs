@@ -19,8 +19,8 @@
 //! bins; any IFS), and the private lane kernel (the common case: few multilinear or affine
 //! functions with global probabilities; bucketed selection, 4-wide arithmetic, and a variant
 //! per set of axes that have more than one cell). On x86-64 CPUs with AVX2 (detected at run
-//! time) the lane kernel's case runs eight orbits per vector instead (`chaos_game/x86.rs`),
-//! again bit-identical. See the README's "CPU chaos-game performance" for measurements.
+//! time) the lane kernel's case runs eight orbits per vector instead, sixteen with AVX-512F
+//! (`chaos_game/x86.rs`), again bit-identical. See the README's "CPU chaos-game performance" for measurements.
 
 use glam::{DVec3, Vec3, Vec3A};
 use rayon::prelude::*;
@@ -100,7 +100,8 @@ pub struct CompiledIfs {
     fast: FastKernel,
     /// The CPU's fastest path, when the IFS allows it, see [`LaneKernel`].
     lanes: Option<LaneKernel>,
-    /// The lane kernel's case as 8-wide AVX2, when the CPU has it (see `chaos_game/x86.rs`).
+    /// The lane kernel's case as 8-wide AVX2 or 16-wide AVX-512F vectors, when the CPU has
+    /// them (see `chaos_game/x86.rs`).
     #[cfg(target_arch = "x86_64")]
     simd: Option<x86::SimdKernel>,
 }
