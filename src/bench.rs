@@ -5,7 +5,7 @@ use std::time::Instant;
 
 use glam::Vec3;
 
-use crate::chaos_game::{self, CompiledIfs, PointSink};
+use crate::chaos_game::{self, CompiledIfs, PointBatch, PointSink};
 use crate::scene::Scene;
 use crate::splat::{Framebuffer, SplatMode, SplatView};
 
@@ -15,9 +15,9 @@ struct MapOnly {
 }
 
 impl PointSink for MapOnly {
-    fn consume(&mut self, points: &[Vec3], _functions: &[u8]) {
-        if let Some(p) = points.last() {
-            self.acc += *p;
+    fn consume(&mut self, batch: PointBatch<'_>) {
+        if let Some(last) = batch.len().checked_sub(1) {
+            self.acc += batch.point(last);
         }
     }
 }

@@ -18,13 +18,18 @@
 //! reference the GPU mirrors, linear cell search), [`CompiledIfs::map_fast`] (cell search by
 //! bins; any IFS), and the private lane kernel (the common case: few multilinear or affine
 //! functions with global probabilities; bucketed selection, 4-wide arithmetic, and a variant
-//! per set of axes that have more than one cell). See docs/perf.md for measurements.
+//! per set of axes that have more than one cell). On x86-64 CPUs with AVX2 (detected at run
+//! time) the lane kernel's case runs eight orbits per vector instead, sixteen with AVX-512F
+//! (`chaos_game/x86.rs`), again bit-identical. See the README's "CPU chaos-game performance" for measurements.
 
 use glam::{DVec3, Vec3, Vec3A};
 use rayon::prelude::*;
 
 use crate::model::{Ifs, Map, ProbabilityMode};
 use crate::rng::Pcg32;
+
+#[cfg(target_arch = "x86_64")]
+mod x86;
 
 /// Orbits advanced together in one chunk.
 pub const ORBITS_PER_CHUNK: usize = 64;
@@ -95,6 +100,10 @@ pub struct CompiledIfs {
     fast: FastKernel,
     /// The CPU's fastest path, when the IFS allows it, see [`LaneKernel`].
     lanes: Option<LaneKernel>,
+    /// The lane kernel's case as 8-wide AVX2 or 16-wide AVX-512F vectors, when the CPU has
+    /// them (see `chaos_game/x86.rs`).
+    #[cfg(target_arch = "x86_64")]
+    simd: Option<x86::SimdKernel>,
 }
 
 /// Most functions the lane kernel handles.
@@ -254,6 +263,8 @@ impl CompiledIfs {
         let selection = selection_table(ifs, &active, domain_lo, domain_hi);
         let fast = FastKernel::new(&functions, &coords, &cells);
         let lanes = LaneKernel::new(&fast, &selection, &cells);
+        #[cfg(target_arch = "x86_64")]
+        let simd = lanes.as_ref().and_then(|_| x86::SimdKernel::new(&fast, &selection));
         let worst = active
             .iter()
             .filter_map(|&i| ifs.functions[i].map.lipschitz_bound())
@@ -273,6 +284,8 @@ impl CompiledIfs {
             transient,
             fast,
             lanes,
+            #[cfg(target_arch = "x86_64")]
+            simd,
         })
     }
 
@@ -756,9 +769,39 @@ fn selection_table(ifs: &Ifs, active: &[usize], lo: Vec3, hi: Vec3) -> Selection
     SelectionTable::from_probabilities(cells, lo, inv_cell, &probs)
 }
 
-/// Receives mapped points in batches: positions and compiled function indices.
+/// A batch of mapped points as structure of arrays (what vector code reads and writes best):
+/// point i is (x[i], y[i], z[i]), mapped by compiled function `functions[i]`. All four slices
+/// have the same length.
+#[derive(Clone, Copy, Debug)]
+pub struct PointBatch<'a> {
+    pub x: &'a [f32],
+    pub y: &'a [f32],
+    pub z: &'a [f32],
+    pub functions: &'a [u8],
+}
+
+impl PointBatch<'_> {
+    pub fn len(&self) -> usize {
+        self.functions.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.functions.is_empty()
+    }
+
+    #[inline(always)]
+    pub fn point(&self, i: usize) -> Vec3 {
+        Vec3::new(self.x[i], self.y[i], self.z[i])
+    }
+
+    pub fn points(&self) -> impl Iterator<Item = Vec3> + '_ {
+        (0..self.len()).map(|i| self.point(i))
+    }
+}
+
+/// Receives mapped points in batches.
 pub trait PointSink {
-    fn consume(&mut self, points: &[Vec3], functions: &[u8]);
+    fn consume(&mut self, batch: PointBatch<'_>);
 }
 
 /// Collects points (used by export and tests).
@@ -769,9 +812,9 @@ pub struct CollectSink {
 }
 
 impl PointSink for CollectSink {
-    fn consume(&mut self, points: &[Vec3], functions: &[u8]) {
-        self.points.extend_from_slice(points);
-        self.functions.extend_from_slice(functions);
+    fn consume(&mut self, batch: PointBatch<'_>) {
+        self.points.extend(batch.points());
+        self.functions.extend_from_slice(batch.functions);
     }
 }
 
@@ -779,9 +822,44 @@ impl PointSink for CollectSink {
 /// the transient, into `sink`. Orbit (lane) `k` of chunk `c` is chain `c · ORBITS_PER_CHUNK + k`
 /// and draws from the random stream (seed, frame, chain), as chain i of the GPU does.
 pub fn run_chunk(ifs: &CompiledIfs, seed: u32, frame: u32, chunk: u32, steps: usize, sink: &mut impl PointSink) {
+    run_chunk_on(ifs, Path::Fastest, seed, frame, chunk, steps, sink)
+}
+
+/// Which implementation [`run_chunk_on`] takes; all give the same points.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Path {
+    /// The fastest the IFS and the CPU allow.
+    Fastest,
+    /// Not the vector kernel (for tests).
+    #[cfg(test)]
+    Portable,
+    /// The vector kernel with this coefficient lookup (for tests).
+    #[cfg(all(test, target_arch = "x86_64"))]
+    Simd(x86::Lookup),
+}
+
+fn run_chunk_on(ifs: &CompiledIfs, path: Path, seed: u32, frame: u32, chunk: u32, steps: usize, sink: &mut impl PointSink) {
     let first_chain = chunk.wrapping_mul(ORBITS_PER_CHUNK as u32);
     let mut rngs: [Pcg32; ORBITS_PER_CHUNK] = std::array::from_fn(|k| Pcg32::for_stream(seed, frame, first_chain.wrapping_add(k as u32)));
     let mut pos: [Vec3A; ORBITS_PER_CHUNK] = std::array::from_fn(|k| ifs.start_point(&mut rngs[k]).into());
+    #[cfg(target_arch = "x86_64")]
+    if let Some(simd) = &ifs.simd {
+        let lookup = match path {
+            Path::Fastest => Some(simd.lookup),
+            #[cfg(test)]
+            Path::Portable => None,
+            #[cfg(test)]
+            Path::Simd(lookup) => Some(lookup),
+        };
+        if let Some(lookup) = lookup {
+            let rngs = rngs.map(Pcg32::state);
+            simd.run(lookup, &rngs, &pos.map(|p| p.to_array()), ifs.transient, steps, sink);
+            return;
+        }
+    }
+    #[cfg(all(test, target_arch = "x86_64"))]
+    assert!(!matches!(path, Path::Simd(_)), "no vector kernel for this IFS");
+    let _ = path;
     let orbits = Orbits { rngs: &mut rngs, pos: &mut pos, transient: ifs.transient, steps };
     match &ifs.lanes {
         Some(lanes) => run_lanes(lanes, orbits, sink),
@@ -815,22 +893,25 @@ impl Orbits<'_> {
                 *p = step(rng, *p).0;
             }
         }
-        let mut out_pos = vec![Vec3::ZERO; K * STEPS_PER_BATCH];
+        let mut out_x = vec![0f32; K * STEPS_PER_BATCH];
+        let mut out_y = vec![0f32; K * STEPS_PER_BATCH];
+        let mut out_z = vec![0f32; K * STEPS_PER_BATCH];
         let mut out_fn = vec![0u8; K * STEPS_PER_BATCH];
         let mut done = 0;
         while done < self.steps {
             let batch = STEPS_PER_BATCH.min(self.steps - done);
             for s in 0..batch {
-                let row = s * K;
-                let (out_p, out_f) = (&mut out_pos[row..row + K], &mut out_fn[row..row + K]);
+                let row = s * K..s * K + K;
+                let (xs, ys, zs, fs) = (&mut out_x[row.clone()], &mut out_y[row.clone()], &mut out_z[row.clone()], &mut out_fn[row]);
                 for (k, (rng, p)) in self.rngs.iter_mut().zip(self.pos.iter_mut()).enumerate() {
                     let (q, fi) = step(rng, *p);
                     *p = q;
-                    out_p[k] = q.into();
-                    out_f[k] = fi as u8;
+                    (xs[k], ys[k], zs[k]) = (q.x, q.y, q.z);
+                    fs[k] = fi as u8;
                 }
             }
-            sink.consume(&out_pos[..batch * K], &out_fn[..batch * K]);
+            let n = batch * K;
+            sink.consume(PointBatch { x: &out_x[..n], y: &out_y[..n], z: &out_z[..n], functions: &out_fn[..n] });
             done += batch;
         }
     }
@@ -974,16 +1055,33 @@ mod tests {
     fn lane_map_is_bit_identical() {
         // The warped IFS has several cells along every axis; its variant on a 1×2×1 grid
         // (as the paper's tapering, 1×3×1) takes the kernel specialized for y alone.
+        // With 2 cells along y the IFS has 7 cells (every vector lookup applies), with 3 it has
+        // 10 (the 16-entry lookups and the gathers), the warped IFS 37 (the gathers).
+        for (ifs, multi) in [(warped_ifs(), [true; 3]), (y_only_ifs(&[0.0, 0.3, 1.0]), [false, true, false]), (y_only_ifs(&[0.0, 0.3, 0.8, 1.0]), [false, true, false])] {
+            check_lane_map(&ifs, multi);
+        }
+    }
+
+    /// The warped IFS with its grid maps on a 1×n×1 grid with y coordinates `ys`.
+    fn y_only_ifs(ys: &[f64]) -> Ifs {
         let mut y_only = warped_ifs();
-        let grid = RectGrid { axes: [vec![0.0, 1.0], vec![0.0, 0.3, 1.0], vec![0.0, 1.0]] };
+        let grid = RectGrid { axes: [vec![0.0, 1.0], ys.to_vec(), vec![0.0, 1.0]] };
         for (i, f) in y_only.functions.iter_mut().enumerate().take(3) {
             let o = DVec3::new(0.1 * i as f64, 0.5, 0.2);
             f.map = Map::Grid(GridMap::from_fn(grid.clone(), |p| 0.4 * p + o + DVec3::new(0.0, 0.1 * p.x * p.y, 0.0)));
         }
         y_only.domain = grid;
-        for (ifs, multi) in [(warped_ifs(), [true; 3]), (y_only, [false, true, false])] {
-            check_lane_map(&ifs, multi);
+        y_only
+    }
+
+    /// The vector kernel's lookups this CPU runs for `c` (none without AVX2 or off x86-64).
+    fn simd_paths(c: &CompiledIfs) -> Vec<Path> {
+        #[cfg(target_arch = "x86_64")]
+        if let Some(simd) = &c.simd {
+            return simd.supported_lookups().into_iter().map(Path::Simd).collect();
         }
+        let _ = c;
+        Vec::new()
     }
 
     fn check_lane_map(ifs: &Ifs, multi: [bool; 3]) {
@@ -992,6 +1090,7 @@ mod tests {
         assert_eq!(lanes.multi, multi);
         let mut r = Pcg32::for_stream(4, 0, 1);
         let faces = [0.0f32, 0.3, 0.5, 0.8, 0.4, 1.0];
+        let mut points = Vec::new();
         for k in 0..20_000 {
             let mut p = Vec3::new(r.next_f32(), r.next_f32(), r.next_f32()) * 1.4 - 0.2;
             if k % 2 == 0 {
@@ -1007,6 +1106,27 @@ mod tests {
                 let want = c.map(fi, p);
                 assert_eq!(got.to_array().map(f32::to_bits), want.to_array().map(f32::to_bits), "f{fi} at {p:?}");
             }
+            points.push(p);
+        }
+        // The vector kernel, a vector of points at a time with mixed functions, every lookup.
+        let paths = simd_paths(&c);
+        #[cfg(target_arch = "x86_64")]
+        if is_x86_feature_detected!("avx2") {
+            assert!(paths.contains(&Path::Simd(x86::Lookup::Gather)), "{paths:?}");
+        }
+        for path in paths {
+            #[cfg(target_arch = "x86_64")]
+            if let Path::Simd(lookup) = path {
+                let simd = c.simd.as_ref().unwrap();
+                let fi: Vec<u32> = (0..points.len()).map(|i| ((i + i / 16) % 4) as u32).collect();
+                let p: Vec<[f32; 3]> = points.iter().map(|p| p.to_array()).collect();
+                let got = simd.map_points(lookup, &fi, &p);
+                for i in 0..points.len() {
+                    let want = c.map(fi[i] as usize, points[i]);
+                    assert_eq!(got[i].map(f32::to_bits), want.to_array().map(f32::to_bits), "{lookup:?} f{} at {:?}", fi[i], points[i]);
+                }
+            }
+            let _ = path;
         }
     }
 
@@ -1024,45 +1144,68 @@ mod tests {
                 rs.extend([r24 << 8, r24 << 8 | 0xff]);
             }
         }
-        for r in rs {
+        for &r in &rs {
             assert_eq!(lanes.select(r), c.selection.select(0, r), "r = {r:#x}");
+        }
+        #[cfg(target_arch = "x86_64")]
+        if let Some(simd) = &c.simd {
+            // Whole vectors: pad with a value already tested.
+            rs.resize(rs.len().next_multiple_of(16), rs[0]);
+            for got in simd.select_points(&rs) {
+                for (&r, &fi) in rs.iter().zip(&got) {
+                    assert_eq!(fi as usize, c.selection.select(0, r), "r = {r:#x}");
+                }
+            }
         }
     }
 
     /// `run_chunk` against a plain oracle: lane k of chunk c draws from stream (seed, frame,
     /// 64c + k), starts at a random domain point, selects with the table and maps with the
     /// reference `map`; every point must be bit-identical, on the lane path (global
-    /// probabilities) and on the general path (adaptive probabilities).
+    /// probabilities; the portable lane kernel and the vector kernel with each lookup the CPU
+    /// has) and on the general path (adaptive probabilities).
     #[test]
     fn run_chunk_matches_reference_orbits() {
-        for mode in [ProbabilityMode::Contractivity, ProbabilityMode::Adaptive] {
-            let mut ifs = warped_ifs();
+        let cases = [
+            (warped_ifs(), ProbabilityMode::Contractivity),
+            (warped_ifs(), ProbabilityMode::Adaptive),
+            (y_only_ifs(&[0.0, 0.3, 1.0]), ProbabilityMode::Contractivity),
+            (y_only_ifs(&[0.0, 0.3, 0.8, 1.0]), ProbabilityMode::Contractivity),
+        ];
+        for (mut ifs, mode) in cases {
             ifs.probability_mode = mode;
             let c = CompiledIfs::new(&ifs).unwrap();
             assert_eq!(c.lanes.is_some(), mode == ProbabilityMode::Contractivity);
-            let (seed, frame, chunk, steps) = (11, 2, 5u32, 40);
-            let mut got = CollectSink::default();
-            run_chunk(&c, seed, frame, chunk, steps, &mut got);
-            let k_n = ORBITS_PER_CHUNK;
-            let mut want = vec![Vec3::ZERO; k_n * steps];
-            let mut want_fn = vec![0u8; k_n * steps];
-            for k in 0..k_n {
-                let mut rng = Pcg32::for_stream(seed, frame, chunk * k_n as u32 + k as u32);
-                let mut p = c.start_point(&mut rng);
-                for s in 0..c.transient as usize + steps {
-                    let fi = c.selection.select(c.selection.cell_of(p), rng.next_u32());
-                    p = c.map(fi, p);
-                    if s >= c.transient as usize {
-                        let row = s - c.transient as usize;
-                        want[row * k_n + k] = p;
-                        want_fn[row * k_n + k] = fi as u8;
-                    }
+            for path in [Path::Fastest, Path::Portable].into_iter().chain(simd_paths(&c)) {
+                check_chunk(&c, path);
+            }
+        }
+    }
+
+    fn check_chunk(c: &CompiledIfs, path: Path) {
+        let mode = (c.selection.cells, path);
+        let (seed, frame, chunk, steps) = (11, 2, 5u32, 40);
+        let mut got = CollectSink::default();
+        run_chunk_on(c, path, seed, frame, chunk, steps, &mut got);
+        let k_n = ORBITS_PER_CHUNK;
+        let mut want = vec![Vec3::ZERO; k_n * steps];
+        let mut want_fn = vec![0u8; k_n * steps];
+        for k in 0..k_n {
+            let mut rng = Pcg32::for_stream(seed, frame, chunk * k_n as u32 + k as u32);
+            let mut p = c.start_point(&mut rng);
+            for s in 0..c.transient as usize + steps {
+                let fi = c.selection.select(c.selection.cell_of(p), rng.next_u32());
+                p = c.map(fi, p);
+                if s >= c.transient as usize {
+                    let row = s - c.transient as usize;
+                    want[row * k_n + k] = p;
+                    want_fn[row * k_n + k] = fi as u8;
                 }
             }
-            assert_eq!(got.functions, want_fn, "{mode:?}");
-            let bits = |v: &[Vec3]| v.iter().map(|p| p.to_array().map(f32::to_bits)).collect::<Vec<_>>();
-            assert_eq!(bits(&got.points), bits(&want), "{mode:?}");
         }
+        assert_eq!(got.functions, want_fn, "{mode:?}");
+        let bits = |v: &[Vec3]| v.iter().map(|p| p.to_array().map(f32::to_bits)).collect::<Vec<_>>();
+        assert_eq!(bits(&got.points), bits(&want), "{mode:?}");
     }
 
     #[test]

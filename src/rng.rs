@@ -4,14 +4,16 @@
 //! function of its seed.
 
 /// LCG multiplier and increment of the 32-bit PCG, the same constants as in `rng.wgsl`.
-const PCG_MUL: u32 = 747_796_405;
-const PCG_INC: u32 = 2_891_336_453;
+pub(crate) const PCG_MUL: u32 = 747_796_405;
+pub(crate) const PCG_INC: u32 = 2_891_336_453;
+/// Multiplier of the RXS-M-XS output function.
+pub(crate) const PCG_OUT_MUL: u32 = 277_803_737;
 
 /// One PCG-RXS-M-XS round: used both as the generator's output function and as a hash.
 #[inline(always)]
 pub fn pcg_hash(input: u32) -> u32 {
     let state = input.wrapping_mul(PCG_MUL).wrapping_add(PCG_INC);
-    let word = ((state >> ((state >> 28) + 4)) ^ state).wrapping_mul(277_803_737);
+    let word = ((state >> ((state >> 28) + 4)) ^ state).wrapping_mul(PCG_OUT_MUL);
     (word >> 22) ^ word
 }
 
@@ -27,11 +29,17 @@ impl Pcg32 {
         Self { state }
     }
 
+    /// The generator's state, for kernels that advance many generators as vectors (the same
+    /// steps as [`Self::next_u32`]).
+    pub(crate) fn state(self) -> u32 {
+        self.state
+    }
+
     #[inline(always)]
     pub fn next_u32(&mut self) -> u32 {
         let old = self.state;
         self.state = old.wrapping_mul(PCG_MUL).wrapping_add(PCG_INC);
-        let word = ((old >> ((old >> 28) + 4)) ^ old).wrapping_mul(277_803_737);
+        let word = ((old >> ((old >> 28) + 4)) ^ old).wrapping_mul(PCG_OUT_MUL);
         (word >> 22) ^ word
     }
 

@@ -1,0 +1,257 @@
+//! The splat with AVX2 (detected at run time): eight points projected per vector, every
+//! operation that of [`SplatView::project`] and the portable splat in its order; then each
+//! lane's pixel is updated by scalar code (pixels are random, so there is nothing to vectorize
+//! there): in closest mode a `min` of the key, in the accumulating modes the portable splat's
+//! own colour arithmetic. A prefetch of the pixels some groups ahead was tried and measured
+//! no faster: the framebuffer's hot part stays in the caches.
+//!
+//! Everything here requires AVX2: [`splat`] checks the CPU before entering. Hence the
+//! module-wide `unsafe_code` allowance: the intrinsics are `unsafe` to call outside a
+//! `#[target_feature]` function; the memory accesses carry their own SAFETY notes.
+#![allow(unsafe_code)]
+
+use std::arch::x86_64::*;
+
+use super::{COLOR_SCALE, DEPTH_BITS, EMPTY, Framebuffer, SplatMode, SplatView};
+use crate::chaos_game::PointBatch;
+
+const LANES: usize = 8;
+
+/// Whether [`splat`] can run for this framebuffer on this CPU.
+pub(super) fn supported(fb: &Framebuffer) -> bool {
+    let view = &fb.view;
+    let (w, h) = (view.width as usize, view.height as usize);
+    let len = if view.mode == SplatMode::Closest { fb.closest.len() } else { fb.accum.len() };
+    // Pixel indices are computed in i32; sizes up to 2^24 keep `width as f32` exact.
+    is_x86_feature_detected!("avx2") && len == w * h && len > 0 && len <= i32::MAX as usize && w <= 1 << 24 && h <= 1 << 24
+}
+
+/// Splats `batch` into `fb`, exactly as the portable splat does.
+pub(super) fn splat(fb: &mut Framebuffer, batch: PointBatch<'_>) {
+    splat_with(fb, batch, is_x86_feature_detected!("avx512f"));
+}
+
+/// [`splat`], with the closest mode's 16-wide AVX-512F projection if `wide` (for tests).
+pub(super) fn splat_with(fb: &mut Framebuffer, batch: PointBatch<'_>, wide: bool) {
+    assert!(supported(fb) && (!wide || is_x86_feature_detected!("avx512f")));
+    assert!(batch.x.len() == batch.len() && batch.y.len() == batch.len() && batch.z.len() == batch.len());
+    // SAFETY: the CPU has AVX2 (and AVX-512F if wide), and the mode's buffer has
+    // width · height > 0 pixels (asserted); the batch's slices have equal lengths (asserted).
+    unsafe {
+        match fb.view.mode {
+            SplatMode::Closest if wide => splat_closest_avx512(&fb.view, &mut fb.closest, batch),
+            SplatMode::Closest => splat_closest_avx2(&fb.view, &mut fb.closest, batch),
+            SplatMode::Average | SplatMode::Density => splat_accumulate_avx2(fb, batch),
+        }
+    }
+}
+
+/// The projection of 8 points (as [`SplatView::project`]): a mask of the lanes that land in
+/// the image, their pixel indices (0 elsewhere) and their depth fractions t (clamped as
+/// `f32::clamp` does: a NaN stays NaN).
+#[inline(always)]
+unsafe fn project8(view: &SplatView, x: __m256, y: __m256, z: __m256) -> (__m256i, __m256i, __m256) {
+    let m = view.pixel_from_world;
+    let (c0, c1, c2, c3) = (m.x_axis, m.y_axis, m.z_axis, m.w_axis);
+    unsafe {
+        // glam's Mat4 · Vec4 with w = 1: ((c0 x + c1 y) + c2 z) + c3 · 1, and c3 · 1 = c3.
+        // A macro, as closures would not have the caller's target features.
+        macro_rules! row {
+            ($c:ident) => {
+                _mm256_add_ps(_mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(_mm256_set1_ps(c0.$c), x), _mm256_mul_ps(_mm256_set1_ps(c1.$c), y)), _mm256_mul_ps(_mm256_set1_ps(c2.$c), z)), _mm256_set1_ps(c3.$c))
+            };
+        }
+        let (qx, qy, qz, qw) = (row!(x), row!(y), row!(z), row!(w));
+        let inv_w = _mm256_div_ps(_mm256_set1_ps(1.0), qw);
+        let (px, py) = (_mm256_mul_ps(qx, inv_w), _mm256_mul_ps(qy, inv_w));
+        // q.w > 0, 0 ≤ x < width, 0 ≤ y < height; ordered compares, so NaN fails.
+        let zero = _mm256_setzero_ps();
+        let inside = _mm256_and_ps(
+            _mm256_and_ps(_mm256_cmp_ps::<_CMP_GT_OQ>(qw, zero), _mm256_and_ps(_mm256_cmp_ps::<_CMP_GE_OQ>(px, zero), _mm256_cmp_ps::<_CMP_GE_OQ>(py, zero))),
+            _mm256_and_ps(_mm256_cmp_ps::<_CMP_LT_OQ>(px, _mm256_set1_ps(view.width as f32)), _mm256_cmp_ps::<_CMP_LT_OQ>(py, _mm256_set1_ps(view.height as f32))),
+        );
+        let inside = _mm256_castps_si256(inside);
+        let pixel = _mm256_add_epi32(_mm256_mullo_epi32(_mm256_cvttps_epi32(py), _mm256_set1_epi32(view.width as i32)), _mm256_cvttps_epi32(px));
+        // t = ((q.z − near) / (far − near)).clamp(0, 1): below 0 → 0, above 1 → 1, NaN kept.
+        let t = _mm256_div_ps(_mm256_sub_ps(qz, _mm256_set1_ps(view.near)), _mm256_set1_ps(view.far - view.near));
+        let t = _mm256_blendv_ps(t, zero, _mm256_cmp_ps::<_CMP_LT_OQ>(t, zero));
+        let t = _mm256_blendv_ps(t, _mm256_set1_ps(1.0), _mm256_cmp_ps::<_CMP_GT_OQ>(t, _mm256_set1_ps(1.0)));
+        (inside, _mm256_and_si256(pixel, inside), t)
+    }
+}
+
+#[target_feature(enable = "avx2")]
+unsafe fn splat_closest_avx2(view: &SplatView, closest: &mut [u32], batch: PointBatch<'_>) {
+    let n = batch.len();
+    let scale = ((1u32 << DEPTH_BITS) - 1) as f32;
+    let vectors = n / LANES;
+    for g in 0..vectors {
+        let o = g * LANES;
+        let mut keys = [0u32; LANES];
+        let mut pixels = [0u32; LANES];
+        // SAFETY: o + 8 ≤ n, the length of each of the batch's slices; stores into local arrays.
+        unsafe {
+            let x = _mm256_loadu_ps(batch.x.as_ptr().add(o));
+            let y = _mm256_loadu_ps(batch.y.as_ptr().add(o));
+            let z = _mm256_loadu_ps(batch.z.as_ptr().add(o));
+            let fi = _mm256_cvtepu8_epi32(_mm_loadl_epi64(batch.functions.as_ptr().add(o).cast()));
+            let (inside, pixel, t) = project8(view, x, y, z);
+            // d = t · scale, then the portable splat's `d > 0 ? d : 0` (maxps returns its
+            // second operand on NaN, and −0 becomes +0, which truncates alike).
+            let d = _mm256_max_ps(_mm256_mul_ps(t, _mm256_set1_ps(scale)), _mm256_setzero_ps());
+            let key = _mm256_or_si256(_mm256_slli_epi32::<8>(_mm256_cvttps_epi32(d)), fi);
+            // Outside lanes: the empty key (a no-op under min) on pixel 0.
+            let key = _mm256_blendv_epi8(_mm256_set1_epi32(EMPTY as i32), key, inside);
+            _mm256_storeu_si256(keys.as_mut_ptr().cast(), key);
+            _mm256_storeu_si256(pixels.as_mut_ptr().cast(), pixel);
+        }
+        for l in 0..LANES {
+            // SAFETY: an inside lane's pixel is iy · width + ix with 0 ≤ ix < width and
+            // 0 ≤ iy < height (exact truncations of the checked coordinates), below
+            // width · height = closest.len(); an outside lane's is 0 < closest.len().
+            let slot = unsafe { closest.get_unchecked_mut(pixels[l] as usize) };
+            *slot = (*slot).min(keys[l]);
+        }
+    }
+    for i in vectors * LANES..n {
+        if let Some((idx, t)) = view.project(batch.point(i)) {
+            let d = t * scale;
+            let d = if d > 0.0 { d } else { 0.0 };
+            let key = (d as u32) << 8 | batch.functions[i] as u32;
+            closest[idx] = closest[idx].min(key);
+        }
+    }
+}
+
+/// The closest-mode splat with 16 points per vector: [`project8`] and [`splat_closest_avx2`]
+/// with AVX-512F, the same operations in the same order.
+#[target_feature(enable = "avx2,avx512f")]
+unsafe fn splat_closest_avx512(view: &SplatView, closest: &mut [u32], batch: PointBatch<'_>) {
+    const WIDE: usize = 16;
+    let n = batch.len();
+    let scale = ((1u32 << DEPTH_BITS) - 1) as f32;
+    let m = view.pixel_from_world;
+    let (c0, c1, c2, c3) = (m.x_axis, m.y_axis, m.z_axis, m.w_axis);
+    let vectors = n / WIDE;
+    for g in 0..vectors {
+        let o = g * WIDE;
+        let mut keys = [0u32; WIDE];
+        let mut pixels = [0u32; WIDE];
+        // SAFETY: o + 16 ≤ n, the length of each of the batch's slices; stores into local arrays.
+        unsafe {
+            let x = _mm512_loadu_ps(batch.x.as_ptr().add(o));
+            let y = _mm512_loadu_ps(batch.y.as_ptr().add(o));
+            let z = _mm512_loadu_ps(batch.z.as_ptr().add(o));
+            let fi = _mm512_cvtepu8_epi32(_mm_loadu_si128(batch.functions.as_ptr().add(o).cast()));
+            macro_rules! row {
+                ($c:ident) => {
+                    _mm512_add_ps(_mm512_add_ps(_mm512_add_ps(_mm512_mul_ps(_mm512_set1_ps(c0.$c), x), _mm512_mul_ps(_mm512_set1_ps(c1.$c), y)), _mm512_mul_ps(_mm512_set1_ps(c2.$c), z)), _mm512_set1_ps(c3.$c))
+                };
+            }
+            let (qx, qy, qz, qw) = (row!(x), row!(y), row!(z), row!(w));
+            let inv_w = _mm512_div_ps(_mm512_set1_ps(1.0), qw);
+            let (px, py) = (_mm512_mul_ps(qx, inv_w), _mm512_mul_ps(qy, inv_w));
+            let zero = _mm512_setzero_ps();
+            let inside = _mm512_cmp_ps_mask::<_CMP_GT_OQ>(qw, zero)
+                & _mm512_cmp_ps_mask::<_CMP_GE_OQ>(px, zero)
+                & _mm512_cmp_ps_mask::<_CMP_GE_OQ>(py, zero)
+                & _mm512_cmp_ps_mask::<_CMP_LT_OQ>(px, _mm512_set1_ps(view.width as f32))
+                & _mm512_cmp_ps_mask::<_CMP_LT_OQ>(py, _mm512_set1_ps(view.height as f32));
+            let pixel = _mm512_add_epi32(_mm512_mullo_epi32(_mm512_cvttps_epi32(py), _mm512_set1_epi32(view.width as i32)), _mm512_cvttps_epi32(px));
+            let t = _mm512_div_ps(_mm512_sub_ps(qz, _mm512_set1_ps(view.near)), _mm512_set1_ps(view.far - view.near));
+            let t = _mm512_mask_blend_ps(_mm512_cmp_ps_mask::<_CMP_LT_OQ>(t, zero), t, zero);
+            let t = _mm512_mask_blend_ps(_mm512_cmp_ps_mask::<_CMP_GT_OQ>(t, _mm512_set1_ps(1.0)), t, _mm512_set1_ps(1.0));
+            let d = _mm512_max_ps(_mm512_mul_ps(t, _mm512_set1_ps(scale)), zero);
+            let key = _mm512_or_si512(_mm512_slli_epi32::<8>(_mm512_cvttps_epi32(d)), fi);
+            let key = _mm512_mask_blend_epi32(inside, _mm512_set1_epi32(EMPTY as i32), key);
+            let pixel = _mm512_maskz_mov_epi32(inside, pixel);
+            _mm512_storeu_si512(keys.as_mut_ptr().cast(), key);
+            _mm512_storeu_si512(pixels.as_mut_ptr().cast(), pixel);
+        }
+        for l in 0..WIDE {
+            // SAFETY: as in splat_closest_avx2.
+            let slot = unsafe { closest.get_unchecked_mut(pixels[l] as usize) };
+            *slot = (*slot).min(keys[l]);
+        }
+    }
+    let rest = vectors * WIDE;
+    // SAFETY: AVX2 is enabled here too.
+    unsafe { splat_closest_avx2(view, closest, PointBatch { x: &batch.x[rest..], y: &batch.y[rest..], z: &batch.z[rest..], functions: &batch.functions[rest..] }) };
+}
+
+#[target_feature(enable = "avx2")]
+unsafe fn splat_accumulate_avx2(fb: &mut Framebuffer, batch: PointBatch<'_>) {
+    let view = fb.view;
+    let n = batch.len();
+    let colors: Vec<[f32; 3]> = fb.colors.iter().map(|c| c.map(|x| x * COLOR_SCALE)).collect();
+    let bg = view.background.map(|x| x * COLOR_SCALE);
+    // Per channel, the colours as an 8-entry table by function (up to 8 functions; more take
+    // the scalar colour arithmetic of the portable splat, lane by lane).
+    let vector_colors = !colors.is_empty() && colors.len() <= LANES;
+    let table: [[f32; LANES]; 3] = std::array::from_fn(|ch| std::array::from_fn(|f| colors.get(f.min(colors.len().saturating_sub(1))).map_or(0.0, |c| c[ch])));
+    let vectors = n / LANES;
+    for g in 0..vectors {
+        let o = g * LANES;
+        let mut pixels = [0u32; LANES];
+        let mut ts = [0f32; LANES];
+        // Per lane: r, g, b, 1 to add (when the vector colour arithmetic applies).
+        let mut adds = [[0u32; 4]; LANES];
+        // SAFETY: o + 8 ≤ n, the length of each of the batch's slices; stores into local arrays.
+        let (mut inside, vector) = unsafe {
+            let fi = _mm256_cvtepu8_epi32(_mm_loadl_epi64(batch.functions.as_ptr().add(o).cast()));
+            let (inside, pixel, t) = project8(&view, _mm256_loadu_ps(batch.x.as_ptr().add(o)), _mm256_loadu_ps(batch.y.as_ptr().add(o)), _mm256_loadu_ps(batch.z.as_ptr().add(o)));
+            _mm256_storeu_si256(pixels.as_mut_ptr().cast(), pixel);
+            _mm256_storeu_ps(ts.as_mut_ptr(), t);
+            let inside = _mm256_movemask_ps(_mm256_castsi256_ps(inside)) as u32;
+            // k = depth_cue · t; per channel (c + (bg − c) · k + 0.5) as u32, the saturating
+            // cast: NaN and negatives → 0 (the mask), values ≥ 2^31 (beyond the signed
+            // truncation) send the group to the scalar arithmetic.
+            let k = _mm256_mul_ps(_mm256_set1_ps(view.depth_cue), t);
+            let mut big = 0;
+            let mut channel = [_mm256_setzero_si256(); 3];
+            for ch in 0..3 {
+                let c = _mm256_permutevar8x32_ps(_mm256_loadu_ps(table[ch].as_ptr()), fi);
+                let v = _mm256_add_ps(_mm256_add_ps(c, _mm256_mul_ps(_mm256_sub_ps(_mm256_set1_ps(bg[ch]), c), k)), _mm256_set1_ps(0.5));
+                big |= _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_GE_OQ>(v, _mm256_set1_ps(2_147_483_648.0)));
+                let nonneg = _mm256_castps_si256(_mm256_cmp_ps::<_CMP_GE_OQ>(v, _mm256_setzero_ps()));
+                channel[ch] = _mm256_and_si256(_mm256_cvttps_epi32(v), nonneg);
+            }
+            // Transpose to r, g, b, 1 per lane: lane l in half l / 4 of vector l % 4.
+            let [r, gr, b] = channel;
+            let one = _mm256_set1_epi32(1);
+            let (rg_lo, rg_hi) = (_mm256_unpacklo_epi32(r, gr), _mm256_unpackhi_epi32(r, gr));
+            let (b1_lo, b1_hi) = (_mm256_unpacklo_epi32(b, one), _mm256_unpackhi_epi32(b, one));
+            let rows = [_mm256_unpacklo_epi64(rg_lo, b1_lo), _mm256_unpackhi_epi64(rg_lo, b1_lo), _mm256_unpacklo_epi64(rg_hi, b1_hi), _mm256_unpackhi_epi64(rg_hi, b1_hi)];
+            for (j, row) in rows.into_iter().enumerate() {
+                _mm_storeu_si128(adds[j].as_mut_ptr().cast(), _mm256_castsi256_si128(row));
+                _mm_storeu_si128(adds[j + 4].as_mut_ptr().cast(), _mm256_extracti128_si256::<1>(row));
+            }
+            (inside, vector_colors && big == 0)
+        };
+        while inside != 0 {
+            let l = inside.trailing_zeros() as usize;
+            inside &= inside - 1;
+            let a = &mut fb.accum[pixels[l] as usize];
+            if vector {
+                // a + min(add, !a) = a.saturating_add(add), per channel and the count.
+                // SAFETY: 16-byte loads and stores of a [u32; 4] and a local [u32; 4].
+                unsafe {
+                    let acc = _mm_loadu_si128(a.as_ptr().cast());
+                    let add = _mm_loadu_si128(adds[l].as_ptr().cast());
+                    let sum = _mm_add_epi32(acc, _mm_min_epu32(add, _mm_xor_si128(acc, _mm_set1_epi32(-1))));
+                    _mm_storeu_si128(a.as_mut_ptr().cast(), sum);
+                }
+            } else {
+                // The portable splat's arithmetic for one point.
+                let c = colors[batch.functions[o + l] as usize];
+                let k = view.depth_cue * ts[l];
+                for ch in 0..3 {
+                    a[ch] = a[ch].saturating_add((c[ch] + (bg[ch] - c[ch]) * k + 0.5) as u32);
+                }
+                a[3] = a[3].saturating_add(1);
+            }
+        }
+    }
+    let tail = PointBatch { x: &batch.x[vectors * LANES..], y: &batch.y[vectors * LANES..], z: &batch.z[vectors * LANES..], functions: &batch.functions[vectors * LANES..] };
+    fb.consume_portable(tail);
+}
