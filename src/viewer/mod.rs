@@ -19,6 +19,7 @@ pub mod jobs;
 pub mod state;
 pub mod timeline_ui;
 pub mod ui;
+pub mod ui_layer;
 
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -89,6 +90,8 @@ pub fn run(options: ViewerOptions) -> Result<(), ViewerError> {
         started: Instant::now(),
         frames: 0,
         splats: 0,
+        smoothed: state::FrameStats::default(),
+        stats_shown: None,
         log: FrameLog::default(),
         fatal: None,
     };
@@ -117,6 +120,7 @@ struct Gfx {
     egui_ctx: egui::Context,
     egui_state: egui_winit::State,
     egui_renderer: egui_wgpu::Renderer,
+    ui_layer: ui_layer::UiLayer,
 }
 
 struct App {
@@ -136,6 +140,10 @@ struct App {
     started: Instant,
     frames: u64,
     splats: u64,
+    /// Frame statistics smoothed every frame; the panel shows a copy refreshed twice a second
+    /// (text that changes every frame would re-render the cached egui layer every frame).
+    smoothed: state::FrameStats,
+    stats_shown: Option<Instant>,
     log: FrameLog,
     fatal: Option<ViewerError>,
 }
@@ -146,6 +154,8 @@ struct App {
 #[derive(Default)]
 struct FrameLog {
     since: Option<Instant>,
+    /// Process CPU seconds (all threads, lavapipe's included) at `since`.
+    cpu_since: f64,
     frames: u32,
     splats: u64,
     /// egui's `run_ui` (the panels' layout), plus applying commands.
@@ -154,13 +164,16 @@ struct FrameLog {
     /// Chaos game, resolve and egui recording: encoding, tessellation, buffer uploads, submit.
     record_secs: f64,
     present_secs: f64,
+    /// Cached egui layer renders so far (total) and at the last report.
+    ui_renders: u64,
+    ui_renders_reported: u64,
 }
 
 impl FrameLog {
     /// Prints and restarts once a second has passed.
     fn report(&mut self, now: Instant) {
         let Some(since) = self.since else {
-            self.since = Some(now);
+            *self = Self { since: Some(now), cpu_since: crate::gpu::bench::process_cpu_secs(), ..Self::default() };
             return;
         };
         let secs = (now - since).as_secs_f64();
@@ -168,16 +181,19 @@ impl FrameLog {
             return;
         }
         let n = self.frames.max(1) as f64;
+        let cpu = crate::gpu::bench::process_cpu_secs();
         eprintln!(
-            "viewer: {:.1} fps, {:.1} M points/s; ms/frame: ui {:.1}, acquire {:.1}, record+submit {:.1}, present {:.1}",
+            "viewer: {:.1} fps, {:.1} M points/s, process CPU {:.0} ms/frame, egui re-rendered in {} frames; wall ms/frame: ui {:.1}, acquire {:.1}, record+submit {:.1}, present {:.1}",
             self.frames as f64 / secs,
             self.splats as f64 / secs / 1e6,
+            1e3 * (cpu - self.cpu_since) / n,
+            self.ui_renders - self.ui_renders_reported,
             1e3 * self.ui_secs / n,
             1e3 * self.acquire_secs / n,
             1e3 * self.record_secs / n,
             1e3 * self.present_secs / n,
         );
-        *self = Self { since: Some(now), ..Self::default() };
+        *self = Self { since: Some(now), cpu_since: cpu, ui_renders: self.ui_renders, ui_renders_reported: self.ui_renders, ..Self::default() };
     }
 }
 
@@ -223,7 +239,8 @@ impl Gfx {
             Some(ctx.device.limits().max_texture_dimension_2d as usize),
         );
         let egui_renderer = egui_wgpu::Renderer::new(&ctx.device, config.format, egui_wgpu::RendererOptions::default());
-        Ok(Self { window, surface, config, ctx, live, egui_ctx, egui_state, egui_renderer })
+        let ui_layer = ui_layer::UiLayer::new(&ctx.device, config.format);
+        Ok(Self { window, surface, config, ctx, live, egui_ctx, egui_state, egui_renderer, ui_layer })
     }
 
     fn reconfigure(&mut self) {
@@ -427,6 +444,7 @@ impl App {
         }
 
         // Textures must be applied every frame even when nothing is drawn.
+        let textures_changed = !full_output.textures_delta.set.is_empty() || !full_output.textures_delta.free.is_empty();
         for (id, deltas) in &full_output.textures_delta.set {
             for delta in deltas {
                 gfx.egui_renderer.update_texture(&gfx.ctx.device, &gfx.ctx.queue, *id, delta);
@@ -472,25 +490,18 @@ impl App {
         let splats = gfx.live.advance(&gfx.ctx, &mut encoder);
         gfx.live.draw(&gfx.ctx, &mut encoder, &view, gfx.config.format, origin_px);
 
-        let paint_jobs = gfx.egui_ctx.tessellate(full_output.shapes, full_output.pixels_per_point);
-        let screen = egui_wgpu::ScreenDescriptor { size_in_pixels: [gfx.config.width, gfx.config.height], pixels_per_point: full_output.pixels_per_point };
-        let extra = gfx.egui_renderer.update_buffers(&gfx.ctx.device, &gfx.ctx.queue, &mut encoder, &paint_jobs, &screen);
-        {
-            let pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some("egui"),
-                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                    view: &view,
-                    depth_slice: None,
-                    resolve_target: None,
-                    ops: wgpu::Operations { load: wgpu::LoadOp::Load, store: wgpu::StoreOp::Store },
-                })],
-                depth_stencil_attachment: None,
-                timestamp_writes: None,
-                occlusion_query_set: None,
-                multiview_mask: None,
-            });
-            gfx.egui_renderer.render(&mut pass.forget_lifetime(), &paint_jobs, &screen);
-        }
+        let extra = gfx.ui_layer.update(
+            &gfx.ctx.device,
+            &gfx.ctx.queue,
+            &mut encoder,
+            &mut gfx.egui_renderer,
+            &gfx.egui_ctx,
+            full_output.shapes,
+            full_output.pixels_per_point,
+            textures_changed,
+            [gfx.config.width, gfx.config.height],
+        );
+        gfx.ui_layer.composite(&mut encoder, &view);
         gfx.ctx.queue.submit(extra.into_iter().chain([encoder.finish()]));
         let t_submitted = Instant::now();
         gfx.ctx.queue.present(frame);
@@ -501,6 +512,7 @@ impl App {
         if self.options.log_fps {
             let log = &mut self.log;
             log.frames += 1;
+            log.ui_renders = gfx.ui_layer.renders;
             log.splats += splats;
             log.ui_secs += (t_ui - t_start).as_secs_f64();
             log.acquire_secs += (t_acquired - t_ui).as_secs_f64();
@@ -512,12 +524,16 @@ impl App {
         let now = Instant::now();
         if let Some(last) = self.last_frame {
             let dt = (now - last).as_secs_f64();
-            let s = &mut self.state.stats;
+            let s = &mut self.smoothed;
             // Exponential smoothing over ~20 frames.
             let a = if s.frames == 0 { 1.0 } else { 0.05 };
             s.frame_secs += a * (dt - s.frame_secs);
             s.points_per_sec += a * (splats as f64 / dt.max(1e-6) - s.points_per_sec);
             s.frames += 1;
+            if self.stats_shown.is_none_or(|t| now - t >= Duration::from_millis(500)) {
+                self.state.stats = self.smoothed;
+                self.stats_shown = Some(now);
+            }
         }
         self.last_frame = Some(now);
         self.frames += 1;
