@@ -110,6 +110,23 @@ fn locate_axis(n: u32, base: u32, lo: f32, inv_bin: f32, x: f32) -> vec2<f32> {
     return vec2<f32>(bitcast<f32>(i), (x - c.x) * c.y);
 }
 
+// `locate_axis` on an axis of the shared grid: `n` cells (a pipeline constant) at `base` in the
+// coordinate pool. The cell is the last one whose first coordinate is at or below `x`, the same
+// cell as `locate_axis`'s walk finds (the coordinates increase strictly), found by comparing
+// with every interior coordinate: no loop that depends on the lane, and every read at an index
+// the compiler knows (scalar loads, not per-lane gathers, on lavapipe).
+fn locate_shared_axis(n: u32, base: u32, x: f32) -> vec2<f32> {
+    var i = 0u;
+    var c = coord_at(base);
+    for (var k = 1u; k < n; k += 1u) {
+        let ck = coord_at(base + k);
+        let above = x >= ck.x;
+        i = select(i, k, above);
+        c = select(c, ck, above);
+    }
+    return vec2<f32>(bitcast<f32>(i), (x - c.x) * c.y);
+}
+
 // The trilinear interpolant of `cell` at local coordinates (u, v, w).
 fn interpolate(cell: u32, u: f32, v: f32, w: f32) -> vec3<f32> {
     // a + u b + v (c + u e) + w (d + u f + v (g + u h))
@@ -124,9 +141,9 @@ fn map_point_shared(fi: u32, p: vec3<f32>) -> vec3<f32> {
     let f = function_at(0u);
     let lo = f.lo.xyz;
     let q = clamp(p, lo, f.hi.xyz);
-    let lx = locate_axis(SHARED_CELLS_X, 0u, lo.x, f.inv_bin.x, q.x);
-    let ly = locate_axis(SHARED_CELLS_Y, SHARED_CELLS_X + 1u, lo.y, f.inv_bin.y, q.y);
-    let lz = locate_axis(SHARED_CELLS_Z, SHARED_CELLS_X + SHARED_CELLS_Y + 2u, lo.z, f.inv_bin.z, q.z);
+    let lx = locate_shared_axis(SHARED_CELLS_X, 0u, q.x);
+    let ly = locate_shared_axis(SHARED_CELLS_Y, SHARED_CELLS_X + 1u, q.y);
+    let lz = locate_shared_axis(SHARED_CELLS_Z, SHARED_CELLS_X + SHARED_CELLS_Y + 2u, q.z);
     let local = (bitcast<u32>(lx.x) * SHARED_CELLS_Y + bitcast<u32>(ly.x)) * SHARED_CELLS_Z + bitcast<u32>(lz.x);
     let cell = fi * (SHARED_CELLS_X * SHARED_CELLS_Y * SHARED_CELLS_Z) + local;
     return interpolate(cell, lx.y, ly.y, lz.y);
