@@ -56,7 +56,7 @@ impl UiLayer {
     /// Brings the cached texture up to date with this frame's egui output (`shapes` at
     /// `pixels_per_point`, `textures_changed`: egui uploaded or freed textures this frame), in a
     /// window of `size_px`. Renders only when something changed; records into `encoder`.
-    #[allow(clippy::too_many_arguments)]
+    #[expect(clippy::too_many_arguments, reason = "the egui frame's parts and the device handles, used once per frame")]
     pub fn update(
         &mut self,
         device: &wgpu::Device,
@@ -159,5 +159,5 @@ fn scissor_of(paint_jobs: &[egui::ClippedPrimitive], pixels_per_point: f32, size
     let y0 = (union.min.y * pixels_per_point).floor().clamp(0.0, h);
     let x1 = (union.max.x * pixels_per_point).ceil().clamp(0.0, w);
     let y1 = (union.max.y * pixels_per_point).ceil().clamp(0.0, h);
-    (x1 > x0 && y1 > y0).then(|| [x0 as u32, y0 as u32, (x1 - x0) as u32, (y1 - y0) as u32])
+    (x1 > x0 && y1 > y0).then_some([x0 as u32, y0 as u32, (x1 - x0) as u32, (y1 - y0) as u32])
 }
