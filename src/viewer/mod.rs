@@ -411,7 +411,10 @@ impl App {
         gfx.egui_state.handle_platform_output(&gfx.window, full_output.platform_output);
         // The attractor is drawn and framed in what the panels leave, in whole window pixels.
         let (origin_px, size_px) = view_pixels(view_rect, ppp, [gfx.config.width, gfx.config.height]);
-        self.commands.push(Command::SetViewRect { origin_px: origin_px.map(|v| v as f32), size_px: size_px.map(|v| v as f32) });
+        let minimized = gfx.config.width == 0 || gfx.config.height == 0;
+        if !minimized {
+            self.commands.push(Command::SetViewRect { origin_px: origin_px.map(|v| v as f32), size_px: size_px.map(|v| v as f32) });
+        }
 
         let mut changes = self.state.apply(self.commands.drain(..));
         for request in changes.jobs.drain(..) {
@@ -429,7 +432,7 @@ impl App {
             self.state.error = Some(e.to_string());
             self.state.live = gfx.live.settings;
         }
-        if gfx.live.size() != (size_px[0], size_px[1]) {
+        if !minimized && gfx.live.size() != (size_px[0], size_px[1]) {
             gfx.live.resize(&gfx.ctx, size_px[0], size_px[1]);
         }
         gfx.live.set_camera(&self.state.camera);
