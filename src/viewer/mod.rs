@@ -61,8 +61,8 @@ pub struct ViewerOptions {
     pub grid_overlay: bool,
     /// Start playing the timeline (if the scene has one).
     pub play: bool,
-    /// Print frames per second and the wall time of each stage of a frame to stderr, once a
-    /// second (measuring the viewer under Xvfb).
+    /// Print frames per second, process CPU per frame and the wall time of each stage of a
+    /// frame to stderr, once a second (measuring the viewer under Xvfb).
     pub log_fps: bool,
 }
 
@@ -148,7 +148,8 @@ struct App {
     fatal: Option<ViewerError>,
 }
 
-/// Wall time of a frame's stages summed over the frames since the last report (`--log-fps`).
+/// Wall time of a frame's stages summed over the frames since the last report, and the process
+/// CPU time since then (`--log-fps`).
 /// The GPU work is asynchronous: on lavapipe its cost shows in `acquire` (waiting for a free
 /// swapchain image, i.e. for the frame before last) and in `present`.
 #[derive(Default)]
