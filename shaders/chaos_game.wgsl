@@ -54,12 +54,24 @@ struct ChaosParams {
     _pad: u32,
 }
 
-// Pipeline constants (src/gpu/chaos_game.rs makes one pipeline per splat mode and per IFS with
-// or without Julia functions). As constants the compiler drops the branches not taken; a SIMD
+// Pipeline constants (src/gpu/chaos_game.rs makes one pipeline per splat mode and per IFS
+// structure, `IfsShape`). As constants the compiler drops the branches not taken; a SIMD
 // software rasterizer would otherwise run both sides (atomics and table loads included) for
 // every lane. `params.mode` stays for the clear.
 override SPLAT_MODE: u32 = 0u;
 override HAS_JULIA: bool = true;
+// Cells per axis when every function is a grid map on one shared grid (0: they are not, each
+// function's own grid is read from its record). Then the cell search reads the coordinates of
+// function 0 at indices known to the compiler (scalar loads instead of per-lane gathers on
+// lavapipe), one-cell axes need no search at all, and function `fi`'s cells start at
+// fi × cells per function, so the function record is not read.
+override SHARED_CELLS_X: u32 = 0u;
+override SHARED_CELLS_Y: u32 = 0u;
+override SHARED_CELLS_Z: u32 = 0u;
+// The number of functions (0: read it from the uniforms), and whether the selection table has
+// a single coarse cell: then the threshold reads are at constant indices too.
+override FUNCTION_COUNT: u32 = 0u;
+override SINGLE_SELECTION_CELL: bool = false;
 
 const KIND_JULIA: u32 = 1u;
 const SELECT_BITS: u32 = 24u;
@@ -98,8 +110,50 @@ fn locate_axis(n: u32, base: u32, lo: f32, inv_bin: f32, x: f32) -> vec2<f32> {
     return vec2<f32>(bitcast<f32>(i), (x - c.x) * c.y);
 }
 
+// `locate_axis` on an axis of the shared grid: `n` cells (a pipeline constant) at `base` in the
+// coordinate pool. The cell is the last one whose first coordinate is at or below `x`, the same
+// cell as `locate_axis`'s walk finds (the coordinates increase strictly), found by comparing
+// with every interior coordinate: no loop that depends on the lane, and every read at an index
+// the compiler knows (scalar loads, not per-lane gathers, on lavapipe).
+fn locate_shared_axis(n: u32, base: u32, x: f32) -> vec2<f32> {
+    var i = 0u;
+    var c = coord_at(base);
+    for (var k = 1u; k < n; k += 1u) {
+        let ck = coord_at(base + k);
+        let above = x >= ck.x;
+        i = select(i, k, above);
+        c = select(c, ck, above);
+    }
+    return vec2<f32>(bitcast<f32>(i), (x - c.x) * c.y);
+}
+
+// The trilinear interpolant of `cell` at local coordinates (u, v, w).
+fn interpolate(cell: u32, u: f32, v: f32, w: f32) -> vec3<f32> {
+    // a + u b + v (c + u e) + w (d + u f + v (g + u h))
+    let inner = cell_coef(cell, 3u) + u * cell_coef(cell, 5u) + v * (cell_coef(cell, 6u) + u * cell_coef(cell, 7u));
+    return cell_coef(cell, 0u) + u * cell_coef(cell, 1u) + v * (cell_coef(cell, 2u) + u * cell_coef(cell, 4u)) + w * inner;
+}
+
+// `map_point` when all functions share one grid (SHARED_CELLS_X > 0): the same arithmetic on
+// the same table values, function 0's clamp box and axes (the coordinate pool starts with them,
+// n + 1 entries per axis).
+fn map_point_shared(fi: u32, p: vec3<f32>) -> vec3<f32> {
+    let f = function_at(0u);
+    let lo = f.lo.xyz;
+    let q = clamp(p, lo, f.hi.xyz);
+    let lx = locate_shared_axis(SHARED_CELLS_X, 0u, q.x);
+    let ly = locate_shared_axis(SHARED_CELLS_Y, SHARED_CELLS_X + 1u, q.y);
+    let lz = locate_shared_axis(SHARED_CELLS_Z, SHARED_CELLS_X + SHARED_CELLS_Y + 2u, q.z);
+    let local = (bitcast<u32>(lx.x) * SHARED_CELLS_Y + bitcast<u32>(ly.x)) * SHARED_CELLS_Z + bitcast<u32>(lz.x);
+    let cell = fi * (SHARED_CELLS_X * SHARED_CELLS_Y * SHARED_CELLS_Z) + local;
+    return interpolate(cell, lx.y, ly.y, lz.y);
+}
+
 // Maps `p` by compiled function `fi` (`CompiledIfs::map`).
 fn map_point(fi: u32, p: vec3<f32>) -> vec3<f32> {
+    if SHARED_CELLS_X > 0u {
+        return map_point_shared(fi, p);
+    }
     let f = function_at(fi);
     if HAS_JULIA && f.coord_offset.w == KIND_JULIA {
         let julia = f.julia;
@@ -121,15 +175,13 @@ fn map_point(fi: u32, p: vec3<f32>) -> vec3<f32> {
     let v = ly.y;
     let w = lz.y;
     let cell = n.w + (ix * n.y + iy) * n.z + iz;
-    // a + u b + v (c + u e) + w (d + u f + v (g + u h))
-    let inner = cell_coef(cell, 3u) + u * cell_coef(cell, 5u) + v * (cell_coef(cell, 6u) + u * cell_coef(cell, 7u));
-    return cell_coef(cell, 0u) + u * cell_coef(cell, 1u) + v * (cell_coef(cell, 2u) + u * cell_coef(cell, 4u)) + w * inner;
+    return interpolate(cell, u, v, w);
 }
 
 // Coarse selection cell of `p` (`SelectionTable::cell_of`).
 fn selection_cell(p: vec3<f32>) -> u32 {
     let n = params.selection_cells.xyz;
-    if all(n == vec3<u32>(1u)) {
+    if SINGLE_SELECTION_CELL || all(n == vec3<u32>(1u)) {
         return 0u;
     }
     let q = (p - params.selection_lo.xyz) * params.selection_inv_cell.xyz;
@@ -141,11 +193,12 @@ fn selection_cell(p: vec3<f32>) -> u32 {
 
 // The function chosen by random bits `r` in coarse cell `cell` (`SelectionTable::select`).
 fn select_function(cell: u32, r: u32) -> u32 {
-    let n = params.selection_cells.w;
+    let n = select(params.selection_cells.w, FUNCTION_COUNT, FUNCTION_COUNT > 0u);
+    let first = select(cell * n, 0u, SINGLE_SELECTION_CELL);
     let r24 = r >> (32u - SELECT_BITS);
     var chosen = 0u;
     for (var k = 0u; k + 1u < n; k += 1u) {
-        chosen += select(0u, 1u, threshold_at(cell * n + k) <= r24);
+        chosen += select(0u, 1u, threshold_at(first + k) <= r24);
     }
     return chosen;
 }

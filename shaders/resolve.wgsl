@@ -25,8 +25,10 @@ struct ResolveParams {
     perspective: u32,
     // Closest mode: each pixel shows the nearest key within this radius (point size).
     point_radius_px: u32,
-    _pad1: u32,
-    _pad2: u32,
+    // Target pixel of the accumulation's pixel (0, 0): the draw's viewport origin (the view
+    // right of the viewer's side panel), so fragment positions map back to accumulation pixels.
+    origin_x: u32,
+    origin_y: u32,
 }
 
 // Pipeline constants (src/gpu/resolve.rs makes one pipeline per target format, mode and
@@ -157,8 +159,10 @@ fn shade(x: i32, y: i32, t: f32) -> f32 {
 
 @fragment
 fn resolve(in: VertexOutput) -> @location(0) vec4<f32> {
-    let x = u32(in.position.x);
-    let y = u32(in.position.y);
+    // Outside the viewport nothing is rasterized, so the subtraction does not wrap in practice;
+    // if it did, the bounds check below would catch it.
+    let x = u32(in.position.x) - params.origin_x;
+    let y = u32(in.position.y) - params.origin_y;
     var c = params.background.rgb;
     if x < params.width && y < params.height {
         let pixel = y * params.width + x;

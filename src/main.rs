@@ -83,6 +83,9 @@ struct ViewArgs {
     /// Start playing the timeline.
     #[arg(long)]
     play: bool,
+    /// Print frames per second and per-stage frame times to stderr once a second.
+    #[arg(long)]
+    log_fps: bool,
 }
 
 #[derive(Subcommand)]
@@ -385,6 +388,7 @@ fn view(args: ViewArgs) -> anyhow::Result<()> {
         screenshot: args.screenshot,
         grid_overlay: args.grid,
         play: args.play,
+        log_fps: args.log_fps,
     };
     nlifs::viewer::run(options).context("viewer")?;
     Ok(())

@@ -40,8 +40,17 @@ fn scene(name: &str, adaptive: bool) -> Scene {
 fn first_step_matches_cpu_bit_for_bit_streams() {
     let Some(ctx) = gpu() else { return };
     // Both chaos-game programs: IFS tables in uniform buffers (these scenes fit) and in
-    // storage buffers (the fallback for large IFS).
-    for (name, adaptive, storage) in [("plant2", false, false), ("twisting", true, false), ("plant2", false, true), ("twisting", true, true)] {
+    // storage buffers (the fallback for large IFS); pipelines specialized for the IFS's shape
+    // (shared grid, one selection cell) and the generic one.
+    let cases = [
+        ("plant2", false, false, false),
+        ("twisting", true, false, false),
+        ("plant2", false, true, false),
+        ("twisting", true, true, false),
+        ("plant2", false, false, true),
+        ("twisting", true, true, true),
+    ];
+    for (name, adaptive, storage, generic) in cases {
         let scene = scene(name, adaptive);
         let compiled = CompiledIfs::new(&scene.at(0.0)).unwrap();
         let bounds = chaos_game::attractor_bounds(&compiled, 1);
@@ -51,6 +60,7 @@ fn first_step_matches_cpu_bit_for_bit_streams() {
         let (seed, frame) = (9u32, 5u32);
         let mut game = GpuChaosGame::new(&ctx.device, n, 64, 48);
         game.force_storage_tables = storage;
+        game.force_generic = generic;
         game.set_ifs(&ctx.device, &ctx.queue, &compiled);
         let mut encoder = ctx.device.create_command_encoder(&Default::default());
         let args = FrameArgs { view: &view, seed, frame, steps: 1, skip_steps: 0, restart: true, clear: true };
@@ -68,7 +78,7 @@ fn first_step_matches_cpu_bit_for_bit_streams() {
             let fi = compiled.selection.select(compiled.selection.cell_of(start), rng.next_u32());
             let p = compiled.map(fi, start);
             let g = gpu_points[thread as usize];
-            let name = format!("{name} (storage tables: {storage})");
+            let name = format!("{name} (storage tables: {storage}, generic pipeline: {generic})");
             assert_eq!(g[3] as usize, fi, "{name}: thread {thread} chose function {} on the GPU, {fi} on the CPU", g[3]);
             let d = (Vec3::new(g[0], g[1], g[2]) - p).length();
             assert!(d <= tol, "{name}: thread {thread}: GPU {g:?} vs CPU {p} (distance {d} > {tol})");

@@ -42,3 +42,33 @@ fn edits_recompile_and_camera_moves_do_not() {
     assert!(!changes.scene_edited);
 }
 
+
+#[test]
+fn the_first_view_rect_frames_the_attractor_in_it_and_later_ones_keep_the_camera() {
+    use nlifs::chaos_game::attractor_sample;
+    use nlifs::viewer::grid_edit::{project, view_of};
+    let mut s = state();
+    // A narrow view (a wide panel on the left): framing for the default 16:9 window would put
+    // the plant's sides outside it.
+    let (w, h) = (200.0, 650.0);
+    let changes = s.apply([Command::SetViewRect { origin_px: [371.0, 0.0], size_px: [w, h] }]);
+    assert!(changes.camera);
+    assert_eq!((s.width_px, s.height_px, s.view_origin_px), (w, h, [371.0, 0.0]));
+    let view = view_of(&s);
+    let sample = attractor_sample(s.compiled.as_ref().unwrap(), s.live.seed);
+    let (mut lo, mut hi) = (glam::Vec2::splat(f32::MAX), glam::Vec2::splat(f32::MIN));
+    for p in &sample {
+        let q = project(&view, p.as_dvec3()).unwrap();
+        lo = lo.min(q);
+        hi = hi.max(q);
+    }
+    // `fit_points` leaves a 5% margin and fills the view along one axis.
+    assert!(lo.x >= 0.0 && lo.y >= 0.0 && hi.x <= w && hi.y <= h, "sample spans {lo}..{hi} in a {w}×{h} view");
+    assert!((hi.x - lo.x) / w > 0.8 || (hi.y - lo.y) / h > 0.8, "sample spans only {lo}..{hi} in a {w}×{h} view");
+    // A later size change (panel resized) keeps the user's camera; the same rect changes nothing.
+    let camera = s.camera;
+    let changes = s.apply([Command::SetViewRect { origin_px: [300.0, 0.0], size_px: [600.0, h] }]);
+    assert!(changes.camera);
+    assert_eq!(s.camera, camera);
+    assert_eq!(s.apply([Command::SetViewRect { origin_px: [300.0, 0.0], size_px: [600.0, h] }]), Changes::default());
+}

@@ -57,7 +57,7 @@ fn submit_frame(ctx: &GpuContext, live: &mut LiveView, target: Option<(&wgpu::Te
     let mut encoder = ctx.device.create_command_encoder(&Default::default());
     let n = live.advance(ctx, &mut encoder);
     if let Some((view, format)) = target {
-        live.draw(ctx, &mut encoder, view, format);
+        live.draw(ctx, &mut encoder, view, format, [0, 0]);
     }
     ctx.queue.submit([encoder.finish()]);
     n
@@ -65,7 +65,7 @@ fn submit_frame(ctx: &GpuContext, live: &mut LiveView, target: Option<(&wgpu::Te
 
 /// User + system CPU seconds of this process (all threads, lavapipe's workers included), from
 /// /proc (Linux; 0 elsewhere). 10 ms resolution.
-fn process_cpu_secs() -> f64 {
+pub fn process_cpu_secs() -> f64 {
     let stat = std::fs::read_to_string("/proc/self/stat").unwrap_or_default();
     let fields: Vec<&str> = stat.rsplit(')').next().unwrap_or("").split_whitespace().collect();
     let ticks = |i: usize| fields.get(i).and_then(|f| f.parse::<f64>().ok()).unwrap_or(0.0);
@@ -161,7 +161,7 @@ pub fn run(scene: &Scene, points: u32, steps: u32, frames: u32) -> Result<BenchR
     let chaos_ms = time_stage(&mut live, &|live, encoder| {
         live.advance(&ctx, encoder);
     });
-    let resolve_ms = time_stage(&mut live, &|live, encoder| live.draw(&ctx, encoder, &view, format));
+    let resolve_ms = time_stage(&mut live, &|live, encoder| live.draw(&ctx, encoder, &view, format, [0, 0]));
     let clear_ms = time_stage(&mut live, &|live, encoder| live.encode_clear(&ctx, encoder));
 
     // Convergence after an edit, in density mode on a smaller view (readbacks every frame).

@@ -9,7 +9,7 @@
 
 use wgpu::util::DeviceExt;
 
-use crate::chaos_game::{Cell, CompiledIfs, KernelFunction};
+use crate::chaos_game::{Cell, CompiledIfs, KIND_MULTILINEAR, KernelFunction};
 use crate::splat::{SplatMode, SplatView};
 
 /// Workgroups per dispatch row; rows extend the dispatch past the 65535-workgroup limit.
@@ -55,6 +55,72 @@ pub fn mode_index(mode: SplatMode) -> u32 {
         SplatMode::Average => 1,
         SplatMode::Density => 2,
     }
+}
+
+/// The structure of a compiled IFS that a chaos-game pipeline is specialized for (the shader's
+/// pipeline constants `SHARED_CELLS_*`, `FUNCTION_COUNT`, `SINGLE_SELECTION_CELL`). Known to the
+/// compiler, table reads at indices that depend only on it become scalar loads instead of
+/// per-lane gathers on a SIMD software rasterizer, and the cell search on one-cell axes vanishes
+/// (chaos game about −30% process CPU on lavapipe, docs/live-view.md). Edits that move grid
+/// points keep the shape (and the pipeline); enabling a function or changing the grid makes a
+/// new pipeline on first use.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct IfsShape {
+    /// Cells per axis when every function is a grid map on one grid: the same clamp box, bins,
+    /// cell counts and axis coordinates, the coordinate pool starting with function 0's axes
+    /// and function f's cells starting at f × cells per function. None otherwise.
+    pub shared_cells: Option<[u32; 3]>,
+    pub function_count: u32,
+    /// The selection table has one coarse cell (explicit or contractivity probabilities).
+    pub single_selection_cell: bool,
+}
+
+impl IfsShape {
+    pub fn of(ifs: &CompiledIfs) -> Self {
+        Self { shared_cells: shared_cells(ifs), function_count: ifs.selection.function_count, single_selection_cell: ifs.selection.cells == [1, 1, 1] }
+    }
+
+    /// The shader's pipeline constants for this shape.
+    fn constants(&self) -> [(&'static str, f64); 5] {
+        let [x, y, z] = self.shared_cells.unwrap_or([0; 3]);
+        [
+            ("SHARED_CELLS_X", x as f64),
+            ("SHARED_CELLS_Y", y as f64),
+            ("SHARED_CELLS_Z", z as f64),
+            ("FUNCTION_COUNT", self.function_count as f64),
+            ("SINGLE_SELECTION_CELL", self.single_selection_cell as u32 as f64),
+        ]
+    }
+}
+
+/// See [`IfsShape::shared_cells`]: the shared shader path reads function 0's record and axes
+/// for every function, so every field it reads must be equal, bit for bit.
+fn shared_cells(ifs: &CompiledIfs) -> Option<[u32; 3]> {
+    let f0 = ifs.functions.first()?;
+    let n = [f0.cells[0], f0.cells[1], f0.cells[2]];
+    let per_function = n.iter().product::<u32>();
+    let axis_offsets = [0, n[0] + 1, n[0] + n[1] + 2];
+    if f0.coord_offset[..3] != axis_offsets {
+        return None;
+    }
+    let axes = |f: &KernelFunction| -> Option<Vec<[u32; 2]>> {
+        (0..3)
+            .map(|a| ifs.coords.get(f.coord_offset[a] as usize..(f.coord_offset[a] + n[a] + 1) as usize))
+            .collect::<Option<Vec<_>>>()
+            .map(|slices| slices.concat().iter().map(|c| c.map(f32::to_bits)).collect())
+    };
+    let bits = |v: &[f32; 4]| v.map(f32::to_bits);
+    let axes0 = axes(f0)?;
+    let same = ifs.functions.iter().enumerate().all(|(i, f)| {
+        f.coord_offset[3] == KIND_MULTILINEAR
+            && f.cells[..3] == n
+            && f.cells[3] == i as u32 * per_function
+            && bits(&f.lo) == bits(&f0.lo)
+            && bits(&f.hi) == bits(&f0.hi)
+            && bits(&f.inv_bin) == bits(&f0.inv_bin)
+            && axes(f).as_ref() == Some(&axes0)
+    });
+    same.then_some(n)
 }
 
 /// What one frame of the chaos game does.
@@ -129,8 +195,12 @@ struct Program {
     pipeline_layout: wgpu::PipelineLayout,
     module: wgpu::ShaderModule,
     clear_pipeline: wgpu::ComputePipeline,
-    chaos_pipelines: Vec<((u32, bool), wgpu::ComputePipeline)>,
+    chaos_pipelines: Vec<(PipelineKey, wgpu::ComputePipeline)>,
 }
+
+/// What a chaos-game pipeline is specialized for: splat mode (shader number), Julia functions
+/// present, IFS shape.
+type PipelineKey = (u32, bool, IfsShape);
 
 impl Program {
     fn new(device: &wgpu::Device, name: &str, tables: wgpu::BufferBindingType) -> Self {
@@ -171,13 +241,13 @@ impl Program {
         Self { layout, pipeline_layout, module, clear_pipeline, chaos_pipelines: Vec::new() }
     }
 
-    /// Index of the chaos-game pipeline for splat mode `mode` (shader number) and `has_julia`.
-    fn chaos_pipeline(&mut self, device: &wgpu::Device, mode: u32, has_julia: bool) -> usize {
-        let key = (mode, has_julia);
+    /// Index of the chaos-game pipeline for `key`.
+    fn chaos_pipeline(&mut self, device: &wgpu::Device, key: PipelineKey) -> usize {
         if let Some(i) = self.chaos_pipelines.iter().position(|(k, _)| *k == key) {
             return i;
         }
-        let constants = [("SPLAT_MODE", mode as f64), ("HAS_JULIA", has_julia as u32 as f64)];
+        let (mode, has_julia, shape) = key;
+        let constants: Vec<(&str, f64)> = [("SPLAT_MODE", mode as f64), ("HAS_JULIA", has_julia as u32 as f64)].into_iter().chain(shape.constants()).collect();
         let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
             label: Some("chaos_game"),
             layout: Some(&self.pipeline_layout),
@@ -200,6 +270,11 @@ pub struct GpuChaosGame {
     has_julia: bool,
     /// Use the storage program even when the tables fit (tests compare both programs).
     pub force_storage_tables: bool,
+    /// The IFS structure the pipeline is specialized for (set by `set_ifs`).
+    shape: IfsShape,
+    /// Use the pipeline for any structure even when a specialized one applies (tests compare
+    /// both).
+    pub force_generic: bool,
     params: wgpu::Buffer,
     functions: wgpu::Buffer,
     coords: wgpu::Buffer,
@@ -233,6 +308,8 @@ impl GpuChaosGame {
             storage_program,
             uniform_tables: true,
             force_storage_tables: false,
+            shape: IfsShape::default(),
+            force_generic: false,
             has_julia: true,
             params,
             functions: table(device, "functions", functions),
@@ -263,6 +340,7 @@ impl GpuChaosGame {
         ];
         let uniform_tables = !self.force_storage_tables && tables.iter().zip(UNIFORM_CAPACITY).all(|(t, capacity)| t.len() as u64 <= capacity);
         self.has_julia = ifs.functions.iter().any(|f| f.coord_offset[3] == crate::chaos_game::KIND_JULIA);
+        self.shape = if self.force_generic { IfsShape::default() } else { IfsShape::of(ifs) };
         let mut replaced = uniform_tables != self.uniform_tables;
         self.uniform_tables = uniform_tables;
         replaced |= upload(device, queue, &mut self.functions, "functions", tables[0]);
@@ -338,7 +416,7 @@ impl GpuChaosGame {
         };
         queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
         let program = if self.uniform_tables { &mut self.uniform_program } else { &mut self.storage_program };
-        let chaos_index = program.chaos_pipeline(device, mode_index(v.mode), self.has_julia);
+        let chaos_index = program.chaos_pipeline(device, (mode_index(v.mode), self.has_julia, self.shape));
         let program = &*program;
         if self.bind_group.is_none() {
             let buffers = [&self.params, &self.functions, &self.coords, &self.cells, &self.thresholds, &self.colors, &self.points, &self.accum];
@@ -376,4 +454,36 @@ pub fn dispatch_size(threads: u64) -> (u32, u32) {
     let x = groups.min(GROUPS_PER_ROW as u64) as u32;
     let y = groups.div_ceil(GROUPS_PER_ROW as u64) as u32;
     (x, y)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::Scene;
+
+    fn shape(file: &str) -> IfsShape {
+        let path = format!("{}/scenes/{file}", env!("CARGO_MANIFEST_DIR"));
+        let scene = Scene::load(std::path::Path::new(&path)).unwrap();
+        IfsShape::of(&CompiledIfs::new(&scene.at(0.0)).unwrap())
+    }
+
+    #[test]
+    fn shapes_of_paper_scenes() {
+        // plant2: 2×4×2 grid points, 1×3×1 cells, five functions on the scene's grid.
+        assert_eq!(shape("plant2.toml"), IfsShape { shared_cells: Some([1, 3, 1]), function_count: 5, single_selection_cell: true });
+        // Julia maps have no grid.
+        assert_eq!(shape("julia.toml").shared_cells, None);
+    }
+
+    #[test]
+    fn a_function_on_another_grid_is_not_shared() {
+        let path = format!("{}/scenes/plant2.toml", env!("CARGO_MANIFEST_DIR"));
+        let scene = Scene::load(std::path::Path::new(&path)).unwrap();
+        let mut ifs = CompiledIfs::new(&scene.at(0.0)).unwrap();
+        assert!(shared_cells(&ifs).is_some());
+        // Function 1's y axis moved by one ulp: its cell search would differ.
+        let i = (ifs.functions[1].coord_offset[1] + 1) as usize;
+        ifs.coords[i][0] = f32::from_bits(ifs.coords[i][0].to_bits() + 1);
+        assert_eq!(shared_cells(&ifs), None);
+    }
 }

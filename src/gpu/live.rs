@@ -209,8 +209,10 @@ impl LiveView {
         self.splats_since_clear = 0;
     }
 
-    /// Records the resolve onto `target` (the window's surface or an offscreen texture).
-    pub fn draw(&mut self, ctx: &GpuContext, encoder: &mut wgpu::CommandEncoder, target: &wgpu::TextureView, format: wgpu::TextureFormat) {
+    /// Records the resolve onto `target` (the window's surface or an offscreen texture) with
+    /// the accumulation's pixel (0, 0) at `origin_px` of the target; the target must hold the
+    /// rectangle of [`Self::size`] there.
+    pub fn draw(&mut self, ctx: &GpuContext, encoder: &mut wgpu::CommandEncoder, target: &wgpu::TextureView, format: wgpu::TextureFormat, origin_px: [u32; 2]) {
         let s = &self.settings;
         let (near, far) = self.view.map_or((0.0, 1.0), |v| (v.near, v.far));
         let (pixel_size, perspective) = match &self.camera {
@@ -220,7 +222,7 @@ impl LiveView {
             Some(c) => (2.0 * c.half_height_at_target() / self.game.height as f32, false),
             None => (1.0, false),
         };
-        let args = ResolveArgs { mode: s.mode, background: s.background, depth_cue: s.depth_cue, shading: s.shading, point_radius_px: s.point_radius_px, near, far, pixel_size, perspective };
+        let args = ResolveArgs { mode: s.mode, background: s.background, depth_cue: s.depth_cue, shading: s.shading, point_radius_px: s.point_radius_px, near, far, pixel_size, perspective, origin_px };
         self.resolve.draw(&ctx.device, &ctx.queue, encoder, &self.game, &args, target, format);
     }
 

@@ -67,7 +67,7 @@ pub fn snapshot(ctx: &GpuContext, live: &mut LiveView) -> Result<image::RgbImage
         mapped_at_creation: false,
     });
     let mut encoder = ctx.device.create_command_encoder(&Default::default());
-    live.draw(ctx, &mut encoder, &view, format);
+    live.draw(ctx, &mut encoder, &view, format, [0, 0]);
     encoder.copy_texture_to_buffer(
         wgpu::TexelCopyTextureInfo { texture: &texture, mip_level: 0, origin: wgpu::Origin3d::ZERO, aspect: wgpu::TextureAspect::All },
         wgpu::TexelCopyBufferInfo {

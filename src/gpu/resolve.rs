@@ -28,7 +28,8 @@ pub struct ResolveParams {
     pub pixel_size: f32,
     pub perspective: u32,
     pub point_radius_px: u32,
-    pub _pad: [u32; 2],
+    pub origin_x: u32,
+    pub origin_y: u32,
 }
 const _: () = assert!(std::mem::size_of::<ResolveParams>() == 64);
 
@@ -47,6 +48,9 @@ pub struct ResolveArgs {
     /// View-space size of a pixel at unit distance (perspective) or absolute (parallel).
     pub pixel_size: f32,
     pub perspective: bool,
+    /// Where in the target the accumulation's pixel (0, 0) goes: the draw covers the rectangle
+    /// of the accumulation's size there (the rest of the target is cleared to black).
+    pub origin_px: [u32; 2],
 }
 
 /// What a draw pipeline is specialized for: target format, splat mode, shading on.
@@ -146,7 +150,8 @@ impl GpuResolve {
             pixel_size: args.pixel_size,
             perspective: args.perspective as u32,
             point_radius_px: if args.mode == SplatMode::Closest { args.point_radius_px.min(8) } else { 0 },
-            _pad: [0; 2],
+            origin_x: args.origin_px[0],
+            origin_y: args.origin_px[1],
         };
         queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
         let pipeline_index = self.draw_pipeline(device, (format, args.mode, params.shading > 0.0));
@@ -206,6 +211,7 @@ impl GpuResolve {
             occlusion_query_set: None,
             multiview_mask: None,
         });
+        pass.set_viewport(args.origin_px[0] as f32, args.origin_px[1] as f32, game.width as f32, game.height as f32, 0.0, 1.0);
         pass.set_pipeline(pipeline);
         pass.set_bind_group(0, draw, &[]);
         pass.draw(0..3, 0..1);

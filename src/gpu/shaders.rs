@@ -8,15 +8,17 @@ pub const IFS_TABLES_UNIFORM: &str = include_str!("../../shaders/ifs_tables_unif
 pub const IFS_TABLES_STORAGE: &str = include_str!("../../shaders/ifs_tables_storage.wgsl");
 pub const CHAOS_GAME: &str = include_str!("../../shaders/chaos_game.wgsl");
 pub const RESOLVE: &str = include_str!("../../shaders/resolve.wgsl");
+pub const COMPOSITE: &str = include_str!("../../shaders/composite.wgsl");
 
 /// The programs: a name and the files it is made of, in order.
 /// The chaos game comes in two programs that differ only in where the compiled IFS tables
 /// live: uniform buffers (fast on lavapipe, fixed capacities) or storage buffers (any size).
-pub const PROGRAMS: [(&str, &[(&str, &str)]); 4] = [
+pub const PROGRAMS: [(&str, &[(&str, &str)]); 5] = [
     ("rng", &[("rng.wgsl", RNG)]),
     ("chaos_game", &[("rng.wgsl", RNG), ("ifs_tables_uniform.wgsl", IFS_TABLES_UNIFORM), ("chaos_game.wgsl", CHAOS_GAME)]),
     ("chaos_game_storage", &[("rng.wgsl", RNG), ("ifs_tables_storage.wgsl", IFS_TABLES_STORAGE), ("chaos_game.wgsl", CHAOS_GAME)]),
     ("resolve", &[("resolve.wgsl", RESOLVE)]),
+    ("composite", &[("composite.wgsl", COMPOSITE)]),
 ];
 
 /// The source text of program `name` (one of [`PROGRAMS`]); empty for an unknown name.

@@ -23,7 +23,8 @@ pub fn view_of(state: &ViewerState) -> SplatView {
     SplatView::new(&state.camera, w, h, state.bounds, state.live.mode, state.live.depth_cue, state.live.background)
 }
 
-/// Window pixel position of a world point; None behind the camera.
+/// View pixel position of a world point (add `state.view_origin_px` for the window); None
+/// behind the camera.
 pub fn project(view: &SplatView, p: DVec3) -> Option<Vec2> {
     let q = view.pixel_from_world * p.as_vec3().extend(1.0);
     (q.w > 1e-6 && q.is_finite()).then(|| Vec2::new(q.x, q.y) / q.w)
@@ -76,14 +77,14 @@ pub fn dragged_position(state: &ViewerState, start: DVec3, delta_px: [f32; 2]) -
     if dim == 2 { DVec3::new(moved.x, moved.y, start.z) } else { moved }
 }
 
-/// The editable grid point nearest to `cursor_px` within [`PICK_RADIUS_PX`]: among the selected
+/// The editable grid point nearest to `cursor_px` (window pixels) within [`PICK_RADIUS_PX`]: among the selected
 /// function's points, or every enabled grid function's when none is selected.
 pub fn pick_point(state: &ViewerState, cursor_px: [f32; 2]) -> Option<(usize, usize)> {
     if !state.edit.grid_overlay {
         return None;
     }
     let view = view_of(state);
-    let cursor = Vec2::from(cursor_px);
+    let cursor = Vec2::from(cursor_px) - Vec2::from(state.view_origin_px);
     let candidates: Vec<usize> = match state.edit.selected_function {
         Some(f) => vec![f],
         None => (0..state.scene.functions.len()).filter(|&f| state.scene.functions[f].enabled).collect(),
@@ -132,8 +133,13 @@ fn srgb(color: [f32; 3], alpha: f32) -> egui::Color32 {
     egui::Color32::from_rgba_unmultiplied(c[0], c[1], c[2], (alpha * 255.0).round() as u8)
 }
 
-fn draw_grid(painter: &egui::Painter, view: &SplatView, grid: &FunctionGrid, ppp: f32, stroke: egui::Stroke) {
-    let projected: Vec<Option<egui::Pos2>> = grid.points.iter().map(|p| project(view, *p).map(|q| egui::pos2(q.x / ppp, q.y / ppp))).collect();
+/// egui position (points) of view pixel `q` in a view whose corner is at window pixel `origin`.
+fn to_egui(q: Vec2, origin: [f32; 2], ppp: f32) -> egui::Pos2 {
+    egui::pos2((q.x + origin[0]) / ppp, (q.y + origin[1]) / ppp)
+}
+
+fn draw_grid(painter: &egui::Painter, view: &SplatView, origin: [f32; 2], grid: &FunctionGrid, ppp: f32, stroke: egui::Stroke) {
+    let projected: Vec<Option<egui::Pos2>> = grid.points.iter().map(|p| project(view, *p).map(|q| to_egui(q, origin, ppp))).collect();
     for (a, b) in grid_lines(grid.dims) {
         if let (Some(Some(pa)), Some(Some(pb))) = (projected.get(a), projected.get(b)) {
             painter.line_segment([*pa, *pb], stroke);
@@ -151,7 +157,7 @@ pub fn grid_overlay_ui(ctx: &egui::Context, clip: egui::Rect, state: &ViewerStat
     let painter = ctx.layer_painter(egui::LayerId::new(egui::Order::Background, egui::Id::unique("nlifs_grid_overlay"))).with_clip_rect(clip);
     let view = view_of(state);
     let initial = FunctionGrid { dims: state.scene.domain.dims(), points: state.scene.domain.points(), editable: false };
-    draw_grid(&painter, &view, &initial, ppp, egui::Stroke::new(1.0, egui::Color32::from_white_alpha(110)));
+    draw_grid(&painter, &view, state.view_origin_px, &initial, ppp, egui::Stroke::new(1.0, egui::Color32::from_white_alpha(110)));
     let selected = state.edit.selected_function;
     if let (Some(f), Some(tl)) = (selected, &state.scene.timeline) {
         let t = state.playhead_secs();
@@ -161,7 +167,7 @@ pub fn grid_overlay_ui(ctx: &egui::Context, clip: egui::Rect, state: &ViewerStat
         let after = with_f.iter().find(|k| k.t_secs > t + tol);
         for key in [before, after].into_iter().flatten() {
             if let Some(grid) = key.function(f).and_then(|d| definition_grid(&state.scene, d)) {
-                draw_grid(&painter, &view, &grid, ppp, egui::Stroke::new(1.0, srgb(state.scene.functions[f].color, 0.25)));
+                draw_grid(&painter, &view, state.view_origin_px, &grid, ppp, egui::Stroke::new(1.0, srgb(state.scene.functions[f].color, 0.25)));
             }
         }
     }
@@ -171,11 +177,11 @@ pub fn grid_overlay_ui(ctx: &egui::Context, clip: egui::Rect, state: &ViewerStat
         }
         let Some(grid) = state.function_grid(f) else { continue };
         let (width, alpha) = if selected == Some(f) { (2.0, 1.0) } else if selected.is_some() { (1.0, 0.35) } else { (1.2, 0.8) };
-        draw_grid(&painter, &view, &grid, ppp, egui::Stroke::new(width, srgb(spec.color, alpha)));
+        draw_grid(&painter, &view, state.view_origin_px, &grid, ppp, egui::Stroke::new(width, srgb(spec.color, alpha)));
         if selected == Some(f) || (selected.is_none() && grid.editable) {
             for (i, p) in grid.points.iter().enumerate() {
                 let Some(q) = project(&view, *p) else { continue };
-                let pos = egui::pos2(q.x / ppp, q.y / ppp);
+                let pos = to_egui(q, state.view_origin_px, ppp);
                 let is_selected = selected == Some(f) && state.edit.selected_point == Some(i);
                 if is_selected {
                     painter.circle_stroke(pos, 6.0, egui::Stroke::new(2.0, egui::Color32::WHITE));

@@ -19,6 +19,7 @@ pub mod jobs;
 pub mod state;
 pub mod timeline_ui;
 pub mod ui;
+pub mod ui_layer;
 
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -60,6 +61,9 @@ pub struct ViewerOptions {
     pub grid_overlay: bool,
     /// Start playing the timeline (if the scene has one).
     pub play: bool,
+    /// Print frames per second, process CPU per frame and the wall time of each stage of a
+    /// frame to stderr, once a second (measuring the viewer under Xvfb).
+    pub log_fps: bool,
 }
 
 /// Opens the viewer and runs until the window closes.
@@ -86,6 +90,9 @@ pub fn run(options: ViewerOptions) -> Result<(), ViewerError> {
         started: Instant::now(),
         frames: 0,
         splats: 0,
+        smoothed: state::FrameStats::default(),
+        stats_shown: None,
+        log: FrameLog::default(),
         fatal: None,
     };
     event_loop.run_app(&mut app)?;
@@ -113,6 +120,7 @@ struct Gfx {
     egui_ctx: egui::Context,
     egui_state: egui_winit::State,
     egui_renderer: egui_wgpu::Renderer,
+    ui_layer: ui_layer::UiLayer,
 }
 
 struct App {
@@ -132,7 +140,62 @@ struct App {
     started: Instant,
     frames: u64,
     splats: u64,
+    /// Frame statistics smoothed every frame; the panel shows a copy refreshed twice a second
+    /// (text that changes every frame would re-render the cached egui layer every frame).
+    smoothed: state::FrameStats,
+    stats_shown: Option<Instant>,
+    log: FrameLog,
     fatal: Option<ViewerError>,
+}
+
+/// Wall time of a frame's stages summed over the frames since the last report, and the process
+/// CPU time since then (`--log-fps`).
+/// The GPU work is asynchronous: on lavapipe its cost shows in `acquire` (waiting for a free
+/// swapchain image, i.e. for the frame before last) and in `present`.
+#[derive(Default)]
+struct FrameLog {
+    since: Option<Instant>,
+    /// Process CPU seconds (all threads, lavapipe's included) at `since`.
+    cpu_since: f64,
+    frames: u32,
+    splats: u64,
+    /// egui's `run_ui` (the panels' layout), plus applying commands.
+    ui_secs: f64,
+    acquire_secs: f64,
+    /// Chaos game, resolve and egui recording: encoding, tessellation, buffer uploads, submit.
+    record_secs: f64,
+    present_secs: f64,
+    /// Cached egui layer renders so far (total) and at the last report.
+    ui_renders: u64,
+    ui_renders_reported: u64,
+}
+
+impl FrameLog {
+    /// Prints and restarts once a second has passed.
+    fn report(&mut self, now: Instant) {
+        let Some(since) = self.since else {
+            *self = Self { since: Some(now), cpu_since: crate::gpu::bench::process_cpu_secs(), ..Self::default() };
+            return;
+        };
+        let secs = (now - since).as_secs_f64();
+        if secs < 1.0 {
+            return;
+        }
+        let n = self.frames.max(1) as f64;
+        let cpu = crate::gpu::bench::process_cpu_secs();
+        eprintln!(
+            "viewer: {:.1} fps, {:.1} M points/s, process CPU {:.0} ms/frame, egui re-rendered in {} frames; wall ms/frame: ui {:.1}, acquire {:.1}, record+submit {:.1}, present {:.1}",
+            self.frames as f64 / secs,
+            self.splats as f64 / secs / 1e6,
+            1e3 * (cpu - self.cpu_since) / n,
+            self.ui_renders - self.ui_renders_reported,
+            1e3 * self.ui_secs / n,
+            1e3 * self.acquire_secs / n,
+            1e3 * self.record_secs / n,
+            1e3 * self.present_secs / n,
+        );
+        *self = Self { since: Some(now), cpu_since: cpu, ui_renders: self.ui_renders, ui_renders_reported: self.ui_renders, ..Self::default() };
+    }
 }
 
 impl Gfx {
@@ -177,7 +240,8 @@ impl Gfx {
             Some(ctx.device.limits().max_texture_dimension_2d as usize),
         );
         let egui_renderer = egui_wgpu::Renderer::new(&ctx.device, config.format, egui_wgpu::RendererOptions::default());
-        Ok(Self { window, surface, config, ctx, live, egui_ctx, egui_state, egui_renderer })
+        let ui_layer = ui_layer::UiLayer::new(&ctx.device, config.format);
+        Ok(Self { window, surface, config, ctx, live, egui_ctx, egui_state, egui_renderer, ui_layer })
     }
 
     fn reconfigure(&mut self) {
@@ -195,8 +259,6 @@ impl ApplicationHandler for App {
         match Gfx::new(event_loop, &self.state) {
             Ok(gfx) => {
                 gfx.window.request_redraw();
-                self.state.width_px = gfx.config.width.max(1) as f32;
-                self.state.height_px = gfx.config.height.max(1) as f32;
                 self.gfx = Some(gfx);
             }
             Err(e) => {
@@ -219,10 +281,9 @@ impl ApplicationHandler for App {
                 gfx.config.width = size.width;
                 gfx.config.height = size.height;
                 if size.width > 0 && size.height > 0 {
+                    // The view (and the live view's size) follows in the next frame, from the
+                    // rectangle the panels leave.
                     gfx.reconfigure();
-                    gfx.live.resize(&gfx.ctx, size.width, size.height);
-                    self.state.width_px = size.width as f32;
-                    self.state.height_px = size.height as f32;
                     gfx.window.request_redraw();
                 }
             }
@@ -323,6 +384,7 @@ impl ApplicationHandler for App {
 impl App {
     fn frame(&mut self) {
         let Some(gfx) = &mut self.gfx else { return };
+        let t_start = Instant::now();
         if self.last_poll.elapsed() >= Duration::from_millis(500) {
             self.last_poll = Instant::now();
             if let Some(c) = self.state.poll_file() {
@@ -345,8 +407,15 @@ impl App {
         let commands = &mut self.commands;
         let job_view = &self.jobs.view;
         let ppp = gfx.egui_ctx.pixels_per_point();
-        let full_output = gfx.egui_ctx.run_ui(raw_input, |ui| ui::panels_ui(ui, state, job_view, ppp, commands));
+        let mut view_rect = egui::Rect::NOTHING;
+        let full_output = gfx.egui_ctx.run_ui(raw_input, |ui| view_rect = ui::panels_ui(ui, state, job_view, ppp, commands));
         gfx.egui_state.handle_platform_output(&gfx.window, full_output.platform_output);
+        // The attractor is drawn and framed in what the panels leave, in whole window pixels.
+        let (origin_px, size_px) = view_pixels(view_rect, ppp, [gfx.config.width, gfx.config.height]);
+        let minimized = gfx.config.width == 0 || gfx.config.height == 0;
+        if !minimized {
+            self.commands.push(Command::SetViewRect { origin_px: origin_px.map(|v| v as f32), size_px: size_px.map(|v| v as f32) });
+        }
 
         let mut changes = self.state.apply(self.commands.drain(..));
         for request in changes.jobs.drain(..) {
@@ -364,6 +433,9 @@ impl App {
             self.state.error = Some(e.to_string());
             self.state.live = gfx.live.settings;
         }
+        if !minimized && gfx.live.size() != (size_px[0], size_px[1]) {
+            gfx.live.resize(&gfx.ctx, size_px[0], size_px[1]);
+        }
         gfx.live.set_camera(&self.state.camera);
         if let Some(path) = changes.screenshot {
             self.state.message = Some(match crate::gpu::render::snapshot(&gfx.ctx, &mut gfx.live) {
@@ -376,6 +448,7 @@ impl App {
         }
 
         // Textures must be applied every frame even when nothing is drawn.
+        let textures_changed = !full_output.textures_delta.set.is_empty() || !full_output.textures_delta.free.is_empty();
         for (id, deltas) in &full_output.textures_delta.set {
             for delta in deltas {
                 gfx.egui_renderer.update_texture(&gfx.ctx.device, &gfx.ctx.queue, *id, delta);
@@ -390,6 +463,7 @@ impl App {
             free(gfx);
             return;
         }
+        let t_ui = Instant::now();
         let frame = match gfx.surface.get_current_texture() {
             wgpu::CurrentSurfaceTexture::Success(t) => Some((t, false)),
             wgpu::CurrentSurfaceTexture::Suboptimal(t) => Some((t, true)),
@@ -414,49 +488,73 @@ impl App {
             gfx.window.request_redraw();
             return;
         };
+        let t_acquired = Instant::now();
         let view = frame.texture.create_view(&Default::default());
         let mut encoder = gfx.ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("frame") });
         let splats = gfx.live.advance(&gfx.ctx, &mut encoder);
-        gfx.live.draw(&gfx.ctx, &mut encoder, &view, gfx.config.format);
+        gfx.live.draw(&gfx.ctx, &mut encoder, &view, gfx.config.format, origin_px);
 
-        let paint_jobs = gfx.egui_ctx.tessellate(full_output.shapes, full_output.pixels_per_point);
-        let screen = egui_wgpu::ScreenDescriptor { size_in_pixels: [gfx.config.width, gfx.config.height], pixels_per_point: full_output.pixels_per_point };
-        let extra = gfx.egui_renderer.update_buffers(&gfx.ctx.device, &gfx.ctx.queue, &mut encoder, &paint_jobs, &screen);
-        {
-            let pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some("egui"),
-                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                    view: &view,
-                    depth_slice: None,
-                    resolve_target: None,
-                    ops: wgpu::Operations { load: wgpu::LoadOp::Load, store: wgpu::StoreOp::Store },
-                })],
-                depth_stencil_attachment: None,
-                timestamp_writes: None,
-                occlusion_query_set: None,
-                multiview_mask: None,
-            });
-            gfx.egui_renderer.render(&mut pass.forget_lifetime(), &paint_jobs, &screen);
-        }
+        let extra = gfx.ui_layer.update(
+            &gfx.ctx.device,
+            &gfx.ctx.queue,
+            &mut encoder,
+            &mut gfx.egui_renderer,
+            &gfx.egui_ctx,
+            full_output.shapes,
+            full_output.pixels_per_point,
+            textures_changed,
+            [gfx.config.width, gfx.config.height],
+        );
+        gfx.ui_layer.composite(&mut encoder, &view);
         gfx.ctx.queue.submit(extra.into_iter().chain([encoder.finish()]));
+        let t_submitted = Instant::now();
         gfx.ctx.queue.present(frame);
         free(gfx);
         if suboptimal {
             gfx.reconfigure();
         }
+        if self.options.log_fps {
+            let log = &mut self.log;
+            log.frames += 1;
+            log.ui_renders = gfx.ui_layer.renders;
+            log.splats += splats;
+            log.ui_secs += (t_ui - t_start).as_secs_f64();
+            log.acquire_secs += (t_acquired - t_ui).as_secs_f64();
+            log.record_secs += (t_submitted - t_acquired).as_secs_f64();
+            log.present_secs += t_submitted.elapsed().as_secs_f64();
+            log.report(Instant::now());
+        }
 
         let now = Instant::now();
         if let Some(last) = self.last_frame {
             let dt = (now - last).as_secs_f64();
-            let s = &mut self.state.stats;
+            let s = &mut self.smoothed;
             // Exponential smoothing over ~20 frames.
             let a = if s.frames == 0 { 1.0 } else { 0.05 };
             s.frame_secs += a * (dt - s.frame_secs);
             s.points_per_sec += a * (splats as f64 / dt.max(1e-6) - s.points_per_sec);
             s.frames += 1;
+            if self.stats_shown.is_none_or(|t| now - t >= Duration::from_millis(500)) {
+                self.state.stats = self.smoothed;
+                self.stats_shown = Some(now);
+            }
         }
         self.last_frame = Some(now);
         self.frames += 1;
         self.splats += splats;
     }
+}
+
+/// The window pixels (origin, size) of `rect` (egui points at `ppp` pixels per point) inside a
+/// window of `window_px`; at least one pixel wide and tall.
+fn view_pixels(rect: egui::Rect, ppp: f32, window_px: [u32; 2]) -> ([u32; 2], [u32; 2]) {
+    let [w, h] = window_px.map(|v| v.max(1));
+    if !rect.is_positive() || !rect.is_finite() {
+        return ([0, 0], [w, h]);
+    }
+    let x0 = ((rect.min.x * ppp).round().max(0.0) as u32).min(w - 1);
+    let y0 = ((rect.min.y * ppp).round().max(0.0) as u32).min(h - 1);
+    let x1 = ((rect.max.x * ppp).round().max(0.0) as u32).clamp(x0 + 1, w);
+    let y1 = ((rect.max.y * ppp).round().max(0.0) as u32).clamp(y0 + 1, h);
+    ([x0, y0], [x1 - x0, y1 - y0])
 }

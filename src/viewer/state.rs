@@ -48,6 +48,9 @@ pub enum Command {
     Zoom { steps: f32 },
     FrameAttractor,
     SaveScreenshot(PathBuf),
+    /// The part of the window the panels leave to the view (window pixels): the attractor is
+    /// drawn and framed there. The first report re-frames the camera for its aspect.
+    SetViewRect { origin_px: [f32; 2], size_px: [f32; 2] },
 
     // Grid display and editing.
     SetGridOverlay(bool),
@@ -195,9 +198,6 @@ pub struct FrameStats {
     pub frames: u64,
 }
 
-/// Aspect ratio assumed when framing (the viewer's default window, 1280×720).
-const VIEW_ASPECT: f32 = 16.0 / 9.0;
-
 #[derive(Clone, Debug)]
 pub struct ViewerState {
     /// The last scene that loaded; a bad file leaves it in place.
@@ -217,9 +217,14 @@ pub struct ViewerState {
     pub t_secs: f64,
     pub stats: FrameStats,
     pub screenshot_text: String,
-    /// The view's size in window pixels.
+    /// The view's size in window pixels: the part of the window right of the side panel and
+    /// above the timeline panel (1280×720, the default window, until the viewer reports it).
     pub width_px: f32,
     pub height_px: f32,
+    /// The view's top left corner in window pixels.
+    pub view_origin_px: [f32; 2],
+    /// The viewer reported the view rectangle (`Command::SetViewRect`) at least once.
+    pub view_rect_known: bool,
     pub edit: EditState,
     pub history: History,
     pub playback: Playback,
@@ -251,6 +256,8 @@ impl ViewerState {
             screenshot_text: "nlifs-screenshot.png".into(),
             width_px: 1280.0,
             height_px: 720.0,
+            view_origin_px: [0.0, 0.0],
+            view_rect_known: false,
             edit: EditState { grid_overlay: false, selected_function: None, selected_point: None, axis_lock: None, gesture: None, save_text: String::new() },
             history: History::default(),
             playback: Playback { playing: false, speed: 1.0, follow_camera: false },
@@ -271,7 +278,12 @@ impl ViewerState {
     /// scene leaves target and distance open (the same framing as `nlifs render`).
     fn framed_camera(&self) -> OrbitCamera {
         let sample = self.compiled.as_ref().map(|c| chaos_game::attractor_sample(c, self.live.seed)).unwrap_or_default();
-        crate::render::frame_camera(&self.scene, self.t_secs, self.bounds, &sample, VIEW_ASPECT)
+        crate::render::frame_camera(&self.scene, self.t_secs, self.bounds, &sample, self.view_aspect())
+    }
+
+    /// Width over height of the view.
+    pub fn view_aspect(&self) -> f32 {
+        self.width_px.max(1.0) / self.height_px.max(1.0)
     }
 
     /// The built-in default scene.
@@ -405,11 +417,23 @@ impl ViewerState {
                         self.camera.target = OrbitCamera::framing(self.bounds, dim).target;
                         self.camera.distance = self.camera.framing_distance(self.bounds);
                     } else {
-                        self.camera.fit_points(&sample, VIEW_ASPECT);
+                        self.camera.fit_points(&sample, self.view_aspect());
                     }
                     changes.camera = true;
                 }
                 Command::SaveScreenshot(path) => changes.screenshot = Some(path),
+                Command::SetViewRect { origin_px, size_px } => {
+                    let size_px = size_px.map(|v| v.max(1.0));
+                    self.view_origin_px = origin_px;
+                    if size_px != [self.width_px, self.height_px] || !self.view_rect_known {
+                        [self.width_px, self.height_px] = size_px;
+                        changes.camera = true;
+                        if !self.view_rect_known {
+                            self.camera = self.framed_camera();
+                        }
+                    }
+                    self.view_rect_known = true;
+                }
                 Command::SetPathText(text) => self.path_text = text,
                 Command::SetScreenshotText(text) => self.screenshot_text = text,
 

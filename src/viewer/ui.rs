@@ -12,8 +12,9 @@ use super::jobs::JobView;
 use super::state::{Command, ViewerState};
 
 /// The left side panel with every section, the timeline at the bottom, the grid overlay, the
-/// ray-traced image window and the keyboard shortcuts. `ppp`: pixels per egui point.
-pub fn panels_ui(ui: &mut egui::Ui, state: &ViewerState, jobs: &JobView, ppp: f32, commands: &mut Vec<Command>) {
+/// ray-traced image window and the keyboard shortcuts. `ppp`: pixels per egui point. Returns
+/// the rectangle (egui points) the panels leave to the view.
+pub fn panels_ui(ui: &mut egui::Ui, state: &ViewerState, jobs: &JobView, ppp: f32, commands: &mut Vec<Command>) -> egui::Rect {
     shortcuts_ui(ui.ctx(), state, commands);
     if state.scene.timeline.is_some() {
         egui::Panel::bottom("nlifs_timeline").resizable(false).show(ui, |ui| super::timeline_ui::timeline_ui(ui, state, commands));
@@ -35,8 +36,10 @@ pub fn panels_ui(ui: &mut egui::Ui, state: &ViewerState, jobs: &JobView, ppp: f3
         });
     });
     // The overlay is clipped to what the panels leave of the view.
-    super::grid_edit::grid_overlay_ui(ui.ctx(), ui.available_rect_before_wrap(), state, ppp);
+    let view_rect = ui.available_rect_before_wrap();
+    super::grid_edit::grid_overlay_ui(ui.ctx(), view_rect, state, ppp);
     super::edit_ui::raytrace_window_ui(ui.ctx(), jobs, commands);
+    view_rect
 }
 
 /// Undo (Ctrl+Z), redo (Ctrl+Shift+Z, Ctrl+Y), save (Ctrl+S), axis lock (X, Y, Z, Esc-free),
