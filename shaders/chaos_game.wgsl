@@ -234,7 +234,7 @@ fn splat(p: vec3<f32>, fi: u32) {
     }
     let near = params.domain_lo.w;
     let far = params.domain_hi.w;
-    let t = clamp((q.z - near) / (far - near), 0.0, 1.0);
+    let t = clamp((q.z - near) * (1.0 / (far - near)), 0.0, 1.0);
     let pixel = u32(y) * params.width + u32(x);
     if SPLAT_MODE == MODE_CLOSEST {
         let slot = pixel;

@@ -99,7 +99,9 @@ impl SplatView {
         if !(x >= 0.0 && y >= 0.0 && x < self.width as f32 && y < self.height as f32) {
             return None;
         }
-        let t = ((q.z - self.near) / (self.far - self.near)).clamp(0.0, 1.0);
+        // A multiplication by the inverse range (one division per view, not per point); the
+        // vector splats (`x86.rs`) and the GPU do the same.
+        let t = ((q.z - self.near) * (1.0 / (self.far - self.near))).clamp(0.0, 1.0);
         // SAFETY: 0 ≤ x < width and 0 ≤ y < height (checked above, NaN fails the check), so
         // the truncations are exact; the same values as `as usize`.
         #[allow(unsafe_code)]

@@ -72,8 +72,8 @@ unsafe fn project8(view: &SplatView, x: __m256, y: __m256, z: __m256) -> (__m256
         );
         let inside = _mm256_castps_si256(inside);
         let pixel = _mm256_add_epi32(_mm256_mullo_epi32(_mm256_cvttps_epi32(py), _mm256_set1_epi32(view.width as i32)), _mm256_cvttps_epi32(px));
-        // t = ((q.z − near) / (far − near)).clamp(0, 1): below 0 → 0, above 1 → 1, NaN kept.
-        let t = _mm256_div_ps(_mm256_sub_ps(qz, _mm256_set1_ps(view.near)), _mm256_set1_ps(view.far - view.near));
+        // t = ((q.z − near) · (1 / (far − near))).clamp(0, 1): below 0 → 0, above 1 → 1, NaN kept.
+        let t = _mm256_mul_ps(_mm256_sub_ps(qz, _mm256_set1_ps(view.near)), _mm256_set1_ps(1.0 / (view.far - view.near)));
         let t = _mm256_blendv_ps(t, zero, _mm256_cmp_ps::<_CMP_LT_OQ>(t, zero));
         let t = _mm256_blendv_ps(t, _mm256_set1_ps(1.0), _mm256_cmp_ps::<_CMP_GT_OQ>(t, _mm256_set1_ps(1.0)));
         (inside, _mm256_and_si256(pixel, inside), t)
@@ -158,7 +158,7 @@ unsafe fn splat_closest_avx512(view: &SplatView, closest: &mut [u32], batch: Poi
                 & _mm512_cmp_ps_mask::<_CMP_LT_OQ>(px, _mm512_set1_ps(view.width as f32))
                 & _mm512_cmp_ps_mask::<_CMP_LT_OQ>(py, _mm512_set1_ps(view.height as f32));
             let pixel = _mm512_add_epi32(_mm512_mullo_epi32(_mm512_cvttps_epi32(py), _mm512_set1_epi32(view.width as i32)), _mm512_cvttps_epi32(px));
-            let t = _mm512_div_ps(_mm512_sub_ps(qz, _mm512_set1_ps(view.near)), _mm512_set1_ps(view.far - view.near));
+            let t = _mm512_mul_ps(_mm512_sub_ps(qz, _mm512_set1_ps(view.near)), _mm512_set1_ps(1.0 / (view.far - view.near)));
             let t = _mm512_mask_blend_ps(_mm512_cmp_ps_mask::<_CMP_LT_OQ>(t, zero), t, zero);
             let t = _mm512_mask_blend_ps(_mm512_cmp_ps_mask::<_CMP_GT_OQ>(t, _mm512_set1_ps(1.0)), t, _mm512_set1_ps(1.0));
             let d = _mm512_max_ps(_mm512_mul_ps(t, _mm512_set1_ps(scale)), zero);
