@@ -9,6 +9,7 @@
 use glam::Vec3;
 use nlifs::chaos_game::{self, CompiledIfs, run_chunk, ORBITS_PER_CHUNK};
 use nlifs::gpu::chaos_game::{FrameArgs, GpuChaosGame};
+use nlifs::gpu::cpu_route::ChaosBackend;
 use nlifs::gpu::live::{LiveSettings, LiveView};
 use nlifs::gpu::render::read_buffer;
 use nlifs::gpu::GpuContext;
@@ -117,7 +118,7 @@ fn densities_match_cpu() {
 
         // GPU: 2^18 independent orbits of k steps after the transient.
         let gpu_orbits = 1u32 << 18;
-        let settings = LiveSettings { point_count: gpu_orbits, steps_per_frame: k, seed: 3, mode: SplatMode::Density, depth_cue: 0.0, background: bg, shading: 0.0, point_radius_px: 0, max_splats: u64::MAX, settle_steps: 0 };
+        let settings = LiveSettings { point_count: gpu_orbits, steps_per_frame: k, seed: 3, mode: SplatMode::Density, depth_cue: 0.0, background: bg, shading: 0.0, point_radius_px: 0, max_splats: u64::MAX, settle_steps: 0, chaos_backend: ChaosBackend::Gpu };
         let mut live = LiveView::new(&ctx, settings, width, height).unwrap();
         live.set_ifs(&ctx, &compiled, bounds, true);
         live.set_camera(&camera);
