@@ -91,8 +91,14 @@ pub fn frame_chunks(points: u64, workers: usize) -> (u32, usize) {
 /// The CPU route's state: the IFS, the per-worker framebuffers (accumulating since the last
 /// clear) and the merged copy that is uploaded. Nothing is allocated per frame except when the
 /// view's size or mode changes.
+///
+/// The frame runs on a pool of its own (as many threads as rayon's global pool), so that a
+/// background job on the global pool (ray trace, recording) shares the cores with the viewer's
+/// frames through the OS scheduler instead of queueing them behind its own tasks.
 #[derive(Default)]
 pub struct CpuChaosGame {
+    pool: Option<rayon::ThreadPool>,
+    pool_tried: bool,
     ifs: Option<Arc<CompiledIfs>>,
     workers: Vec<Framebuffer>,
     /// Closest mode: the merged keys; other modes: the merged sums (4 u32 per pixel).
@@ -133,45 +139,59 @@ impl CpuChaosGame {
         }
         let workers = self.workers.len();
         let (chunks, steps) = frame_chunks(points, workers);
-        self.workers.par_iter_mut().enumerate().for_each(|(w, fb)| {
-            for c in (w as u32..chunks).step_by(workers) {
-                run_chunk(ifs, seed, frame, c, steps, fb);
-            }
-        });
-        self.merge();
+        if !self.pool_tried {
+            // Without a pool of its own (threads refused) frames run on the global pool.
+            self.pool = rayon::ThreadPoolBuilder::new().num_threads(workers).thread_name(|i| format!("nlifs-cpu-route-{i}")).build().ok();
+            self.pool_tried = true;
+        }
+        let framebuffers = &mut self.workers;
+        let merged = &mut self.merged;
+        let mut run = || {
+            framebuffers.par_iter_mut().enumerate().for_each(|(w, fb)| {
+                for c in (w as u32..chunks).step_by(workers) {
+                    run_chunk(ifs, seed, frame, c, steps, fb);
+                }
+            });
+            merge(framebuffers, merged);
+        };
+        match &self.pool {
+            Some(pool) => pool.install(run),
+            None => run(),
+        }
         chunks as u64 * ORBITS_PER_CHUNK as u64 * steps as u64
     }
+}
 
-    /// Merges the workers' framebuffers into `merged` (min of keys, saturating sums), in
-    /// parallel over blocks of pixels.
-    fn merge(&mut self) {
-        const BLOCK: usize = 1 << 14;
-        let workers = &self.workers;
-        if workers[0].view.mode == SplatMode::Closest {
-            self.merged.par_chunks_mut(BLOCK).enumerate().for_each(|(b, out)| {
-                let range = b * BLOCK..b * BLOCK + out.len();
-                out.copy_from_slice(&workers[0].closest[range.clone()]);
-                for fb in &workers[1..] {
-                    for (o, &k) in out.iter_mut().zip(&fb.closest[range.clone()]) {
-                        *o = (*o).min(k);
-                    }
+/// Merges the workers' framebuffers into `merged` (min of keys, saturating sums), in parallel
+/// over blocks of pixels.
+fn merge(workers: &[Framebuffer], merged: &mut [u32]) {
+    const BLOCK: usize = 1 << 14;
+    if workers[0].view.mode == SplatMode::Closest {
+        merged.par_chunks_mut(BLOCK).enumerate().for_each(|(b, out)| {
+            let range = b * BLOCK..b * BLOCK + out.len();
+            out.copy_from_slice(&workers[0].closest[range.clone()]);
+            for fb in &workers[1..] {
+                for (o, &k) in out.iter_mut().zip(&fb.closest[range.clone()]) {
+                    *o = (*o).min(k);
                 }
-            });
-        } else {
-            self.merged.par_chunks_mut(4 * BLOCK).enumerate().for_each(|(b, out)| {
-                let start = b * BLOCK;
-                let pixels = out.len() / 4;
-                out.copy_from_slice(bytemuck::cast_slice(&workers[0].accum[start..start + pixels]));
-                for fb in &workers[1..] {
-                    let sums: &[u32] = bytemuck::cast_slice(&fb.accum[start..start + pixels]);
-                    for (o, &s) in out.iter_mut().zip(sums) {
-                        *o = o.saturating_add(s);
-                    }
+            }
+        });
+    } else {
+        merged.par_chunks_mut(4 * BLOCK).enumerate().for_each(|(b, out)| {
+            let start = b * BLOCK;
+            let pixels = out.len() / 4;
+            out.copy_from_slice(bytemuck::cast_slice(&workers[0].accum[start..start + pixels]));
+            for fb in &workers[1..] {
+                let sums: &[u32] = bytemuck::cast_slice(&fb.accum[start..start + pixels]);
+                for (o, &s) in out.iter_mut().zip(sums) {
+                    *o = o.saturating_add(s);
                 }
-            });
-        }
+            }
+        });
     }
+}
 
+impl CpuChaosGame {
     /// The merged accumulation in the GPU layout (what [`Self::upload`] writes).
     pub fn merged(&self) -> &[u32] {
         &self.merged
