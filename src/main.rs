@@ -86,6 +86,10 @@ struct ViewArgs {
     /// Print frames per second and per-stage frame times to stderr once a second.
     #[arg(long)]
     log_fps: bool,
+    /// Where the chaos game runs: gpu (compute shader), cpu (CPU kernel; the GPU only
+    /// resolves), or auto (default: cpu on a software adapter such as lavapipe, gpu otherwise).
+    #[arg(long, value_parser = ["auto", "gpu", "cpu"])]
+    chaos_backend: Option<String>,
 }
 
 #[derive(Subcommand)]
@@ -371,6 +375,7 @@ fn record(args: RecordArgs) -> anyhow::Result<()> {
 }
 
 fn view(args: ViewArgs) -> anyhow::Result<()> {
+    use nlifs::gpu::cpu_route::ChaosBackend;
     let mut live = nlifs::gpu::live::LiveSettings::default();
     if let Some(n) = args.points {
         live.point_count = n;
@@ -381,6 +386,7 @@ fn view(args: ViewArgs) -> anyhow::Result<()> {
     if let Some(s) = args.shading {
         live.shading = s.clamp(0.0, 1.0);
     }
+    live.chaos_backend = args.chaos_backend.as_deref().and_then(ChaosBackend::parse).unwrap_or(ChaosBackend::Auto);
     let options = nlifs::viewer::ViewerOptions {
         scene: args.scene,
         live,

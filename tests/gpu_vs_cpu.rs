@@ -5,12 +5,15 @@
 //!    with the CPU's for every thread (f32 maps agree to rounding).
 //! 2. Normalized densities of the same scene on a coarse grid agree within a tolerance derived
 //!    from the sample counts.
+//! 3. The live view's CPU route uploads exactly the CPU framebuffer of its frames and shows the
+//!    same densities as the GPU route.
 
 use glam::Vec3;
 use nlifs::chaos_game::{self, CompiledIfs, run_chunk, ORBITS_PER_CHUNK};
 use nlifs::gpu::chaos_game::{FrameArgs, GpuChaosGame};
+use nlifs::gpu::cpu_route::{ChaosBackend, frame_chunks};
 use nlifs::gpu::live::{LiveSettings, LiveView};
-use nlifs::gpu::render::read_buffer;
+use nlifs::gpu::render::{read_buffer, snapshot};
 use nlifs::gpu::GpuContext;
 use nlifs::rng::Pcg32;
 use nlifs::scene::Scene;
@@ -117,7 +120,7 @@ fn densities_match_cpu() {
 
         // GPU: 2^18 independent orbits of k steps after the transient.
         let gpu_orbits = 1u32 << 18;
-        let settings = LiveSettings { point_count: gpu_orbits, steps_per_frame: k, seed: 3, mode: SplatMode::Density, depth_cue: 0.0, background: bg, shading: 0.0, point_radius_px: 0, max_splats: u64::MAX, settle_steps: 0 };
+        let settings = LiveSettings { point_count: gpu_orbits, steps_per_frame: k, seed: 3, mode: SplatMode::Density, depth_cue: 0.0, background: bg, shading: 0.0, point_radius_px: 0, max_splats: u64::MAX, settle_steps: 0, chaos_backend: ChaosBackend::Gpu };
         let mut live = LiveView::new(&ctx, settings, width, height).unwrap();
         live.set_ifs(&ctx, &compiled, bounds, true);
         live.set_camera(&camera);
@@ -152,4 +155,114 @@ fn densities_match_cpu() {
         }
         eprintln!("{name}: {n_gpu} GPU / {n_cpu} CPU samples, worst |Δ|/tolerance {worst:.3}");
     }
+}
+
+/// Settings of the CPU-route tests.
+fn route_settings(backend: ChaosBackend, mode: SplatMode, points: u32, steps: u32) -> LiveSettings {
+    LiveSettings { point_count: points, steps_per_frame: steps, seed: 5, mode, depth_cue: 0.5, background: [0.02, 0.03, 0.05], max_splats: u64::MAX, chaos_backend: backend, ..LiveSettings::default() }
+}
+
+/// The CPU route (`chaos_backend = cpu`) uploads exactly the framebuffer that the CPU chaos
+/// game of its frames gives (frame f: chunks 0..n of stream (seed, f), recomputed here into one
+/// framebuffer), frame after frame (progressive), in the GPU's accumulation layout; the
+/// resolved image shows the attractor. Closest and density modes.
+#[test]
+fn cpu_route_uploads_the_cpu_framebuffer() {
+    let Some(ctx) = gpu() else { return };
+    let (width, height) = (160u32, 120u32);
+    let scene = scene("plant2", false);
+    let compiled = CompiledIfs::new(&scene.at(0.0)).unwrap();
+    let bounds = chaos_game::attractor_bounds(&compiled, 1);
+    let camera = scene.camera_for(bounds);
+    for mode in [SplatMode::Closest, SplatMode::Density] {
+        let settings = route_settings(ChaosBackend::Cpu, mode, 1 << 14, 3);
+        let mut live = LiveView::new(&ctx, settings, width, height).unwrap();
+        assert!(live.route().cpu);
+        live.set_ifs(&ctx, &compiled, bounds, true);
+        live.set_camera(&camera);
+        let view = SplatView::new(&camera, width, height, bounds, mode, settings.depth_cue, settings.background);
+        let mut expected = Framebuffer::new(view, compiled.colors.clone());
+        let points = settings.point_count as u64 * settings.steps_per_frame as u64;
+        let (chunks, steps) = frame_chunks(points, rayon::current_num_threads());
+        let mut previous_covered = 0;
+        for frame in 0..3u32 {
+            let mut encoder = ctx.device.create_command_encoder(&Default::default());
+            let splats = live.advance(&ctx, &mut encoder);
+            ctx.queue.submit([encoder.finish()]);
+            assert_eq!(splats, chunks as u64 * ORBITS_PER_CHUNK as u64 * steps as u64);
+            assert!(splats >= points);
+            for c in 0..chunks {
+                run_chunk(&compiled, settings.seed, frame, c, steps, &mut expected);
+            }
+            let uploaded = live.read_accum(&ctx).unwrap();
+            let cpu = live.cpu_accum().expect("the CPU route runs");
+            let words: &[u32] = match mode {
+                SplatMode::Closest => &expected.closest,
+                _ => bytemuck::cast_slice(&expected.accum),
+            };
+            assert_eq!(cpu, words, "{mode:?} frame {frame}: merged CPU accumulation");
+            assert_eq!(&uploaded[..words.len()], words, "{mode:?} frame {frame}: uploaded accumulation");
+            // Progressive: every frame adds points.
+            let covered = expected.covered_pixels();
+            assert!(covered >= previous_covered);
+            previous_covered = covered;
+        }
+        assert!(previous_covered > 500, "{mode:?}: {previous_covered} pixels covered");
+        // The resolve (unchanged) draws the uploaded accumulation: as many pixels differ from
+        // the background as the CPU framebuffer covers, give or take rounding to 8 bits.
+        let image = snapshot(&ctx, &mut live).unwrap();
+        let bg = expected.resolve().get_pixel(0, 0).0;
+        let drawn = image.pixels().filter(|p| (0..3).any(|k| (p.0[k] as i32 - bg[k] as i32).abs() > 2)).count();
+        assert!(drawn as f64 > 0.9 * previous_covered as f64, "{mode:?}: {drawn} pixels drawn, {previous_covered} covered");
+        assert!(drawn <= previous_covered, "{mode:?}: {drawn} pixels drawn, {previous_covered} covered");
+    }
+}
+
+/// The CPU route and the GPU route show the same attractor: normalized densities on a coarse
+/// grid agree within a tolerance derived from the sample counts (as `densities_match_cpu`,
+/// with the CPU route's longer orbits in its bound).
+#[test]
+fn cpu_route_densities_match_gpu_route() {
+    let Some(ctx) = gpu() else { return };
+    let (width, height) = (160u32, 120u32);
+    let cells = (16usize, 12usize);
+    let scene = scene("plant2", false);
+    let compiled = CompiledIfs::new(&scene.at(0.0)).unwrap();
+    let bounds = chaos_game::attractor_bounds(&compiled, 1);
+    let camera = scene.camera_for(bounds);
+    let counts = |backend: ChaosBackend, frames: u32| -> (Vec<u32>, u64) {
+        let settings = LiveSettings { depth_cue: 0.0, ..route_settings(backend, SplatMode::Density, 1 << 18, 4) };
+        let mut live = LiveView::new(&ctx, settings, width, height).unwrap();
+        assert_eq!(live.route().cpu, backend == ChaosBackend::Cpu);
+        live.set_ifs(&ctx, &compiled, bounds, true);
+        live.set_camera(&camera);
+        for _ in 0..frames {
+            let mut encoder = ctx.device.create_command_encoder(&Default::default());
+            live.advance(&ctx, &mut encoder);
+            ctx.queue.submit([encoder.finish()]);
+        }
+        let accum = live.read_accum(&ctx).unwrap();
+        (accum.chunks(4).take((width * height) as usize).map(|a| a[3]).collect(), live.splats_since_clear)
+    };
+    // GPU route: one frame, 2^18 orbits of 4 steps after the transient.
+    let (gpu_counts, _) = counts(ChaosBackend::Gpu, 1);
+    // CPU route: 8 frames of 2^20 points in orbits of `cpu_k` steps.
+    let (cpu_counts, splats) = counts(ChaosBackend::Cpu, 8);
+    let (_, cpu_k) = frame_chunks(1 << 20, rayon::current_num_threads());
+    let gpu_k = 4.0;
+    let n_gpu: f64 = gpu_counts.iter().map(|&c| c as f64).sum();
+    let n_cpu: f64 = cpu_counts.iter().map(|&c| c as f64).sum();
+    assert!(n_cpu > 0.5 * splats as f64, "{n_cpu} of {splats} CPU-route points on screen");
+    let pg = coarse(&gpu_counts, width as usize, height as usize, cells);
+    let pc = coarse(&cpu_counts, width as usize, height as usize, cells);
+    let mut worst: f64 = 0.0;
+    for i in 0..pg.len() {
+        let p = 0.5 * (pg[i] + pc[i]);
+        let sigma = (p * (1.0 - p) * (gpu_k / n_gpu + cpu_k as f64 / n_cpu)).sqrt();
+        let tol = 6.0 * sigma + 1e-12;
+        let d = (pg[i] - pc[i]).abs();
+        worst = worst.max(d / tol);
+        assert!(d <= tol, "cell {i}: GPU route {} vs CPU route {} (|Δ| {d:.3e} > tolerance {tol:.3e})", pg[i], pc[i]);
+    }
+    eprintln!("CPU route vs GPU route: {n_gpu} / {n_cpu} samples, worst |Δ|/tolerance {worst:.3}");
 }

@@ -1,6 +1,7 @@
 //! The viewer in a real window under a virtual X display: it starts on a paper scene, a
 //! screenshot of the screen (`import -window root`) shows the attractor (not a blank or
-//! uniform image), and a mouse drag (xdotool) on the view changes what is shown.
+//! uniform image), and a mouse drag (xdotool) on the view changes what is shown. Twice: with the
+//! default chaos-game backend (auto, the CPU route on lavapipe) and with the GPU route forced.
 //!
 //! Needs Xvfb, xdotool, imagemagick and a GPU adapter (lavapipe will do); without them it skips
 //! loudly, unless NLIFS_REQUIRE_GPU=1, in which case it fails. Failing screenshots are kept in
@@ -73,8 +74,19 @@ fn changed_fraction(a: &image::RgbImage, b: &image::RgbImage) -> f64 {
     changed as f64 / total.max(1) as f64
 }
 
+/// The viewer's default chaos-game backend (auto: the CPU route on lavapipe).
 #[test]
 fn viewer_shows_the_attractor_and_drag_orbits() {
+    check_viewer(None);
+}
+
+/// The same with the chaos game forced onto the GPU (its route on every adapter).
+#[test]
+fn viewer_on_the_gpu_route_shows_the_attractor_and_drag_orbits() {
+    check_viewer(Some("gpu"));
+}
+
+fn check_viewer(chaos_backend: Option<&str>) {
     for tool in ["Xvfb", "xdotool", "import"] {
         if !have(tool) {
             return skip(&format!("{tool} is not installed"));
@@ -83,7 +95,8 @@ fn viewer_shows_the_attractor_and_drag_orbits() {
     if !nlifs::gpu::adapter_available() {
         return skip("no GPU adapter");
     }
-    let dir: PathBuf = std::env::temp_dir().join(format!("nlifs-window-smoke-{}", std::process::id()));
+    let label = chaos_backend.unwrap_or("auto");
+    let dir: PathBuf = std::env::temp_dir().join(format!("nlifs-window-smoke-{}-{label}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let runtime = dir.join("xdg");
     std::fs::create_dir_all(&runtime).unwrap();
@@ -110,6 +123,7 @@ fn viewer_shows_the_attractor_and_drag_orbits() {
         .arg("view")
         .arg(&scene)
         .args(["--points", "262144", "--exit-after-secs", "240"])
+        .args(chaos_backend.map(|b| ["--chaos-backend", b]).into_iter().flatten())
         .env("DISPLAY", &display)
         .env("XDG_RUNTIME_DIR", &runtime)
         .env("LIBGL_ALWAYS_SOFTWARE", "1")
@@ -161,7 +175,7 @@ fn viewer_shows_the_attractor_and_drag_orbits() {
         }
     };
     assert!(changed > 0.01, "a drag changed only {changed:.4} of the view; see {} and {}", first.display(), second.display());
-    eprintln!("window smoke: attractor covers {covered:.3} of the view, a drag changed {changed:.3}");
+    eprintln!("window smoke ({label}): attractor covers {covered:.3} of the view, a drag changed {changed:.3}");
     drop(viewer);
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -4,6 +4,11 @@
 //! changes frames accumulate until `max_splats` points were splatted (then the image is
 //! converged and the GPU idles). The same object serves the viewer, `render --backend gpu` and
 //! the benchmarks.
+//!
+//! With [`LiveSettings::chaos_backend`] taking the CPU route (`cpu`, or `auto` on a software
+//! adapter) the chaos game runs on the CPU instead ([`super::cpu_route`]): fresh orbits every
+//! frame into CPU framebuffers, uploaded into the same accumulation buffer and resolved by the
+//! same pass; clears happen at the same moments.
 
 use glam::DVec3;
 
@@ -12,6 +17,7 @@ use crate::chaos_game::CompiledIfs;
 use crate::splat::{SplatMode, SplatView};
 
 use super::chaos_game::{FrameArgs, GpuChaosGame};
+use super::cpu_route::{ChaosBackend, ChaosRoute, CpuChaosGame};
 use super::resolve::{GpuResolve, ResolveArgs};
 use super::{GpuContext, GpuError};
 
@@ -35,6 +41,9 @@ pub struct LiveSettings {
     pub max_splats: u64,
     /// Steps not splatted after a scene edit while the kept points settle on the new attractor.
     pub settle_steps: u32,
+    /// Where the chaos game runs (the GPU only resolves on the CPU route). The default, `gpu`,
+    /// serves `render --backend gpu` and the benchmarks; the viewer starts on `auto`.
+    pub chaos_backend: ChaosBackend,
 }
 
 impl Default for LiveSettings {
@@ -50,6 +59,7 @@ impl Default for LiveSettings {
             point_radius_px: 0,
             max_splats: 1 << 30,
             settle_steps: 8,
+            chaos_backend: ChaosBackend::Gpu,
         }
     }
 }
@@ -70,6 +80,9 @@ pub struct LiveView {
     pub frames_since_clear: u32,
     pub splats_since_clear: u64,
     has_ifs: bool,
+    route: ChaosRoute,
+    device_type: wgpu::DeviceType,
+    cpu: CpuChaosGame,
 }
 
 fn same_view(a: &SplatView, b: &SplatView) -> bool {
@@ -88,7 +101,11 @@ impl LiveView {
         if settings.point_count as u64 > ctx.max_points() {
             return Err(GpuError::TooManyPoints(settings.point_count as u64));
         }
+        let device_type = ctx.adapter.get_info().device_type;
         Ok(Self {
+            route: settings.chaos_backend.route(device_type),
+            device_type,
+            cpu: CpuChaosGame::default(),
             game: GpuChaosGame::new(&ctx.device, settings.point_count, width.max(1), height.max(1)),
             resolve: GpuResolve::new(&ctx.device),
             settings,
@@ -115,6 +132,7 @@ impl LiveView {
     /// kept and skip `settle_steps`).
     pub fn set_ifs(&mut self, ctx: &GpuContext, ifs: &CompiledIfs, bounds: (DVec3, DVec3), restart: bool) {
         self.game.set_ifs(&ctx.device, &ctx.queue, ifs);
+        self.cpu.set_ifs(ifs);
         self.bounds = bounds;
         self.transient = ifs.transient;
         self.has_ifs = true;
@@ -152,6 +170,14 @@ impl LiveView {
             self.skip_steps = self.transient;
             self.clear = true;
         }
+        let route = settings.chaos_backend.route(self.device_type);
+        if route.cpu != self.route.cpu {
+            // The GPU points did not move while the CPU ran: restart them.
+            self.restart = true;
+            self.skip_steps = self.transient;
+            self.clear = true;
+        }
+        self.route = route;
         self.settings = settings;
         self.update_view();
         Ok(())
@@ -160,6 +186,16 @@ impl LiveView {
     pub fn resize(&mut self, ctx: &GpuContext, width: u32, height: u32) {
         self.game.resize(&ctx.device, width.max(1), height.max(1));
         self.update_view();
+    }
+
+    /// Where the chaos game runs, and why.
+    pub fn route(&self) -> ChaosRoute {
+        self.route
+    }
+
+    /// The CPU route's merged accumulation as last uploaded (GPU layout), if it runs.
+    pub fn cpu_accum(&self) -> Option<&[u32]> {
+        self.route.cpu.then(|| self.cpu.merged())
     }
 
     /// True when accumulation has stopped (nothing changed for `max_splats` splats).
@@ -173,6 +209,9 @@ impl LiveView {
         let Some(view) = self.view else { return 0 };
         if !self.has_ifs || self.converged() {
             return 0;
+        }
+        if self.route.cpu {
+            return self.advance_cpu(ctx, &view);
         }
         let steps = self.skip_steps + self.settings.steps_per_frame;
         let args = FrameArgs {
@@ -196,6 +235,24 @@ impl LiveView {
         self.restart = false;
         self.clear = false;
         self.skip_steps = 0;
+        splats
+    }
+
+    /// The CPU route's frame: splat on the CPU, upload (through the queue, ordered before the
+    /// encoder's resolve once both are submitted).
+    fn advance_cpu(&mut self, ctx: &GpuContext, view: &SplatView) -> u64 {
+        if self.clear {
+            self.cpu.clear(view);
+            self.frames_since_clear = 0;
+            self.splats_since_clear = 0;
+        }
+        let points = self.settings.point_count as u64 * self.settings.steps_per_frame as u64;
+        let splats = self.cpu.advance(self.settings.seed, self.frame, points);
+        self.cpu.upload(&ctx.queue, &self.game.accum);
+        self.frames_since_clear += 1;
+        self.splats_since_clear += splats;
+        self.frame = self.frame.wrapping_add(1);
+        self.clear = false;
         splats
     }
 

@@ -7,6 +7,7 @@
 
 pub mod bench;
 pub mod chaos_game;
+pub mod cpu_route;
 pub mod live;
 pub mod render;
 pub mod resolve;

@@ -120,6 +120,7 @@ pub fn headless_settings(settings: &RenderSettings) -> LiveSettings {
         point_radius_px: 0,
         max_splats: u64::MAX,
         settle_steps: 0,
+        chaos_backend: super::cpu_route::ChaosBackend::Gpu,
     }
 }
 

@@ -99,13 +99,14 @@ pub fn run(options: ViewerOptions) -> Result<(), ViewerError> {
     if app.options.exit_after_secs.is_some() {
         let secs = app.started.elapsed().as_secs_f64();
         eprintln!(
-            "viewer: {} frames in {:.2} s ({:.1} fps), {:.1} M points/s, {} points × {} steps per frame",
+            "viewer: {} frames in {:.2} s ({:.1} fps), {:.1} M points/s, {} points × {} steps per frame, chaos game on the {}",
             app.frames,
             secs,
             app.frames as f64 / secs,
             app.splats as f64 / secs / 1e6,
             app.state.live.point_count,
-            app.state.live.steps_per_frame
+            app.state.live.steps_per_frame,
+            app.smoothed.chaos_route.name()
         );
     }
     app.fatal.map_or(Ok(()), Err)
@@ -162,12 +163,15 @@ struct FrameLog {
     /// egui's `run_ui` (the panels' layout), plus applying commands.
     ui_secs: f64,
     acquire_secs: f64,
-    /// Chaos game, resolve and egui recording: encoding, tessellation, buffer uploads, submit.
+    /// Chaos game (on the CPU route: the whole CPU chaos game and its upload), resolve and egui
+    /// recording: encoding, tessellation, buffer uploads, submit.
     record_secs: f64,
     present_secs: f64,
     /// Cached egui layer renders so far (total) and at the last report.
     ui_renders: u64,
     ui_renders_reported: u64,
+    /// Where the chaos game ran (set every frame).
+    route: crate::gpu::cpu_route::ChaosRoute,
 }
 
 impl FrameLog {
@@ -184,9 +188,11 @@ impl FrameLog {
         let n = self.frames.max(1) as f64;
         let cpu = crate::gpu::bench::process_cpu_secs();
         eprintln!(
-            "viewer: {:.1} fps, {:.1} M points/s, process CPU {:.0} ms/frame, egui re-rendered in {} frames; wall ms/frame: ui {:.1}, acquire {:.1}, record+submit {:.1}, present {:.1}",
+            "viewer: {:.1} fps, {:.1} M points/s, chaos game on the {} ({}), process CPU {:.0} ms/frame, egui re-rendered in {} frames; wall ms/frame: ui {:.1}, acquire {:.1}, record+submit {:.1}, present {:.1}",
             self.frames as f64 / secs,
             self.splats as f64 / secs / 1e6,
+            self.route.name(),
+            self.route.reason,
             1e3 * (cpu - self.cpu_since) / n,
             self.ui_renders - self.ui_renders_reported,
             1e3 * self.ui_secs / n,
@@ -518,6 +524,7 @@ impl App {
             log.frames += 1;
             log.ui_renders = gfx.ui_layer.renders;
             log.splats += splats;
+            log.route = gfx.live.route();
             log.ui_secs += (t_ui - t_start).as_secs_f64();
             log.acquire_secs += (t_acquired - t_ui).as_secs_f64();
             log.record_secs += (t_submitted - t_acquired).as_secs_f64();
@@ -534,6 +541,7 @@ impl App {
             s.frame_secs += a * (dt - s.frame_secs);
             s.points_per_sec += a * (splats as f64 / dt.max(1e-6) - s.points_per_sec);
             s.frames += 1;
+            s.chaos_route = gfx.live.route();
             if self.stats_shown.is_none_or(|t| now - t >= Duration::from_millis(500)) {
                 self.state.stats = self.smoothed;
                 self.stats_shown = Some(now);

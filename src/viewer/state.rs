@@ -196,6 +196,8 @@ pub struct FrameStats {
     pub frame_secs: f64,
     pub points_per_sec: f64,
     pub frames: u64,
+    /// Where the chaos game runs and why (the live view's [`crate::gpu::cpu_route::ChaosRoute`]).
+    pub chaos_route: crate::gpu::cpu_route::ChaosRoute,
 }
 
 #[derive(Clone, Debug)]

@@ -6,6 +6,7 @@ use egui::{Color32, RichText};
 use crate::camera::Projection;
 use crate::model::builder::Step;
 use crate::scene::FunctionDef;
+use crate::gpu::cpu_route::ChaosBackend;
 use crate::splat::SplatMode;
 
 use super::jobs::JobView;
@@ -190,6 +191,11 @@ fn render_ui(ui: &mut egui::Ui, state: &ViewerState, commands: &mut Vec<Command>
                 ui.selectable_value(&mut live.mode, mode, mode.name());
             }
         });
+        egui::ComboBox::from_label("chaos game backend").selected_text(live.chaos_backend.name()).show_ui(ui, |ui| {
+            for backend in ChaosBackend::ALL {
+                ui.selectable_value(&mut live.chaos_backend, backend, backend.name());
+            }
+        });
         ui.add(egui::Slider::new(&mut live.depth_cue, 0.0..=1.0).text("depth cue"));
         ui.add(egui::Slider::new(&mut live.point_radius_px, 0..=3).text("point size (radius px)"));
         ui.add(egui::Slider::new(&mut live.shading, 0.0..=1.0).text("shading (closest)"));
@@ -218,6 +224,7 @@ fn statistics_ui(ui: &mut egui::Ui, state: &ViewerState) {
         let s = &state.stats;
         ui.label(format!("frame {:.1} ms ({:.0} fps)", 1e3 * s.frame_secs, 1.0 / s.frame_secs.max(1e-6)));
         ui.label(format!("{:.1} M points/s", s.points_per_sec / 1e6));
+        ui.label(format!("chaos game on the {} ({})", s.chaos_route.name(), s.chaos_route.reason));
         let Some(report) = &state.report else { return };
         egui::Grid::new("report").striped(true).show(ui, |ui| {
             ui.label("function");

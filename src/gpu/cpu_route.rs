@@ -1,0 +1,236 @@
+//! The live view's CPU route: the chaos game of [`crate::chaos_game::run_chunk`] splatted on the
+//! CPU into persistent [`Framebuffer`]s (one per rayon worker), merged and uploaded into the GPU
+//! accumulation buffer, which the unchanged resolve pass then draws. On a software adapter
+//! (lavapipe) the GPU chaos game costs the same CPU cores several times more than the CPU
+//! kernel, so the viewer's `auto` backend takes this route there (docs/live-view.md).
+//!
+//! Every frame runs fresh orbits: chunk c of frame f draws from the streams (seed, f, chain) as
+//! [`crate::chaos_game::run_parallel`] does, starts in the domain and discards the IFS's
+//! transient, so frames add new points to the accumulation (progressive) instead of advancing
+//! persistent ones. The upload has the GPU layout: closest mode one u32 key per pixel (the
+//! buffer's first width × height words, as `shaders/chaos_game.wgsl` and `resolve.wgsl` use
+//! it), average and density four u32 per pixel (r, g, b sums and the count), which is
+//! `Framebuffer::closest` and `Framebuffer::accum` as they are.
+
+use std::sync::Arc;
+
+use rayon::prelude::*;
+
+use crate::chaos_game::{CompiledIfs, ORBITS_PER_CHUNK, STEPS_PER_ORBIT, run_chunk};
+use crate::splat::{EMPTY, Framebuffer, SplatMode, SplatView};
+
+/// Which chaos game the live view runs.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum ChaosBackend {
+    /// The compute shader (points persist on the GPU).
+    #[default]
+    Gpu,
+    /// The CPU kernel; the GPU only resolves.
+    Cpu,
+    /// CPU on a software adapter (lavapipe, llvmpipe), GPU otherwise.
+    Auto,
+}
+
+impl ChaosBackend {
+    pub const ALL: [ChaosBackend; 3] = [ChaosBackend::Auto, ChaosBackend::Gpu, ChaosBackend::Cpu];
+
+    pub fn parse(s: &str) -> Option<Self> {
+        match s {
+            "gpu" => Some(Self::Gpu),
+            "cpu" => Some(Self::Cpu),
+            "auto" => Some(Self::Auto),
+            _ => None,
+        }
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Gpu => "gpu",
+            Self::Cpu => "cpu",
+            Self::Auto => "auto",
+        }
+    }
+
+    /// The route this setting takes on an adapter of `device_type`, and why.
+    pub fn route(self, device_type: wgpu::DeviceType) -> ChaosRoute {
+        let software = device_type == wgpu::DeviceType::Cpu;
+        match self {
+            Self::Gpu => ChaosRoute { cpu: false, reason: "chosen: gpu" },
+            Self::Cpu => ChaosRoute { cpu: true, reason: "chosen: cpu" },
+            Self::Auto if software => ChaosRoute { cpu: true, reason: "auto: software adapter" },
+            Self::Auto => ChaosRoute { cpu: false, reason: "auto: hardware adapter" },
+        }
+    }
+}
+
+/// Where the chaos game runs, and why (the viewer's statistics show both).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct ChaosRoute {
+    pub cpu: bool,
+    pub reason: &'static str,
+}
+
+impl ChaosRoute {
+    pub fn name(&self) -> &'static str {
+        if self.cpu { "cpu" } else { "gpu" }
+    }
+}
+
+/// How a frame of `points` splats splits over `workers`: (chunks, steps per orbit). The chunk
+/// count is a multiple of `workers` (each runs the same number) and chunks hold at most
+/// [`STEPS_PER_ORBIT`] steps per orbit; the frame splats chunks × [`ORBITS_PER_CHUNK`] × steps
+/// ≥ `points` points.
+pub fn frame_chunks(points: u64, workers: usize) -> (u32, usize) {
+    let workers = workers.max(1) as u64;
+    let per_chunk = (ORBITS_PER_CHUNK * STEPS_PER_ORBIT) as u64;
+    let chunks = points.div_ceil(per_chunk).max(1).next_multiple_of(workers);
+    let steps = points.div_ceil(chunks * ORBITS_PER_CHUNK as u64).max(1);
+    (chunks as u32, steps as usize)
+}
+
+/// The CPU route's state: the IFS, the per-worker framebuffers (accumulating since the last
+/// clear) and the merged copy that is uploaded. Nothing is allocated per frame except when the
+/// view's size or mode changes.
+///
+/// The frame runs on a pool of its own (as many threads as rayon's global pool), so that a
+/// background job on the global pool (ray trace, recording) shares the cores with the viewer's
+/// frames through the OS scheduler instead of queueing them behind its own tasks.
+#[derive(Default)]
+pub struct CpuChaosGame {
+    pool: Option<rayon::ThreadPool>,
+    pool_tried: bool,
+    ifs: Option<Arc<CompiledIfs>>,
+    workers: Vec<Framebuffer>,
+    /// Closest mode: the merged keys; other modes: the merged sums (4 u32 per pixel).
+    merged: Vec<u32>,
+}
+
+impl CpuChaosGame {
+    pub fn set_ifs(&mut self, ifs: &CompiledIfs) {
+        self.ifs = Some(Arc::new(ifs.clone()));
+    }
+
+    /// Empties the accumulation for `view` (reallocating only when its size or mode changed).
+    pub fn clear(&mut self, view: &SplatView) {
+        let colors = self.ifs.as_ref().map_or_else(Vec::new, |ifs| ifs.colors.clone());
+        let n = rayon::current_num_threads().max(1);
+        let fits = |fb: &Framebuffer| fb.view.width == view.width && fb.view.height == view.height && fb.view.mode == view.mode;
+        if self.workers.len() != n || !self.workers.iter().all(fits) {
+            self.workers = (0..n).map(|_| Framebuffer::new(*view, colors.clone())).collect();
+        } else {
+            for fb in &mut self.workers {
+                fb.view = *view;
+                fb.colors.clone_from(&colors);
+                fb.closest.fill(EMPTY);
+                fb.accum.fill([0; 4]);
+            }
+        }
+        let words = view.width as usize * view.height as usize * if view.mode == SplatMode::Closest { 1 } else { 4 };
+        self.merged.resize(words, 0);
+    }
+
+    /// Splats frame `frame` (at least `points` points) into the worker framebuffers on all rayon
+    /// threads, merges them and returns the number of points splatted. Call [`Self::clear`]
+    /// first, and again whenever the view changes.
+    pub fn advance(&mut self, seed: u32, frame: u32, points: u64) -> u64 {
+        let Some(ifs) = self.ifs.as_deref() else { return 0 };
+        if self.workers.is_empty() {
+            return 0;
+        }
+        let workers = self.workers.len();
+        let (chunks, steps) = frame_chunks(points, workers);
+        if !self.pool_tried {
+            // Without a pool of its own (threads refused) frames run on the global pool.
+            self.pool = rayon::ThreadPoolBuilder::new().num_threads(workers).thread_name(|i| format!("nlifs-cpu-route-{i}")).build().ok();
+            self.pool_tried = true;
+        }
+        let framebuffers = &mut self.workers;
+        let merged = &mut self.merged;
+        let mut run = || {
+            framebuffers.par_iter_mut().enumerate().for_each(|(w, fb)| {
+                for c in (w as u32..chunks).step_by(workers) {
+                    run_chunk(ifs, seed, frame, c, steps, fb);
+                }
+            });
+            merge(framebuffers, merged);
+        };
+        match &self.pool {
+            Some(pool) => pool.install(run),
+            None => run(),
+        }
+        chunks as u64 * ORBITS_PER_CHUNK as u64 * steps as u64
+    }
+}
+
+/// Merges the workers' framebuffers into `merged` (min of keys, saturating sums), in parallel
+/// over blocks of pixels.
+fn merge(workers: &[Framebuffer], merged: &mut [u32]) {
+    const BLOCK: usize = 1 << 14;
+    if workers[0].view.mode == SplatMode::Closest {
+        merged.par_chunks_mut(BLOCK).enumerate().for_each(|(b, out)| {
+            let range = b * BLOCK..b * BLOCK + out.len();
+            out.copy_from_slice(&workers[0].closest[range.clone()]);
+            for fb in &workers[1..] {
+                for (o, &k) in out.iter_mut().zip(&fb.closest[range.clone()]) {
+                    *o = (*o).min(k);
+                }
+            }
+        });
+    } else {
+        merged.par_chunks_mut(4 * BLOCK).enumerate().for_each(|(b, out)| {
+            let start = b * BLOCK;
+            let pixels = out.len() / 4;
+            out.copy_from_slice(bytemuck::cast_slice(&workers[0].accum[start..start + pixels]));
+            for fb in &workers[1..] {
+                let sums: &[u32] = bytemuck::cast_slice(&fb.accum[start..start + pixels]);
+                for (o, &s) in out.iter_mut().zip(sums) {
+                    *o = o.saturating_add(s);
+                }
+            }
+        });
+    }
+}
+
+impl CpuChaosGame {
+    /// The merged accumulation in the GPU layout (what [`Self::upload`] writes).
+    pub fn merged(&self) -> &[u32] {
+        &self.merged
+    }
+
+    /// Writes the merged accumulation to the start of the GPU accumulation buffer.
+    pub fn upload(&self, queue: &wgpu::Queue, accum: &wgpu::Buffer) {
+        if !self.merged.is_empty() {
+            queue.write_buffer(accum, 0, bytemuck::cast_slice(&self.merged));
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn frame_chunks_cover_the_points_evenly() {
+        for (points, workers) in [(1u64 << 20, 2usize), (1 << 12, 2), (1, 1), (3 << 20, 2), (1 << 20, 3)] {
+            let (chunks, steps) = frame_chunks(points, workers);
+            let total = chunks as u64 * ORBITS_PER_CHUNK as u64 * steps as u64;
+            assert_eq!(chunks as usize % workers, 0);
+            assert!(steps <= STEPS_PER_ORBIT);
+            assert!(total >= points, "{points} {workers}: {total}");
+            // Less than one step per orbit of slack.
+            assert!(total < points + chunks as u64 * ORBITS_PER_CHUNK as u64, "{points} {workers}: {total}");
+        }
+        assert_eq!(frame_chunks(1 << 20, 2), (4, 4096));
+    }
+
+    #[test]
+    fn auto_takes_the_cpu_on_software_adapters_only() {
+        assert!(ChaosBackend::Auto.route(wgpu::DeviceType::Cpu).cpu);
+        assert!(!ChaosBackend::Auto.route(wgpu::DeviceType::DiscreteGpu).cpu);
+        assert!(!ChaosBackend::Gpu.route(wgpu::DeviceType::Cpu).cpu);
+        assert!(ChaosBackend::Cpu.route(wgpu::DeviceType::IntegratedGpu).cpu);
+        for b in ChaosBackend::ALL {
+            assert_eq!(ChaosBackend::parse(b.name()), Some(b));
+        }
+    }
+}
