@@ -6,17 +6,7 @@
 
 @group(0) @binding(0) var layer: texture_2d<f32>;
 
-struct VertexOutput {
-    @builtin(position) position: vec4<f32>,
-}
-
-@vertex
-fn fullscreen(@builtin(vertex_index) index: u32) -> VertexOutput {
-    let uv = vec2<f32>(f32((index << 1u) & 2u), f32(index & 2u));
-    var out: VertexOutput;
-    out.position = vec4<f32>(uv * 2.0 - 1.0, 0.0, 1.0);
-    return out;
-}
+// `VertexOutput` and the vertex stage `fullscreen`: fullscreen.wgsl, prepended.
 
 @fragment
 fn composite(in: VertexOutput) -> @location(0) vec4<f32> {

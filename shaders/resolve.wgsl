@@ -75,18 +75,7 @@ fn max_count(@builtin(global_invocation_id) id: vec3<u32>, @builtin(local_invoca
     }
 }
 
-struct VertexOutput {
-    @builtin(position) position: vec4<f32>,
-}
-
-// One triangle covering the target.
-@vertex
-fn fullscreen(@builtin(vertex_index) index: u32) -> VertexOutput {
-    let uv = vec2<f32>(f32((index << 1u) & 2u), f32(index & 2u));
-    var out: VertexOutput;
-    out.position = vec4<f32>(uv * 2.0 - 1.0, 0.0, 1.0);
-    return out;
-}
+// `VertexOutput` and the vertex stage `fullscreen`: fullscreen.wgsl, prepended.
 
 fn linear_to_srgb(v: f32) -> f32 {
     let x = clamp(v, 0.0, 1.0);

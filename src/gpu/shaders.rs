@@ -1,12 +1,14 @@
 //! The one place WGSL enters the program. Every file under `shaders/` is included here, and a
 //! program is the concatenation of its files in order (`rng.wgsl` holds functions only, shared
-//! by the programs that draw random numbers). `tests/shader_validation.rs` validates every
+//! by the programs that draw random numbers; `fullscreen.wgsl` the vertex stage of the
+//! full-screen passes). `tests/shader_validation.rs` validates every
 //! program with naga and checks that every file under `shaders/` belongs to one.
 
 pub const RNG: &str = include_str!("../../shaders/rng.wgsl");
 pub const IFS_TABLES_UNIFORM: &str = include_str!("../../shaders/ifs_tables_uniform.wgsl");
 pub const IFS_TABLES_STORAGE: &str = include_str!("../../shaders/ifs_tables_storage.wgsl");
 pub const CHAOS_GAME: &str = include_str!("../../shaders/chaos_game.wgsl");
+pub const FULLSCREEN: &str = include_str!("../../shaders/fullscreen.wgsl");
 pub const RESOLVE: &str = include_str!("../../shaders/resolve.wgsl");
 pub const COMPOSITE: &str = include_str!("../../shaders/composite.wgsl");
 
@@ -17,8 +19,8 @@ pub const PROGRAMS: [(&str, &[(&str, &str)]); 5] = [
     ("rng", &[("rng.wgsl", RNG)]),
     ("chaos_game", &[("rng.wgsl", RNG), ("ifs_tables_uniform.wgsl", IFS_TABLES_UNIFORM), ("chaos_game.wgsl", CHAOS_GAME)]),
     ("chaos_game_storage", &[("rng.wgsl", RNG), ("ifs_tables_storage.wgsl", IFS_TABLES_STORAGE), ("chaos_game.wgsl", CHAOS_GAME)]),
-    ("resolve", &[("resolve.wgsl", RESOLVE)]),
-    ("composite", &[("composite.wgsl", COMPOSITE)]),
+    ("resolve", &[("fullscreen.wgsl", FULLSCREEN), ("resolve.wgsl", RESOLVE)]),
+    ("composite", &[("fullscreen.wgsl", FULLSCREEN), ("composite.wgsl", COMPOSITE)]),
 ];
 
 /// The source text of program `name` (one of [`PROGRAMS`]); empty for an unknown name.
