@@ -51,7 +51,11 @@ pub fn cpu(scene: &Scene, points: u64, width: u32, height: u32, repeats: usize) 
     let only = std::env::var("NLIFS_BENCH_ONLY").ok();
     let wanted = |name: &str| only.as_deref().is_none_or(|o| o == name);
     let mut map_only = MapOnly { acc: Vec3::ZERO };
-    let map_points_per_sec = if !wanted("map") { 0.0 } else { time(&mut |c, n| chaos_game::run_chunk(&compiled, 1, 0, c, n, &mut map_only)) };
+    let map_points_per_sec = if !wanted("map") {
+        0.0
+    } else {
+        time(&mut |c, n| chaos_game::run_chunk(&compiled, 1, 0, c, n, &mut map_only))
+    };
     std::hint::black_box(map_only.acc);
     let mut splat_points_per_sec = Vec::new();
     for mode in SplatMode::ALL {
@@ -92,12 +96,21 @@ pub fn coverage(scene: &Scene, budget: u64, reference_points: u64, size: u32) ->
             ifs
         }),
     ];
-    let compiled: Vec<CompiledIfs> = variants.iter().map(|(_, ifs)| CompiledIfs::new(ifs).expect("functions")).collect();
+    let compiled: Vec<CompiledIfs> =
+        variants.iter().map(|(_, ifs)| CompiledIfs::new(ifs).expect("functions")).collect();
     let bounds = chaos_game::attractor_bounds(&compiled[1], 1);
     let camera = scene.camera_for(bounds);
     let view = SplatView::new(&camera, size, size, bounds, SplatMode::Closest, 0.0, [0.0; 3]);
     let run = |c: &CompiledIfs, points: u64, seed: u32| -> Framebuffer {
-        chaos_game::run_parallel(c, seed, 0, points, || Framebuffer::new(view, c.colors.clone()), Framebuffer::merge, || {})
+        chaos_game::run_parallel(
+            c,
+            seed,
+            0,
+            points,
+            || Framebuffer::new(view, c.colors.clone()),
+            Framebuffer::merge,
+            || {},
+        )
     };
     let reference = run(&compiled[1], reference_points, 101).merge(run(&compiled[2], reference_points, 202));
     let lit: Vec<bool> = reference.closest.iter().map(|&k| k != crate::splat::EMPTY).collect();

@@ -29,9 +29,23 @@ impl OrbitCamera {
     pub fn framing(bounds: (DVec3, DVec3), dim: usize) -> Self {
         let centre = (0.5 * (bounds.0 + bounds.1)).as_vec3();
         let mut cam = if dim == 2 {
-            Self { target: centre, yaw_deg: 0.0, pitch_deg: 0.0, distance: 1.0, fov_y_deg: 30.0, projection: Projection::Parallel }
+            Self {
+                target: centre,
+                yaw_deg: 0.0,
+                pitch_deg: 0.0,
+                distance: 1.0,
+                fov_y_deg: 30.0,
+                projection: Projection::Parallel,
+            }
         } else {
-            Self { target: centre, yaw_deg: 35.0, pitch_deg: 20.0, distance: 1.0, fov_y_deg: 30.0, projection: Projection::Perspective }
+            Self {
+                target: centre,
+                yaw_deg: 35.0,
+                pitch_deg: 20.0,
+                distance: 1.0,
+                fov_y_deg: 30.0,
+                projection: Projection::Perspective,
+            }
         };
         cam.distance = cam.framing_distance(bounds);
         cam
@@ -74,7 +88,8 @@ impl OrbitCamera {
         let back = self.eye_direction();
         let right = Vec3::Y.cross(back).try_normalize().unwrap_or(Vec3::X);
         let up = back.cross(right);
-        let (mut r0, mut r1, mut u0, mut u1, mut d0, mut d1) = (f32::MAX, f32::MIN, f32::MAX, f32::MIN, f32::MAX, f32::MIN);
+        let (mut r0, mut r1, mut u0, mut u1, mut d0, mut d1) =
+            (f32::MAX, f32::MIN, f32::MAX, f32::MIN, f32::MAX, f32::MIN);
         for p in &pts {
             let (r, u, d) = (p.dot(right), p.dot(up), p.dot(back));
             (r0, r1, u0, u1, d0, d1) = (r0.min(r), r1.max(r), u0.min(u), u1.max(u), d0.min(d), d1.max(d));
@@ -90,7 +105,9 @@ impl OrbitCamera {
                 for p in &pts {
                     let c = *p - self.target;
                     let depth = c.dot(back);
-                    need = need.max(depth + margin * c.dot(right).abs() / tan_x).max(depth + margin * c.dot(up).abs() / tan_y);
+                    need = need
+                        .max(depth + margin * c.dot(right).abs() / tan_x)
+                        .max(depth + margin * c.dot(up).abs() / tan_y);
                 }
                 need
             }

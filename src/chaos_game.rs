@@ -214,7 +214,11 @@ impl SelectionTable {
             let mut acc = 0.0;
             for (k, &pk) in p.iter().enumerate() {
                 acc += pk;
-                let t = if k + 1 == n { 1u32 << SELECT_BITS } else { ((acc * (1u64 << SELECT_BITS) as f64).round() as u32).min(1 << SELECT_BITS) };
+                let t = if k + 1 == n {
+                    1u32 << SELECT_BITS
+                } else {
+                    ((acc * (1u64 << SELECT_BITS) as f64).round() as u32).min(1 << SELECT_BITS)
+                };
                 thresholds.push(t);
             }
         }
@@ -374,7 +378,10 @@ impl FastKernel {
                 assert!(base as usize + (cx * cy * cz) as usize <= cells.len(), "cell pool too short");
                 for (a, fa) in axes.iter().enumerate() {
                     assert_eq!(fa.last_cell + 1, f.cells[a], "cell count");
-                    assert!(fa.coord_offset as usize + fa.last_cell as usize + 2 <= coords.len(), "coordinate pool too short");
+                    assert!(
+                        fa.coord_offset as usize + fa.last_cell as usize + 2 <= coords.len(),
+                        "coordinate pool too short"
+                    );
                     let bins = fa.last_bin as usize + 1;
                     assert!(fa.bin_offset as usize + bins <= bin_cells.len(), "bin table too short");
                     let table = &bin_cells[fa.bin_offset as usize..fa.bin_offset as usize + bins];
@@ -454,9 +461,14 @@ impl LaneKernel {
             let mut bin_offset = [0u32; 3];
             for (a, axis) in f.axes.iter().enumerate() {
                 bin_offset[a] = bins.len() as u32;
-                let table = &fast.bin_cells[axis.bin_offset as usize..=axis.bin_offset as usize + axis.last_bin as usize];
+                let table =
+                    &fast.bin_cells[axis.bin_offset as usize..=axis.bin_offset as usize + axis.last_bin as usize];
                 for &cell in table {
-                    let next = if cell < axis.last_cell { fast.coords[(axis.coord_offset + cell + 1) as usize][0] } else { f32::INFINITY };
+                    let next = if cell < axis.last_cell {
+                        fast.coords[(axis.coord_offset + cell + 1) as usize][0]
+                    } else {
+                        f32::INFINITY
+                    };
                     bins.push((cell, next));
                 }
             }
@@ -589,7 +601,11 @@ fn run_lanes(lanes: &LaneKernel, orbits: Orbits, sink: &mut impl PointSink) {
     }
 }
 
-fn run_lanes_for<const MX: bool, const MY: bool, const MZ: bool>(lanes: &LaneKernel, orbits: Orbits, sink: &mut impl PointSink) {
+fn run_lanes_for<const MX: bool, const MY: bool, const MZ: bool>(
+    lanes: &LaneKernel,
+    orbits: Orbits,
+    sink: &mut impl PointSink,
+) {
     orbits.run(sink, |rng, p| {
         let fi = lanes.select(rng.next_u32());
         (lanes.map::<MX, MY, MZ>(fi, p), fi)
@@ -673,7 +689,11 @@ fn compile_map(map: &Map, dim: usize, coords: &mut Vec<[f32; 2]>, cells: &mut Ve
                     for cz in 0..counts[2] {
                         let corner = |o: [usize; 3]| -> DVec3 {
                             let [nx, ny, nz] = g.grid.dims();
-                            g.points[g.grid.index((cx + o[0]).min(nx - 1), (cy + o[1]).min(ny - 1), (cz + o[2]).min(nz - 1))]
+                            g.points[g.grid.index(
+                                (cx + o[0]).min(nx - 1),
+                                (cy + o[1]).min(ny - 1),
+                                (cz + o[2]).min(nz - 1),
+                            )]
                         };
                         let c000 = corner([0, 0, 0]);
                         let c100 = corner([1, 0, 0]);
@@ -760,7 +780,11 @@ fn selection_table(ifs: &Ifs, active: &[usize], lo: Vec3, hi: Vec3) -> Selection
     for ix in 0..cells[0] {
         for iy in 0..cells[1] {
             for iz in 0..cells[2] {
-                let t = Vec3::new((ix as f32 + 0.5) / n as f32, (iy as f32 + 0.5) / n as f32, if dim == 3 { (iz as f32 + 0.5) / n as f32 } else { 0.0 });
+                let t = Vec3::new(
+                    (ix as f32 + 0.5) / n as f32,
+                    (iy as f32 + 0.5) / n as f32,
+                    if dim == 3 { (iz as f32 + 0.5) / n as f32 } else { 0.0 },
+                );
                 let q = (lo + t * (hi - lo)).as_dvec3();
                 probs.push(pick(ifs.local_probabilities(q, d)));
             }
@@ -838,9 +862,18 @@ enum Path {
     Simd(x86::Lookup),
 }
 
-fn run_chunk_on(ifs: &CompiledIfs, path: Path, seed: u32, frame: u32, chunk: u32, steps: usize, sink: &mut impl PointSink) {
+fn run_chunk_on(
+    ifs: &CompiledIfs,
+    path: Path,
+    seed: u32,
+    frame: u32,
+    chunk: u32,
+    steps: usize,
+    sink: &mut impl PointSink,
+) {
     let first_chain = chunk.wrapping_mul(ORBITS_PER_CHUNK as u32);
-    let mut rngs: [Pcg32; ORBITS_PER_CHUNK] = std::array::from_fn(|k| Pcg32::for_stream(seed, frame, first_chain.wrapping_add(k as u32)));
+    let mut rngs: [Pcg32; ORBITS_PER_CHUNK] =
+        std::array::from_fn(|k| Pcg32::for_stream(seed, frame, first_chain.wrapping_add(k as u32)));
     let mut pos: [Vec3A; ORBITS_PER_CHUNK] = std::array::from_fn(|k| ifs.start_point(&mut rngs[k]).into());
     #[cfg(target_arch = "x86_64")]
     if let Some(simd) = &ifs.simd {
@@ -902,7 +935,8 @@ impl Orbits<'_> {
             let batch = STEPS_PER_BATCH.min(self.steps - done);
             for s in 0..batch {
                 let row = s * K..s * K + K;
-                let (xs, ys, zs, fs) = (&mut out_x[row.clone()], &mut out_y[row.clone()], &mut out_z[row.clone()], &mut out_fn[row]);
+                let (xs, ys, zs, fs) =
+                    (&mut out_x[row.clone()], &mut out_y[row.clone()], &mut out_z[row.clone()], &mut out_fn[row]);
                 for (k, (rng, p)) in self.rngs.iter_mut().zip(self.pos.iter_mut()).enumerate() {
                     let (q, fi) = step(rng, *p);
                     *p = q;
@@ -994,7 +1028,8 @@ mod tests {
             .map(|i| Function {
                 name: format!("f{i}"),
                 map: Map::Grid(GridMap::from_fn(grid.clone(), |p| {
-                    0.45 * p + DVec3::new(r.next_f32() as f64 * 0.5, r.next_f32() as f64 * 0.5, r.next_f32() as f64 * 0.5)
+                    0.45 * p
+                        + DVec3::new(r.next_f32() as f64 * 0.5, r.next_f32() as f64 * 0.5, r.next_f32() as f64 * 0.5)
                 })),
                 color: [1.0; 3],
                 weight: None,
@@ -1002,7 +1037,10 @@ mod tests {
             })
             .chain(std::iter::once(Function {
                 name: "affine".into(),
-                map: Map::Affine(AffineMap { matrix: DMat3::from_diagonal(DVec3::splat(0.3)), offset: DVec3::splat(0.1) }),
+                map: Map::Affine(AffineMap {
+                    matrix: DMat3::from_diagonal(DVec3::splat(0.3)),
+                    offset: DVec3::splat(0.1),
+                }),
                 color: [1.0; 3],
                 weight: None,
                 enabled: true,
@@ -1041,7 +1079,11 @@ mod tests {
             if k % 4 == 0 {
                 // Exactly on a face, or one ulp either side.
                 let f = faces[k / 4 % faces.len()];
-                p.y = match k % 3 { 0 => f, 1 => f.next_up(), _ => f.next_down() };
+                p.y = match k % 3 {
+                    0 => f,
+                    1 => f.next_up(),
+                    _ => f.next_down(),
+                };
             }
             for fi in 0..4 {
                 assert_eq!(c.map_fast(fi, p), c.map(fi, p), "f{fi} at {p:?}");
@@ -1057,7 +1099,11 @@ mod tests {
         // (as the paper's tapering, 1×3×1) takes the kernel specialized for y alone.
         // With 2 cells along y the IFS has 7 cells (every vector lookup applies), with 3 it has
         // 10 (the 16-entry lookups and the gathers), the warped IFS 37 (the gathers).
-        for (ifs, multi) in [(warped_ifs(), [true; 3]), (y_only_ifs(&[0.0, 0.3, 1.0]), [false, true, false]), (y_only_ifs(&[0.0, 0.3, 0.8, 1.0]), [false, true, false])] {
+        for (ifs, multi) in [
+            (warped_ifs(), [true; 3]),
+            (y_only_ifs(&[0.0, 0.3, 1.0]), [false, true, false]),
+            (y_only_ifs(&[0.0, 0.3, 0.8, 1.0]), [false, true, false]),
+        ] {
             check_lane_map(&ifs, multi);
         }
     }
@@ -1095,8 +1141,16 @@ mod tests {
             let mut p = Vec3::new(r.next_f32(), r.next_f32(), r.next_f32()) * 1.4 - 0.2;
             if k % 2 == 0 {
                 let f = faces[k / 2 % faces.len()];
-                let g = match k % 3 { 0 => f, 1 => f.next_up(), _ => f.next_down() };
-                match k % 5 { 0 => p.x = g, 1 | 2 => p.y = g, _ => p.z = g }
+                let g = match k % 3 {
+                    0 => f,
+                    1 => f.next_up(),
+                    _ => f.next_down(),
+                };
+                match k % 5 {
+                    0 => p.x = g,
+                    1 | 2 => p.y = g,
+                    _ => p.z = g,
+                }
             }
             if k % 97 == 0 {
                 p = Vec3::new(f32::NAN, 1e30, -1e30);
@@ -1123,7 +1177,13 @@ mod tests {
                 let got = simd.map_points(lookup, &fi, &p);
                 for i in 0..points.len() {
                     let want = c.map(fi[i] as usize, points[i]);
-                    assert_eq!(got[i].map(f32::to_bits), want.to_array().map(f32::to_bits), "{lookup:?} f{} at {:?}", fi[i], points[i]);
+                    assert_eq!(
+                        got[i].map(f32::to_bits),
+                        want.to_array().map(f32::to_bits),
+                        "{lookup:?} f{} at {:?}",
+                        fi[i],
+                        points[i]
+                    );
                 }
             }
             let _ = path;
@@ -1242,10 +1302,18 @@ mod tests {
         let ifs = warped_ifs();
         let c = CompiledIfs::new(&ifs).unwrap();
         let run = || {
-            run_parallel(&c, 7, 0, 600_000, CollectSink::default, |mut a, b| {
-                a.points.extend(b.points);
-                a
-            }, || {})
+            run_parallel(
+                &c,
+                7,
+                0,
+                600_000,
+                CollectSink::default,
+                |mut a, b| {
+                    a.points.extend(b.points);
+                    a
+                },
+                || {},
+            )
             .points
             .len()
         };

@@ -40,14 +40,35 @@ pub enum EditError {
 pub enum Edit {
     /// Function `function`'s definition: in the base scene (`key: None`, both sides Some) or its
     /// override in key `key` (None: the key does not override it).
-    SetFunction { function: usize, key: Option<usize>, before: Option<FunctionDef>, after: Option<FunctionDef> },
-    InsertKey { index: usize, key: Key },
-    DeleteKey { index: usize, key: Key },
-    ReplaceKey { index: usize, before: Key, after: Key },
+    SetFunction {
+        function: usize,
+        key: Option<usize>,
+        before: Option<FunctionDef>,
+        after: Option<FunctionDef>,
+    },
+    InsertKey {
+        index: usize,
+        key: Key,
+    },
+    DeleteKey {
+        index: usize,
+        key: Key,
+    },
+    ReplaceKey {
+        index: usize,
+        before: Key,
+        after: Key,
+    },
     /// The timeline's duration (period in loop mode).
-    SetDuration { before: f64, after: f64 },
+    SetDuration {
+        before: f64,
+        after: f64,
+    },
     /// Makes a scene animated (None → Some) or still again.
-    SetTimeline { before: Option<Timeline>, after: Option<Timeline> },
+    SetTimeline {
+        before: Option<Timeline>,
+        after: Option<Timeline>,
+    },
     /// Several edits as one gesture, applied in order and undone in reverse.
     Batch(Vec<Edit>),
 }
@@ -65,7 +86,12 @@ fn function_def(scene: &Scene, function: usize, key: Option<usize>) -> Result<Op
 
 impl Edit {
     /// Sets function `function`'s definition in the base scene or in key `key`.
-    pub fn set_function(scene: &Scene, function: usize, key: Option<usize>, def: FunctionDef) -> Result<Edit, EditError> {
+    pub fn set_function(
+        scene: &Scene,
+        function: usize,
+        key: Option<usize>,
+        def: FunctionDef,
+    ) -> Result<Edit, EditError> {
         let before = function_def(scene, function, key)?;
         Ok(Edit::SetFunction { function, key, before, after: Some(def) })
     }
@@ -83,9 +109,16 @@ impl Edit {
     }
 
     /// Moves grid points `(index, new position)` of grid function `function`: one drag gesture.
-    pub fn move_grid_points(scene: &Scene, function: usize, key: Option<usize>, moves: &[(usize, DVec3)]) -> Result<Edit, EditError> {
+    pub fn move_grid_points(
+        scene: &Scene,
+        function: usize,
+        key: Option<usize>,
+        moves: &[(usize, DVec3)],
+    ) -> Result<Edit, EditError> {
         let mut def = Self::start_def(scene, function, key)?;
-        let FunctionDef::Grid { points } = &mut def else { return Err(EditError::WrongKind { function, expected: "grid" }) };
+        let FunctionDef::Grid { points } = &mut def else {
+            return Err(EditError::WrongKind { function, expected: "grid" });
+        };
         for &(point, p) in moves {
             let count = points.len();
             *points.get_mut(point).ok_or(EditError::NoPoint { function, point, count })? = p;
@@ -95,9 +128,17 @@ impl Edit {
 
     /// Replaces step `step` of builder function `function` (same kind and axes: parameters only
     /// when `key` is Some; any step in the base scene if no key overrides the function).
-    pub fn set_step(scene: &Scene, function: usize, key: Option<usize>, step: usize, value: Step) -> Result<Edit, EditError> {
+    pub fn set_step(
+        scene: &Scene,
+        function: usize,
+        key: Option<usize>,
+        step: usize,
+        value: Step,
+    ) -> Result<Edit, EditError> {
         let mut def = Self::start_def(scene, function, key)?;
-        let FunctionDef::Builder { builder, .. } = &mut def else { return Err(EditError::WrongKind { function, expected: "builder" }) };
+        let FunctionDef::Builder { builder, .. } = &mut def else {
+            return Err(EditError::WrongKind { function, expected: "builder" });
+        };
         let count = builder.steps.len();
         *builder.steps.get_mut(step).ok_or(EditError::NoStep { function, step, count })? = value;
         Self::set_function(scene, function, key, def)
@@ -105,7 +146,12 @@ impl Edit {
 
     /// Sets `function`'s definition at the playhead `t_secs`: in the key there, or in a new key
     /// inserted there (making the scene animated if it was still).
-    pub fn set_function_at_playhead(scene: &Scene, t_secs: f64, function: usize, def: FunctionDef) -> Result<Edit, EditError> {
+    pub fn set_function_at_playhead(
+        scene: &Scene,
+        t_secs: f64,
+        function: usize,
+        def: FunctionDef,
+    ) -> Result<Edit, EditError> {
         scene.functions.get(function).ok_or(EditError::NoFunction(function))?;
         if let Some(k) = scene.timeline.as_ref().and_then(|tl| tl.key_index_at(t_secs)) {
             return Self::set_function(scene, function, Some(k), def);
@@ -149,7 +195,9 @@ impl Edit {
     /// The edit that undoes this one.
     pub fn inverse(&self) -> Edit {
         match self.clone() {
-            Edit::SetFunction { function, key, before, after } => Edit::SetFunction { function, key, before: after, after: before },
+            Edit::SetFunction { function, key, before, after } => {
+                Edit::SetFunction { function, key, before: after, after: before }
+            }
             Edit::InsertKey { index, key } => Edit::DeleteKey { index, key },
             Edit::DeleteKey { index, key } => Edit::InsertKey { index, key },
             Edit::ReplaceKey { index, before, after } => Edit::ReplaceKey { index, before: after, after: before },
@@ -192,7 +240,9 @@ impl Edit {
                 scene.timeline.as_mut().ok_or(EditError::NoTimeline)?.keys[index] = after;
             }
             Edit::SetTimeline { after, .. } => scene.timeline = after,
-            Edit::SetDuration { after, .. } => scene.timeline.as_mut().ok_or(EditError::NoTimeline)?.duration_secs = after,
+            Edit::SetDuration { after, .. } => {
+                scene.timeline.as_mut().ok_or(EditError::NoTimeline)?.duration_secs = after
+            }
             Edit::Batch(_) => unreachable!("handled above"),
         }
         Ok(())
@@ -208,13 +258,15 @@ impl Edit {
                 }
                 let base = &scene.functions[*function].def;
                 // Every definition of a function must keep one structure so that keys interpolate.
-                let mut others: Vec<&FunctionDef> = keys().map(|ks| ks.iter().filter_map(|k| k.function(*function)).collect()).unwrap_or_default();
+                let mut others: Vec<&FunctionDef> =
+                    keys().map(|ks| ks.iter().filter_map(|k| k.function(*function)).collect()).unwrap_or_default();
                 if key.is_some() {
                     others = vec![base];
                 }
                 if let Some(after) = after {
                     for other in others {
-                        timeline::same_structure(other, after).map_err(|message| EditError::Structure { function: *function, message })?;
+                        timeline::same_structure(other, after)
+                            .map_err(|message| EditError::Structure { function: *function, message })?;
                     }
                 } else if key.is_none() {
                     return Err(EditError::Stale);
@@ -234,7 +286,8 @@ impl Edit {
             Edit::DeleteKey { index, key } => (keys()?.get(*index) == Some(key)).then_some(()).ok_or(EditError::Stale),
             Edit::ReplaceKey { index, before, after } => {
                 let ks = keys()?;
-                if ks.get(*index) != Some(before) || (after.t_secs - before.t_secs).abs() > timeline::KEY_TIME_TOL_SECS {
+                if ks.get(*index) != Some(before) || (after.t_secs - before.t_secs).abs() > timeline::KEY_TIME_TOL_SECS
+                {
                     return Err(EditError::Stale);
                 }
                 Ok(())
@@ -330,12 +383,27 @@ steps = [{ op = "scale", by = 0.5 }, { op = "twist", degrees = 0 }]
         let mut s = scene();
         let original = s.clone();
         let mut h = History::default();
-        let drag = Edit::move_grid_points(&s, 0, None, &[(1, DVec3::new(0.1, 0.6, 0.0)), (3, DVec3::new(0.6, 0.6, 0.0))]).unwrap();
+        let drag =
+            Edit::move_grid_points(&s, 0, None, &[(1, DVec3::new(0.1, 0.6, 0.0)), (3, DVec3::new(0.6, 0.6, 0.0))])
+                .unwrap();
         h.apply(&mut s, drag).unwrap();
         let moved = s.clone();
         let FunctionDef::Grid { points } = &s.functions[0].def else { panic!() };
         assert_eq!(points[1], DVec3::new(0.1, 0.6, 0.0));
-        let twist = Edit::set_step(&s, 1, None, 1, Step::Twist { axis: Axis::Z, along: Axis::Y, degrees: 30.0, range: [0.0, 1.0], center: DVec3::new(0.5, 0.5, 0.0) }).unwrap();
+        let twist = Edit::set_step(
+            &s,
+            1,
+            None,
+            1,
+            Step::Twist {
+                axis: Axis::Z,
+                along: Axis::Y,
+                degrees: 30.0,
+                range: [0.0, 1.0],
+                center: DVec3::new(0.5, 0.5, 0.0),
+            },
+        )
+        .unwrap();
         h.apply(&mut s, twist).unwrap();
         let twisted = s.clone();
         assert!(h.undo(&mut s).unwrap());

@@ -36,7 +36,6 @@ pub fn write_atomic(path: &Path, write: impl FnOnce(&mut dyn Write) -> std::io::
 /// Encodes `img` as PNG and writes it atomically.
 pub fn save_png(path: &Path, img: &image::RgbImage) -> std::io::Result<()> {
     let mut bytes = Vec::new();
-    img.write_to(&mut std::io::Cursor::new(&mut bytes), image::ImageFormat::Png)
-        .map_err(std::io::Error::other)?;
+    img.write_to(&mut std::io::Cursor::new(&mut bytes), image::ImageFormat::Png).map_err(std::io::Error::other)?;
     write_atomic(path, |w| w.write_all(&bytes))
 }

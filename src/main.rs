@@ -271,7 +271,12 @@ fn main() -> ExitCode {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("error: {e:#}");
-            let bad_input = e.chain().any(|c| c.is::<BadInput>() || c.downcast_ref::<nlifs::raytrace::RaytraceError>().is_some_and(|e| e.is_bad_input()) || c.is::<nlifs::scene::LoadError>() || c.is::<nlifs::scene::SceneError>());
+            let bad_input = e.chain().any(|c| {
+                c.is::<BadInput>()
+                    || c.downcast_ref::<nlifs::raytrace::RaytraceError>().is_some_and(|e| e.is_bad_input())
+                    || c.is::<nlifs::scene::LoadError>()
+                    || c.is::<nlifs::scene::SceneError>()
+            });
             ExitCode::from(if bad_input { 2 } else { 1 })
         }
     }
@@ -340,7 +345,11 @@ fn record(args: RecordArgs) -> anyhow::Result<()> {
     }
     let frames = args.frames.clone().unwrap_or(0..count);
     if frames.end > count {
-        return Err(BadInput(format!("--frames {}..{} goes past the animation's {count} frames (0..{count} at {} fps)", frames.start, frames.end, args.fps)).into());
+        return Err(BadInput(format!(
+            "--frames {}..{} goes past the animation's {count} frames (0..{count} at {} fps)",
+            frames.start, frames.end, args.fps
+        ))
+        .into());
     }
     let todo = record::frames_to_render(&rec, &args.output, frames.clone(), args.resume).len();
     if args.resume && todo < frames.len() {
@@ -348,13 +357,16 @@ fn record(args: RecordArgs) -> anyhow::Result<()> {
     }
     let bar = ProgressBar::new(todo as u64);
     bar.set_style(
-        ProgressStyle::with_template("record [{bar:30}] {pos}/{len} frames, {per_sec}, {elapsed_precise} elapsed, {eta} left")
-            .unwrap_or_else(|_| ProgressStyle::default_bar())
-            .progress_chars("=> "),
+        ProgressStyle::with_template(
+            "record [{bar:30}] {pos}/{len} frames, {per_sec}, {elapsed_precise} elapsed, {eta} left",
+        )
+        .unwrap_or_else(|_| ProgressStyle::default_bar())
+        .progress_chars("=> "),
     );
     let start = std::time::Instant::now();
-    let report = record::record(&rec, &args.output, frames.clone(), args.resume, &mut |done, _| bar.set_position(done as u64))
-        .with_context(|| format!("recording {}", args.scene.display()))?;
+    let report =
+        record::record(&rec, &args.output, frames.clone(), args.resume, &mut |done, _| bar.set_position(done as u64))
+            .with_context(|| format!("recording {}", args.scene.display()))?;
     bar.finish_and_clear();
     let secs = start.elapsed().as_secs_f64();
     eprintln!(
@@ -434,11 +446,17 @@ fn info(path: &Path, json: bool, time: f64) -> anyhow::Result<()> {
         return Ok(());
     }
     let d = scene.domain.dims();
-    println!("{} ({}D, grid {}×{}×{}, probabilities: {})", scene.name, report.dimension, d[0], d[1], d[2], report.probability_mode);
+    println!(
+        "{} ({}D, grid {}×{}×{}, probabilities: {})",
+        scene.name, report.dimension, d[0], d[1], d[2], report.probability_mode
+    );
     if !scene.description.is_empty() {
         println!("{}", scene.description);
     }
-    println!("{:<12} {:<8} {:>10} {:>15} {:>10} {:>11}", "function", "kind", "grid_ratio", "lipschitz_bound", "contained", "probability");
+    println!(
+        "{:<12} {:<8} {:>10} {:>15} {:>10} {:>11}",
+        "function", "kind", "grid_ratio", "lipschitz_bound", "contained", "probability"
+    );
     for f in &report.functions {
         let contained = match f.contained {
             None => "n/a".to_string(),
@@ -521,12 +539,18 @@ fn render(args: RenderArgs) -> anyhow::Result<()> {
         Some(ctx) => {
             bar.finish_and_clear();
             eprintln!("rendering on {}", ctx.describe());
-            nlifs::gpu::render::render_gpu(ctx, &scene, args.time, &settings, None).map_err(|e| match e {
-                nlifs::gpu::GpuError::NoFunctions => anyhow::Error::new(BadInput(e.to_string())),
-                e => e.into(),
-            })?.image
+            nlifs::gpu::render::render_gpu(ctx, &scene, args.time, &settings, None)
+                .map_err(|e| match e {
+                    nlifs::gpu::GpuError::NoFunctions => anyhow::Error::new(BadInput(e.to_string())),
+                    e => e.into(),
+                })?
+                .image
         }
-        None => render_cpu(&scene, args.time, &settings, None, &|d, _| bar.set_position(d)).map_err(|e| BadInput(e.to_string()))?.image,
+        None => {
+            render_cpu(&scene, args.time, &settings, None, &|d, _| bar.set_position(d))
+                .map_err(|e| BadInput(e.to_string()))?
+                .image
+        }
     };
     bar.finish_and_clear();
     save_png(&args.output, &image).with_context(|| format!("cannot write {}", args.output.display()))?;
@@ -587,8 +611,10 @@ fn export_points(path: &Path, output: &Path, points: u64, seed: Option<u32>, tim
     }
     pts.truncate(points as usize);
     colors.truncate(points as usize);
-    write_atomic(output, |w| if glb { export::write_glb_points(w, &pts, &colors) } else { export::write_ply(w, &pts, &colors) })
-        .with_context(|| format!("cannot write {}", output.display()))?;
+    write_atomic(output, |w| {
+        if glb { export::write_glb_points(w, &pts, &colors) } else { export::write_ply(w, &pts, &colors) }
+    })
+    .with_context(|| format!("cannot write {}", output.display()))?;
     eprintln!("wrote {} ({} points)", output.display(), pts.len());
     Ok(())
 }

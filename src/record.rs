@@ -31,7 +31,9 @@ pub enum RecordError {
     FrameRange { start: u32, end: u32, count: u32 },
     #[error("cannot write frame {path}: {source}")]
     Write { path: String, source: std::io::Error },
-    #[error("ffmpeg was not found on PATH, so no video was made; the frames are in {dir} (install ffmpeg, or encode them with another tool)")]
+    #[error(
+        "ffmpeg was not found on PATH, so no video was made; the frames are in {dir} (install ffmpeg, or encode them with another tool)"
+    )]
     NoFfmpeg { dir: String },
     #[error("ffmpeg failed ({status}): {stderr}")]
     Ffmpeg { status: String, stderr: String },
@@ -56,7 +58,14 @@ pub struct RecordSettings {
 
 impl RecordSettings {
     pub fn for_scene(scene: &Scene) -> Self {
-        Self { fps: 24.0, width: scene.render.width, height: scene.render.height, points_per_frame: None, motion_blur_samples: 1, shutter: 0.5 }
+        Self {
+            fps: 24.0,
+            width: scene.render.width,
+            height: scene.render.height,
+            points_per_frame: None,
+            motion_blur_samples: 1,
+            shutter: 0.5,
+        }
     }
 }
 
@@ -133,7 +142,8 @@ impl<'a> Recorder<'a> {
         let t_frame = self.time_of(frame);
         (0..samples)
             .map(|sample| {
-                let offset = if samples == 1 { 0.0 } else { ((sample as f64 + 0.5) / samples as f64 - 0.5) * s.shutter / s.fps };
+                let offset =
+                    if samples == 1 { 0.0 } else { ((sample as f64 + 0.5) / samples as f64 - 0.5) * s.shutter / s.fps };
                 let t_secs = t_frame + offset;
                 let render = self.scene.render_at(t_secs);
                 FrameSample {
@@ -226,7 +236,13 @@ pub fn frames_to_render(rec: &Recorder, dir: &Path, frames: Range<u32>, resume: 
 
 /// Renders frames `frames` into `dir`. With `resume`, frames already complete are kept; any
 /// other file at a frame's path is replaced. `progress(done, total)` follows each written frame.
-pub fn record(rec: &Recorder, dir: &Path, frames: Range<u32>, resume: bool, progress: &mut dyn FnMut(usize, usize)) -> Result<RecordReport, RecordError> {
+pub fn record(
+    rec: &Recorder,
+    dir: &Path,
+    frames: Range<u32>,
+    resume: bool,
+    progress: &mut dyn FnMut(usize, usize),
+) -> Result<RecordReport, RecordError> {
     let count = rec.frame_count();
     if frames.start >= frames.end || frames.end > count {
         return Err(RecordError::FrameRange { start: frames.start, end: frames.end, count });
@@ -239,7 +255,8 @@ pub fn record(rec: &Recorder, dir: &Path, frames: Range<u32>, resume: bool, prog
     for (n, &k) in todo.iter().enumerate() {
         let img = rec.frame(k)?;
         let path = frame_path(dir, k);
-        crate::io::save_png(&path, &img).map_err(|source| RecordError::Write { path: path.display().to_string(), source })?;
+        crate::io::save_png(&path, &img)
+            .map_err(|source| RecordError::Write { path: path.display().to_string(), source })?;
         progress(n + 1, todo.len());
     }
     Ok(RecordReport { rendered: todo, skipped })
@@ -265,7 +282,12 @@ fn remove_stale_temp_files(dir: &Path, frames: Range<u32>) {
 
 /// Whether ffmpeg can be run.
 pub fn ffmpeg_available() -> bool {
-    std::process::Command::new("ffmpeg").arg("-version").stdout(std::process::Stdio::null()).stderr(std::process::Stdio::null()).status().is_ok()
+    std::process::Command::new("ffmpeg")
+        .arg("-version")
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .status()
+        .is_ok()
 }
 
 /// Encodes frames `frames` of `dir` into the video `out` with the system ffmpeg (H.264 in
@@ -300,7 +322,10 @@ pub fn encode_video(dir: &Path, frames: Range<u32>, fps: f64, out: &Path) -> Res
     let output = cmd.arg(&tmp).output().map_err(RecordError::FfmpegIo)?;
     if !output.status.success() {
         let _ = std::fs::remove_file(&tmp);
-        return Err(RecordError::Ffmpeg { status: output.status.to_string(), stderr: String::from_utf8_lossy(&output.stderr).trim().to_string() });
+        return Err(RecordError::Ffmpeg {
+            status: output.status.to_string(),
+            stderr: String::from_utf8_lossy(&output.stderr).trim().to_string(),
+        });
     }
     std::fs::rename(&tmp, out).map_err(|e| {
         let _ = std::fs::remove_file(&tmp);

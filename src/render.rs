@@ -39,7 +39,15 @@ pub fn render_cpu(
         let sample = chaos_game::attractor_sample(&compiled, settings.seed);
         frame_camera(scene, t_secs, bounds, &sample, settings.width as f32 / settings.height as f32)
     });
-    let view = SplatView::new(&camera, settings.width, settings.height, bounds, settings.mode, settings.depth_cue, settings.background);
+    let view = SplatView::new(
+        &camera,
+        settings.width,
+        settings.height,
+        bounds,
+        settings.mode,
+        settings.depth_cue,
+        settings.background,
+    );
     let (chunks, _, _) = chaos_game::chunking(settings.points);
     let done = std::sync::atomic::AtomicU64::new(0);
     let framebuffer = chaos_game::run_parallel(
@@ -59,7 +67,13 @@ pub fn render_cpu(
 
 /// The scene's camera; where the scene leaves both target and distance open, fitted to a sample
 /// of the attractor's points (tighter than fitting its bounding box).
-pub fn frame_camera(scene: &Scene, t_secs: f64, bounds: (DVec3, DVec3), sample: &[glam::Vec3], aspect: f32) -> OrbitCamera {
+pub fn frame_camera(
+    scene: &Scene,
+    t_secs: f64,
+    bounds: (DVec3, DVec3),
+    sample: &[glam::Vec3],
+    aspect: f32,
+) -> OrbitCamera {
     let mut camera = scene.camera_for_at(t_secs, bounds);
     let spec = scene.camera_at(t_secs);
     if spec.target.is_none() && spec.distance.is_none() {

@@ -187,9 +187,14 @@ struct RenderToml {
 #[derive(Clone, Debug, PartialEq)]
 pub enum FunctionDef {
     /// Explicit transformed points of the scene grid.
-    Grid { points: Vec<DVec3> },
+    Grid {
+        points: Vec<DVec3>,
+    },
     /// Builder steps sampled on a uniform grid of `resolution` points over the scene grid's box.
-    Builder { resolution: [usize; 3], builder: Builder },
+    Builder {
+        resolution: [usize; 3],
+        builder: Builder,
+    },
     Affine(AffineMap),
     Julia(JuliaMap),
 }
@@ -292,13 +297,7 @@ impl Scene {
         let raw: SceneToml = toml::from_str(text).map_err(|e| {
             let span = e.span().unwrap_or(0..0);
             let (line, column) = line_col(text, span.start);
-            SceneError {
-                file: file.to_string(),
-                line,
-                column,
-                field: None,
-                message: e.message().trim().to_string(),
-            }
+            SceneError { file: file.to_string(), line, column, field: None, message: e.message().trim().to_string() }
         })?;
         Checker { text, file }.scene(raw)
     }
@@ -335,7 +334,9 @@ impl Scene {
     pub fn camera_at(&self, t_secs: f64) -> CameraSpec {
         let mut out = self.camera.clone();
         let Some(tl) = &self.timeline else { return out };
-        let scalar = |get: fn(&CameraSpec) -> Option<f64>| tl.channel_at(t_secs, |k| get(&k.camera).map(|v| vec![v])).map(|v| v[0]);
+        let scalar = |get: fn(&CameraSpec) -> Option<f64>| {
+            tl.channel_at(t_secs, |k| get(&k.camera).map(|v| vec![v])).map(|v| v[0])
+        };
         // Yaw is an angle: keys are joined the short way round (see `sample_channel_wrapped`).
         if let Some(v) = tl.angle_channel_at(t_secs, Some(360.0), |k| k.camera.yaw_deg.map(|v| vec![v])) {
             out.yaw_deg = Some(v[0]);
@@ -453,7 +454,11 @@ impl Checker<'_> {
     }
 
     fn finite(&self, v: &Spanned<f64>, field: &str) -> Res<f64> {
-        if v.get_ref().is_finite() { Ok(*v.get_ref()) } else { Err(self.err(v.span(), field, "must be a finite number")) }
+        if v.get_ref().is_finite() {
+            Ok(*v.get_ref())
+        } else {
+            Err(self.err(v.span(), field, "must be a finite number"))
+        }
     }
 
     fn vec3(&self, v: &Spanned<Vec<f64>>, field: &str, dim: usize) -> Res<DVec3> {
@@ -473,7 +478,11 @@ impl Checker<'_> {
                 let hex = s.strip_prefix('#').unwrap_or(s);
                 let ok = hex.len() == 6 && hex.chars().all(|ch| ch.is_ascii_hexdigit());
                 if !ok {
-                    return Err(self.err(c.span(), field, format!("`{s}` is not a colour; write \"#rrggbb\" or [r, g, b] in 0..1")));
+                    return Err(self.err(
+                        c.span(),
+                        field,
+                        format!("`{s}` is not a colour; write \"#rrggbb\" or [r, g, b] in 0..1"),
+                    ));
                 }
                 let byte = |i: usize| u8::from_str_radix(&hex[i..i + 2], 16).unwrap_or(0) as f32 / 255.0;
                 [byte(0), byte(2), byte(4)]
@@ -489,13 +498,19 @@ impl Checker<'_> {
     }
 
     fn axis(&self, s: &Spanned<String>, field: &str) -> Res<Axis> {
-        Axis::parse(s.get_ref()).ok_or_else(|| self.err(s.span(), field, format!("`{}` is not an axis; use \"x\", \"y\" or \"z\"", s.get_ref())))
+        Axis::parse(s.get_ref()).ok_or_else(|| {
+            self.err(s.span(), field, format!("`{}` is not an axis; use \"x\", \"y\" or \"z\"", s.get_ref()))
+        })
     }
 
     fn matrix(&self, m: &Spanned<Vec<Vec<f64>>>, field: &str, dim: usize) -> Res<DMat3> {
         let rows = m.get_ref();
         if rows.len() != dim || rows.iter().any(|r| r.len() != dim) {
-            return Err(self.err(m.span(), field, format!("expected a {dim}×{dim} matrix as {dim} rows of {dim} numbers")));
+            return Err(self.err(
+                m.span(),
+                field,
+                format!("expected a {dim}×{dim} matrix as {dim} rows of {dim} numbers"),
+            ));
         }
         if rows.iter().flatten().any(|x| !x.is_finite()) {
             return Err(self.err(m.span(), field, "numbers must be finite"));
@@ -514,7 +529,10 @@ impl Checker<'_> {
             return Err(self.err(
                 raw.version.span(),
                 "version",
-                format!("this nlifs reads scene format version {FORMAT_VERSION}, the file says {}", raw.version.get_ref()),
+                format!(
+                    "this nlifs reads scene format version {FORMAT_VERSION}, the file says {}",
+                    raw.version.get_ref()
+                ),
             ));
         }
         let grid_span = raw.grid.span();
@@ -537,7 +555,11 @@ impl Checker<'_> {
         if let Some(z) = &g.z
             && z.get_ref().len() < 2
         {
-            return Err(self.err(z.span(), "grid.z", "a 3D grid needs at least 2 z coordinates (leave `z` out for 2D)"));
+            return Err(self.err(
+                z.span(),
+                "grid.z",
+                "a 3D grid needs at least 2 z coordinates (leave `z` out for 2D)",
+            ));
         }
         let dim = domain.dimension();
         if raw.functions.is_empty() {
@@ -560,14 +582,22 @@ impl Checker<'_> {
                 "contractivity" => ProbabilityMode::Contractivity,
                 "adaptive" => ProbabilityMode::Adaptive,
                 other => {
-                    return Err(self.err(s.span(), "probabilities", format!("`{other}` is not a mode; use \"explicit\", \"contractivity\" or \"adaptive\"")));
+                    return Err(self.err(
+                        s.span(),
+                        "probabilities",
+                        format!("`{other}` is not a mode; use \"explicit\", \"contractivity\" or \"adaptive\""),
+                    ));
                 }
             },
         };
         if probability_mode == ProbabilityMode::Explicit
             && let Some((i, _)) = functions.iter().enumerate().find(|(_, f)| f.probability.is_none())
         {
-            return Err(self.err(raw.functions[i].span(), &format!("function[{i}].probability"), "explicit probabilities need a `probability` on every function"));
+            return Err(self.err(
+                raw.functions[i].span(),
+                &format!("function[{i}].probability"),
+                "explicit probabilities need a `probability` on every function",
+            ));
         }
         let camera = match &raw.camera {
             None => CameraSpec::default(),
@@ -604,7 +634,11 @@ impl Checker<'_> {
             "affine" => &["matrix", "offset"],
             "julia" => &["c", "sign"],
             other => {
-                return Err(self.err(f.kind.span(), &field("kind"), format!("`{other}` is not a function kind; use \"grid\", \"builder\", \"affine\" or \"julia\"")));
+                return Err(self.err(
+                    f.kind.span(),
+                    &field("kind"),
+                    format!("`{other}` is not a function kind; use \"grid\", \"builder\", \"affine\" or \"julia\""),
+                ));
             }
         };
         let present: [(&str, Option<Range<usize>>); 8] = [
@@ -631,7 +665,17 @@ impl Checker<'_> {
                 let expected = domain.point_count();
                 if pts.get_ref().len() != expected {
                     let d = domain.dims();
-                    return Err(self.err(pts.span(), &field("points"), format!("has {} points, the {}×{}×{} grid has {expected}", pts.get_ref().len(), d[0], d[1], d[2])));
+                    return Err(self.err(
+                        pts.span(),
+                        &field("points"),
+                        format!(
+                            "has {} points, the {}×{}×{} grid has {expected}",
+                            pts.get_ref().len(),
+                            d[0],
+                            d[1],
+                            d[2]
+                        ),
+                    ));
                 }
                 let points = pts
                     .get_ref()
@@ -643,11 +687,21 @@ impl Checker<'_> {
             }
             "builder" => {
                 let resolution = match &f.resolution {
-                    None => if dim == 3 { [5, 5, 5] } else { [9, 9, 1] },
+                    None => {
+                        if dim == 3 {
+                            [5, 5, 5]
+                        } else {
+                            [9, 9, 1]
+                        }
+                    }
                     Some(r) => {
                         let v = r.get_ref();
                         if v.len() != dim || v.iter().any(|&n| !(2..=64).contains(&n)) {
-                            return Err(self.err(r.span(), &field("resolution"), format!("expected {dim} point counts, each from 2 to 64")));
+                            return Err(self.err(
+                                r.span(),
+                                &field("resolution"),
+                                format!("expected {dim} point counts, each from 2 to 64"),
+                            ));
                         }
                         [v[0] as usize, v[1] as usize, if dim == 3 { v[2] as usize } else { 1 }]
                     }
@@ -670,7 +724,11 @@ impl Checker<'_> {
             }
             _ => {
                 if dim != 2 {
-                    return Err(self.err(f.kind.span(), &field("kind"), "a `julia` function works in the complex plane and needs a 2D grid"));
+                    return Err(self.err(
+                        f.kind.span(),
+                        &field("kind"),
+                        "a `julia` function works in the complex plane and needs a 2D grid",
+                    ));
                 }
                 let c = self.vec3(f.c.as_ref().ok_or_else(|| missing("c"))?, &field("c"), 2)?;
                 let sign = match &f.sign {
@@ -719,7 +777,11 @@ impl Checker<'_> {
             "bend" => &["axis", "toward", "degrees", "range", "center"],
             "affine" => &["matrix", "offset"],
             other => {
-                return Err(self.err(s.op.span(), &field("op"), format!("`{other}` is not a step; use scale, rotate, translate, taper, twist, bend or affine")));
+                return Err(self.err(
+                    s.op.span(),
+                    &field("op"),
+                    format!("`{other}` is not a step; use scale, rotate, translate, taper, twist, bend or affine"),
+                ));
             }
         };
         let present: [(&str, Option<Range<usize>>); 10] = [
@@ -796,7 +858,11 @@ impl Checker<'_> {
                 }
                 let amount = number(&s.amount, "amount")?;
                 if !(-4.0..=1.0).contains(&amount) {
-                    return Err(self.err(s.amount.as_ref().map_or(span.clone(), |a| a.span()), &field("amount"), "must lie in -4..1 (1 tapers to a point)"));
+                    return Err(self.err(
+                        s.amount.as_ref().map_or(span.clone(), |a| a.span()),
+                        &field("amount"),
+                        "must lie in -4..1 (1 tapers to a point)",
+                    ));
                 }
                 Step::Taper { axis: a, amount, range: range_along(a)?, center }
             }
@@ -808,9 +874,19 @@ impl Checker<'_> {
                     None => a,
                 };
                 if dim == 2 && (a != Axis::Z || along == Axis::Z) {
-                    return Err(self.err(span, &field("axis"), "a 2D twist rotates about z, with the angle growing `along` x or y"));
+                    return Err(self.err(
+                        span,
+                        &field("axis"),
+                        "a 2D twist rotates about z, with the angle growing `along` x or y",
+                    ));
                 }
-                Step::Twist { axis: a, along, degrees: number(&s.degrees, "degrees")?, range: range_along(along)?, center }
+                Step::Twist {
+                    axis: a,
+                    along,
+                    degrees: number(&s.degrees, "degrees")?,
+                    range: range_along(along)?,
+                    center,
+                }
             }
             "bend" => {
                 let a = axis(None)?;
@@ -821,7 +897,13 @@ impl Checker<'_> {
                 if dim == 2 && (a == Axis::Z || t == Axis::Z) {
                     return Err(self.err(span, &field("axis"), "a 2D bend uses the x and y axes"));
                 }
-                Step::Bend { axis: a, toward: t, degrees: number(&s.degrees, "degrees")?, range: range_along(a)?, center }
+                Step::Bend {
+                    axis: a,
+                    toward: t,
+                    degrees: number(&s.degrees, "degrees")?,
+                    range: range_along(a)?,
+                    center,
+                }
             }
             _ => {
                 let matrix = self.matrix(s.matrix.as_ref().ok_or_else(|| missing("matrix"))?, &field("matrix"), dim)?;
@@ -835,14 +917,25 @@ impl Checker<'_> {
         Ok(step)
     }
 
-    fn timeline(&self, raw: Option<&Spanned<TimelineToml>>, keys: &[Spanned<KeyToml>], functions: &[FunctionSpec], domain: &RectGrid) -> Res<Option<Timeline>> {
+    fn timeline(
+        &self,
+        raw: Option<&Spanned<TimelineToml>>,
+        keys: &[Spanned<KeyToml>],
+        functions: &[FunctionSpec],
+        domain: &RectGrid,
+    ) -> Res<Option<Timeline>> {
         if raw.is_none() && keys.is_empty() {
             return Ok(None);
         }
         let loop_mode = match raw.and_then(|r| r.get_ref().loop_mode.as_ref()) {
             None => LoopMode::Once,
-            Some(m) => LoopMode::parse(m.get_ref())
-                .ok_or_else(|| self.err(m.span(), "timeline.loop", format!("`{}` is not a loop mode; use \"once\", \"loop\" or \"ping-pong\"", m.get_ref())))?,
+            Some(m) => LoopMode::parse(m.get_ref()).ok_or_else(|| {
+                self.err(
+                    m.span(),
+                    "timeline.loop",
+                    format!("`{}` is not a loop mode; use \"once\", \"loop\" or \"ping-pong\"", m.get_ref()),
+                )
+            })?,
         };
         let mut out = Vec::new();
         for (i, k) in keys.iter().enumerate() {
@@ -850,7 +943,11 @@ impl Checker<'_> {
         }
         for (i, w) in out.windows(2).enumerate() {
             if w[1].t_secs <= w[0].t_secs {
-                return Err(self.err(keys[i + 1].get_ref().t_secs.span(), &format!("key[{}].t_secs", i + 1), "keys must be listed in increasing time"));
+                return Err(self.err(
+                    keys[i + 1].get_ref().t_secs.span(),
+                    &format!("key[{}].t_secs", i + 1),
+                    "keys must be listed in increasing time",
+                ));
             }
         }
         let last = out.last().map_or(0.0, |k| k.t_secs);
@@ -868,13 +965,21 @@ impl Checker<'_> {
                     ));
                 }
                 if v < last {
-                    return Err(self.err(d.span(), "timeline.duration_secs", format!("ends before the last key at {last} s")));
+                    return Err(self.err(
+                        d.span(),
+                        "timeline.duration_secs",
+                        format!("ends before the last key at {last} s"),
+                    ));
                 }
                 v
             }
             None if loop_mode == LoopMode::Loop => {
                 let span = raw.map_or(0..0, |r| r.span());
-                return Err(self.err(span, "timeline.duration_secs", "loop mode needs `duration_secs`, the period after which the first key repeats"));
+                return Err(self.err(
+                    span,
+                    "timeline.duration_secs",
+                    "loop mode needs `duration_secs`, the period after which the first key repeats",
+                ));
             }
             None => last,
         };
@@ -892,13 +997,22 @@ impl Checker<'_> {
         let interpolation = match &k.interpolation {
             None => Interpolation::default(),
             Some(s) => Interpolation::parse(s.get_ref()).ok_or_else(|| {
-                self.err(s.span(), &field("interpolation"), format!("`{}` is not an interpolation; use \"hold\", \"linear\" or \"catmull-rom\"", s.get_ref()))
+                self.err(
+                    s.span(),
+                    &field("interpolation"),
+                    format!("`{}` is not an interpolation; use \"hold\", \"linear\" or \"catmull-rom\"", s.get_ref()),
+                )
             })?,
         };
         let ease = match &k.ease {
             None => Ease::default(),
-            Some(s) => Ease::parse(s.get_ref())
-                .ok_or_else(|| self.err(s.span(), &field("ease"), format!("`{}` is not an ease; use \"none\", \"in\", \"out\" or \"in-out\"", s.get_ref())))?,
+            Some(s) => Ease::parse(s.get_ref()).ok_or_else(|| {
+                self.err(
+                    s.span(),
+                    &field("ease"),
+                    format!("`{}` is not an ease; use \"none\", \"in\", \"out\" or \"in-out\"", s.get_ref()),
+                )
+            })?,
         };
         let mut keyed = Vec::new();
         for (j, f) in k.functions.iter().enumerate() {
@@ -910,7 +1024,11 @@ impl Checker<'_> {
                 self.err(f.name.span(), &format!("{prefix}.name"), format!("no [[function]] is named `{name}`"))
             })?;
             if keyed.iter().any(|g: &FunctionKey| g.function == index) {
-                return Err(self.err(f.name.span(), &format!("{prefix}.name"), format!("`{name}` appears twice in this key")));
+                return Err(self.err(
+                    f.name.span(),
+                    &format!("{prefix}.name"),
+                    format!("`{name}` appears twice in this key"),
+                ));
             }
             let base = &functions[index].def;
             let (kind, allowed): (&str, &[&str]) = match base {
@@ -930,7 +1048,11 @@ impl Checker<'_> {
                 if let Some(s) = s
                     && !allowed.contains(&field_name)
                 {
-                    return Err(self.err(s, &format!("{prefix}.{field_name}"), format!("`{name}` is a `{kind}` function; a key may set {}", allowed.join(" or "))));
+                    return Err(self.err(
+                        s,
+                        &format!("{prefix}.{field_name}"),
+                        format!("`{name}` is a `{kind}` function; a key may set {}", allowed.join(" or ")),
+                    ));
                 }
             }
             let def = match base {
@@ -938,7 +1060,11 @@ impl Checker<'_> {
                     None => base.clone(),
                     Some(pts) => {
                         if pts.get_ref().len() != base_points.len() {
-                            return Err(self.err(pts.span(), &format!("{prefix}.points"), format!("has {} points, the grid has {}", pts.get_ref().len(), base_points.len())));
+                            return Err(self.err(
+                                pts.span(),
+                                &format!("{prefix}.points"),
+                                format!("has {} points, the grid has {}", pts.get_ref().len(), base_points.len()),
+                            ));
                         }
                         let points = pts
                             .get_ref()
@@ -983,7 +1109,11 @@ impl Checker<'_> {
                 }
             };
             if let Err(msg) = timeline::same_structure(base, &def) {
-                return Err(self.err(f.steps.as_ref().map_or(span.clone(), |s| s.span()), &format!("{prefix}.steps"), msg));
+                return Err(self.err(
+                    f.steps.as_ref().map_or(span.clone(), |s| s.span()),
+                    &format!("{prefix}.steps"),
+                    msg,
+                ));
             }
             keyed.push(FunctionKey { function: index, def });
         }
@@ -997,7 +1127,11 @@ impl Checker<'_> {
             if let Some(p) = &r.points {
                 let x = *p.get_ref();
                 if !(1..=1 << 40).contains(&x) {
-                    return Err(self.err(p.span(), &field("render.points"), format!("must lie in 1..={}, found {x}", 1u64 << 40)));
+                    return Err(self.err(
+                        p.span(),
+                        &field("render.points"),
+                        format!("must lie in 1..={}, found {x}", 1u64 << 40),
+                    ));
                 }
                 render.points = Some(x as u64);
             }
@@ -1045,7 +1179,13 @@ impl Checker<'_> {
             out.projection = Some(match p.get_ref().as_str() {
                 "perspective" => Projection::Perspective,
                 "parallel" => Projection::Parallel,
-                other => return Err(self.err(p.span(), &format!("{prefix}.projection"), format!("`{other}` is not a projection; use \"perspective\" or \"parallel\""))),
+                other => {
+                    return Err(self.err(
+                        p.span(),
+                        &format!("{prefix}.projection"),
+                        format!("`{other}` is not a projection; use \"perspective\" or \"parallel\""),
+                    ));
+                }
             });
         }
         Ok(out)
@@ -1074,7 +1214,11 @@ impl Checker<'_> {
         }
         if let Some(m) = &r.mode {
             out.mode = SplatMode::parse(m.get_ref()).ok_or_else(|| {
-                self.err(m.span(), "render.mode", format!("`{}` is not a mode; use \"closest\", \"average\" or \"density\"", m.get_ref()))
+                self.err(
+                    m.span(),
+                    "render.mode",
+                    format!("`{}` is not a mode; use \"closest\", \"average\" or \"density\"", m.get_ref()),
+                )
             })?;
         }
         if let Some(b) = &r.background {
@@ -1132,11 +1276,22 @@ fn step_text(s: &Step, dim: usize) -> String {
     match s {
         Step::Scale { by, center } => format!("{{ op = \"scale\", by = {}, center = {} }}", v(*by), v(*center)),
         Step::Rotate { axis, degrees, center } => {
-            format!("{{ op = \"rotate\", axis = \"{}\", degrees = {}, center = {} }}", axis.name(), num(*degrees), v(*center))
+            format!(
+                "{{ op = \"rotate\", axis = \"{}\", degrees = {}, center = {} }}",
+                axis.name(),
+                num(*degrees),
+                v(*center)
+            )
         }
         Step::Translate { by } => format!("{{ op = \"translate\", by = {} }}", v(*by)),
         Step::Taper { axis, amount, range, center } => {
-            format!("{{ op = \"taper\", axis = \"{}\", amount = {}, range = {}, center = {} }}", axis.name(), num(*amount), nums(range), v(*center))
+            format!(
+                "{{ op = \"taper\", axis = \"{}\", amount = {}, range = {}, center = {} }}",
+                axis.name(),
+                num(*amount),
+                nums(range),
+                v(*center)
+            )
         }
         Step::Twist { axis, along, degrees, range, center } => format!(
             "{{ op = \"twist\", axis = \"{}\", along = \"{}\", degrees = {}, range = {}, center = {} }}",
@@ -1154,7 +1309,9 @@ fn step_text(s: &Step, dim: usize) -> String {
             nums(range),
             v(*center)
         ),
-        Step::Affine { matrix, offset } => format!("{{ op = \"affine\", matrix = {}, offset = {} }}", matrix_text(matrix, dim), v(*offset)),
+        Step::Affine { matrix, offset } => {
+            format!("{{ op = \"affine\", matrix = {}, offset = {} }}", matrix_text(matrix, dim), v(*offset))
+        }
     }
 }
 
@@ -1194,13 +1351,16 @@ fn camera_fields(c: &CameraSpec) -> String {
     if let Some(t) = c.target {
         let _ = writeln!(out, "target = {}", nums(&t.to_array()));
     }
-    for (name, v) in [("yaw_deg", c.yaw_deg), ("pitch_deg", c.pitch_deg), ("distance", c.distance), ("fov_y_deg", c.fov_y_deg)] {
+    for (name, v) in
+        [("yaw_deg", c.yaw_deg), ("pitch_deg", c.pitch_deg), ("distance", c.distance), ("fov_y_deg", c.fov_y_deg)]
+    {
         if let Some(v) = v {
             let _ = writeln!(out, "{name} = {}", num(v));
         }
     }
     if let Some(p) = c.projection {
-        let _ = writeln!(out, "projection = \"{}\"", if p == Projection::Perspective { "perspective" } else { "parallel" });
+        let _ =
+            writeln!(out, "projection = \"{}\"", if p == Projection::Perspective { "perspective" } else { "parallel" });
     }
     out
 }
@@ -1247,7 +1407,11 @@ impl Scene {
             }
             match &f.def {
                 FunctionDef::Builder { resolution, .. } => {
-                    let _ = writeln!(out, "resolution = [{}]", resolution[..dim].iter().map(|n| n.to_string()).collect::<Vec<_>>().join(", "));
+                    let _ = writeln!(
+                        out,
+                        "resolution = [{}]",
+                        resolution[..dim].iter().map(|n| n.to_string()).collect::<Vec<_>>().join(", ")
+                    );
                 }
                 FunctionDef::Julia(j) => {
                     let _ = writeln!(out, "sign = {}", num(j.sign));
@@ -1264,13 +1428,25 @@ impl Scene {
         let r = &self.render;
         out += "\n[render]\n";
         let _ = writeln!(out, "width = {}\nheight = {}\npoints = {}\nseed = {}", r.width, r.height, r.points, r.seed);
-        let _ = writeln!(out, "mode = \"{}\"\nbackground = {}\ndepth_cue = {:?}", r.mode.name(), color_text(r.background), r.depth_cue);
+        let _ = writeln!(
+            out,
+            "mode = \"{}\"\nbackground = {}\ndepth_cue = {:?}",
+            r.mode.name(),
+            color_text(r.background),
+            r.depth_cue
+        );
         if let Some(tl) = &self.timeline {
             out += "\n[timeline]\n";
             let _ = writeln!(out, "loop = \"{}\"\nduration_secs = {}", tl.loop_mode.name(), num(tl.duration_secs));
             for k in &tl.keys {
                 out += "\n[[key]]\n";
-                let _ = writeln!(out, "t_secs = {}\ninterpolation = \"{}\"\nease = \"{}\"", num(k.t_secs), k.interpolation.name(), k.ease.name());
+                let _ = writeln!(
+                    out,
+                    "t_secs = {}\ninterpolation = \"{}\"\nease = \"{}\"",
+                    num(k.t_secs),
+                    k.interpolation.name(),
+                    k.ease.name()
+                );
                 for fk in &k.functions {
                     out += "[[key.function]]\n";
                     let _ = writeln!(out, "name = {}", toml_string(&self.functions[fk.function].name));

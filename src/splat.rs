@@ -72,7 +72,15 @@ pub struct SplatView {
 
 impl SplatView {
     /// The view of `camera` on an image of `width`×`height` with depth range from `bounds`.
-    pub fn new(camera: &OrbitCamera, width: u32, height: u32, bounds: (glam::DVec3, glam::DVec3), mode: SplatMode, depth_cue: f32, background: [f32; 3]) -> Self {
+    pub fn new(
+        camera: &OrbitCamera,
+        width: u32,
+        height: u32,
+        bounds: (glam::DVec3, glam::DVec3),
+        mode: SplatMode,
+        depth_cue: f32,
+        background: [f32; 3],
+    ) -> Self {
         let (near, far) = camera.depth_range(bounds);
         let aspect = width as f32 / height as f32;
         let view_from_world = camera.view_from_world();
@@ -281,21 +289,29 @@ mod tests {
         let view = SplatView::new(&camera, 64, 48, bounds, mode, 0.75, [0.1, 0.2, 0.3]);
         let mut r = Pcg32::for_stream(21, 0, 0);
         let n = 4003;
-        let mut p: Vec<Vec3> = (0..n).map(|_| Vec3::new(r.next_f32(), r.next_f32(), r.next_f32()) * 3.0 - 1.0).collect();
+        let mut p: Vec<Vec3> =
+            (0..n).map(|_| Vec3::new(r.next_f32(), r.next_f32(), r.next_f32()) * 3.0 - 1.0).collect();
         p[5] = Vec3::new(f32::NAN, 0.5, 0.5);
         p[6] = Vec3::new(0.5, f32::INFINITY, 0.5);
         p[7] = camera.eye();
         p[8] = camera.eye() + (camera.eye() - camera.target);
         // Function 4 (whose colour needs the scalar arithmetic) only in every fourth run of 64.
         let functions: Vec<u8> = (0..n).map(|i| if i / 64 % 4 == 3 { 4 } else { (i % 4) as u8 }).collect();
-        let (x, y, z): (Vec<f32>, Vec<f32>, Vec<f32>) = (p.iter().map(|p| p.x).collect(), p.iter().map(|p| p.y).collect(), p.iter().map(|p| p.z).collect());
+        let (x, y, z): (Vec<f32>, Vec<f32>, Vec<f32>) =
+            (p.iter().map(|p| p.x).collect(), p.iter().map(|p| p.y).collect(), p.iter().map(|p| p.z).collect());
         // Function 4's red is beyond what a signed 32-bit truncation holds once scaled.
-        let mut portable = Framebuffer::new(view, (0..5).map(|i| [if i == 4 { 1e7 } else { 0.2 * i as f32 }, 1.0, 0.5]).collect());
+        let mut portable =
+            Framebuffer::new(view, (0..5).map(|i| [if i == 4 { 1e7 } else { 0.2 * i as f32 }, 1.0, 0.5]).collect());
         let mut fastest = portable.clone();
         let mut narrow = portable.clone();
         for start in (0..n).step_by(1000) {
             let end = (start + 1000).min(n);
-            let batch = PointBatch { x: &x[start..end], y: &y[start..end], z: &z[start..end], functions: &functions[start..end] };
+            let batch = PointBatch {
+                x: &x[start..end],
+                y: &y[start..end],
+                z: &z[start..end],
+                functions: &functions[start..end],
+            };
             portable.consume_portable(batch);
             fastest.consume(batch);
             #[cfg(target_arch = "x86_64")]

@@ -296,7 +296,14 @@ impl Timeline {
     pub fn channel(&self, get: impl Fn(&Key) -> Option<Vec<f64>>) -> Vec<ChannelKeyOwned> {
         self.keys
             .iter()
-            .filter_map(|k| get(k).map(|value| ChannelKeyOwned { t_secs: k.t_secs, interpolation: k.interpolation, ease: k.ease, value }))
+            .filter_map(|k| {
+                get(k).map(|value| ChannelKeyOwned {
+                    t_secs: k.t_secs,
+                    interpolation: k.interpolation,
+                    ease: k.ease,
+                    value,
+                })
+            })
             .collect()
     }
 
@@ -306,7 +313,12 @@ impl Timeline {
     }
 
     /// [`Timeline::channel_at`] for angles with a full turn of `turn`, when given.
-    pub fn angle_channel_at(&self, t_secs: f64, turn: Option<f64>, get: impl Fn(&Key) -> Option<Vec<f64>>) -> Option<Vec<f64>> {
+    pub fn angle_channel_at(
+        &self,
+        t_secs: f64,
+        turn: Option<f64>,
+        get: impl Fn(&Key) -> Option<Vec<f64>>,
+    ) -> Option<Vec<f64>> {
         let owned = self.channel(get);
         let keys: Vec<ChannelKey> = owned.iter().map(ChannelKeyOwned::borrow).collect();
         self.sample_wrapped(&keys, t_secs, turn)
@@ -317,7 +329,11 @@ impl Timeline {
     pub fn held_key(&self, t_secs: f64, has: impl Fn(&Key) -> bool) -> Option<&Key> {
         let t = self.local_time(t_secs);
         let set: Vec<&Key> = self.keys.iter().filter(|k| has(k)).collect();
-        set.iter().rev().find(|k| k.t_secs <= t).or(if self.loop_mode == LoopMode::Loop { set.last() } else { set.first() }).copied()
+        set.iter()
+            .rev()
+            .find(|k| k.t_secs <= t)
+            .or(if self.loop_mode == LoopMode::Loop { set.last() } else { set.first() })
+            .copied()
     }
 }
 
@@ -417,7 +433,9 @@ pub fn sample_channel_wrapped(keys: &[ChannelKey], t: f64, period: Option<f64>, 
                     return vec![0.0; keys[i].value.len()];
                 }
                 let pi = keys[i].value;
-                (0..pi.len()).map(|c| (wrap_diff(pb[c] - pi[c], turn) - wrap_diff(pa[c] - pi[c], turn)) / (tb - ta)).collect()
+                (0..pi.len())
+                    .map(|c| (wrap_diff(pb[c] - pi[c], turn) - wrap_diff(pa[c] - pi[c], turn)) / (tb - ta))
+                    .collect()
             };
             let (m0, m1) = (tangent(j), tangent(j + 1));
             let (u2, u3) = (u * u, u * u * u);
@@ -446,7 +464,9 @@ fn step_params(step: &Step, out: &mut Vec<f64>) {
             push3(out, *center);
         }
         Step::Translate { by } => push3(out, *by),
-        Step::Taper { amount: x, range, center, .. } | Step::Twist { degrees: x, range, center, .. } | Step::Bend { degrees: x, range, center, .. } => {
+        Step::Taper { amount: x, range, center, .. }
+        | Step::Twist { degrees: x, range, center, .. }
+        | Step::Bend { degrees: x, range, center, .. } => {
             out.push(*x);
             out.extend_from_slice(range);
             push3(out, *center);
@@ -497,7 +517,9 @@ pub fn unflatten(template: &FunctionDef, values: &[f64]) -> Option<FunctionDef> 
                         *center = v3(&mut next);
                     }
                     Step::Translate { by } => *by = v3(&mut next),
-                    Step::Taper { amount: x, range, center, .. } | Step::Twist { degrees: x, range, center, .. } | Step::Bend { degrees: x, range, center, .. } => {
+                    Step::Taper { amount: x, range, center, .. }
+                    | Step::Twist { degrees: x, range, center, .. }
+                    | Step::Bend { degrees: x, range, center, .. } => {
                         *x = next();
                         *range = [next(), next()];
                         *center = v3(&mut next);
@@ -530,7 +552,11 @@ pub fn same_structure(a: &FunctionDef, b: &FunctionDef) -> Result<(), String> {
         }
         (FunctionDef::Builder { builder: ba, .. }, FunctionDef::Builder { builder: bb, .. }) => {
             if ba.steps.len() != bb.steps.len() {
-                return Err(format!("has {} steps, the function has {} (a key lists every step of the builder)", bb.steps.len(), ba.steps.len()));
+                return Err(format!(
+                    "has {} steps, the function has {} (a key lists every step of the builder)",
+                    bb.steps.len(),
+                    ba.steps.len()
+                ));
             }
             for (k, (sa, sb)) in ba.steps.iter().zip(&bb.steps).enumerate() {
                 let axes = |s: &Step| match s {
@@ -540,7 +566,9 @@ pub fn same_structure(a: &FunctionDef, b: &FunctionDef) -> Result<(), String> {
                     _ => None,
                 };
                 if discriminant(sa) != discriminant(sb) || axes(sa) != axes(sb) {
-                    return Err(format!("step {k} differs in kind or axis from the function's step {k}; keys may change only numbers"));
+                    return Err(format!(
+                        "step {k} differs in kind or axis from the function's step {k}; keys may change only numbers"
+                    ));
                 }
             }
             Ok(())
@@ -555,7 +583,10 @@ mod tests {
     use super::*;
 
     fn keys(ts: &[f64], vs: &[f64], interpolation: Interpolation) -> Vec<ChannelKeyOwned> {
-        ts.iter().zip(vs).map(|(&t, &v)| ChannelKeyOwned { t_secs: t, interpolation, ease: Ease::None, value: vec![v] }).collect()
+        ts.iter()
+            .zip(vs)
+            .map(|(&t, &v)| ChannelKeyOwned { t_secs: t, interpolation, ease: Ease::None, value: vec![v] })
+            .collect()
     }
 
     fn eval(k: &[ChannelKeyOwned], t: f64, period: Option<f64>) -> f64 {
@@ -601,7 +632,8 @@ mod tests {
 
     #[test]
     fn playhead_operations_keep_keys_sorted() {
-        let mut tl = Timeline { loop_mode: LoopMode::Once, duration_secs: 1.0, keys: vec![Key::new(0.0), Key::new(1.0)] };
+        let mut tl =
+            Timeline { loop_mode: LoopMode::Once, duration_secs: 1.0, keys: vec![Key::new(0.0), Key::new(1.0)] };
         assert_eq!(tl.key_at_playhead(0.5), 1);
         assert_eq!(tl.key_at_playhead(0.5 + KEY_TIME_TOL_SECS / 2.0), 1, "the same key within the tolerance");
         assert_eq!(tl.upsert_key(Key::new(3.0)), 3);
@@ -626,8 +658,17 @@ mod tests {
             resolution: [3, 3, 3],
             builder: Builder {
                 steps: vec![
-                    Step::Twist { axis: Axis::Y, along: Axis::Y, degrees: 30.0, range: [0.0, 1.0], center: DVec3::new(0.5, 0.5, 0.5) },
-                    Step::Affine { matrix: glam::DMat3::from_cols_array(&[1., 2., 3., 4., 5., 6., 7., 8., 9.]), offset: DVec3::X },
+                    Step::Twist {
+                        axis: Axis::Y,
+                        along: Axis::Y,
+                        degrees: 30.0,
+                        range: [0.0, 1.0],
+                        center: DVec3::new(0.5, 0.5, 0.5),
+                    },
+                    Step::Affine {
+                        matrix: glam::DMat3::from_cols_array(&[1., 2., 3., 4., 5., 6., 7., 8., 9.]),
+                        offset: DVec3::X,
+                    },
                 ],
             },
         };
@@ -681,11 +722,16 @@ pub fn check_timeline(scene: &crate::scene::Scene, samples_per_interval: usize) 
     let tl = scene.timeline.as_ref()?;
     let d = tl.duration_secs;
     let mut spans: Vec<(TimelineSpan, Vec<f64>)> = Vec::new();
-    let interior = |a: f64, b: f64| -> Vec<f64> { (1..=samples_per_interval).map(|i| a + (b - a) * i as f64 / (samples_per_interval + 1) as f64).collect() };
+    let interior = |a: f64, b: f64| -> Vec<f64> {
+        (1..=samples_per_interval).map(|i| a + (b - a) * i as f64 / (samples_per_interval + 1) as f64).collect()
+    };
     let n = tl.keys.len();
     let first = tl.keys.first().map_or(d, |k| k.t_secs);
     if first > 0.0 {
-        spans.push((TimelineSpan::Interval { from_key: None, to_key: (n > 0).then_some(0), from_secs: 0.0, to_secs: first }, interior(0.0, first)));
+        spans.push((
+            TimelineSpan::Interval { from_key: None, to_key: (n > 0).then_some(0), from_secs: 0.0, to_secs: first },
+            interior(0.0, first),
+        ));
     }
     for (i, k) in tl.keys.iter().enumerate() {
         spans.push((TimelineSpan::Key { index: i, t_secs: k.t_secs }, vec![k.t_secs]));
@@ -694,7 +740,10 @@ pub fn check_timeline(scene: &crate::scene::Scene, samples_per_interval: usize) 
             None => (d, if tl.loop_mode == LoopMode::Loop { Some(0) } else { None }),
         };
         if next > k.t_secs {
-            spans.push((TimelineSpan::Interval { from_key: Some(i), to_key, from_secs: k.t_secs, to_secs: next }, interior(k.t_secs, next)));
+            spans.push((
+                TimelineSpan::Interval { from_key: Some(i), to_key, from_secs: k.t_secs, to_secs: next },
+                interior(k.t_secs, next),
+            ));
         }
     }
     let mut problems = Vec::new();
@@ -722,10 +771,18 @@ pub fn check_timeline(scene: &crate::scene::Scene, samples_per_interval: usize) 
         }
         for (fi, f) in scene.functions.iter().enumerate() {
             if let Some((max_bound, t_secs)) = worst[fi] {
-                problems.push(TimelineProblem { span: span.clone(), function: f.name.clone(), kind: TimelineProblemKind::NotContractive { max_bound, t_secs } });
+                problems.push(TimelineProblem {
+                    span: span.clone(),
+                    function: f.name.clone(),
+                    kind: TimelineProblemKind::NotContractive { max_bound, t_secs },
+                });
             }
             if let Some((t_secs, outside)) = leaves[fi] {
-                problems.push(TimelineProblem { span: span.clone(), function: f.name.clone(), kind: TimelineProblemKind::NotContained { t_secs, outside } });
+                problems.push(TimelineProblem {
+                    span: span.clone(),
+                    function: f.name.clone(),
+                    kind: TimelineProblemKind::NotContained { t_secs, outside },
+                });
             }
         }
     }
@@ -738,12 +795,21 @@ impl std::fmt::Display for TimelineProblem {
             TimelineSpan::Key { index, t_secs } => write!(f, "key {index} (t = {t_secs:.3} s): ")?,
             TimelineSpan::Interval { from_key, to_key, from_secs, to_secs } => {
                 let name = |k: &Option<usize>, end: &str| k.map_or(end.to_string(), |k| format!("key {k}"));
-                write!(f, "between {} and {} ({from_secs:.3}–{to_secs:.3} s): ", name(from_key, "the start"), name(to_key, "the end"))?
+                write!(
+                    f,
+                    "between {} and {} ({from_secs:.3}–{to_secs:.3} s): ",
+                    name(from_key, "the start"),
+                    name(to_key, "the end")
+                )?
             }
         }
         match &self.kind {
             TimelineProblemKind::NotContractive { max_bound, t_secs } => {
-                write!(f, "{} may not be contractive (Lipschitz bound up to {max_bound:.4}, at t = {t_secs:.3} s)", self.function)
+                write!(
+                    f,
+                    "{} may not be contractive (Lipschitz bound up to {max_bound:.4}, at t = {t_secs:.3} s)",
+                    self.function
+                )
             }
             TimelineProblemKind::NotContained { t_secs, outside } => {
                 write!(f, "{} leaves the grid ({outside} points outside, first at t = {t_secs:.3} s)", self.function)

@@ -128,8 +128,11 @@ fn twist_parameters_interpolate_on_the_circle_not_the_chord() {
 /// Value of a one-number channel at `t`.
 fn channel(keys: &[(f64, f64)], interp: Interpolation, ease: Ease, t: f64, period: Option<f64>) -> f64 {
     let values: Vec<[f64; 1]> = keys.iter().map(|k| [k.1]).collect();
-    let ck: Vec<ChannelKey> =
-        keys.iter().zip(&values).map(|(k, v)| ChannelKey { t_secs: k.0, interpolation: interp, ease, value: v }).collect();
+    let ck: Vec<ChannelKey> = keys
+        .iter()
+        .zip(&values)
+        .map(|(k, v)| ChannelKey { t_secs: k.0, interpolation: interp, ease, value: v })
+        .collect();
     timeline::sample_channel(&ck, t, period).unwrap()[0]
 }
 
@@ -171,10 +174,16 @@ fn catmull_rom_is_c1_across_keys() {
         let period = keys.last().unwrap().0 + 0.7;
         for periodic in [None, Some(period)] {
             // The timeline maps scene time into [0, period) before sampling; do the same here.
-            let f = |t: f64| channel(&keys, Interpolation::CatmullRom, Ease::None, periodic.map_or(t, |p| t.rem_euclid(p)), periodic);
+            let f = |t: f64| {
+                channel(&keys, Interpolation::CatmullRom, Ease::None, periodic.map_or(t, |p| t.rem_euclid(p)), periodic)
+            };
             for k in &keys {
                 let (left, right) = ((f(k.0) - f(k.0 - h)) / h, (f(k.0 + h) - f(k.0)) / h);
-                assert!((left - right).abs() <= tol, "case {case} {periodic:?} key t={}: slopes {left} vs {right}, tol {tol}", k.0);
+                assert!(
+                    (left - right).abs() <= tol,
+                    "case {case} {periodic:?} key t={}: slopes {left} vs {right}, tol {tol}",
+                    k.0
+                );
             }
             // Across the loop's wrap, too.
             if let Some(p) = periodic {
@@ -186,7 +195,9 @@ fn catmull_rom_is_c1_across_keys() {
         let g = |t: f64| channel(&keys, Interpolation::Linear, Ease::None, t, None);
         let k = keys[2].0;
         let kink = ((g(k + h) - g(k)) / h - (g(k) - g(k - h)) / h).abs();
-        let slopes = ((keys[3].1 - keys[2].1) / (keys[3].0 - keys[2].0) - (keys[2].1 - keys[1].1) / (keys[2].0 - keys[1].0)).abs();
+        let slopes = ((keys[3].1 - keys[2].1) / (keys[3].0 - keys[2].0)
+            - (keys[2].1 - keys[1].1) / (keys[2].0 - keys[1].0))
+            .abs();
         assert!((kink - slopes).abs() < 1e-4 * slopes.max(1.0), "linear kink {kink} vs {slopes}");
     }
 }
@@ -252,7 +263,9 @@ fn loop_and_ping_pong_wrap() {
 
 #[test]
 fn yaw_takes_the_short_way_round() {
-    let text = twist_scene("linear", "once", 1.0).replace("yaw_deg = 10", "yaw_deg = 350").replace("yaw_deg = 50", "yaw_deg = 30");
+    let text = twist_scene("linear", "once", 1.0)
+        .replace("yaw_deg = 10", "yaw_deg = 350")
+        .replace("yaw_deg = 50", "yaw_deg = 30");
     let scene = Scene::parse(&text, "t.toml").unwrap();
     let yaw = scene.camera_at(0.5).yaw_deg.unwrap();
     assert!((yaw.rem_euclid(360.0) - 10.0).abs() < 1e-9, "yaw {yaw}");
@@ -262,12 +275,24 @@ fn yaw_takes_the_short_way_round() {
 fn timeline_errors_are_located() {
     let base = twist_scene("linear", "once", 1.0);
     let cases: &[(&str, &str, &str)] = &[
-        ("interpolation = \"linear\"\n[[key.function]]\nname = \"f1\"", "interpolation = \"linear\"\nwobble = 3\n[[key.function]]\nname = \"f1\"", "wobble"),
-        ("name = \"f1\"\nsteps = [{ op = \"twist\", axis = \"y\", degrees = 90 }", "name = \"nope\"\nsteps = [{ op = \"twist\", axis = \"y\", degrees = 90 }", "key[1].function[0].name"),
+        (
+            "interpolation = \"linear\"\n[[key.function]]\nname = \"f1\"",
+            "interpolation = \"linear\"\nwobble = 3\n[[key.function]]\nname = \"f1\"",
+            "wobble",
+        ),
+        (
+            "name = \"f1\"\nsteps = [{ op = \"twist\", axis = \"y\", degrees = 90 }",
+            "name = \"nope\"\nsteps = [{ op = \"twist\", axis = \"y\", degrees = 90 }",
+            "key[1].function[0].name",
+        ),
         ("degrees = 90 }, { op = \"scale\"", "degrees = 90 }, { op = \"translate\"", "key[1].function[0].steps"),
         ("t_secs = 1.0", "t_secs = -1.0", "key[1].t_secs"),
         ("loop = \"once\"", "loop = \"sometimes\"", "timeline.loop"),
-        ("interpolation = \"linear\"\n[[key.function]]\nname = \"f1\"", "interpolation = \"cubic\"\n[[key.function]]\nname = \"f1\"", "interpolation"),
+        (
+            "interpolation = \"linear\"\n[[key.function]]\nname = \"f1\"",
+            "interpolation = \"cubic\"\n[[key.function]]\nname = \"f1\"",
+            "interpolation",
+        ),
     ];
     for (from, to, field) in cases {
         assert!(base.contains(from), "test setup: {from}");
@@ -312,7 +337,14 @@ fn example_scene() -> Scene {
 
 /// Small, fast frames: 64×48, 20 000 points.
 fn small_settings(scene: &Scene, motion_blur_samples: u32) -> RecordSettings {
-    RecordSettings { fps: 3.0, width: 64, height: 48, points_per_frame: Some(20_000), motion_blur_samples, ..RecordSettings::for_scene(scene) }
+    RecordSettings {
+        fps: 3.0,
+        width: 64,
+        height: 48,
+        points_per_frame: Some(20_000),
+        motion_blur_samples,
+        ..RecordSettings::for_scene(scene)
+    }
 }
 
 fn temp_dir(name: &str) -> std::path::PathBuf {
@@ -373,7 +405,20 @@ fn resume_restores_deleted_and_truncated_frames() {
             .arg(&scene_path)
             .arg("-o")
             .arg(&dir)
-            .args(["--frames", "0..4", "--fps", "3", "--width", "64", "--height", "48", "--points-per-frame", "20000", "--backend", "cpu"])
+            .args([
+                "--frames",
+                "0..4",
+                "--fps",
+                "3",
+                "--width",
+                "64",
+                "--height",
+                "48",
+                "--points-per-frame",
+                "20000",
+                "--backend",
+                "cpu",
+            ])
             .args(extra)
             .output()
             .unwrap();
@@ -391,7 +436,11 @@ fn resume_restores_deleted_and_truncated_frames() {
         assert_eq!(&frame_bytes(&dir, k as u32), bytes, "frame {k} after resume");
     }
     // No temporary files are left behind.
-    let leftovers: Vec<_> = std::fs::read_dir(&dir).unwrap().filter_map(|e| e.ok()).filter(|e| e.file_name().to_string_lossy().ends_with(".tmp")).collect();
+    let leftovers: Vec<_> = std::fs::read_dir(&dir)
+        .unwrap()
+        .filter_map(|e| e.ok())
+        .filter(|e| e.file_name().to_string_lossy().ends_with(".tmp"))
+        .collect();
     assert!(leftovers.is_empty(), "{leftovers:?}");
     let _ = std::fs::remove_dir_all(&dir);
 }
@@ -444,12 +493,30 @@ fn killing_a_recording_leaves_only_whole_frames() {
         .arg(&scene_path)
         .arg("-o")
         .arg(&dir)
-        .args(["--fps", "3", "--width", "96", "--height", "72", "--points-per-frame", "20000", "--backend", "cpu", "--resume", "--frames", "0..5"])
+        .args([
+            "--fps",
+            "3",
+            "--width",
+            "96",
+            "--height",
+            "72",
+            "--points-per-frame",
+            "20000",
+            "--backend",
+            "cpu",
+            "--resume",
+            "--frames",
+            "0..5",
+        ])
         .stderr(std::process::Stdio::null())
         .status()
         .unwrap();
     assert!(status.success());
-    let names: Vec<String> = std::fs::read_dir(&dir).unwrap().filter_map(|e| e.ok()).map(|e| e.file_name().to_string_lossy().into_owned()).collect();
+    let names: Vec<String> = std::fs::read_dir(&dir)
+        .unwrap()
+        .filter_map(|e| e.ok())
+        .map(|e| e.file_name().to_string_lossy().into_owned())
+        .collect();
     // Only the resumed range's temporary files are its to remove (job-array chunks own
     // disjoint ranges); a fast killed run may have been writing a later frame.
     let in_range = |n: &String| (0..5).any(|k| n.starts_with(&format!(".frame_{k:05}.png.")));
@@ -492,14 +559,22 @@ matrix = [[1.2, 0], [0, 1.2]]
     let scene = Scene::parse(text, "t.toml").unwrap();
     let check = check_timeline(&scene, 8).unwrap();
     assert_eq!(check.samples, 3 + 2 * 8);
-    let found: Vec<(S, &str, bool)> =
-        check.problems.iter().map(|p| (p.span.clone(), p.function.as_str(), matches!(p.kind, K::NotContractive { .. }))).collect();
+    let found: Vec<(S, &str, bool)> = check
+        .problems
+        .iter()
+        .map(|p| (p.span.clone(), p.function.as_str(), matches!(p.kind, K::NotContractive { .. })))
+        .collect();
     let interval = S::Interval { from_key: Some(1), to_key: Some(2), from_secs: 1.0, to_secs: 2.0 };
     let key2 = S::Key { index: 2, t_secs: 2.0 };
     // The scale passes 1 at t = 1 + 0.5/0.7 ≈ 1.71 s, so the samples at 1.78 and 1.89 s see it.
     assert_eq!(
         found,
-        vec![(interval.clone(), "grow", true), (interval, "grow", false), (key2.clone(), "grow", true), (key2, "grow", false)],
+        vec![
+            (interval.clone(), "grow", true),
+            (interval, "grow", false),
+            (key2.clone(), "grow", true),
+            (key2, "grow", false)
+        ],
         "{:#?}",
         check.problems
     );
@@ -529,7 +604,10 @@ fn to_toml_round_trips_every_scene() {
     assert!(scenes.len() >= 6, "found {} scenes", scenes.len());
     for interp in ["hold", "linear", "catmull-rom"] {
         for mode in ["once", "ping-pong"] {
-            scenes.push((format!("twist_scene {interp} {mode}"), Scene::parse(&twist_scene(interp, mode, 1.0), "t.toml").unwrap()));
+            scenes.push((
+                format!("twist_scene {interp} {mode}"),
+                Scene::parse(&twist_scene(interp, mode, 1.0), "t.toml").unwrap(),
+            ));
         }
     }
     for (name, mut scene) in scenes {

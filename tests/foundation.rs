@@ -32,7 +32,9 @@ fn points_of(scene: &Scene, n: u64, seed: u32) -> Vec<Vec3> {
 /// condition) for every function of every paper scene.
 #[test]
 fn paper_figure_8_and_containment() {
-    for (name, expected) in [("tapering", 0.55), ("twisting", 0.69), ("fantasy", 0.64), ("plant1", 0.50), ("plant2", 0.68)] {
+    for (name, expected) in
+        [("tapering", 0.55), ("twisting", 0.69), ("fantasy", 0.64), ("plant1", 0.50), ("plant2", 0.68)]
+    {
         let report = load(name).at(0.0).report();
         let ratio = report.max_grid_ratio.unwrap();
         assert!((ratio - expected).abs() <= 0.005, "{name}: grid ratio {ratio:.4}, figure 8 says {expected}");
@@ -49,11 +51,13 @@ fn paper_figure_8_and_containment() {
 /// corrections; this test keeps the reason for them checkable.
 #[test]
 fn printed_tables_need_the_documented_corrections() {
-    let plant1 = std::fs::read_to_string(scene_path("plant1")).unwrap().replace("z = [-46.74, 46.74]", "z = [-23.37, 23.37]");
+    let plant1 =
+        std::fs::read_to_string(scene_path("plant1")).unwrap().replace("z = [-46.74, 46.74]", "z = [-23.37, 23.37]");
     let report = Scene::parse(&plant1, "plant1-as-printed").unwrap().at(0.0).report();
     assert!((report.max_grid_ratio.unwrap() - 40.0 / 46.74).abs() < 1e-3);
     assert_eq!(report.all_contained, Some(false));
-    let plant2 = std::fs::read_to_string(scene_path("plant2")).unwrap().replace("x = [-21.21, 21.21]", "x = [-21.2, 21.2]");
+    let plant2 =
+        std::fs::read_to_string(scene_path("plant2")).unwrap().replace("x = [-21.21, 21.21]", "x = [-21.2, 21.2]");
     let report = Scene::parse(&plant2, "plant2-as-printed").unwrap().at(0.0).report();
     assert_eq!(report.functions[2].contained, Some(false));
 }
@@ -101,7 +105,8 @@ fn sierpinski_box_counting_dimension() {
     }
     let mx = xs.iter().sum::<f64>() / xs.len() as f64;
     let my = ys.iter().sum::<f64>() / ys.len() as f64;
-    let slope = xs.iter().zip(&ys).map(|(x, y)| (x - mx) * (y - my)).sum::<f64>() / xs.iter().map(|x| (x - mx).powi(2)).sum::<f64>();
+    let slope = xs.iter().zip(&ys).map(|(x, y)| (x - mx) * (y - my)).sum::<f64>()
+        / xs.iter().map(|x| (x - mx).powi(2)).sum::<f64>();
     let expected = 3f64.ln() / 2f64.ln();
     assert!((slope - expected).abs() < 0.03, "dimension {slope:.4}, expected {expected:.4}");
 }
@@ -135,12 +140,12 @@ fn linear_ifs_points_lie_in_w_n_of_a() {
         let n = 5;
         let (lo, hi) = (ifs.domain.min(), ifs.domain.max());
         // The box as an affine image of the unit square.
-        let mut pieces = vec![(DMat3::from_cols(DVec3::new(hi.x - lo.x, 0.0, 0.0), DVec3::new(0.0, hi.y - lo.y, 0.0), DVec3::Z), lo)];
+        let mut pieces = vec![(
+            DMat3::from_cols(DVec3::new(hi.x - lo.x, 0.0, 0.0), DVec3::new(0.0, hi.y - lo.y, 0.0), DVec3::Z),
+            lo,
+        )];
         for _ in 0..n {
-            pieces = pieces
-                .iter()
-                .flat_map(|(m, t)| maps.iter().map(move |(a, b)| (*a * *m, *a * *t + *b)))
-                .collect();
+            pieces = pieces.iter().flat_map(|(m, t)| maps.iter().map(move |(a, b)| (*a * *m, *a * *t + *b))).collect();
         }
         // Unit-square coordinates of p in each piece (2D inverse).
         let inv: Vec<(f64, f64, f64, f64, DVec3)> = pieces
@@ -197,26 +202,83 @@ fn malformed_scenes_give_specific_errors() {
         ("version = 2\n[grid]\nx = [0, 1]\ny = [0, 1]\n".into(), "version", 1),
         (format!("{GRID}{AFFINE}colour = \"#fff\"\n"), "unknown field `colour`", 8),
         (format!("{GRID}{AFFINE}[[function]]\nkind = \"grdi\"\n"), "`function[1].kind`", 9),
-        ("version = 1\n[grid]\nx = [0, 1, 1]\ny = [0, 1]\n[[function]]\nkind = \"julia\"\nc = [0, 0]\n".into(), "`grid.x`", 3),
+        (
+            "version = 1\n[grid]\nx = [0, 1, 1]\ny = [0, 1]\n[[function]]\nkind = \"julia\"\nc = [0, 0]\n".into(),
+            "`grid.x`",
+            3,
+        ),
         ("version = 1\n[grid]\nx = [0]\ny = [0, 1]\n".into(), "`grid.x`", 3),
-        ("version = 1\n[grid]\nx = [0, 1]\ny = [0, 1]\nz = [0]\n[[function]]\nkind = \"julia\"\nc = [0, 0]\n".into(), "`grid.z`", 5),
-        (format!("{GRID}[[function]]\nkind = \"grid\"\npoints = [[0, 0], [1, 0], [0, 1]]\n"), "has 3 points, the 2×2×1 grid has 4", 7),
-        (format!("{GRID}[[function]]\nkind = \"grid\"\npoints = [[0, 0], [1, 0], [0, 1], [1]]\n"), "`function[0].points[3]`", 7),
-        (format!("{GRID}[[function]]\nkind = \"affine\"\nmatrix = [[0.5, 0, 0], [0, 0.5, 0]]\n"), "`function[0].matrix`", 7),
+        (
+            "version = 1\n[grid]\nx = [0, 1]\ny = [0, 1]\nz = [0]\n[[function]]\nkind = \"julia\"\nc = [0, 0]\n".into(),
+            "`grid.z`",
+            5,
+        ),
+        (
+            format!("{GRID}[[function]]\nkind = \"grid\"\npoints = [[0, 0], [1, 0], [0, 1]]\n"),
+            "has 3 points, the 2×2×1 grid has 4",
+            7,
+        ),
+        (
+            format!("{GRID}[[function]]\nkind = \"grid\"\npoints = [[0, 0], [1, 0], [0, 1], [1]]\n"),
+            "`function[0].points[3]`",
+            7,
+        ),
+        (
+            format!("{GRID}[[function]]\nkind = \"affine\"\nmatrix = [[0.5, 0, 0], [0, 0.5, 0]]\n"),
+            "`function[0].matrix`",
+            7,
+        ),
         (format!("{GRID}[[function]]\nkind = \"affine\"\n"), "needs `matrix`", 5),
-        (format!("{GRID}{AFFINE}points = [[0, 0]]\n"), "`function[0].points`: is not a field of a `affine` function", 8),
+        (
+            format!("{GRID}{AFFINE}points = [[0, 0]]\n"),
+            "`function[0].points`: is not a field of a `affine` function",
+            8,
+        ),
         (format!("{GRID}{AFFINE}color = \"#12345\"\n"), "`function[0].color`", 8),
         (format!("{GRID}{AFFINE}color = [1, 2, 3]\n"), "`function[0].color`", 8),
         (format!("{GRID}{AFFINE}probability = -1\n"), "`function[0].probability`: must not be negative", 8),
         (format!("{GRID}{AFFINE}probabilities = \"random\"\n"), "unknown field `probabilities`", 8),
         (format!("probabilities = \"random\"\n{GRID}{AFFINE}"), "`probabilities`", 1),
-        (format!("{GRID}[[function]]\nkind = \"julia\"\nc = [0, 0]\nsign = 2\n"), "`function[0].sign`: must be 1 or -1", 8),
-        ("version = 1\n[grid]\nx = [0, 1]\ny = [0, 1]\nz = [0, 1]\n[[function]]\nkind = \"julia\"\nc = [0, 0]\n".into(), "needs a 2D grid", 7),
-        (format!("{GRID}[[function]]\nkind = \"builder\"\nsteps = [{{ op = \"warp\" }}]\n"), "`function[0].steps[0].op`", 7),
-        (format!("{GRID}[[function]]\nkind = \"builder\"\nsteps = [{{ op = \"taper\", axis = \"w\", amount = 0.5 }}]\n"), "`function[0].steps[0].axis`", 7),
-        (format!("{GRID}[[function]]\nkind = \"builder\"\nsteps = [{{ op = \"taper\", axis = \"y\", amount = 3 }}]\n"), "`function[0].steps[0].amount`", 7),
-        (format!("{GRID}[[function]]\nkind = \"builder\"\nresolution = [1, 5]\nsteps = []\n"), "`function[0].resolution`", 7),
-        (format!("{GRID}[[function]]\nkind = \"builder\"\nsteps = [{{ op = \"scale\", by = 0.5, degrees = 3 }}]\n"), "`function[0].steps[0].degrees`: is not a parameter of a `scale` step", 7),
+        (
+            format!("{GRID}[[function]]\nkind = \"julia\"\nc = [0, 0]\nsign = 2\n"),
+            "`function[0].sign`: must be 1 or -1",
+            8,
+        ),
+        (
+            "version = 1\n[grid]\nx = [0, 1]\ny = [0, 1]\nz = [0, 1]\n[[function]]\nkind = \"julia\"\nc = [0, 0]\n"
+                .into(),
+            "needs a 2D grid",
+            7,
+        ),
+        (
+            format!("{GRID}[[function]]\nkind = \"builder\"\nsteps = [{{ op = \"warp\" }}]\n"),
+            "`function[0].steps[0].op`",
+            7,
+        ),
+        (
+            format!(
+                "{GRID}[[function]]\nkind = \"builder\"\nsteps = [{{ op = \"taper\", axis = \"w\", amount = 0.5 }}]\n"
+            ),
+            "`function[0].steps[0].axis`",
+            7,
+        ),
+        (
+            format!(
+                "{GRID}[[function]]\nkind = \"builder\"\nsteps = [{{ op = \"taper\", axis = \"y\", amount = 3 }}]\n"
+            ),
+            "`function[0].steps[0].amount`",
+            7,
+        ),
+        (
+            format!("{GRID}[[function]]\nkind = \"builder\"\nresolution = [1, 5]\nsteps = []\n"),
+            "`function[0].resolution`",
+            7,
+        ),
+        (
+            format!("{GRID}[[function]]\nkind = \"builder\"\nsteps = [{{ op = \"scale\", by = 0.5, degrees = 3 }}]\n"),
+            "`function[0].steps[0].degrees`: is not a parameter of a `scale` step",
+            7,
+        ),
         (format!("{GRID}{AFFINE}[camera]\npitch_deg = 95\n"), "`camera.pitch_deg`", 9),
         (format!("{GRID}{AFFINE}[camera]\nprojection = \"fisheye\"\n"), "`camera.projection`", 9),
         (format!("{GRID}{AFFINE}[render]\nwidth = 0\n"), "`render.width`", 9),
@@ -264,7 +326,8 @@ fn cli_bad_input_exits_2_with_a_message() {
     let sierpinski = scene_path("sierpinski");
     let out = nlifs(&["render", sierpinski.to_str().unwrap(), "-o", dir.join("x.jpg").to_str().unwrap()]);
     assert_eq!(out.status.code(), Some(2));
-    let out = nlifs(&["render", sierpinski.to_str().unwrap(), "-o", dir.join("x.png").to_str().unwrap(), "--width", "0"]);
+    let out =
+        nlifs(&["render", sierpinski.to_str().unwrap(), "-o", dir.join("x.png").to_str().unwrap(), "--width", "0"]);
     assert_eq!(out.status.code(), Some(2));
     let out = nlifs(&["export", "points", sierpinski.to_str().unwrap(), "-o", dir.join("x.obj").to_str().unwrap()]);
     assert_eq!(out.status.code(), Some(2));

@@ -9,12 +9,12 @@
 //!    same densities as the GPU route.
 
 use glam::Vec3;
-use nlifs::chaos_game::{self, CompiledIfs, run_chunk, ORBITS_PER_CHUNK};
+use nlifs::chaos_game::{self, CompiledIfs, ORBITS_PER_CHUNK, run_chunk};
+use nlifs::gpu::GpuContext;
 use nlifs::gpu::chaos_game::{FrameArgs, GpuChaosGame};
 use nlifs::gpu::cpu_route::{ChaosBackend, frame_chunks};
 use nlifs::gpu::live::{LiveSettings, LiveView};
 use nlifs::gpu::render::{read_buffer, snapshot};
-use nlifs::gpu::GpuContext;
 use nlifs::rng::Pcg32;
 use nlifs::scene::Scene;
 use nlifs::splat::{Framebuffer, SplatMode, SplatView};
@@ -76,13 +76,18 @@ fn first_step_matches_cpu_bit_for_bit_streams() {
         let tol = 1e-5 * (hi - lo).length();
         for thread in 0..n {
             let mut rng = Pcg32::for_stream(seed, frame, thread);
-            let t = Vec3::new(rng.next_f32(), rng.next_f32(), if compiled.dimension == 3 { rng.next_f32() } else { 0.0 });
+            let t =
+                Vec3::new(rng.next_f32(), rng.next_f32(), if compiled.dimension == 3 { rng.next_f32() } else { 0.0 });
             let start = lo + t * (hi - lo);
             let fi = compiled.selection.select(compiled.selection.cell_of(start), rng.next_u32());
             let p = compiled.map(fi, start);
             let g = gpu_points[thread as usize];
             let name = format!("{name} (storage tables: {storage}, generic pipeline: {generic})");
-            assert_eq!(g[3] as usize, fi, "{name}: thread {thread} chose function {} on the GPU, {fi} on the CPU", g[3]);
+            assert_eq!(
+                g[3] as usize, fi,
+                "{name}: thread {thread} chose function {} on the GPU, {fi} on the CPU",
+                g[3]
+            );
             let d = (Vec3::new(g[0], g[1], g[2]) - p).length();
             assert!(d <= tol, "{name}: thread {thread}: GPU {g:?} vs CPU {p} (distance {d} > {tol})");
         }
@@ -120,7 +125,19 @@ fn densities_match_cpu() {
 
         // GPU: 2^18 independent orbits of k steps after the transient.
         let gpu_orbits = 1u32 << 18;
-        let settings = LiveSettings { point_count: gpu_orbits, steps_per_frame: k, seed: 3, mode: SplatMode::Density, depth_cue: 0.0, background: bg, shading: 0.0, point_radius_px: 0, max_splats: u64::MAX, settle_steps: 0, chaos_backend: ChaosBackend::Gpu };
+        let settings = LiveSettings {
+            point_count: gpu_orbits,
+            steps_per_frame: k,
+            seed: 3,
+            mode: SplatMode::Density,
+            depth_cue: 0.0,
+            background: bg,
+            shading: 0.0,
+            point_radius_px: 0,
+            max_splats: u64::MAX,
+            settle_steps: 0,
+            chaos_backend: ChaosBackend::Gpu,
+        };
         let mut live = LiveView::new(&ctx, settings, width, height).unwrap();
         live.set_ifs(&ctx, &compiled, bounds, true);
         live.set_camera(&camera);
@@ -151,7 +168,12 @@ fn densities_match_cpu() {
             let tol = 6.0 * sigma + 1e-12;
             let d = (pg[i] - pc[i]).abs();
             worst = worst.max(d / tol);
-            assert!(d <= tol, "{name}: cell {i}: GPU {} vs CPU {} (|Δ| {d:.3e} > tolerance {tol:.3e}; {n_gpu} vs {n_cpu} samples)", pg[i], pc[i]);
+            assert!(
+                d <= tol,
+                "{name}: cell {i}: GPU {} vs CPU {} (|Δ| {d:.3e} > tolerance {tol:.3e}; {n_gpu} vs {n_cpu} samples)",
+                pg[i],
+                pc[i]
+            );
         }
         eprintln!("{name}: {n_gpu} GPU / {n_cpu} CPU samples, worst |Δ|/tolerance {worst:.3}");
     }
@@ -159,7 +181,17 @@ fn densities_match_cpu() {
 
 /// Settings of the CPU-route tests.
 fn route_settings(backend: ChaosBackend, mode: SplatMode, points: u32, steps: u32) -> LiveSettings {
-    LiveSettings { point_count: points, steps_per_frame: steps, seed: 5, mode, depth_cue: 0.5, background: [0.02, 0.03, 0.05], max_splats: u64::MAX, chaos_backend: backend, ..LiveSettings::default() }
+    LiveSettings {
+        point_count: points,
+        steps_per_frame: steps,
+        seed: 5,
+        mode,
+        depth_cue: 0.5,
+        background: [0.02, 0.03, 0.05],
+        max_splats: u64::MAX,
+        chaos_backend: backend,
+        ..LiveSettings::default()
+    }
 }
 
 /// The CPU route (`chaos_backend = cpu`) uploads exactly the framebuffer that the CPU chaos
@@ -213,7 +245,10 @@ fn cpu_route_uploads_the_cpu_framebuffer() {
         let image = snapshot(&ctx, &mut live).unwrap();
         let bg = expected.resolve().get_pixel(0, 0).0;
         let drawn = image.pixels().filter(|p| (0..3).any(|k| (p.0[k] as i32 - bg[k] as i32).abs() > 2)).count();
-        assert!(drawn as f64 > 0.9 * previous_covered as f64, "{mode:?}: {drawn} pixels drawn, {previous_covered} covered");
+        assert!(
+            drawn as f64 > 0.9 * previous_covered as f64,
+            "{mode:?}: {drawn} pixels drawn, {previous_covered} covered"
+        );
         assert!(drawn <= previous_covered, "{mode:?}: {drawn} pixels drawn, {previous_covered} covered");
     }
 }

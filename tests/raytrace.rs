@@ -16,7 +16,8 @@ use nlifs::scene::Scene;
 const SCENES: [&str; 5] = ["tapering", "twisting", "fantasy", "plant1", "plant2"];
 
 fn scene(name: &str) -> Scene {
-    Scene::load(&Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes").join(format!("{name}.toml"))).expect("paper scene loads")
+    Scene::load(&Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes").join(format!("{name}.toml")))
+        .expect("paper scene loads")
 }
 
 fn unit_vector(rng: &mut Pcg32) -> Vec3 {
@@ -65,14 +66,19 @@ fn check_against_brute_force(h: &Hierarchy, what: &str, seed: u32) -> usize {
             _ => panic!("{what}: ray {i} (seed {seed}): hierarchy {fast:?} vs brute force {slow:?}"),
         }
         // With any leaf as hint (the tracer passes the previous sample's), the same nearest t.
-        let leaves: Vec<u32> = (0..h.nodes.len() as u32).filter(|&k| h.nodes[k as usize].kind != NodeKind::Inner).collect();
+        let leaves: Vec<u32> =
+            (0..h.nodes.len() as u32).filter(|&k| h.nodes[k as usize].kind != NodeKind::Inner).collect();
         let hint = leaves[(i * 7919) % leaves.len()];
         let hinted = h.intersect_hinted(ray, 0.0, f32::INFINITY, hint, &mut Scratch::default());
         assert_eq!(hinted.map(|x| x.t), slow.map(|x| x.t), "{what}: ray {i} (seed {seed}): hinted with leaf {hint}");
         assert_eq!(h.occluded(ray, 0.0, f32::INFINITY), slow.is_some(), "{what}: ray {i} (seed {seed}): occlusion");
         // With any leaf as the shadow cache's guess, the same answer.
         let cached = h.occluder_hinted(ray, 0.0, f32::INFINITY, hint, &mut Scratch::default());
-        assert_eq!(cached.is_some(), slow.is_some(), "{what}: ray {i} (seed {seed}): occlusion with cached leaf {hint}");
+        assert_eq!(
+            cached.is_some(),
+            slow.is_some(),
+            "{what}: ray {i} (seed {seed}): occlusion with cached leaf {hint}"
+        );
         if let Some(b) = slow {
             // A segment ending before the first hit is not occluded.
             assert!(!h.occluded(ray, 0.0, b.t * 0.999), "{what}: ray {i}: occluded before the first hit");
@@ -133,7 +139,8 @@ fn mesh_hierarchy_matches_brute_force_on_paper_scenes() {
         let mesh = Mesh::box_surface(ifs.domain.min(), ifs.domain.max(), 3);
         let h = Hierarchy::build(&ifs, &InitialObject::Mesh(mesh), Stop { max_depth: 2, pixel: None }).unwrap();
         for form in simd_forms(&h) {
-            let hits = check_against_brute_force(&form, &format!("{name} grid surface ({:?})", form.simd()), 100 + k as u32);
+            let hits =
+                check_against_brute_force(&form, &format!("{name} grid surface ({:?})", form.simd()), 100 + k as u32);
             assert!(hits > 1000, "{name}: only {hits} of 10000 rays hit");
         }
     }
@@ -160,12 +167,17 @@ fn lipschitz_spheres_contain_mapped_samples() {
             let f = sample % m;
             let p = (rng.next_u32() as usize) % inner.len();
             let s = inner[p];
-            let x = s.centre.as_dvec3() + s.radius as f64 * rng.next_f32().cbrt() as f64 * unit_vector(&mut rng).as_dvec3();
+            let x =
+                s.centre.as_dvec3() + s.radius as f64 * rng.next_f32().cbrt() as f64 * unit_vector(&mut rng).as_dvec3();
             let y = ifs.functions[active[f]].map.eval(x);
             let t = outer[f * inner.len() + p];
             let d = (y - t.centre.as_dvec3()).length();
             let slack = 1e-6 * t.centre.abs().max_element() as f64 + 1e-9;
-            assert!(d <= t.radius as f64 + slack, "{name}: sample {sample}: w_{f}(x) at distance {d} from a sphere of radius {}", t.radius);
+            assert!(
+                d <= t.radius as f64 + slack,
+                "{name}: sample {sample}: w_{f}(x) at distance {d} from a sphere of radius {}",
+                t.radius
+            );
         }
     }
 }
@@ -181,7 +193,8 @@ fn mapped_points_stay_inside_their_ancestors() {
         let (lo, hi) = (ifs.domain.min(), ifs.domain.max());
         let mut rng = Pcg32::for_stream(11, k as u32, 0);
         for sample in 0..2000 {
-            let mut x = lo + (hi - lo) * DVec3::new(rng.next_f32() as f64, rng.next_f32() as f64, rng.next_f32() as f64);
+            let mut x =
+                lo + (hi - lo) * DVec3::new(rng.next_f32() as f64, rng.next_f32() as f64, rng.next_f32() as f64);
             let path: Vec<usize> = (0..4).map(|_| rng.next_u32() as usize % active.len()).collect();
             for &f in path.iter().rev() {
                 x = ifs.functions[active[f]].map.eval(x);
@@ -240,7 +253,11 @@ fn golden_image_tapering_spheres() {
         let (a, d) = (out.join("tapering_n3_spheres.actual.png"), out.join("tapering_n3_spheres.diff.png"));
         nlifs::io::save_png(&a, &actual).unwrap();
         nlifs::io::save_png(&d, &diff).unwrap();
-        panic!("golden image differs: mean {mean:.3} levels, {bad} pixels > 16 levels; actual {}, diff ×8 {}", a.display(), d.display());
+        panic!(
+            "golden image differs: mean {mean:.3} levels, {bad} pixels > 16 levels; actual {}, diff ×8 {}",
+            a.display(),
+            d.display()
+        );
     }
 }
 

@@ -22,7 +22,8 @@ const INTERFACE_STRUCTS: [&str; 1] = ["VertexOutput"];
 
 fn validate(name: &str) -> (naga::Module, naga::valid::ModuleInfo) {
     let source = program(name);
-    let module = naga::front::wgsl::parse_str(&source).unwrap_or_else(|e| panic!("{name}: {}", e.emit_to_string(&source)));
+    let module =
+        naga::front::wgsl::parse_str(&source).unwrap_or_else(|e| panic!("{name}: {}", e.emit_to_string(&source)));
     let info = naga::valid::Validator::new(naga::valid::ValidationFlags::all(), naga::valid::Capabilities::default())
         .validate(&module)
         .unwrap_or_else(|e| panic!("{name}: {}", e.emit_to_string(&source)));
@@ -50,7 +51,8 @@ fn every_shader_file_is_in_a_program() {
     for f in &files {
         let text = std::fs::read_to_string(dir.join(f)).unwrap();
         let included = PROGRAMS.iter().flat_map(|(_, parts)| parts.iter()).find(|(n, _)| n == f);
-        let (_, embedded) = included.unwrap_or_else(|| panic!("shaders/{f} is not part of any program in src/gpu/shaders.rs"));
+        let (_, embedded) =
+            included.unwrap_or_else(|| panic!("shaders/{f} is not part of any program in src/gpu/shaders.rs"));
         assert_eq!(*embedded, text, "shaders/{f}: embedded text differs (rebuild)");
     }
 }
@@ -70,7 +72,11 @@ fn struct_sizes_match_rust_mirrors() {
             let mirrors: Vec<_> = MIRRORS.iter().filter(|(p, s, _)| *p == name && *s == struct_name).collect();
             assert_eq!(mirrors.len(), 1, "{name}: struct {struct_name} needs exactly one Rust mirror");
             let wgsl_size = layouter[handle].size as usize;
-            assert_eq!(wgsl_size, mirrors[0].2, "{name}: struct {struct_name} is {wgsl_size} bytes in WGSL, its mirror {} bytes", mirrors[0].2);
+            assert_eq!(
+                wgsl_size, mirrors[0].2,
+                "{name}: struct {struct_name} is {wgsl_size} bytes in WGSL, its mirror {} bytes",
+                mirrors[0].2
+            );
         }
     }
     // Every mirror names a struct that exists.
@@ -101,6 +107,11 @@ fn uniform_table_sizes_match_host_capacities() {
     let (module, _) = validate("resolve");
     let mut layouter = naga::proc::Layouter::default();
     layouter.update(module.to_ctx()).unwrap();
-    let colors = module.global_variables.iter().map(|(_, v)| v).find(|v| v.name.as_deref() == Some("colors")).expect("resolve: colors");
+    let colors = module
+        .global_variables
+        .iter()
+        .map(|(_, v)| v)
+        .find(|v| v.name.as_deref() == Some("colors"))
+        .expect("resolve: colors");
     assert_eq!(layouter[colors.ty].size as u64, UNIFORM_CAPACITY[4], "resolve: colors");
 }

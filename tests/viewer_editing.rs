@@ -38,7 +38,10 @@ fn a_drag_gesture_is_one_undo_step_and_undo_redo_restore_exactly() {
     for k in 1..=10 {
         changes.push(s.apply([Command::DragPoint { delta_px: [-10.0 * k as f32, -8.0 * k as f32] }]));
     }
-    assert!(changes.iter().all(|c| c.scene_edited && !c.scene_replaced), "every drag step is a scene edit that keeps the points");
+    assert!(
+        changes.iter().all(|c| c.scene_edited && !c.scene_replaced),
+        "every drag step is a scene edit that keeps the points"
+    );
     let moved = grid_points(&s, f)[i];
     // The point followed the cursor in the view plane: its projection moved by the cursor's
     // delta (to 0.05 px: f32 projection of coordinates ~100).
@@ -65,7 +68,11 @@ fn axis_lock_moves_along_one_axis_and_numeric_entry_is_one_step() {
     let mut s = state_for("plant1.toml");
     s.apply([Command::SetGridOverlay(true), Command::SetAxisLock(Some(1))]);
     let start = grid_points(&s, 0)[5];
-    s.apply([Command::BeginPointDrag { function: 0, point: 5 }, Command::DragPoint { delta_px: [30.0, -40.0] }, Command::EndGesture]);
+    s.apply([
+        Command::BeginPointDrag { function: 0, point: 5 },
+        Command::DragPoint { delta_px: [30.0, -40.0] },
+        Command::EndGesture,
+    ]);
     let p = grid_points(&s, 0)[5];
     assert_eq!((p.x, p.z), (start.x, start.z));
     assert!(p.y > start.y, "dragging up raises y: {start} -> {p}");
@@ -78,7 +85,10 @@ fn axis_lock_moves_along_one_axis_and_numeric_entry_is_one_step() {
     s.apply([Command::Undo]);
     assert_eq!(s.scene, before);
     // Builder grids are read-only; bad indices are ignored.
-    s.apply([Command::SetPoint { function: 99, point: 0, p: DVec3::ZERO }, Command::SetPoint { function: 0, point: 9999, p: DVec3::ZERO }]);
+    s.apply([
+        Command::SetPoint { function: 99, point: 0, p: DVec3::ZERO },
+        Command::SetPoint { function: 0, point: 9999, p: DVec3::ZERO },
+    ]);
     s.apply([Command::EndGesture]);
     assert_eq!(s.scene, before);
 }
@@ -96,7 +106,8 @@ fn keys_at_the_playhead_add_edit_delete_and_undo() {
     let k = s.key_at_playhead().unwrap();
     assert_eq!(tl.keys[k].t_secs, 0.7);
     // The new key holds the values the animation had there: the scene at 0.7 is unchanged.
-    let at = |s: &ViewerState| (0..s.scene.functions.len()).map(|f| s.scene.function_def_at(f, 0.7)).collect::<Vec<_>>();
+    let at =
+        |s: &ViewerState| (0..s.scene.functions.len()).map(|f| s.scene.function_def_at(f, 0.7)).collect::<Vec<_>>();
     assert_eq!(at(&s), (0..original.functions.len()).map(|f| original.function_def_at(f, 0.7)).collect::<Vec<_>>());
     s.apply([Command::SetKeyShape { key: k, interpolation: Interpolation::Linear, ease: Ease::InOut }]);
     let key = &s.scene.timeline.as_ref().unwrap().keys[k];
@@ -209,7 +220,8 @@ fn ray_trace_and_record_jobs_run_in_the_background_and_cancel() {
     let mut s = state_for("tapering.toml");
     let png = dir.join("rt.png");
     let form = RaytraceForm { depth: 2, spp: 1, width: 64, height: 48, png_text: png.display().to_string() };
-    let changes = s.apply([Command::SetRaytraceForm(form), Command::Orbit { dx_px: 30.0, dy_px: 0.0 }, Command::StartRaytrace]);
+    let changes =
+        s.apply([Command::SetRaytraceForm(form), Command::Orbit { dx_px: 30.0, dy_px: 0.0 }, Command::StartRaytrace]);
     for r in changes.jobs {
         jobs.handle(r);
     }
@@ -230,7 +242,13 @@ fn ray_trace_and_record_jobs_run_in_the_background_and_cancel() {
     assert_eq!(img, direct.image);
 
     // A cancelled ray-trace ends with a message and no new image.
-    let big = RaytraceForm { depth: 8, spp: 16, width: 1024, height: 768, png_text: dir.join("big.png").display().to_string() };
+    let big = RaytraceForm {
+        depth: 8,
+        spp: 16,
+        width: 1024,
+        height: 768,
+        png_text: dir.join("big.png").display().to_string(),
+    };
     for r in s.apply([Command::SetRaytraceForm(big), Command::StartRaytrace, Command::CancelRaytrace]).jobs {
         jobs.handle(r);
     }
@@ -241,7 +259,8 @@ fn ray_trace_and_record_jobs_run_in_the_background_and_cancel() {
     // Record the timeline (CPU): every frame written.
     let mut s = state_for("twist-anim.toml");
     let out = dir.join("frames");
-    let form = RecordForm { width: 32, height: 24, fps: 2.0, points_per_frame: 2000, dir_text: out.display().to_string() };
+    let form =
+        RecordForm { width: 32, height: 24, fps: 2.0, points_per_frame: 2000, dir_text: out.display().to_string() };
     for r in s.apply([Command::SetRecordForm(form.clone()), Command::StartRecord]).jobs {
         jobs.handle(r);
     }
@@ -255,7 +274,11 @@ fn ray_trace_and_record_jobs_run_in_the_background_and_cancel() {
         jobs.handle(r);
     }
     wait_jobs(&mut jobs, &ctx);
-    assert!(jobs.view.record_message.as_deref().unwrap_or("").starts_with("cancelled after"), "{:?}", jobs.view.record_message);
+    assert!(
+        jobs.view.record_message.as_deref().unwrap_or("").starts_with("cancelled after"),
+        "{:?}",
+        jobs.view.record_message
+    );
     let _ = std::fs::remove_dir_all(&dir);
 }
 

@@ -54,7 +54,12 @@ fn playback_through_a_key_reconverges() {
     let scene = Scene::load(&path).unwrap();
     let bounds = nlifs::record::timeline_bounds(&scene).unwrap();
     let camera = scene.camera_for_at(0.0, bounds);
-    let settings = LiveSettings { point_count: 1 << 17, mode: SplatMode::Density, max_splats: u64::MAX, ..LiveSettings::default() };
+    let settings = LiveSettings {
+        point_count: 1 << 17,
+        mode: SplatMode::Density,
+        max_splats: u64::MAX,
+        ..LiveSettings::default()
+    };
     let compiled = |t: f64| CompiledIfs::new(&scene.at(t)).unwrap();
     let reference = |t: f64| {
         let mut r = LiveView::new(&ctx, LiveSettings { steps_per_frame: 16, seed: 99, ..settings }, W, H).unwrap();
@@ -103,6 +108,8 @@ fn playback_through_a_key_reconverges() {
                 converged = Some(k);
             }
         }
-        println!("  worst playback ratio {worst:.2}; after pausing at t = {t:.3}: within noise after {converged:?} frame(s)");
+        println!(
+            "  worst playback ratio {worst:.2}; after pausing at t = {t:.3}: within noise after {converged:?} frame(s)"
+        );
     }
 }

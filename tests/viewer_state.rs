@@ -42,7 +42,6 @@ fn edits_recompile_and_camera_moves_do_not() {
     assert!(!changes.scene_edited);
 }
 
-
 #[test]
 fn the_first_view_rect_frames_the_attractor_in_it_and_later_ones_keep_the_camera() {
     use nlifs::chaos_game::attractor_sample;

@@ -27,7 +27,12 @@ fn skip(why: &str) {
 }
 
 fn have(tool: &str) -> bool {
-    Command::new("sh").arg("-c").arg(format!("command -v {tool}")).stdout(Stdio::null()).status().is_ok_and(|s| s.success())
+    Command::new("sh")
+        .arg("-c")
+        .arg(format!("command -v {tool}"))
+        .stdout(Stdio::null())
+        .status()
+        .is_ok_and(|s| s.success())
 }
 
 /// Kills and reaps a child we started when dropped.
@@ -40,7 +45,8 @@ impl Drop for Guard {
 }
 
 fn screenshot(display: &str, path: &Path) -> Option<image::RgbImage> {
-    let ok = Command::new("import").args(["-window", "root"]).arg(path).env("DISPLAY", display).status().ok()?.success();
+    let ok =
+        Command::new("import").args(["-window", "root"]).arg(path).env("DISPLAY", display).status().ok()?.success();
     if !ok {
         return None;
     }
@@ -57,7 +63,8 @@ fn non_background_fraction(img: &image::RgbImage) -> f64 {
     }
     let Some((bg, _)) = counts.iter().max_by_key(|(_, n)| **n) else { return 0.0 };
     let total: u64 = counts.values().sum();
-    let differ: u64 = counts.iter().filter(|(c, _)| (0..3).any(|k| (c[k] as i32 - bg[k] as i32).abs() > DIFF)).map(|(_, n)| n).sum();
+    let differ: u64 =
+        counts.iter().filter(|(c, _)| (0..3).any(|k| (c[k] as i32 - bg[k] as i32).abs() > DIFF)).map(|(_, n)| n).sum();
     differ as f64 / total as f64
 }
 
@@ -157,7 +164,23 @@ fn check_viewer(chaos_backend: Option<&str>) {
     // 2. A left drag on the view orbits the camera: the image changes.
     let drag = Command::new("xdotool")
         .args(["mousemove", "850", "360", "mousedown", "1"])
-        .args(["mousemove", "870", "362", "sleep", "0.2", "mousemove", "920", "365", "sleep", "0.2", "mousemove", "990", "370", "sleep", "0.2"])
+        .args([
+            "mousemove",
+            "870",
+            "362",
+            "sleep",
+            "0.2",
+            "mousemove",
+            "920",
+            "365",
+            "sleep",
+            "0.2",
+            "mousemove",
+            "990",
+            "370",
+            "sleep",
+            "0.2",
+        ])
         .args(["mouseup", "1"])
         .env("DISPLAY", &display)
         .status()
@@ -174,7 +197,12 @@ fn check_viewer(chaos_backend: Option<&str>) {
             break changed;
         }
     };
-    assert!(changed > 0.01, "a drag changed only {changed:.4} of the view; see {} and {}", first.display(), second.display());
+    assert!(
+        changed > 0.01,
+        "a drag changed only {changed:.4} of the view; see {} and {}",
+        first.display(),
+        second.display()
+    );
     eprintln!("window smoke ({label}): attractor covers {covered:.3} of the view, a drag changed {changed:.3}");
     drop(viewer);
     let _ = std::fs::remove_dir_all(&dir);

@@ -29,7 +29,9 @@
 
 use std::arch::x86_64::*;
 
-use super::{FastKernel, LANE_FUNCTIONS, ORBITS_PER_CHUNK, PointBatch, PointSink, SELECT_BITS, STEPS_PER_BATCH, SelectionTable};
+use super::{
+    FastKernel, LANE_FUNCTIONS, ORBITS_PER_CHUNK, PointBatch, PointSink, SELECT_BITS, STEPS_PER_BATCH, SelectionTable,
+};
 use crate::rng::{PCG_INC, PCG_MUL, PCG_OUT_MUL};
 
 /// Orbits per AVX2 vector.
@@ -114,7 +116,12 @@ impl SimdKernel {
     /// function with more than [`MAX_AXIS_CELLS`] cells along an axis.
     pub(super) fn new(fast: &FastKernel, selection: &SelectionTable) -> Option<Self> {
         let n = fast.functions.len();
-        if n == 0 || n > LANES || selection.cells != [1, 1, 1] || selection.thresholds.len() != n || fast.functions.iter().any(|f| f.julia) {
+        if n == 0
+            || n > LANES
+            || selection.cells != [1, 1, 1]
+            || selection.thresholds.len() != n
+            || fast.functions.iter().any(|f| f.julia)
+        {
             return None;
         }
         if fast.cells.len() >= (i32::MAX as usize) / COEFS {
@@ -153,7 +160,9 @@ impl SimdKernel {
                 axis.stride[l] = [f.stride_x, f.stride_y, 1][a] as i32;
             }
         }
-        let per_fn = |g: &dyn Fn(&super::FastFunction) -> f32| -> [f32; WIDE] { std::array::from_fn(|l| g(&fast.functions[lane_fn(l)])) };
+        let per_fn = |g: &dyn Fn(&super::FastFunction) -> f32| -> [f32; WIDE] {
+            std::array::from_fn(|l| g(&fast.functions[lane_fn(l)]))
+        };
         let cell_count = fast.cells.len();
         let lookup = if Lookup::Wide16.supported() {
             if cell_count <= 16 { Lookup::Wide16 } else { Lookup::WideGather }
@@ -167,7 +176,9 @@ impl SimdKernel {
             Lookup::Gather
         };
         let small = cell_count <= 16;
-        let coef_tables = Box::new(std::array::from_fn(|j| std::array::from_fn(|c| fast.cells.get(c).filter(|_| small).map_or(0.0, |cell| cell[j]))));
+        let coef_tables = Box::new(std::array::from_fn(|j| {
+            std::array::from_fn(|c| fast.cells.get(c).filter(|_| small).map_or(0.0, |cell| cell[j]))
+        }));
         let inner = &selection.thresholds[..n - 1];
         Some(Self {
             thresholds: std::array::from_fn(|k| inner.get(k).map_or((1 << SELECT_BITS) - 1, |&t| t as i32 - 1)),
@@ -202,7 +213,15 @@ impl SimdKernel {
 
     /// Runs the orbits of one chunk (lane k: generator `rngs[k]`, position `pos[k]`) for
     /// `transient` discarded steps and `steps` kept ones into `sink`, as `Orbits::run` does.
-    pub(super) fn run(&self, lookup: Lookup, rngs: &[u32; ORBITS_PER_CHUNK], pos: &[[f32; 3]; ORBITS_PER_CHUNK], transient: u32, steps: usize, sink: &mut impl PointSink) {
+    pub(super) fn run(
+        &self,
+        lookup: Lookup,
+        rngs: &[u32; ORBITS_PER_CHUNK],
+        pos: &[[f32; 3]; ORBITS_PER_CHUNK],
+        transient: u32,
+        steps: usize,
+        sink: &mut impl PointSink,
+    ) {
         assert!(lookup.supported() && self.has_tables(lookup));
         let mut state = Lanes { rng: *rngs, x: pos.map(|p| p[0]), y: pos.map(|p| p[1]), z: pos.map(|p| p[2]) };
         // SAFETY: the CPU has the features each entry point enables (asserted above), and the
@@ -289,7 +308,9 @@ impl SimdKernel {
                 if axis.boundaries > 0 {
                     let stride = _mm256_permutevar8x32_epi32(_mm256_loadu_si256(axis.stride.as_ptr().cast()), fi);
                     let b = axis.boundaries;
-                    for ((next, next_start), next_inv_width) in axis.next[..b].iter().zip(&axis.start[1..=b]).zip(&axis.inv_width[1..=b]) {
+                    for ((next, next_start), next_inv_width) in
+                        axis.next[..b].iter().zip(&axis.start[1..=b]).zip(&axis.inv_width[1..=b])
+                    {
                         let passed = _mm256_cmp_ps::<_CMP_GE_OQ>(q, by_fn!(next));
                         start = _mm256_blendv_ps(start, by_fn!(next_start), passed);
                         inv_width = _mm256_blendv_ps(inv_width, by_fn!(next_inv_width), passed);
@@ -354,9 +375,15 @@ impl SimdKernel {
     unsafe fn step<const L: u8>(&self, rng: &mut __m256i, p: [__m256; 3]) -> ([__m256; 3], __m256i) {
         unsafe {
             let old = *rng;
-            *rng = _mm256_add_epi32(_mm256_mullo_epi32(old, _mm256_set1_epi32(PCG_MUL as i32)), _mm256_set1_epi32(PCG_INC as i32));
+            *rng = _mm256_add_epi32(
+                _mm256_mullo_epi32(old, _mm256_set1_epi32(PCG_MUL as i32)),
+                _mm256_set1_epi32(PCG_INC as i32),
+            );
             let shift = _mm256_add_epi32(_mm256_srli_epi32::<28>(old), _mm256_set1_epi32(4));
-            let word = _mm256_mullo_epi32(_mm256_xor_si256(_mm256_srlv_epi32(old, shift), old), _mm256_set1_epi32(PCG_OUT_MUL as i32));
+            let word = _mm256_mullo_epi32(
+                _mm256_xor_si256(_mm256_srlv_epi32(old, shift), old),
+                _mm256_set1_epi32(PCG_OUT_MUL as i32),
+            );
             let r = _mm256_xor_si256(_mm256_srli_epi32::<22>(word), word);
             let fi = self.select(r);
             (self.map::<L>(fi, p), fi)
@@ -397,10 +424,13 @@ impl SimdKernel {
                 if axis.boundaries > 0 {
                     let stride = _mm512_permutexvar_epi32(fi, _mm512_loadu_si512(axis.stride.as_ptr().cast()));
                     let b = axis.boundaries;
-                    for ((next, next_start), next_inv_width) in axis.next[..b].iter().zip(&axis.start[1..=b]).zip(&axis.inv_width[1..=b]) {
+                    for ((next, next_start), next_inv_width) in
+                        axis.next[..b].iter().zip(&axis.start[1..=b]).zip(&axis.inv_width[1..=b])
+                    {
                         let passed = _mm512_cmp_ps_mask::<_CMP_GE_OQ>(q, by_fn!(next));
                         start = _mm512_mask_permutexvar_ps(start, passed, fi, _mm512_loadu_ps(next_start.as_ptr()));
-                        inv_width = _mm512_mask_permutexvar_ps(inv_width, passed, fi, _mm512_loadu_ps(next_inv_width.as_ptr()));
+                        inv_width =
+                            _mm512_mask_permutexvar_ps(inv_width, passed, fi, _mm512_loadu_ps(next_inv_width.as_ptr()));
                         cell = _mm512_mask_add_epi32(cell, passed, cell, stride);
                     }
                 }
@@ -438,9 +468,15 @@ impl SimdKernel {
     unsafe fn step16<const L: u8>(&self, rng: &mut __m512i, p: [__m512; 3]) -> ([__m512; 3], __m512i) {
         unsafe {
             let old = *rng;
-            *rng = _mm512_add_epi32(_mm512_mullo_epi32(old, _mm512_set1_epi32(PCG_MUL as i32)), _mm512_set1_epi32(PCG_INC as i32));
+            *rng = _mm512_add_epi32(
+                _mm512_mullo_epi32(old, _mm512_set1_epi32(PCG_MUL as i32)),
+                _mm512_set1_epi32(PCG_INC as i32),
+            );
             let shift = _mm512_add_epi32(_mm512_srli_epi32::<28>(old), _mm512_set1_epi32(4));
-            let word = _mm512_mullo_epi32(_mm512_xor_si512(_mm512_srlv_epi32(old, shift), old), _mm512_set1_epi32(PCG_OUT_MUL as i32));
+            let word = _mm512_mullo_epi32(
+                _mm512_xor_si512(_mm512_srlv_epi32(old, shift), old),
+                _mm512_set1_epi32(PCG_OUT_MUL as i32),
+            );
             let r = _mm512_xor_si512(_mm512_srli_epi32::<22>(word), word);
             let fi = self.select16(r);
             (self.map16::<L>(fi, p), fi)
@@ -505,15 +541,31 @@ macro_rules! run_chunk_loop {
 }
 
 #[target_feature(enable = "avx2")]
-unsafe fn run_avx2<const L: u8>(k: &SimdKernel, lanes: &mut Lanes, transient: u32, steps: usize, sink: &mut impl PointSink) {
+unsafe fn run_avx2<const L: u8>(
+    k: &SimdKernel,
+    lanes: &mut Lanes,
+    transient: u32,
+    steps: usize,
+    sink: &mut impl PointSink,
+) {
     // SAFETY: AVX2 is enabled here; g < ORBITS_PER_CHUNK / 8 and the offsets are rows.
-    run_chunk_loop!(ORBITS_PER_CHUNK / LANES, transient, steps, sink, |g, out| unsafe { group_avx2::<L>(k, lanes, g, out) })
+    run_chunk_loop!(ORBITS_PER_CHUNK / LANES, transient, steps, sink, |g, out| unsafe {
+        group_avx2::<L>(k, lanes, g, out)
+    })
 }
 
 #[target_feature(enable = "avx2,avx512f")]
-unsafe fn run_avx512<const L: u8>(k: &SimdKernel, lanes: &mut Lanes, transient: u32, steps: usize, sink: &mut impl PointSink) {
+unsafe fn run_avx512<const L: u8>(
+    k: &SimdKernel,
+    lanes: &mut Lanes,
+    transient: u32,
+    steps: usize,
+    sink: &mut impl PointSink,
+) {
     // SAFETY: AVX-512F is enabled here; g < ORBITS_PER_CHUNK / 16 and the offsets are rows.
-    run_chunk_loop!(ORBITS_PER_CHUNK / WIDE, transient, steps, sink, |g, out| unsafe { group_avx512::<L>(k, lanes, g, out) })
+    run_chunk_loop!(ORBITS_PER_CHUNK / WIDE, transient, steps, sink, |g, out| unsafe {
+        group_avx512::<L>(k, lanes, g, out)
+    })
 }
 
 /// Advances lanes 8g..8g + 8 one step; writes their points at offset `row` of `out`, if any.
@@ -526,7 +578,11 @@ unsafe fn group_avx2<const L: u8>(k: &SimdKernel, lanes: &mut Lanes, g: usize, o
     // STEPS_PER_BATCH, the length of each output buffer (the caller's bounds on g and row).
     unsafe {
         let mut rng = _mm256_loadu_si256(lanes.rng.as_ptr().add(o).cast());
-        let p = [_mm256_loadu_ps(lanes.x.as_ptr().add(o)), _mm256_loadu_ps(lanes.y.as_ptr().add(o)), _mm256_loadu_ps(lanes.z.as_ptr().add(o))];
+        let p = [
+            _mm256_loadu_ps(lanes.x.as_ptr().add(o)),
+            _mm256_loadu_ps(lanes.y.as_ptr().add(o)),
+            _mm256_loadu_ps(lanes.z.as_ptr().add(o)),
+        ];
         let (q, fi) = k.step::<L>(&mut rng, p);
         _mm256_storeu_si256(lanes.rng.as_mut_ptr().add(o).cast(), rng);
         _mm256_storeu_ps(lanes.x.as_mut_ptr().add(o), q[0]);
@@ -554,7 +610,11 @@ unsafe fn group_avx512<const L: u8>(k: &SimdKernel, lanes: &mut Lanes, g: usize,
     // SAFETY: as in group_avx2, with 16 lanes.
     unsafe {
         let mut rng = _mm512_loadu_si512(lanes.rng.as_ptr().add(o).cast());
-        let p = [_mm512_loadu_ps(lanes.x.as_ptr().add(o)), _mm512_loadu_ps(lanes.y.as_ptr().add(o)), _mm512_loadu_ps(lanes.z.as_ptr().add(o))];
+        let p = [
+            _mm512_loadu_ps(lanes.x.as_ptr().add(o)),
+            _mm512_loadu_ps(lanes.y.as_ptr().add(o)),
+            _mm512_loadu_ps(lanes.z.as_ptr().add(o)),
+        ];
         let (q, fi) = k.step16::<L>(&mut rng, p);
         _mm512_storeu_si512(lanes.rng.as_mut_ptr().add(o).cast(), rng);
         _mm512_storeu_ps(lanes.x.as_mut_ptr().add(o), q[0]);
@@ -579,7 +639,14 @@ unsafe fn map_points_avx2<const L: u8>(k: &SimdKernel, fi: &[u32], p: &[[f32; 3]
         // SAFETY: loads and stores of whole 8-lane arrays.
         unsafe {
             let fi = _mm256_loadu_si256(fi.as_ptr().cast());
-            let r = k.map::<L>(fi, [_mm256_loadu_ps(axis(0).as_ptr()), _mm256_loadu_ps(axis(1).as_ptr()), _mm256_loadu_ps(axis(2).as_ptr())]);
+            let r = k.map::<L>(
+                fi,
+                [
+                    _mm256_loadu_ps(axis(0).as_ptr()),
+                    _mm256_loadu_ps(axis(1).as_ptr()),
+                    _mm256_loadu_ps(axis(2).as_ptr()),
+                ],
+            );
             for a in 0..3 {
                 _mm256_storeu_ps(q[a].as_mut_ptr(), r[a]);
             }
@@ -599,7 +666,14 @@ unsafe fn map_points_avx512<const L: u8>(k: &SimdKernel, fi: &[u32], p: &[[f32; 
         // SAFETY: loads and stores of whole 16-lane arrays.
         unsafe {
             let fi = _mm512_loadu_si512(fi.as_ptr().cast());
-            let r = k.map16::<L>(fi, [_mm512_loadu_ps(axis(0).as_ptr()), _mm512_loadu_ps(axis(1).as_ptr()), _mm512_loadu_ps(axis(2).as_ptr())]);
+            let r = k.map16::<L>(
+                fi,
+                [
+                    _mm512_loadu_ps(axis(0).as_ptr()),
+                    _mm512_loadu_ps(axis(1).as_ptr()),
+                    _mm512_loadu_ps(axis(2).as_ptr()),
+                ],
+            );
             for a in 0..3 {
                 _mm512_storeu_ps(q[a].as_mut_ptr(), r[a]);
             }

@@ -38,11 +38,32 @@ impl fmt::Display for BenchReport {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         let steps = self.points as f64 * self.steps as f64 * self.frames as f64;
         writeln!(f, "adapter: {}", self.adapter)?;
-        writeln!(f, "{} points × {} steps per frame at 1280×720, {} frames in {:.3} s", self.points, self.steps, self.frames, self.secs)?;
-        writeln!(f, "  {:.1} fps, {:.1} M points/s (map + splat + resolve)", self.frames as f64 / self.secs, steps / self.secs / 1e6)?;
+        writeln!(
+            f,
+            "{} points × {} steps per frame at 1280×720, {} frames in {:.3} s",
+            self.points, self.steps, self.frames, self.secs
+        )?;
+        writeln!(
+            f,
+            "  {:.1} fps, {:.1} M points/s (map + splat + resolve)",
+            self.frames as f64 / self.secs,
+            steps / self.secs / 1e6
+        )?;
         writeln!(f, "  per stage alone, ms per frame (wall / process CPU):")?;
-        writeln!(f, "    chaos game + splat {:.1} / {:.1}, resolve {:.1} / {:.1}, clear {:.1} / {:.1}", self.chaos_ms[0], self.chaos_ms[1], self.resolve_ms[0], self.resolve_ms[1], self.clear_ms[0], self.clear_ms[1])?;
-        writeln!(f, "after an edit (coarse-grid L1 distance to the converged image: edited vs fresh run of equal splats):")?;
+        writeln!(
+            f,
+            "    chaos game + splat {:.1} / {:.1}, resolve {:.1} / {:.1}, clear {:.1} / {:.1}",
+            self.chaos_ms[0],
+            self.chaos_ms[1],
+            self.resolve_ms[0],
+            self.resolve_ms[1],
+            self.clear_ms[0],
+            self.clear_ms[1]
+        )?;
+        writeln!(
+            f,
+            "after an edit (coarse-grid L1 distance to the converged image: edited vs fresh run of equal splats):"
+        )?;
         for (k, d_edit, d_fresh) in &self.convergence {
             writeln!(f, "  frame {k:>2}: {d_edit:.4} vs {d_fresh:.4}")?;
         }
@@ -53,7 +74,11 @@ impl fmt::Display for BenchReport {
     }
 }
 
-fn submit_frame(ctx: &GpuContext, live: &mut LiveView, target: Option<(&wgpu::TextureView, wgpu::TextureFormat)>) -> u64 {
+fn submit_frame(
+    ctx: &GpuContext,
+    live: &mut LiveView,
+    target: Option<(&wgpu::TextureView, wgpu::TextureFormat)>,
+) -> u64 {
     let mut encoder = ctx.device.create_command_encoder(&Default::default());
     let n = live.advance(ctx, &mut encoder);
     if let Some((view, format)) = target {
@@ -122,7 +147,8 @@ pub fn run(scene: &Scene, points: u32, steps: u32, frames: u32) -> Result<BenchR
     let bounds = chaos_game::attractor_bounds(&ifs, scene.render.seed);
     let camera = scene.camera_for(bounds);
     let (width, height) = (1280, 720);
-    let settings = LiveSettings { point_count: points, steps_per_frame: steps, max_splats: u64::MAX, ..LiveSettings::default() };
+    let settings =
+        LiveSettings { point_count: points, steps_per_frame: steps, max_splats: u64::MAX, ..LiveSettings::default() };
 
     // Throughput: frames into an offscreen target of the window's size.
     let mut live = LiveView::new(&ctx, settings, width, height)?;
@@ -204,5 +230,16 @@ pub fn run(scene: &Scene, points: u32, steps: u32, frames: u32) -> Result<BenchR
             frames_to_converge = Some(k);
         }
     }
-    Ok(BenchReport { adapter: ctx.describe(), points, steps, frames, secs, chaos_ms, resolve_ms, clear_ms, frames_to_converge, convergence })
+    Ok(BenchReport {
+        adapter: ctx.describe(),
+        points,
+        steps,
+        frames,
+        secs,
+        chaos_ms,
+        resolve_ms,
+        clear_ms,
+        frames_to_converge,
+        convergence,
+    })
 }

@@ -77,7 +77,11 @@ pub struct IfsShape {
 
 impl IfsShape {
     pub fn of(ifs: &CompiledIfs) -> Self {
-        Self { shared_cells: shared_cells(ifs), function_count: ifs.selection.function_count, single_selection_cell: ifs.selection.cells == [1, 1, 1] }
+        Self {
+            shared_cells: shared_cells(ifs),
+            function_count: ifs.selection.function_count,
+            single_selection_cell: ifs.selection.cells == [1, 1, 1],
+        }
     }
 
     /// The shader's pipeline constants for this shape.
@@ -247,7 +251,10 @@ impl Program {
             return i;
         }
         let (mode, has_julia, shape) = key;
-        let constants: Vec<(&str, f64)> = [("SPLAT_MODE", mode as f64), ("HAS_JULIA", has_julia as u32 as f64)].into_iter().chain(shape.constants()).collect();
+        let constants: Vec<(&str, f64)> = [("SPLAT_MODE", mode as f64), ("HAS_JULIA", has_julia as u32 as f64)]
+            .into_iter()
+            .chain(shape.constants())
+            .collect();
         let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
             label: Some("chaos_game"),
             layout: Some(&self.pipeline_layout),
@@ -295,7 +302,8 @@ pub struct GpuChaosGame {
 impl GpuChaosGame {
     pub fn new(device: &wgpu::Device, point_count: u32, width: u32, height: u32) -> Self {
         let uniform_program = Program::new(device, "chaos_game", wgpu::BufferBindingType::Uniform);
-        let storage_program = Program::new(device, "chaos_game_storage", wgpu::BufferBindingType::Storage { read_only: true });
+        let storage_program =
+            Program::new(device, "chaos_game_storage", wgpu::BufferBindingType::Storage { read_only: true });
         let params = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("chaos_params"),
             size: std::mem::size_of::<ChaosParams>() as u64,
@@ -338,7 +346,8 @@ impl GpuChaosGame {
             bytemuck::cast_slice(&ifs.selection.thresholds),
             bytemuck::cast_slice(&colors),
         ];
-        let uniform_tables = !self.force_storage_tables && tables.iter().zip(UNIFORM_CAPACITY).all(|(t, capacity)| t.len() as u64 <= capacity);
+        let uniform_tables = !self.force_storage_tables
+            && tables.iter().zip(UNIFORM_CAPACITY).all(|(t, capacity)| t.len() as u64 <= capacity);
         self.has_julia = ifs.functions.iter().any(|f| f.coord_offset[3] == crate::chaos_game::KIND_JULIA);
         self.shape = if self.force_generic { IfsShape::default() } else { IfsShape::of(ifs) };
         let mut replaced = uniform_tables != self.uniform_tables;
@@ -390,7 +399,13 @@ impl GpuChaosGame {
     /// Writes the frame's uniforms and records the frame (clear, then the chaos game) into
     /// `encoder`. The uniforms are written through the queue, so submit `encoder` before
     /// recording the next frame. Does nothing before an IFS was uploaded.
-    pub fn encode(&mut self, device: &wgpu::Device, queue: &wgpu::Queue, encoder: &mut wgpu::CommandEncoder, args: &FrameArgs) {
+    pub fn encode(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        encoder: &mut wgpu::CommandEncoder,
+        args: &FrameArgs,
+    ) {
         let Some(ifs) = self.ifs else { return };
         let v = args.view;
         let params = ChaosParams {
@@ -419,20 +434,39 @@ impl GpuChaosGame {
         let chaos_index = program.chaos_pipeline(device, (mode_index(v.mode), self.has_julia, self.shape));
         let program = &*program;
         if self.bind_group.is_none() {
-            let buffers = [&self.params, &self.functions, &self.coords, &self.cells, &self.thresholds, &self.colors, &self.points, &self.accum];
+            let buffers = [
+                &self.params,
+                &self.functions,
+                &self.coords,
+                &self.cells,
+                &self.thresholds,
+                &self.colors,
+                &self.points,
+                &self.accum,
+            ];
             let entries: Vec<wgpu::BindGroupEntry> = buffers
                 .iter()
                 .enumerate()
                 .map(|(i, b)| {
                     // A uniform binding is exactly the shader's fixed-size array.
-                    let size = (self.uniform_tables && (1..=5).contains(&i)).then(|| wgpu::BufferSize::new(UNIFORM_CAPACITY[i - 1])).flatten();
-                    wgpu::BindGroupEntry { binding: i as u32, resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding { buffer: b, offset: 0, size }) }
+                    let size = (self.uniform_tables && (1..=5).contains(&i))
+                        .then(|| wgpu::BufferSize::new(UNIFORM_CAPACITY[i - 1]))
+                        .flatten();
+                    wgpu::BindGroupEntry {
+                        binding: i as u32,
+                        resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding { buffer: b, offset: 0, size }),
+                    }
                 })
                 .collect();
-            self.bind_group = Some(device.create_bind_group(&wgpu::BindGroupDescriptor { label: Some("chaos_game"), layout: &program.layout, entries: &entries }));
+            self.bind_group = Some(device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("chaos_game"),
+                layout: &program.layout,
+                entries: &entries,
+            }));
         }
         let Some(bind_group) = &self.bind_group else { return };
-        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("chaos_game"), timestamp_writes: None });
+        let mut pass = encoder
+            .begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("chaos_game"), timestamp_writes: None });
         pass.set_bind_group(0, bind_group, &[]);
         if args.clear {
             pass.set_pipeline(&program.clear_pipeline);
@@ -470,7 +504,10 @@ mod tests {
     #[test]
     fn shapes_of_paper_scenes() {
         // plant2: 2×4×2 grid points, 1×3×1 cells, five functions on the scene's grid.
-        assert_eq!(shape("plant2.toml"), IfsShape { shared_cells: Some([1, 3, 1]), function_count: 5, single_selection_cell: true });
+        assert_eq!(
+            shape("plant2.toml"),
+            IfsShape { shared_cells: Some([1, 3, 1]), function_count: 5, single_selection_cell: true }
+        );
         // Julia maps have no grid.
         assert_eq!(shape("julia.toml").shared_cells, None);
     }

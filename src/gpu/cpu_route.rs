@@ -114,7 +114,9 @@ impl CpuChaosGame {
     pub fn clear(&mut self, view: &SplatView) {
         let colors = self.ifs.as_ref().map_or_else(Vec::new, |ifs| ifs.colors.clone());
         let n = rayon::current_num_threads().max(1);
-        let fits = |fb: &Framebuffer| fb.view.width == view.width && fb.view.height == view.height && fb.view.mode == view.mode;
+        let fits = |fb: &Framebuffer| {
+            fb.view.width == view.width && fb.view.height == view.height && fb.view.mode == view.mode
+        };
         if self.workers.len() != n || !self.workers.iter().all(fits) {
             self.workers = (0..n).map(|_| Framebuffer::new(*view, colors.clone())).collect();
         } else {
@@ -141,7 +143,11 @@ impl CpuChaosGame {
         let (chunks, steps) = frame_chunks(points, workers);
         if !self.pool_tried {
             // Without a pool of its own (threads refused) frames run on the global pool.
-            self.pool = rayon::ThreadPoolBuilder::new().num_threads(workers).thread_name(|i| format!("nlifs-cpu-route-{i}")).build().ok();
+            self.pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(workers)
+                .thread_name(|i| format!("nlifs-cpu-route-{i}"))
+                .build()
+                .ok();
             self.pool_tried = true;
         }
         let framebuffers = &mut self.workers;

@@ -153,7 +153,8 @@ impl LiveView {
     fn update_view(&mut self) {
         let Some(camera) = &self.camera else { return };
         let s = &self.settings;
-        let view = SplatView::new(camera, self.game.width, self.game.height, self.bounds, s.mode, s.depth_cue, s.background);
+        let view =
+            SplatView::new(camera, self.game.width, self.game.height, self.bounds, s.mode, s.depth_cue, s.background);
         if self.view.as_ref().is_none_or(|v| !same_view(v, &view)) {
             self.view = Some(view);
             self.clear = true;
@@ -259,7 +260,15 @@ impl LiveView {
     /// Records only an emptying of the accumulation buffer (benchmarks time it alone).
     pub fn encode_clear(&mut self, ctx: &GpuContext, encoder: &mut wgpu::CommandEncoder) {
         let Some(view) = self.view else { return };
-        let args = FrameArgs { view: &view, seed: self.settings.seed, frame: self.frame, steps: 0, skip_steps: 0, restart: false, clear: true };
+        let args = FrameArgs {
+            view: &view,
+            seed: self.settings.seed,
+            frame: self.frame,
+            steps: 0,
+            skip_steps: 0,
+            restart: false,
+            clear: true,
+        };
         self.game.encode(&ctx.device, &ctx.queue, encoder, &args);
         self.clear = false;
         self.frames_since_clear = 0;
@@ -269,7 +278,14 @@ impl LiveView {
     /// Records the resolve onto `target` (the window's surface or an offscreen texture) with
     /// the accumulation's pixel (0, 0) at `origin_px` of the target; the target must hold the
     /// rectangle of [`Self::size`] there.
-    pub fn draw(&mut self, ctx: &GpuContext, encoder: &mut wgpu::CommandEncoder, target: &wgpu::TextureView, format: wgpu::TextureFormat, origin_px: [u32; 2]) {
+    pub fn draw(
+        &mut self,
+        ctx: &GpuContext,
+        encoder: &mut wgpu::CommandEncoder,
+        target: &wgpu::TextureView,
+        format: wgpu::TextureFormat,
+        origin_px: [u32; 2],
+    ) {
         let s = &self.settings;
         let (near, far) = self.view.map_or((0.0, 1.0), |v| (v.near, v.far));
         let (pixel_size, perspective) = match &self.camera {
@@ -279,7 +295,18 @@ impl LiveView {
             Some(c) => (2.0 * c.half_height_at_target() / self.game.height as f32, false),
             None => (1.0, false),
         };
-        let args = ResolveArgs { mode: s.mode, background: s.background, depth_cue: s.depth_cue, shading: s.shading, point_radius_px: s.point_radius_px, near, far, pixel_size, perspective, origin_px };
+        let args = ResolveArgs {
+            mode: s.mode,
+            background: s.background,
+            depth_cue: s.depth_cue,
+            shading: s.shading,
+            point_radius_px: s.point_radius_px,
+            near,
+            far,
+            pixel_size,
+            perspective,
+            origin_px,
+        };
         self.resolve.draw(&ctx.device, &ctx.queue, encoder, &self.game, &args, target, format);
     }
 

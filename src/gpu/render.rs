@@ -45,9 +45,7 @@ fn map_and_read(ctx: &GpuContext, staging: &wgpu::Buffer) -> Result<Vec<u8>, Gpu
     ctx.device
         .poll(wgpu::PollType::Wait { submission_index: None, timeout: None })
         .map_err(|e| GpuError::Readback(e.to_string()))?;
-    rx.recv()
-        .map_err(|e| GpuError::Readback(e.to_string()))?
-        .map_err(|e| GpuError::Readback(e.to_string()))?;
+    rx.recv().map_err(|e| GpuError::Readback(e.to_string()))?.map_err(|e| GpuError::Readback(e.to_string()))?;
     let bytes = staging.get_mapped_range(..).map_err(|e| GpuError::Readback(e.to_string()))?.to_vec();
     staging.unmap();
     Ok(bytes)
@@ -69,10 +67,19 @@ pub fn snapshot(ctx: &GpuContext, live: &mut LiveView) -> Result<image::RgbImage
     let mut encoder = ctx.device.create_command_encoder(&Default::default());
     live.draw(ctx, &mut encoder, &view, format, [0, 0]);
     encoder.copy_texture_to_buffer(
-        wgpu::TexelCopyTextureInfo { texture: &texture, mip_level: 0, origin: wgpu::Origin3d::ZERO, aspect: wgpu::TextureAspect::All },
+        wgpu::TexelCopyTextureInfo {
+            texture: &texture,
+            mip_level: 0,
+            origin: wgpu::Origin3d::ZERO,
+            aspect: wgpu::TextureAspect::All,
+        },
         wgpu::TexelCopyBufferInfo {
             buffer: &staging,
-            layout: wgpu::TexelCopyBufferLayout { offset: 0, bytes_per_row: Some(bytes_per_row), rows_per_image: Some(height) },
+            layout: wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(bytes_per_row),
+                rows_per_image: Some(height),
+            },
         },
         wgpu::Extent3d { width, height, depth_or_array_layers: 1 },
     );
@@ -127,7 +134,13 @@ pub fn headless_settings(settings: &RenderSettings) -> LiveSettings {
 /// Renders `scene` at `t_secs` on the GPU: the twin of `render::render_cpu` (same bounds,
 /// camera and splat; the points come from GPU streams, so the image agrees in distribution,
 /// not bit for bit).
-pub fn render_gpu(ctx: &GpuContext, scene: &Scene, t_secs: f64, settings: &RenderSettings, camera: Option<OrbitCamera>) -> Result<GpuRendered, GpuError> {
+pub fn render_gpu(
+    ctx: &GpuContext,
+    scene: &Scene,
+    t_secs: f64,
+    settings: &RenderSettings,
+    camera: Option<OrbitCamera>,
+) -> Result<GpuRendered, GpuError> {
     let ifs = scene.at(t_secs);
     let compiled = CompiledIfs::new(&ifs).ok_or(GpuError::NoFunctions)?;
     let bounds = chaos_game::attractor_bounds(&compiled, settings.seed);
@@ -145,7 +158,14 @@ pub fn render_gpu(ctx: &GpuContext, scene: &Scene, t_secs: f64, settings: &Rende
 
 /// A 2D render target of `width`×`height` for offscreen drawing (snapshots, benchmarks), with
 /// `extra` usages beside RENDER_ATTACHMENT.
-pub fn offscreen_texture(ctx: &GpuContext, label: &str, width: u32, height: u32, format: wgpu::TextureFormat, extra: wgpu::TextureUsages) -> wgpu::Texture {
+pub fn offscreen_texture(
+    ctx: &GpuContext,
+    label: &str,
+    width: u32,
+    height: u32,
+    format: wgpu::TextureFormat,
+    extra: wgpu::TextureUsages,
+) -> wgpu::Texture {
     ctx.device.create_texture(&wgpu::TextureDescriptor {
         label: Some(label),
         size: wgpu::Extent3d { width, height, depth_or_array_layers: 1 },

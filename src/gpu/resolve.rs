@@ -110,7 +110,12 @@ impl GpuResolve {
         let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
             label: Some("resolve"),
             layout: None,
-            vertex: wgpu::VertexState { module: &self.module, entry_point: Some("fullscreen"), compilation_options: Default::default(), buffers: &[] },
+            vertex: wgpu::VertexState {
+                module: &self.module,
+                entry_point: Some("fullscreen"),
+                compilation_options: Default::default(),
+                buffers: &[],
+            },
             primitive: wgpu::PrimitiveState::default(),
             depth_stencil: None,
             multisample: wgpu::MultisampleState::default(),
@@ -179,7 +184,11 @@ impl GpuResolve {
                     entry(1, &game.accum),
                     wgpu::BindGroupEntry {
                         binding: 2,
-                        resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding { buffer: &game.colors, offset: 0, size: wgpu::BufferSize::new(COLORS_BYTES) }),
+                        resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                            buffer: &game.colors,
+                            offset: 0,
+                            size: wgpu::BufferSize::new(COLORS_BYTES),
+                        }),
                     },
                     entry(3, &self.stats),
                 ],
@@ -190,7 +199,8 @@ impl GpuResolve {
         let Some((_, max_input, max_output)) = &self.bound else { return };
         if args.mode == SplatMode::Density {
             encoder.clear_buffer(&self.stats, 0, None);
-            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("max_count"), timestamp_writes: None });
+            let mut pass = encoder
+                .begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("max_count"), timestamp_writes: None });
             pass.set_pipeline(&self.max_pipeline);
             pass.set_bind_group(0, max_input, &[]);
             pass.set_bind_group(1, max_output, &[]);
@@ -211,7 +221,14 @@ impl GpuResolve {
             occlusion_query_set: None,
             multiview_mask: None,
         });
-        pass.set_viewport(args.origin_px[0] as f32, args.origin_px[1] as f32, game.width as f32, game.height as f32, 0.0, 1.0);
+        pass.set_viewport(
+            args.origin_px[0] as f32,
+            args.origin_px[1] as f32,
+            game.width as f32,
+            game.height as f32,
+            0.0,
+            1.0,
+        );
         pass.set_pipeline(pipeline);
         pass.set_bind_group(0, draw, &[]);
         pass.draw(0..3, 0..1);

@@ -17,8 +17,14 @@ pub const COMPOSITE: &str = include_str!("../../shaders/composite.wgsl");
 /// live: uniform buffers (fast on lavapipe, fixed capacities) or storage buffers (any size).
 pub const PROGRAMS: [(&str, &[(&str, &str)]); 5] = [
     ("rng", &[("rng.wgsl", RNG)]),
-    ("chaos_game", &[("rng.wgsl", RNG), ("ifs_tables_uniform.wgsl", IFS_TABLES_UNIFORM), ("chaos_game.wgsl", CHAOS_GAME)]),
-    ("chaos_game_storage", &[("rng.wgsl", RNG), ("ifs_tables_storage.wgsl", IFS_TABLES_STORAGE), ("chaos_game.wgsl", CHAOS_GAME)]),
+    (
+        "chaos_game",
+        &[("rng.wgsl", RNG), ("ifs_tables_uniform.wgsl", IFS_TABLES_UNIFORM), ("chaos_game.wgsl", CHAOS_GAME)],
+    ),
+    (
+        "chaos_game_storage",
+        &[("rng.wgsl", RNG), ("ifs_tables_storage.wgsl", IFS_TABLES_STORAGE), ("chaos_game.wgsl", CHAOS_GAME)],
+    ),
     ("resolve", &[("fullscreen.wgsl", FULLSCREEN), ("resolve.wgsl", RESOLVE)]),
     ("composite", &[("fullscreen.wgsl", FULLSCREEN), ("composite.wgsl", COMPOSITE)]),
 ];

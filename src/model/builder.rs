@@ -47,23 +47,52 @@ impl Axis {
 #[derive(Clone, Debug, PartialEq)]
 pub enum Step {
     /// Scales by `by` about `center`.
-    Scale { by: DVec3, center: DVec3 },
+    Scale {
+        by: DVec3,
+        center: DVec3,
+    },
     /// Rotates by `degrees` about `axis` through `center`.
-    Rotate { axis: Axis, degrees: f64, center: DVec3 },
-    Translate { by: DVec3 },
+    Rotate {
+        axis: Axis,
+        degrees: f64,
+        center: DVec3,
+    },
+    Translate {
+        by: DVec3,
+    },
     /// Barr's taper: the coordinates across `axis` are scaled, about `center`, by a factor that
     /// goes linearly from 1 at the start of `range` to `1 - amount` at its end.
-    Taper { axis: Axis, amount: f64, range: [f64; 2], center: DVec3 },
+    Taper {
+        axis: Axis,
+        amount: f64,
+        range: [f64; 2],
+        center: DVec3,
+    },
     /// Barr's twist: rotation about `axis` through `center` by an angle growing linearly from 0
     /// at the start of `range` to `degrees` at its end, the range measured along `along` (the
     /// rotation axis itself in 3D; in 2D the rotation is about z and the angle grows along x or y).
-    Twist { axis: Axis, along: Axis, degrees: f64, range: [f64; 2], center: DVec3 },
+    Twist {
+        axis: Axis,
+        along: Axis,
+        degrees: f64,
+        range: [f64; 2],
+        center: DVec3,
+    },
     /// Barr's bend: the part of the shape along `axis` within `range` is bent towards the
     /// `toward` axis by a total angle of `degrees` (radius = range length / angle); beyond the
     /// range it continues straight along the bent tangent.
-    Bend { axis: Axis, toward: Axis, degrees: f64, range: [f64; 2], center: DVec3 },
+    Bend {
+        axis: Axis,
+        toward: Axis,
+        degrees: f64,
+        range: [f64; 2],
+        center: DVec3,
+    },
     /// A general affine step p' = matrix * p + offset.
-    Affine { matrix: DMat3, offset: DVec3 },
+    Affine {
+        matrix: DMat3,
+        offset: DVec3,
+    },
 }
 
 /// Linear ramp from 0 at `range[0]` to 1 at `range[1]`, clamped.

@@ -129,10 +129,7 @@ impl RectGrid {
                 return Err(format!("axis {name} has a non-finite coordinate"));
             }
             if let Some(w) = xs.windows(2).find(|w| w[1] <= w[0]) {
-                return Err(format!(
-                    "axis {name} must increase strictly, but {} is followed by {}",
-                    w[0], w[1]
-                ));
+                return Err(format!("axis {name} must increase strictly, but {} is followed by {}", w[0], w[1]));
             }
         }
         Ok(())
@@ -148,16 +145,8 @@ pub struct GridMap {
 }
 
 /// The corner offsets of a cell, in the order the interpolation visits them.
-const CORNERS: [[usize; 3]; 8] = [
-    [0, 0, 0],
-    [1, 0, 0],
-    [0, 1, 0],
-    [1, 1, 0],
-    [0, 0, 1],
-    [1, 0, 1],
-    [0, 1, 1],
-    [1, 1, 1],
-];
+const CORNERS: [[usize; 3]; 8] =
+    [[0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0], [0, 0, 1], [1, 0, 1], [0, 1, 1], [1, 1, 1]];
 
 impl GridMap {
     pub fn new(grid: RectGrid, points: Vec<DVec3>) -> Self {
@@ -196,9 +185,7 @@ impl GridMap {
         let CellCoords { cell, local } = self.grid.locate(p);
         let mut out = DVec3::ZERO;
         for &o in self.corners_used() {
-            let weight = (0..3)
-                .map(|a| if o[a] == 1 { local[a] } else { 1.0 - local[a] })
-                .product::<f64>();
+            let weight = (0..3).map(|a| if o[a] == 1 { local[a] } else { 1.0 - local[a] }).product::<f64>();
             out += weight * self.corner(cell, o);
         }
         out
@@ -323,12 +310,7 @@ impl GridMap {
     /// of the box lies in the convex hull of the transformed points, so an empty list means the
     /// whole image is contained.
     pub fn outside_points(&self, tol: f64) -> Vec<(usize, DVec3)> {
-        self.points
-            .iter()
-            .enumerate()
-            .filter(|(_, p)| !self.grid.contains(**p, tol))
-            .map(|(i, p)| (i, *p))
-            .collect()
+        self.points.iter().enumerate().filter(|(_, p)| !self.grid.contains(**p, tol)).map(|(i, p)| (i, *p)).collect()
     }
 
     /// Mean of |det J| over the cell centres, weighted by cell volume: the map's mean volume
@@ -359,11 +341,7 @@ impl GridMap {
 
 /// |det J| of the block that a `dim`-dimensional map uses.
 pub fn volume_ratio(j: DMat3, dim: usize) -> f64 {
-    if dim == 2 {
-        (j.x_axis.x * j.y_axis.y - j.y_axis.x * j.x_axis.y).abs()
-    } else {
-        j.determinant().abs()
-    }
+    if dim == 2 { (j.x_axis.x * j.y_axis.y - j.y_axis.x * j.x_axis.y).abs() } else { j.determinant().abs() }
 }
 
 /// An upper bound of the spectral norm of `m`: the exact largest eigenvalue of mᵀm from the
@@ -371,9 +349,7 @@ pub fn volume_ratio(j: DMat3, dim: usize) -> f64 {
 /// upper bound), square-rooted and raised by a relative margin far above f64 rounding.
 pub fn spectral_norm_bound(m: DMat3) -> f64 {
     let a = m.transpose() * m;
-    let gershgorin = (0..3)
-        .map(|r| (0..3).map(|c| a.col(c)[r].abs()).sum::<f64>())
-        .fold(0.0, f64::max);
+    let gershgorin = (0..3).map(|r| (0..3).map(|c| a.col(c)[r].abs()).sum::<f64>()).fold(0.0, f64::max);
     let lambda = symmetric_max_eigenvalue(a).min(gershgorin);
     lambda.max(0.0).sqrt() * (1.0 + 1e-9) + 1e-300
 }
@@ -415,9 +391,7 @@ mod tests {
 
     fn warped(grid: RectGrid, seed: u32) -> GridMap {
         let mut r = Pcg32::for_stream(seed, 0, 0);
-        GridMap::from_fn(grid, |p| {
-            0.4 * p + DVec3::new(r.next_f32() as f64, r.next_f32() as f64, r.next_f32() as f64)
-        })
+        GridMap::from_fn(grid, |p| 0.4 * p + DVec3::new(r.next_f32() as f64, r.next_f32() as f64, r.next_f32() as f64))
     }
 
     #[test]

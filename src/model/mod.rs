@@ -205,7 +205,11 @@ impl Ifs {
                 Some(out)
             }
             Map::Affine(a) => {
-                let corners = RectGrid::uniform(self.domain.min(), self.domain.max(), [2, 2, if self.dimension() == 3 { 2 } else { 1 }]);
+                let corners = RectGrid::uniform(
+                    self.domain.min(),
+                    self.domain.max(),
+                    [2, 2, if self.dimension() == 3 { 2 } else { 1 }],
+                );
                 Some(
                     corners
                         .points()
@@ -296,9 +300,8 @@ impl Ifs {
                 }
             })
             .collect();
-        let max_opt = |v: Vec<Option<f64>>| -> Option<f64> {
-            v.into_iter().try_fold(0.0f64, |m, x| x.map(|x| m.max(x)))
-        };
+        let max_opt =
+            |v: Vec<Option<f64>>| -> Option<f64> { v.into_iter().try_fold(0.0f64, |m, x| x.map(|x| m.max(x))) };
         IfsReport {
             dimension: dim,
             probability_mode: self.probability_mode.name(),

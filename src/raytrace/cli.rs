@@ -208,7 +208,14 @@ pub fn export_pov(args: ExportPovArgs) -> anyhow::Result<()> {
 }
 
 /// Writes the .pov of W^depth(sphere) with the camera, lights and ground the tracer uses.
-fn write_pov(scene: &Scene, t_secs: f64, depth: u32, width: u32, height: u32, output: &Path) -> anyhow::Result<raytrace::hierarchy::Hierarchy> {
+fn write_pov(
+    scene: &Scene,
+    t_secs: f64,
+    depth: u32,
+    width: u32,
+    height: u32,
+    output: &Path,
+) -> anyhow::Result<raytrace::hierarchy::Hierarchy> {
     let ifs = scene.at(t_secs);
     let h = raytrace::build_fixed(&ifs, &Initial::Sphere, depth)?;
     let camera = scene.camera_for((h.bounds.0.as_dvec3(), h.bounds.1.as_dvec3()));
@@ -238,7 +245,10 @@ pub fn bench(cmd: BenchCommand) -> anyhow::Result<()> {
     let BenchCommand::Raytrace { scenes, width, height, spp, no_povray, out } = cmd;
     std::fs::create_dir_all(&out)?;
     let threads = rayon::current_num_threads();
-    println!("machine: {} threads in rayon's pool; {width}×{height}, {spp} spp, 2 lights with shadows, ground plane", threads);
+    println!(
+        "machine: {} threads in rayon's pool; {width}×{height}, {spp} spp, 2 lights with shadows, ground plane",
+        threads
+    );
     for (name, depth) in [("tapering", 6u32), ("plant2", 7)] {
         let scene = load(&scenes.join(format!("{name}.toml")))?;
         let settings = RaytraceSettings { width, height, spp, depth, ..Default::default() };
@@ -271,7 +281,18 @@ pub fn bench(cmd: BenchCommand) -> anyhow::Result<()> {
         let status = std::process::Command::new("povray")
             .arg(format!("+I{}", pov.display()))
             .arg(format!("+O{}", pov_png.display()))
-            .args([format!("+W{width}"), format!("+H{height}"), "+A0.0".into(), "+AM1".into(), "+R2".into(), format!("+WT{threads}"), "-D".into(), "-V".into(), "+FN".into(), "-GA".into()])
+            .args([
+                format!("+W{width}"),
+                format!("+H{height}"),
+                "+A0.0".into(),
+                "+AM1".into(),
+                "+R2".into(),
+                format!("+WT{threads}"),
+                "-D".into(),
+                "-V".into(),
+                "+FN".into(),
+                "-GA".into(),
+            ])
             .stdout(std::process::Stdio::null())
             .stderr(std::process::Stdio::null())
             .status()

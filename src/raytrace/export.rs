@@ -16,15 +16,42 @@ use crate::export::write_glb;
 fn icosphere() -> (Vec<Vec3>, Vec<[u32; 3]>) {
     let t = (1.0 + 5f32.sqrt()) / 2.0;
     let mut v: Vec<Vec3> = [
-        [-1.0, t, 0.0], [1.0, t, 0.0], [-1.0, -t, 0.0], [1.0, -t, 0.0],
-        [0.0, -1.0, t], [0.0, 1.0, t], [0.0, -1.0, -t], [0.0, 1.0, -t],
-        [t, 0.0, -1.0], [t, 0.0, 1.0], [-t, 0.0, -1.0], [-t, 0.0, 1.0],
+        [-1.0, t, 0.0],
+        [1.0, t, 0.0],
+        [-1.0, -t, 0.0],
+        [1.0, -t, 0.0],
+        [0.0, -1.0, t],
+        [0.0, 1.0, t],
+        [0.0, -1.0, -t],
+        [0.0, 1.0, -t],
+        [t, 0.0, -1.0],
+        [t, 0.0, 1.0],
+        [-t, 0.0, -1.0],
+        [-t, 0.0, 1.0],
     ]
     .map(|p| Vec3::from(p).normalize())
     .to_vec();
     let faces: [[u32; 3]; 20] = [
-        [0, 11, 5], [0, 5, 1], [0, 1, 7], [0, 7, 10], [0, 10, 11], [1, 5, 9], [5, 11, 4], [11, 10, 2], [10, 7, 6], [7, 1, 8],
-        [3, 9, 4], [3, 4, 2], [3, 2, 6], [3, 6, 8], [3, 8, 9], [4, 9, 5], [2, 4, 11], [6, 2, 10], [8, 6, 7], [9, 8, 1],
+        [0, 11, 5],
+        [0, 5, 1],
+        [0, 1, 7],
+        [0, 7, 10],
+        [0, 10, 11],
+        [1, 5, 9],
+        [5, 11, 4],
+        [11, 10, 2],
+        [10, 7, 6],
+        [7, 1, 8],
+        [3, 9, 4],
+        [3, 4, 2],
+        [3, 2, 6],
+        [3, 6, 8],
+        [3, 8, 9],
+        [4, 9, 5],
+        [2, 4, 11],
+        [6, 2, 10],
+        [8, 6, 7],
+        [9, 8, 1],
     ];
     let mut mid = std::collections::BTreeMap::new();
     let mut midpoint = |a: u32, b: u32, v: &mut Vec<Vec3>| -> u32 {
@@ -84,19 +111,32 @@ pub fn write_glb_mesh(w: &mut dyn Write, h: &Hierarchy, colors: &[[f32; 3]], nam
         if part.indices.is_empty() {
             continue;
         }
-        let (lo, hi) = part.positions.iter().fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), p| (lo.min(*p), hi.max(*p)));
+        let (lo, hi) =
+            part.positions.iter().fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), p| (lo.min(*p), hi.max(*p)));
         let mut view = |bytes: &[u8], target: u32, bin: &mut Vec<u8>| {
             let offset = bin.len();
             bin.extend_from_slice(bytes);
-            views.push(serde_json::json!({ "buffer": 0, "byteOffset": offset, "byteLength": bytes.len(), "target": target }));
+            views.push(
+                serde_json::json!({ "buffer": 0, "byteOffset": offset, "byteLength": bytes.len(), "target": target }),
+            );
             views.len() - 1
         };
-        let pv = view(bytemuck::cast_slice(&part.positions.iter().map(|p| p.to_array()).collect::<Vec<_>>()), 34962, &mut bin);
-        let nv = view(bytemuck::cast_slice(&part.normals.iter().map(|p| p.normalize_or(Vec3::Y).to_array()).collect::<Vec<_>>()), 34962, &mut bin);
+        let pv = view(
+            bytemuck::cast_slice(&part.positions.iter().map(|p| p.to_array()).collect::<Vec<_>>()),
+            34962,
+            &mut bin,
+        );
+        let nv = view(
+            bytemuck::cast_slice(&part.normals.iter().map(|p| p.normalize_or(Vec3::Y).to_array()).collect::<Vec<_>>()),
+            34962,
+            &mut bin,
+        );
         let iv = view(bytemuck::cast_slice(&part.indices), 34963, &mut bin);
         let a = accessors.len();
         accessors.push(serde_json::json!({ "bufferView": pv, "componentType": 5126, "count": part.positions.len(), "type": "VEC3", "min": lo.to_array(), "max": hi.to_array() }));
-        accessors.push(serde_json::json!({ "bufferView": nv, "componentType": 5126, "count": part.normals.len(), "type": "VEC3" }));
+        accessors.push(
+            serde_json::json!({ "bufferView": nv, "componentType": 5126, "count": part.normals.len(), "type": "VEC3" }),
+        );
         accessors.push(serde_json::json!({ "bufferView": iv, "componentType": 5125, "count": part.indices.len(), "type": "SCALAR" }));
         let c = colors.get(f).copied().unwrap_or([0.7; 3]);
         let name = names.get(f).cloned().unwrap_or_else(|| format!("f{f}"));
@@ -177,7 +217,12 @@ pub fn write_pov(w: &mut dyn Write, h: &Hierarchy, camera: &OrbitCamera, shading
     }
     let finish = format!("finish {{ ambient {} diffuse 1 specular 0.25 roughness 0.03 }}", shading.ambient);
     if shading.ground {
-        writeln!(w, "plane {{ y, {} texture {{ pigment {{ rgb 0.55 }} finish {{ ambient {} diffuse 1 }} }} }}", lo.y - 1e-3 * radius, shading.ambient)?;
+        writeln!(
+            w,
+            "plane {{ y, {} texture {{ pigment {{ rgb 0.55 }} finish {{ ambient {} diffuse 1 }} }} }}",
+            lo.y - 1e-3 * radius,
+            shading.ambient
+        )?;
     }
     for (f, c) in shading.function_colors.iter().enumerate() {
         let spheres: Vec<_> = h.leaf_spheres().filter(|n| n.function as usize == f).collect();

@@ -19,11 +19,11 @@ use std::collections::HashMap;
 use glam::{DVec3, Vec3};
 use rayon::prelude::*;
 
+use super::RaytraceError;
 use super::mesh::Mesh;
 #[cfg(target_arch = "x86_64")]
 use super::wide::Avx512;
 use super::wide::{self, LANES, Lanes, Portable, Simd, WideNode};
-use super::RaytraceError;
 use crate::model::{Ifs, Map};
 
 /// Most children a node may have (functions of the IFS; tile-tree fan-out is smaller).
@@ -215,7 +215,15 @@ impl Hierarchy {
         let mut h = Hierarchy::default();
         // Paths of the nodes of the current level, in node order (outermost function first).
         let mut level: Vec<(u32, Vec<u8>)> = vec![(0, Vec::new())];
-        h.nodes.push(Node { centre: Vec3::ZERO, radius: 0.0, first: 0, count: 0, kind: NodeKind::Inner, function: 0, depth: 0 });
+        h.nodes.push(Node {
+            centre: Vec3::ZERO,
+            radius: 0.0,
+            first: 0,
+            count: 0,
+            kind: NodeKind::Inner,
+            function: 0,
+            depth: 0,
+        });
         let mut leaves: Vec<(u32, Vec<u8>)> = Vec::new();
         const NODE_LIMIT: usize = 8_000_000;
         // Spheres of the previous level, in path-number order when that level is complete (no
@@ -259,10 +267,20 @@ impl Hierarchy {
                     let mut child = path.clone();
                     child.push(j as u8);
                     next.push((h.nodes.len() as u32, child));
-                    h.nodes.push(Node { centre, radius, first: 0, count: 0, kind: NodeKind::Inner, function: 0, depth: 0 });
+                    h.nodes.push(Node {
+                        centre,
+                        radius,
+                        first: 0,
+                        count: 0,
+                        kind: NodeKind::Inner,
+                        function: 0,
+                        depth: 0,
+                    });
                 }
                 if h.nodes.len() > NODE_LIMIT {
-                    return Err(RaytraceError::TooLarge(format!("more than {NODE_LIMIT} nodes; lower --depth or raise --stop-pixels")));
+                    return Err(RaytraceError::TooLarge(format!(
+                        "more than {NODE_LIMIT} nodes; lower --depth or raise --stop-pixels"
+                    )));
                 }
             }
             level = next;
@@ -317,7 +335,8 @@ impl Hierarchy {
     /// Makes node `index` the root of a sphere tree over `tiles` (fan-out ≤ TILE_FANOUT, split
     /// by the median of tile centres along the widest axis).
     fn tile_tree(&mut self, index: u32, tiles: &[(u32, u16)], function: u8, depth: u8) {
-        let template = Node { centre: Vec3::ZERO, radius: 0.0, first: 0, count: 0, kind: NodeKind::Triangles, function, depth };
+        let template =
+            Node { centre: Vec3::ZERO, radius: 0.0, first: 0, count: 0, kind: NodeKind::Triangles, function, depth };
         if tiles.len() == 1 {
             let (first, count) = tiles[0];
             let n = &mut self.nodes[index as usize];
@@ -334,7 +353,8 @@ impl Hierarchy {
         while groups.len() < TILE_FANOUT && groups.iter().any(|g| g.len() > 1) {
             let widest = (0..groups.len()).max_by_key(|&k| groups[k].len()).unwrap_or(0);
             let g = groups.swap_remove(widest);
-            let (lo, hi) = g.iter().fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), (c, _)| (lo.min(*c), hi.max(*c)));
+            let (lo, hi) =
+                g.iter().fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), (c, _)| (lo.min(*c), hi.max(*c)));
             let axis = (hi - lo).max_position();
             g.sort_by(|a, b| a.0[axis].total_cmp(&b.0[axis]));
             let (a, b) = g.split_at_mut(g.len() / 2);
@@ -374,7 +394,8 @@ impl Hierarchy {
                     lo = lo.min(tlo);
                     hi = hi.max(thi);
                     let c = 0.5 * (tlo + thi);
-                    let r = tris.iter().flatten().map(|&i| (self.positions[i as usize] - c).length()).fold(0.0, f32::max);
+                    let r =
+                        tris.iter().flatten().map(|&i| (self.positions[i as usize] - c).length()).fold(0.0, f32::max);
                     self.nodes[k].centre = c;
                     self.nodes[k].radius = r * (1.0 + 1e-5) + c.abs().max_element() * 1e-6;
                 }
@@ -382,10 +403,11 @@ impl Hierarchy {
                     let children = &self.nodes[n.first as usize..n.first as usize + n.count as usize];
                     // Centre: the node's own sphere centre, or for tile groups the mean of the
                     // children; radius: the farthest child bound, with slack for rounding.
-                    let (blo, bhi) = children
-                        .iter()
-                        .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), ch| (lo.min(ch.centre - ch.radius), hi.max(ch.centre + ch.radius)));
-                    let enclose = |c: Vec3| children.iter().map(|ch| (ch.centre - c).length() + ch.radius).fold(0.0, f32::max);
+                    let (blo, bhi) = children.iter().fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), ch| {
+                        (lo.min(ch.centre - ch.radius), hi.max(ch.centre + ch.radius))
+                    });
+                    let enclose =
+                        |c: Vec3| children.iter().map(|ch| (ch.centre - c).length() + ch.radius).fold(0.0, f32::max);
                     let box_centre = 0.5 * (blo + bhi);
                     let (c, r) = if n.radius > 0.0 && enclose(n.centre) < enclose(box_centre) {
                         (n.centre, enclose(n.centre))
@@ -448,7 +470,15 @@ impl Hierarchy {
     }
 
     /// [`Self::intersect_hinted`] for a ray whose [`Self::root_entry`] is `root_entry` (finite).
-    pub fn intersect_entered(&self, ray: &Ray, t_min: f32, t_max: f32, root_entry: f32, hint: u32, scratch: &mut Scratch) -> Option<Hit> {
+    pub fn intersect_entered(
+        &self,
+        ray: &Ray,
+        t_min: f32,
+        t_max: f32,
+        root_entry: f32,
+        hint: u32,
+        scratch: &mut Scratch,
+    ) -> Option<Hit> {
         match self.simd {
             #[cfg(target_arch = "x86_64")]
             #[allow(unsafe_code)]
@@ -466,7 +496,15 @@ impl Hierarchy {
 
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx512f")]
-    fn closest_avx512(&self, ray: &Ray, t_min: f32, t_max: f32, root_entry: f32, hint: u32, scratch: &mut Scratch) -> Option<Hit> {
+    fn closest_avx512(
+        &self,
+        ray: &Ray,
+        t_min: f32,
+        t_max: f32,
+        root_entry: f32,
+        hint: u32,
+        scratch: &mut Scratch,
+    ) -> Option<Hit> {
         #[allow(unsafe_code)]
         // SAFETY: this function only runs where AVX-512F is enabled.
         unsafe {
@@ -476,7 +514,15 @@ impl Hierarchy {
 
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
-    fn closest_avx2(&self, ray: &Ray, t_min: f32, t_max: f32, root_entry: f32, hint: u32, scratch: &mut Scratch) -> Option<Hit> {
+    fn closest_avx2(
+        &self,
+        ray: &Ray,
+        t_min: f32,
+        t_max: f32,
+        root_entry: f32,
+        hint: u32,
+        scratch: &mut Scratch,
+    ) -> Option<Hit> {
         #[allow(unsafe_code)]
         // SAFETY: the portable lanes need nothing beyond the baseline target.
         unsafe {
@@ -491,7 +537,15 @@ impl Hierarchy {
     /// The CPU must run the instructions of `L`.
     #[allow(unsafe_code)]
     #[inline(always)]
-    unsafe fn closest<L: Lanes>(&self, ray: &Ray, t_min: f32, t_max: f32, root_entry: f32, hint: u32, scratch: &mut Scratch) -> Option<Hit> {
+    unsafe fn closest<L: Lanes>(
+        &self,
+        ray: &Ray,
+        t_min: f32,
+        t_max: f32,
+        root_entry: f32,
+        hint: u32,
+        scratch: &mut Scratch,
+    ) -> Option<Hit> {
         let mut best = Hit { t: t_max, node: u32::MAX, triangle: u32::MAX, u: 0.0, v: 0.0 };
         let Some(root) = self.nodes.first() else { return None };
         match root.kind {
@@ -675,7 +729,8 @@ impl Hierarchy {
         let node = &self.nodes[index as usize];
         match node.kind {
             NodeKind::Sphere => sphere_surface(ray, node.centre, node.radius, t_min, t_max).is_some(),
-            NodeKind::Triangles => (node.first..node.first + node.count as u32).any(|tri| self.triangle_hit(ray, tri, t_min, t_max).is_some()),
+            NodeKind::Triangles => (node.first..node.first + node.count as u32)
+                .any(|tri| self.triangle_hit(ray, tri, t_min, t_max).is_some()),
             NodeKind::Inner => false,
         }
     }

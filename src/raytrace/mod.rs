@@ -177,7 +177,11 @@ pub fn render(
             None => scene.camera_for(framing_bounds(&ifs, &settings.initial, settings.depth)?),
         };
         let rays = tracer::CameraRays::new(&camera, settings.width, settings.height, 1.0);
-        let pixel = PixelFootprint { eye: camera.eye(), perspective: camera.projection == Projection::Perspective, per_pixel: rays.per_pixel() * settings.stop_pixels.max(1e-3) };
+        let pixel = PixelFootprint {
+            eye: camera.eye(),
+            perspective: camera.projection == Projection::Perspective,
+            per_pixel: rays.per_pixel() * settings.stop_pixels.max(1e-3),
+        };
         let m = ifs.active().len().max(1) as f64;
         let object = initial_object(&ifs, &settings.initial, m.powi(settings.depth as i32))?;
         (Hierarchy::build(&ifs, &object, Stop { max_depth: settings.depth, pixel: Some(pixel) })?, camera)

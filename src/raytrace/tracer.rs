@@ -8,8 +8,8 @@ use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use glam::Vec3;
 use rayon::prelude::*;
 
-use super::hierarchy::{Hierarchy, Hit, Ray, Scratch};
 use super::RaytraceError;
+use super::hierarchy::{Hierarchy, Hit, Ray, Scratch};
 use crate::camera::{OrbitCamera, Projection};
 use crate::rng::Pcg32;
 use crate::scene::linear_to_srgb;
@@ -88,7 +88,11 @@ impl CameraRays {
             right,
             up,
             forward: -back,
-            half_height: if parallel { camera.half_height_at_target() } else { (0.5 * camera.fov_y_deg.to_radians()).tan() },
+            half_height: if parallel {
+                camera.half_height_at_target()
+            } else {
+                (0.5 * camera.fov_y_deg.to_radians()).tan()
+            },
             aspect: width as f32 / height as f32,
             parallel,
             back_off: 4.0 * scene_radius + camera.distance,
@@ -155,7 +159,9 @@ impl Tracer<'_> {
     fn albedo(&self, hit: &Hit) -> Vec3 {
         let node = &self.hierarchy.nodes[hit.node as usize];
         match self.shading.color_mode {
-            ColorMode::Function => self.shading.function_colors.get(node.function as usize).copied().unwrap_or(Vec3::splat(0.7)),
+            ColorMode::Function => {
+                self.shading.function_colors.get(node.function as usize).copied().unwrap_or(Vec3::splat(0.7))
+            }
             ColorMode::Depth => depth_color(node.depth, self.hierarchy.max_depth),
         }
     }
@@ -171,7 +177,11 @@ impl Tracer<'_> {
         let mut t_ground = [f32::INFINITY; BATCH];
         let mut entry = [f32::INFINITY; BATCH];
         for (k, ray) in rays.iter().enumerate() {
-            let t = if self.shading.ground && ray.dir.y < -1e-6 { (self.ground_y - ray.origin.y) / ray.dir.y } else { f32::INFINITY };
+            let t = if self.shading.ground && ray.dir.y < -1e-6 {
+                (self.ground_y - ray.origin.y) / ray.dir.y
+            } else {
+                f32::INFINITY
+            };
             t_ground[k] = if t > 0.0 { t } else { f32::INFINITY };
             entry[k] = self.hierarchy.root_entry(ray, 0.0, t_ground[k]);
         }
@@ -185,7 +195,14 @@ impl Tracer<'_> {
         let mut on_ground: u32 = 0;
         for (k, ray) in rays.iter().enumerate() {
             if entry[k] < f32::INFINITY {
-                if let Some(hit) = self.hierarchy.intersect_entered(ray, 0.0, t_ground[k], entry[k], scratch.last_hit, &mut scratch.stacks) {
+                if let Some(hit) = self.hierarchy.intersect_entered(
+                    ray,
+                    0.0,
+                    t_ground[k],
+                    entry[k],
+                    scratch.last_hit,
+                    &mut scratch.stacks,
+                ) {
                     scratch.last_hit = hit.node;
                     (point[k], normal[k]) = self.hierarchy.surface(ray, &hit);
                     albedo[k] = self.albedo(&hit);
@@ -233,7 +250,9 @@ impl Tracer<'_> {
                     // Shadow cache (Haines & Greenberg): neighbouring shadow rays are often
                     // blocked by the same leaf, so it is tried before a full search.
                     let cached = scratch.last_occluder[index];
-                    if let Some(leaf) = self.hierarchy.occluder_entered(&shadow[k], 0.0, f32::INFINITY, cached, &mut scratch.stacks) {
+                    if let Some(leaf) =
+                        self.hierarchy.occluder_entered(&shadow[k], 0.0, f32::INFINITY, cached, &mut scratch.stacks)
+                    {
                         scratch.last_occluder[index] = leaf;
                         shaded &= !(1 << k);
                     }
@@ -326,7 +345,11 @@ pub fn trace(
             return Err(RaytraceError::Cancelled);
         }
         let mut stats = TraceStats::default();
-        let mut scratch = RowScratch { stacks: Scratch::default(), last_occluder: vec![u32::MAX; shading.lights.len()], last_hit: u32::MAX };
+        let mut scratch = RowScratch {
+            stacks: Scratch::default(),
+            last_occluder: vec![u32::MAX; shading.lights.len()],
+            last_hit: u32::MAX,
+        };
         let mut strata: Vec<u32> = (0..spp).collect();
         for x in 0..w as usize {
             let mut rng = Pcg32::for_stream(shading.seed, 0, (y * w as usize + x) as u32);

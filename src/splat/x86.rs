@@ -23,7 +23,12 @@ pub(super) fn supported(fb: &Framebuffer) -> bool {
     let (w, h) = (view.width as usize, view.height as usize);
     let len = if view.mode == SplatMode::Closest { fb.closest.len() } else { fb.accum.len() };
     // Pixel indices are computed in i32; sizes up to 2^24 keep `width as f32` exact.
-    is_x86_feature_detected!("avx2") && len == w * h && len > 0 && len <= i32::MAX as usize && w <= 1 << 24 && h <= 1 << 24
+    is_x86_feature_detected!("avx2")
+        && len == w * h
+        && len > 0
+        && len <= i32::MAX as usize
+        && w <= 1 << 24
+        && h <= 1 << 24
 }
 
 /// Splats `batch` into `fb`, exactly as the portable splat does.
@@ -58,7 +63,13 @@ unsafe fn project8(view: &SplatView, x: __m256, y: __m256, z: __m256) -> (__m256
         // A macro, as closures would not have the caller's target features.
         macro_rules! row {
             ($c:ident) => {
-                _mm256_add_ps(_mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(_mm256_set1_ps(c0.$c), x), _mm256_mul_ps(_mm256_set1_ps(c1.$c), y)), _mm256_mul_ps(_mm256_set1_ps(c2.$c), z)), _mm256_set1_ps(c3.$c))
+                _mm256_add_ps(
+                    _mm256_add_ps(
+                        _mm256_add_ps(_mm256_mul_ps(_mm256_set1_ps(c0.$c), x), _mm256_mul_ps(_mm256_set1_ps(c1.$c), y)),
+                        _mm256_mul_ps(_mm256_set1_ps(c2.$c), z),
+                    ),
+                    _mm256_set1_ps(c3.$c),
+                )
             };
         }
         let (qx, qy, qz, qw) = (row!(x), row!(y), row!(z), row!(w));
@@ -67,13 +78,23 @@ unsafe fn project8(view: &SplatView, x: __m256, y: __m256, z: __m256) -> (__m256
         // q.w > 0, 0 ≤ x < width, 0 ≤ y < height; ordered compares, so NaN fails.
         let zero = _mm256_setzero_ps();
         let inside = _mm256_and_ps(
-            _mm256_and_ps(_mm256_cmp_ps::<_CMP_GT_OQ>(qw, zero), _mm256_and_ps(_mm256_cmp_ps::<_CMP_GE_OQ>(px, zero), _mm256_cmp_ps::<_CMP_GE_OQ>(py, zero))),
-            _mm256_and_ps(_mm256_cmp_ps::<_CMP_LT_OQ>(px, _mm256_set1_ps(view.width as f32)), _mm256_cmp_ps::<_CMP_LT_OQ>(py, _mm256_set1_ps(view.height as f32))),
+            _mm256_and_ps(
+                _mm256_cmp_ps::<_CMP_GT_OQ>(qw, zero),
+                _mm256_and_ps(_mm256_cmp_ps::<_CMP_GE_OQ>(px, zero), _mm256_cmp_ps::<_CMP_GE_OQ>(py, zero)),
+            ),
+            _mm256_and_ps(
+                _mm256_cmp_ps::<_CMP_LT_OQ>(px, _mm256_set1_ps(view.width as f32)),
+                _mm256_cmp_ps::<_CMP_LT_OQ>(py, _mm256_set1_ps(view.height as f32)),
+            ),
         );
         let inside = _mm256_castps_si256(inside);
-        let pixel = _mm256_add_epi32(_mm256_mullo_epi32(_mm256_cvttps_epi32(py), _mm256_set1_epi32(view.width as i32)), _mm256_cvttps_epi32(px));
+        let pixel = _mm256_add_epi32(
+            _mm256_mullo_epi32(_mm256_cvttps_epi32(py), _mm256_set1_epi32(view.width as i32)),
+            _mm256_cvttps_epi32(px),
+        );
         // t = ((q.z − near) · (1 / (far − near))).clamp(0, 1): below 0 → 0, above 1 → 1, NaN kept.
-        let t = _mm256_mul_ps(_mm256_sub_ps(qz, _mm256_set1_ps(view.near)), _mm256_set1_ps(1.0 / (view.far - view.near)));
+        let t =
+            _mm256_mul_ps(_mm256_sub_ps(qz, _mm256_set1_ps(view.near)), _mm256_set1_ps(1.0 / (view.far - view.near)));
         let t = _mm256_blendv_ps(t, zero, _mm256_cmp_ps::<_CMP_LT_OQ>(t, zero));
         let t = _mm256_blendv_ps(t, _mm256_set1_ps(1.0), _mm256_cmp_ps::<_CMP_GT_OQ>(t, _mm256_set1_ps(1.0)));
         (inside, _mm256_and_si256(pixel, inside), t)
@@ -145,7 +166,16 @@ unsafe fn splat_closest_avx512(view: &SplatView, closest: &mut [u32], batch: Poi
             let fi = _mm512_cvtepu8_epi32(_mm_loadu_si128(batch.functions.as_ptr().add(o).cast()));
             macro_rules! row {
                 ($c:ident) => {
-                    _mm512_add_ps(_mm512_add_ps(_mm512_add_ps(_mm512_mul_ps(_mm512_set1_ps(c0.$c), x), _mm512_mul_ps(_mm512_set1_ps(c1.$c), y)), _mm512_mul_ps(_mm512_set1_ps(c2.$c), z)), _mm512_set1_ps(c3.$c))
+                    _mm512_add_ps(
+                        _mm512_add_ps(
+                            _mm512_add_ps(
+                                _mm512_mul_ps(_mm512_set1_ps(c0.$c), x),
+                                _mm512_mul_ps(_mm512_set1_ps(c1.$c), y),
+                            ),
+                            _mm512_mul_ps(_mm512_set1_ps(c2.$c), z),
+                        ),
+                        _mm512_set1_ps(c3.$c),
+                    )
                 };
             }
             let (qx, qy, qz, qw) = (row!(x), row!(y), row!(z), row!(w));
@@ -157,10 +187,17 @@ unsafe fn splat_closest_avx512(view: &SplatView, closest: &mut [u32], batch: Poi
                 & _mm512_cmp_ps_mask::<_CMP_GE_OQ>(py, zero)
                 & _mm512_cmp_ps_mask::<_CMP_LT_OQ>(px, _mm512_set1_ps(view.width as f32))
                 & _mm512_cmp_ps_mask::<_CMP_LT_OQ>(py, _mm512_set1_ps(view.height as f32));
-            let pixel = _mm512_add_epi32(_mm512_mullo_epi32(_mm512_cvttps_epi32(py), _mm512_set1_epi32(view.width as i32)), _mm512_cvttps_epi32(px));
-            let t = _mm512_mul_ps(_mm512_sub_ps(qz, _mm512_set1_ps(view.near)), _mm512_set1_ps(1.0 / (view.far - view.near)));
+            let pixel = _mm512_add_epi32(
+                _mm512_mullo_epi32(_mm512_cvttps_epi32(py), _mm512_set1_epi32(view.width as i32)),
+                _mm512_cvttps_epi32(px),
+            );
+            let t = _mm512_mul_ps(
+                _mm512_sub_ps(qz, _mm512_set1_ps(view.near)),
+                _mm512_set1_ps(1.0 / (view.far - view.near)),
+            );
             let t = _mm512_mask_blend_ps(_mm512_cmp_ps_mask::<_CMP_LT_OQ>(t, zero), t, zero);
-            let t = _mm512_mask_blend_ps(_mm512_cmp_ps_mask::<_CMP_GT_OQ>(t, _mm512_set1_ps(1.0)), t, _mm512_set1_ps(1.0));
+            let t =
+                _mm512_mask_blend_ps(_mm512_cmp_ps_mask::<_CMP_GT_OQ>(t, _mm512_set1_ps(1.0)), t, _mm512_set1_ps(1.0));
             let d = _mm512_max_ps(_mm512_mul_ps(t, _mm512_set1_ps(scale)), zero);
             let key = _mm512_or_si512(_mm512_slli_epi32::<8>(_mm512_cvttps_epi32(d)), fi);
             let key = _mm512_mask_blend_epi32(inside, _mm512_set1_epi32(EMPTY as i32), key);
@@ -176,7 +213,18 @@ unsafe fn splat_closest_avx512(view: &SplatView, closest: &mut [u32], batch: Poi
     }
     let rest = vectors * WIDE;
     // SAFETY: AVX2 is enabled here too.
-    unsafe { splat_closest_avx2(view, closest, PointBatch { x: &batch.x[rest..], y: &batch.y[rest..], z: &batch.z[rest..], functions: &batch.functions[rest..] }) };
+    unsafe {
+        splat_closest_avx2(
+            view,
+            closest,
+            PointBatch {
+                x: &batch.x[rest..],
+                y: &batch.y[rest..],
+                z: &batch.z[rest..],
+                functions: &batch.functions[rest..],
+            },
+        )
+    };
 }
 
 #[target_feature(enable = "avx2")]
@@ -188,7 +236,9 @@ unsafe fn splat_accumulate_avx2(fb: &mut Framebuffer, batch: PointBatch<'_>) {
     // Per channel, the colours as an 8-entry table by function (up to 8 functions; more take
     // the scalar colour arithmetic of the portable splat, lane by lane).
     let vector_colors = !colors.is_empty() && colors.len() <= LANES;
-    let table: [[f32; LANES]; 3] = std::array::from_fn(|ch| std::array::from_fn(|f| colors.get(f.min(colors.len().saturating_sub(1))).map_or(0.0, |c| c[ch])));
+    let table: [[f32; LANES]; 3] = std::array::from_fn(|ch| {
+        std::array::from_fn(|f| colors.get(f.min(colors.len().saturating_sub(1))).map_or(0.0, |c| c[ch]))
+    });
     let vectors = n / LANES;
     for g in 0..vectors {
         let o = g * LANES;
@@ -199,7 +249,12 @@ unsafe fn splat_accumulate_avx2(fb: &mut Framebuffer, batch: PointBatch<'_>) {
         // SAFETY: o + 8 ≤ n, the length of each of the batch's slices; stores into local arrays.
         let (mut inside, vector) = unsafe {
             let fi = _mm256_cvtepu8_epi32(_mm_loadl_epi64(batch.functions.as_ptr().add(o).cast()));
-            let (inside, pixel, t) = project8(&view, _mm256_loadu_ps(batch.x.as_ptr().add(o)), _mm256_loadu_ps(batch.y.as_ptr().add(o)), _mm256_loadu_ps(batch.z.as_ptr().add(o)));
+            let (inside, pixel, t) = project8(
+                &view,
+                _mm256_loadu_ps(batch.x.as_ptr().add(o)),
+                _mm256_loadu_ps(batch.y.as_ptr().add(o)),
+                _mm256_loadu_ps(batch.z.as_ptr().add(o)),
+            );
             _mm256_storeu_si256(pixels.as_mut_ptr().cast(), pixel);
             _mm256_storeu_ps(ts.as_mut_ptr(), t);
             let inside = _mm256_movemask_ps(_mm256_castsi256_ps(inside)) as u32;
@@ -211,7 +266,10 @@ unsafe fn splat_accumulate_avx2(fb: &mut Framebuffer, batch: PointBatch<'_>) {
             let mut channel = [_mm256_setzero_si256(); 3];
             for ch in 0..3 {
                 let c = _mm256_permutevar8x32_ps(_mm256_loadu_ps(table[ch].as_ptr()), fi);
-                let v = _mm256_add_ps(_mm256_add_ps(c, _mm256_mul_ps(_mm256_sub_ps(_mm256_set1_ps(bg[ch]), c), k)), _mm256_set1_ps(0.5));
+                let v = _mm256_add_ps(
+                    _mm256_add_ps(c, _mm256_mul_ps(_mm256_sub_ps(_mm256_set1_ps(bg[ch]), c), k)),
+                    _mm256_set1_ps(0.5),
+                );
                 big |= _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_GE_OQ>(v, _mm256_set1_ps(2_147_483_648.0)));
                 let nonneg = _mm256_castps_si256(_mm256_cmp_ps::<_CMP_GE_OQ>(v, _mm256_setzero_ps()));
                 channel[ch] = _mm256_and_si256(_mm256_cvttps_epi32(v), nonneg);
@@ -221,7 +279,12 @@ unsafe fn splat_accumulate_avx2(fb: &mut Framebuffer, batch: PointBatch<'_>) {
             let one = _mm256_set1_epi32(1);
             let (rg_lo, rg_hi) = (_mm256_unpacklo_epi32(r, gr), _mm256_unpackhi_epi32(r, gr));
             let (b1_lo, b1_hi) = (_mm256_unpacklo_epi32(b, one), _mm256_unpackhi_epi32(b, one));
-            let rows = [_mm256_unpacklo_epi64(rg_lo, b1_lo), _mm256_unpackhi_epi64(rg_lo, b1_lo), _mm256_unpacklo_epi64(rg_hi, b1_hi), _mm256_unpackhi_epi64(rg_hi, b1_hi)];
+            let rows = [
+                _mm256_unpacklo_epi64(rg_lo, b1_lo),
+                _mm256_unpackhi_epi64(rg_lo, b1_lo),
+                _mm256_unpacklo_epi64(rg_hi, b1_hi),
+                _mm256_unpackhi_epi64(rg_hi, b1_hi),
+            ];
             for (j, row) in rows.into_iter().enumerate() {
                 _mm_storeu_si128(adds[j].as_mut_ptr().cast(), _mm256_castsi256_si128(row));
                 _mm_storeu_si128(adds[j + 4].as_mut_ptr().cast(), _mm256_extracti128_si256::<1>(row));
@@ -252,6 +315,11 @@ unsafe fn splat_accumulate_avx2(fb: &mut Framebuffer, batch: PointBatch<'_>) {
             }
         }
     }
-    let tail = PointBatch { x: &batch.x[vectors * LANES..], y: &batch.y[vectors * LANES..], z: &batch.z[vectors * LANES..], functions: &batch.functions[vectors * LANES..] };
+    let tail = PointBatch {
+        x: &batch.x[vectors * LANES..],
+        y: &batch.y[vectors * LANES..],
+        z: &batch.z[vectors * LANES..],
+        functions: &batch.functions[vectors * LANES..],
+    };
     fb.consume_portable(tail);
 }

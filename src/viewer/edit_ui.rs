@@ -50,7 +50,9 @@ pub fn grid_edit_ui(ui: &mut egui::Ui, state: &ViewerState, commands: &mut Vec<C
                 let mut point = e.selected_point.unwrap_or(0);
                 ui.horizontal(|ui| {
                     ui.label("point");
-                    if ui.add(egui::DragValue::new(&mut point).range(0..=count.saturating_sub(1))).changed() || e.selected_point.is_none() && count > 0 {
+                    if ui.add(egui::DragValue::new(&mut point).range(0..=count.saturating_sub(1))).changed()
+                        || e.selected_point.is_none() && count > 0
+                    {
                         commands.push(Command::SelectPoint(Some(point)));
                     }
                     let [nx, ny, nz] = grid.dims;
@@ -66,7 +68,11 @@ pub fn grid_edit_ui(ui: &mut egui::Ui, state: &ViewerState, commands: &mut Vec<C
                         }
                     });
                     if q != *p && q.is_finite() {
-                        commands.push(Command::SetPoint { function: f, point: e.selected_point.unwrap_or(0), p: DVec3::new(q.x, q.y, q.z) });
+                        commands.push(Command::SetPoint {
+                            function: f,
+                            point: e.selected_point.unwrap_or(0),
+                            p: DVec3::new(q.x, q.y, q.z),
+                        });
                     }
                 }
                 ui.small("drag a point in the view (near its dot); X / Y / Z lock an axis.");
@@ -75,7 +81,11 @@ pub fn grid_edit_ui(ui: &mut egui::Ui, state: &ViewerState, commands: &mut Vec<C
             ui.small("click-drag a grid function's point in the view, or choose a function.");
         }
         if state.scene.timeline.is_none() {
-            if ui.button("Animate (key at 0 s, 4 s long)").on_hover_text("adds a timeline; edits at other times then create keys").clicked() {
+            if ui
+                .button("Animate (key at 0 s, 4 s long)")
+                .on_hover_text("adds a timeline; edits at other times then create keys")
+                .clicked()
+            {
                 commands.extend([Command::SetTime(0.0), Command::AddOrUpdateKey, Command::SetDuration(4.0)]);
             }
         } else {
@@ -86,10 +96,18 @@ pub fn grid_edit_ui(ui: &mut egui::Ui, state: &ViewerState, commands: &mut Vec<C
             ));
         }
         ui.horizontal(|ui| {
-            if ui.add_enabled(state.history.can_undo() || e.gesture.is_some(), egui::Button::new("Undo")).on_hover_text("Ctrl+Z").clicked() {
+            if ui
+                .add_enabled(state.history.can_undo() || e.gesture.is_some(), egui::Button::new("Undo"))
+                .on_hover_text("Ctrl+Z")
+                .clicked()
+            {
                 commands.push(Command::Undo);
             }
-            if ui.add_enabled(state.history.can_redo(), egui::Button::new("Redo")).on_hover_text("Ctrl+Shift+Z / Ctrl+Y").clicked() {
+            if ui
+                .add_enabled(state.history.can_redo(), egui::Button::new("Redo"))
+                .on_hover_text("Ctrl+Shift+Z / Ctrl+Y")
+                .clicked()
+            {
                 commands.push(Command::Redo);
             }
         });
@@ -105,7 +123,13 @@ pub fn grid_edit_ui(ui: &mut egui::Ui, state: &ViewerState, commands: &mut Vec<C
     });
 }
 
-fn progress_ui(ui: &mut egui::Ui, fraction: Option<f32>, message: &Option<String>, cancel: Command, commands: &mut Vec<Command>) {
+fn progress_ui(
+    ui: &mut egui::Ui,
+    fraction: Option<f32>,
+    message: &Option<String>,
+    cancel: Command,
+    commands: &mut Vec<Command>,
+) {
     if let Some(f) = fraction {
         ui.horizontal(|ui| {
             ui.add(egui::ProgressBar::new(f).show_percentage().desired_width(180.0));
@@ -152,7 +176,12 @@ pub fn record_ui(ui: &mut egui::Ui, state: &ViewerState, jobs: &JobView, command
             ui.add(egui::DragValue::new(&mut form.height).range(16..=4096).prefix("h "));
             ui.add(egui::DragValue::new(&mut form.fps).range(1.0..=240.0).prefix("fps "));
         });
-        ui.add(egui::DragValue::new(&mut form.points_per_frame).range(1000..=100_000_000).speed(1000.0).prefix("points / frame "));
+        ui.add(
+            egui::DragValue::new(&mut form.points_per_frame)
+                .range(1000..=100_000_000)
+                .speed(1000.0)
+                .prefix("points / frame "),
+        );
         ui.horizontal(|ui| {
             ui.label("directory");
             ui.text_edit_singleline(&mut form.dir_text);

@@ -41,7 +41,9 @@ pub fn dragged_position(state: &ViewerState, start: DVec3, delta_px: [f32; 2]) -
             // by pixels per world unit there.
             let extent = (state.scene.domain.max() - state.scene.domain.min()).max_element().max(1e-9);
             let step = 1e-3 * extent;
-            let (Some(a), Some(b)) = (project(&view, start), project(&view, start + step * DVec3::AXES[axis])) else { return start };
+            let (Some(a), Some(b)) = (project(&view, start), project(&view, start + step * DVec3::AXES[axis])) else {
+                return start;
+            };
             let s = b - a;
             if s.length_squared() < 1e-12 {
                 return start;
@@ -54,14 +56,16 @@ pub fn dragged_position(state: &ViewerState, start: DVec3, delta_px: [f32; 2]) -
             // `pixel_from_world` is singular in perspective (its depth and w rows are both the
             // view distance), so unproject through clip space: same NDC depth, moved NDC x, y.
             let (near, far) = state.camera.depth_range(state.bounds);
-            let clip_from_world = state.camera.clip_from_view(view.width as f32 / view.height as f32, near, far) * state.camera.view_from_world();
+            let clip_from_world = state.camera.clip_from_view(view.width as f32 / view.height as f32, near, far)
+                * state.camera.view_from_world();
             let world_from_clip = clip_from_world.inverse();
             let q = clip_from_world * start.as_vec3().extend(1.0);
             if !(q.w.abs() > 1e-9) {
                 return start;
             }
             let ndc = q.truncate() / q.w;
-            let moved = ndc + glam::Vec3::new(2.0 * delta.x / view.width as f32, -2.0 * delta.y / view.height as f32, 0.0);
+            let moved =
+                ndc + glam::Vec3::new(2.0 * delta.x / view.width as f32, -2.0 * delta.y / view.height as f32, 0.0);
             let unproject = |n: glam::Vec3| {
                 let p = world_from_clip * n.extend(1.0);
                 p.truncate() / p.w
@@ -138,8 +142,16 @@ fn to_egui(q: Vec2, origin: [f32; 2], ppp: f32) -> egui::Pos2 {
     egui::pos2((q.x + origin[0]) / ppp, (q.y + origin[1]) / ppp)
 }
 
-fn draw_grid(painter: &egui::Painter, view: &SplatView, origin: [f32; 2], grid: &FunctionGrid, ppp: f32, stroke: egui::Stroke) {
-    let projected: Vec<Option<egui::Pos2>> = grid.points.iter().map(|p| project(view, *p).map(|q| to_egui(q, origin, ppp))).collect();
+fn draw_grid(
+    painter: &egui::Painter,
+    view: &SplatView,
+    origin: [f32; 2],
+    grid: &FunctionGrid,
+    ppp: f32,
+    stroke: egui::Stroke,
+) {
+    let projected: Vec<Option<egui::Pos2>> =
+        grid.points.iter().map(|p| project(view, *p).map(|q| to_egui(q, origin, ppp))).collect();
     for (a, b) in grid_lines(grid.dims) {
         if let (Some(Some(pa)), Some(Some(pb))) = (projected.get(a), projected.get(b)) {
             painter.line_segment([*pa, *pb], stroke);
@@ -154,10 +166,20 @@ pub fn grid_overlay_ui(ctx: &egui::Context, clip: egui::Rect, state: &ViewerStat
     if !state.edit.grid_overlay {
         return;
     }
-    let painter = ctx.layer_painter(egui::LayerId::new(egui::Order::Background, egui::Id::unique("nlifs_grid_overlay"))).with_clip_rect(clip);
+    let painter = ctx
+        .layer_painter(egui::LayerId::new(egui::Order::Background, egui::Id::unique("nlifs_grid_overlay")))
+        .with_clip_rect(clip);
     let view = view_of(state);
-    let initial = FunctionGrid { dims: state.scene.domain.dims(), points: state.scene.domain.points(), editable: false };
-    draw_grid(&painter, &view, state.view_origin_px, &initial, ppp, egui::Stroke::new(1.0, egui::Color32::from_white_alpha(110)));
+    let initial =
+        FunctionGrid { dims: state.scene.domain.dims(), points: state.scene.domain.points(), editable: false };
+    draw_grid(
+        &painter,
+        &view,
+        state.view_origin_px,
+        &initial,
+        ppp,
+        egui::Stroke::new(1.0, egui::Color32::from_white_alpha(110)),
+    );
     let selected = state.edit.selected_function;
     if let (Some(f), Some(tl)) = (selected, &state.scene.timeline) {
         let t = state.playhead_secs();
@@ -167,7 +189,14 @@ pub fn grid_overlay_ui(ctx: &egui::Context, clip: egui::Rect, state: &ViewerStat
         let after = with_f.iter().find(|k| k.t_secs > t + tol);
         for key in [before, after].into_iter().flatten() {
             if let Some(grid) = key.function(f).and_then(|d| definition_grid(&state.scene, d)) {
-                draw_grid(&painter, &view, state.view_origin_px, &grid, ppp, egui::Stroke::new(1.0, srgb(state.scene.functions[f].color, 0.25)));
+                draw_grid(
+                    &painter,
+                    &view,
+                    state.view_origin_px,
+                    &grid,
+                    ppp,
+                    egui::Stroke::new(1.0, srgb(state.scene.functions[f].color, 0.25)),
+                );
             }
         }
     }
@@ -176,7 +205,13 @@ pub fn grid_overlay_ui(ctx: &egui::Context, clip: egui::Rect, state: &ViewerStat
             continue;
         }
         let Some(grid) = state.function_grid(f) else { continue };
-        let (width, alpha) = if selected == Some(f) { (2.0, 1.0) } else if selected.is_some() { (1.0, 0.35) } else { (1.2, 0.8) };
+        let (width, alpha) = if selected == Some(f) {
+            (2.0, 1.0)
+        } else if selected.is_some() {
+            (1.0, 0.35)
+        } else {
+            (1.2, 0.8)
+        };
         draw_grid(&painter, &view, state.view_origin_px, &grid, ppp, egui::Stroke::new(width, srgb(spec.color, alpha)));
         if selected == Some(f) || (selected.is_none() && grid.editable) {
             for (i, p) in grid.points.iter().enumerate() {

@@ -22,11 +22,10 @@ struct Running<T> {
 
 impl<T: Send + 'static> Running<T> {
     fn spawn(work: impl FnOnce(&AtomicBool, &AtomicU64, &AtomicU64) -> T + Send + 'static) -> std::io::Result<Self> {
-        let (cancel, done, total) = (Arc::new(AtomicBool::new(false)), Arc::new(AtomicU64::new(0)), Arc::new(AtomicU64::new(0)));
+        let (cancel, done, total) =
+            (Arc::new(AtomicBool::new(false)), Arc::new(AtomicU64::new(0)), Arc::new(AtomicU64::new(0)));
         let (c, d, t) = (cancel.clone(), done.clone(), total.clone());
-        let handle = std::thread::Builder::new()
-            .name("nlifs-job".into())
-            .spawn(move || work(&c, &d, &t))?;
+        let handle = std::thread::Builder::new().name("nlifs-job".into()).spawn(move || work(&c, &d, &t))?;
         Ok(Self { cancel, done, total, handle })
     }
 
@@ -69,13 +68,22 @@ impl Jobs {
                 if self.raytrace.is_some() {
                     return;
                 }
-                let settings = RaytraceSettings { width: form.width.clamp(16, 4096), height: form.height.clamp(16, 4096), spp: form.spp.clamp(1, 64), depth: form.depth.min(12), ..RaytraceSettings::default() };
+                let settings = RaytraceSettings {
+                    width: form.width.clamp(16, 4096),
+                    height: form.height.clamp(16, 4096),
+                    spp: form.spp.clamp(1, 64),
+                    depth: form.depth.min(12),
+                    ..RaytraceSettings::default()
+                };
                 let png = PathBuf::from(form.png_text.trim());
                 // W^n(A) has m^n leaves: refuse what would not fit in memory rather than abort.
                 let m = scene.at(t_secs).active().len().max(1) as f64;
                 if m.powi(settings.depth as i32) > MAX_LEAVES {
                     let depth = (MAX_LEAVES.ln() / m.ln()).floor();
-                    self.view.raytrace_message = Some(format!("depth {} gives {m}^{} leaves; at most depth {depth} here", settings.depth, settings.depth));
+                    self.view.raytrace_message = Some(format!(
+                        "depth {} gives {m}^{} leaves; at most depth {depth} here",
+                        settings.depth, settings.depth
+                    ));
                     return;
                 }
                 let job = Running::spawn(move |cancel, done, total| {
@@ -83,7 +91,11 @@ impl Jobs {
                         done.store(d, Ordering::Relaxed);
                         total.store(t, Ordering::Relaxed);
                     };
-                    (crate::raytrace::render(&scene, t_secs, Some(camera), &settings, &progress, cancel).map_err(|e| e.to_string()), png)
+                    (
+                        crate::raytrace::render(&scene, t_secs, Some(camera), &settings, &progress, cancel)
+                            .map_err(|e| e.to_string()),
+                        png,
+                    )
                 });
                 match job {
                     Ok(job) => {
@@ -122,7 +134,8 @@ impl Jobs {
                         if cancel.load(Ordering::Relaxed) {
                             return Ok(format!("cancelled after {k} of {count} frames in {}", dir.display()));
                         }
-                        crate::record::record(&rec, &dir, k..k + 1, false, &mut |_, _| {}).map_err(|e| e.to_string())?;
+                        crate::record::record(&rec, &dir, k..k + 1, false, &mut |_, _| {})
+                            .map_err(|e| e.to_string())?;
                         done.store(k as u64 + 1, Ordering::Relaxed);
                     }
                     Ok(format!("recorded {count} frames to {}", dir.display()))
@@ -171,7 +184,11 @@ impl Jobs {
                             Err(e) => format!("cannot write {}: {e}", png.display()),
                         }
                     };
-                    format!("{w}×{h}, {} leaves, {:.1} s; {saved}", traced.leaf_count, traced.build_secs + traced.trace_secs)
+                    format!(
+                        "{w}×{h}, {} leaves, {:.1} s; {saved}",
+                        traced.leaf_count,
+                        traced.build_secs + traced.trace_secs
+                    )
                 }
                 Ok((Err(e), _)) => format!("ray-trace: {e}"),
                 Err(_) => "ray-trace failed (the thread panicked)".into(),

@@ -200,7 +200,13 @@ impl FrameLog {
             1e3 * self.record_secs / n,
             1e3 * self.present_secs / n,
         );
-        *self = Self { since: Some(now), cpu_since: cpu, ui_renders: self.ui_renders, ui_renders_reported: self.ui_renders, ..Self::default() };
+        *self = Self {
+            since: Some(now),
+            cpu_since: cpu,
+            ui_renders: self.ui_renders,
+            ui_renders_reported: self.ui_renders,
+            ..Self::default()
+        };
     }
 }
 
@@ -210,7 +216,9 @@ impl Gfx {
             .with_title(format!("nlifs — {}", state.scene.name))
             .with_inner_size(winit::dpi::PhysicalSize::new(1280u32, 720u32));
         let window = Arc::new(event_loop.create_window(attributes).map_err(|e| ViewerError::Window(e.to_string()))?);
-        let instance = wgpu::Instance::new(wgpu::InstanceDescriptor::new_with_display_handle_from_env(Box::new(event_loop.owned_display_handle())));
+        let instance = wgpu::Instance::new(wgpu::InstanceDescriptor::new_with_display_handle_from_env(Box::new(
+            event_loop.owned_display_handle(),
+        )));
         let surface = instance.create_surface(window.clone()).map_err(|e| ViewerError::Window(e.to_string()))?;
         let ctx = GpuContext::with_instance(instance, Some(&surface))?;
         let size = window.inner_size();
@@ -296,7 +304,10 @@ impl ApplicationHandler for App {
             WindowEvent::RedrawRequested => self.frame(),
             WindowEvent::DroppedFile(path) => self.commands.push(Command::OpenScene(path)),
             WindowEvent::MouseInput { state: ElementState::Pressed, button, .. } if !egui_wants_pointer => {
-                let picked = (button == MouseButton::Left).then_some(self.cursor).flatten().and_then(|(x, y)| grid_edit::pick_point(&self.state, [x as f32, y as f32]));
+                let picked = (button == MouseButton::Left)
+                    .then_some(self.cursor)
+                    .flatten()
+                    .and_then(|(x, y)| grid_edit::pick_point(&self.state, [x as f32, y as f32]));
                 match picked {
                     Some((function, point)) => {
                         self.commands.push(Command::BeginPointDrag { function, point });
@@ -306,15 +317,20 @@ impl ApplicationHandler for App {
                 }
                 gfx.window.request_redraw();
             }
-            WindowEvent::MouseInput { state: ElementState::Released, button: MouseButton::Left, .. } if self.point_drag.is_some() => {
+            WindowEvent::MouseInput { state: ElementState::Released, button: MouseButton::Left, .. }
+                if self.point_drag.is_some() =>
+            {
                 self.point_drag = None;
                 self.commands.push(Command::EndGesture);
                 gfx.window.request_redraw();
             }
-            WindowEvent::MouseInput { state: ElementState::Released, button, .. } if self.drag == Some(button) => self.drag = None,
+            WindowEvent::MouseInput { state: ElementState::Released, button, .. } if self.drag == Some(button) => {
+                self.drag = None
+            }
             WindowEvent::CursorMoved { position, .. } => {
                 if let Some((x0, y0)) = self.point_drag {
-                    self.commands.push(Command::DragPoint { delta_px: [(position.x - x0) as f32, (position.y - y0) as f32] });
+                    self.commands
+                        .push(Command::DragPoint { delta_px: [(position.x - x0) as f32, (position.y - y0) as f32] });
                     gfx.window.request_redraw();
                 } else if let (Some(button), Some((x, y))) = (self.drag, self.cursor) {
                     let (dx_px, dy_px) = ((position.x - x) as f32, (position.y - y) as f32);
@@ -334,7 +350,11 @@ impl ApplicationHandler for App {
                 self.commands.push(Command::Zoom { steps });
                 gfx.window.request_redraw();
             }
-            WindowEvent::KeyboardInput { event, .. } if !response.consumed && !gfx.egui_ctx.egui_wants_keyboard_input() && event.state == ElementState::Pressed => {
+            WindowEvent::KeyboardInput { event, .. }
+                if !response.consumed
+                    && !gfx.egui_ctx.egui_wants_keyboard_input()
+                    && event.state == ElementState::Pressed =>
+            {
                 match event.logical_key.as_ref() {
                     Key::Character(c) if c.eq_ignore_ascii_case("f") => self.commands.push(Command::FrameAttractor),
                     Key::Character(c) if c.eq_ignore_ascii_case("p") => {
@@ -372,7 +392,10 @@ impl ApplicationHandler for App {
         }
         let Some(gfx) = &self.gfx else { return };
         // Converged and idle: wake a few times a second (file polling), else draw continuously.
-        let busy = self.state.playback.playing || self.state.edit.gesture.is_some() || self.jobs.view.raytrace.is_some() || self.jobs.view.record.is_some();
+        let busy = self.state.playback.playing
+            || self.state.edit.gesture.is_some()
+            || self.jobs.view.raytrace.is_some()
+            || self.jobs.view.record.is_some();
         let idle = gfx.live.converged() && self.commands.is_empty() && self.drag.is_none() && !busy;
         if idle {
             let next = self.last_frame.unwrap_or_else(Instant::now) + Duration::from_millis(250);
@@ -414,13 +437,17 @@ impl App {
         let job_view = &self.jobs.view;
         let ppp = gfx.egui_ctx.pixels_per_point();
         let mut view_rect = egui::Rect::NOTHING;
-        let full_output = gfx.egui_ctx.run_ui(raw_input, |ui| view_rect = ui::panels_ui(ui, state, job_view, ppp, commands));
+        let full_output =
+            gfx.egui_ctx.run_ui(raw_input, |ui| view_rect = ui::panels_ui(ui, state, job_view, ppp, commands));
         gfx.egui_state.handle_platform_output(&gfx.window, full_output.platform_output);
         // The attractor is drawn and framed in what the panels leave, in whole window pixels.
         let (origin_px, size_px) = view_pixels(view_rect, ppp, [gfx.config.width, gfx.config.height]);
         let minimized = gfx.config.width == 0 || gfx.config.height == 0;
         if !minimized {
-            self.commands.push(Command::SetViewRect { origin_px: origin_px.map(|v| v as f32), size_px: size_px.map(|v| v as f32) });
+            self.commands.push(Command::SetViewRect {
+                origin_px: origin_px.map(|v| v as f32),
+                size_px: size_px.map(|v| v as f32),
+            });
         }
 
         let mut changes = self.state.apply(self.commands.drain(..));
@@ -454,7 +481,8 @@ impl App {
         }
 
         // Textures must be applied every frame even when nothing is drawn.
-        let textures_changed = !full_output.textures_delta.set.is_empty() || !full_output.textures_delta.free.is_empty();
+        let textures_changed =
+            !full_output.textures_delta.set.is_empty() || !full_output.textures_delta.free.is_empty();
         for (id, deltas) in &full_output.textures_delta.set {
             for delta in deltas {
                 gfx.egui_renderer.update_texture(&gfx.ctx.device, &gfx.ctx.queue, *id, delta);
@@ -473,7 +501,9 @@ impl App {
         let frame = match gfx.surface.get_current_texture() {
             wgpu::CurrentSurfaceTexture::Success(t) => Some((t, false)),
             wgpu::CurrentSurfaceTexture::Suboptimal(t) => Some((t, true)),
-            wgpu::CurrentSurfaceTexture::Timeout | wgpu::CurrentSurfaceTexture::Occluded | wgpu::CurrentSurfaceTexture::Validation => None,
+            wgpu::CurrentSurfaceTexture::Timeout
+            | wgpu::CurrentSurfaceTexture::Occluded
+            | wgpu::CurrentSurfaceTexture::Validation => None,
             wgpu::CurrentSurfaceTexture::Outdated => {
                 gfx.reconfigure();
                 None
@@ -496,7 +526,8 @@ impl App {
         };
         let t_acquired = Instant::now();
         let view = frame.texture.create_view(&Default::default());
-        let mut encoder = gfx.ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("frame") });
+        let mut encoder =
+            gfx.ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("frame") });
         let splats = gfx.live.advance(&gfx.ctx, &mut encoder);
         gfx.live.draw(&gfx.ctx, &mut encoder, &view, gfx.config.format, origin_px);
 

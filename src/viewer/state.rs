@@ -19,10 +19,10 @@ use crate::camera::{OrbitCamera, Projection};
 use crate::chaos_game::{self, CompiledIfs};
 use crate::edit::{Edit, History};
 use crate::gpu::live::LiveSettings;
-use crate::timeline::{Ease, Interpolation, Key, LoopMode};
 use crate::model::IfsReport;
 use crate::model::builder::Step;
 use crate::scene::{FunctionDef, Scene};
+use crate::timeline::{Ease, Interpolation, Key, LoopMode};
 
 /// The scene shown when the viewer starts without one (the paper's plant, table 4).
 pub const DEFAULT_SCENE: &str = include_str!("../../scenes/plant2.toml");
@@ -36,21 +36,45 @@ pub enum Command {
     SetScreenshotText(String),
     /// Re-read the current scene file (it changed on disk); keeps the camera.
     ReloadScene,
-    SetFunctionEnabled { function: usize, enabled: bool },
-    SetFunctionProbability { function: usize, probability: Option<f64> },
+    SetFunctionEnabled {
+        function: usize,
+        enabled: bool,
+    },
+    SetFunctionProbability {
+        function: usize,
+        probability: Option<f64>,
+    },
     /// Linear RGB.
-    SetFunctionColor { function: usize, color: [f32; 3] },
-    SetBuilderStep { function: usize, step: usize, value: Step },
+    SetFunctionColor {
+        function: usize,
+        color: [f32; 3],
+    },
+    SetBuilderStep {
+        function: usize,
+        step: usize,
+        value: Step,
+    },
     SetLiveSettings(LiveSettings),
     SetProjection(Projection),
-    Orbit { dx_px: f32, dy_px: f32 },
-    Pan { dx_px: f32, dy_px: f32 },
-    Zoom { steps: f32 },
+    Orbit {
+        dx_px: f32,
+        dy_px: f32,
+    },
+    Pan {
+        dx_px: f32,
+        dy_px: f32,
+    },
+    Zoom {
+        steps: f32,
+    },
     FrameAttractor,
     SaveScreenshot(PathBuf),
     /// The part of the window the panels leave to the view (window pixels): the attractor is
     /// drawn and framed there. The first report re-frames the camera for its aspect.
-    SetViewRect { origin_px: [f32; 2], size_px: [f32; 2] },
+    SetViewRect {
+        origin_px: [f32; 2],
+        size_px: [f32; 2],
+    },
 
     // Grid display and editing.
     SetGridOverlay(bool),
@@ -59,11 +83,20 @@ pub enum Command {
     /// Moves along one world axis only (0 = x, 1 = y, 2 = z).
     SetAxisLock(Option<usize>),
     /// A press on grid point `point` of `function` in the view: selects it and starts a gesture.
-    BeginPointDrag { function: usize, point: usize },
+    BeginPointDrag {
+        function: usize,
+        point: usize,
+    },
     /// The cursor moved `delta_px` (window pixels) since the press of the running point drag.
-    DragPoint { delta_px: [f32; 2] },
+    DragPoint {
+        delta_px: [f32; 2],
+    },
     /// Puts a grid point at `p` (numeric entry); part of the running gesture.
-    SetPoint { function: usize, point: usize, p: DVec3 },
+    SetPoint {
+        function: usize,
+        point: usize,
+        p: DVec3,
+    },
     /// Ends the running gesture: its edits become one undo step.
     EndGesture,
     Undo,
@@ -74,7 +107,9 @@ pub enum Command {
     // Timeline.
     SetPlaying(bool),
     /// Advances scene time by `dt_secs` × speed while playing (the event loop's clock).
-    Tick { dt_secs: f64 },
+    Tick {
+        dt_secs: f64,
+    },
     /// Scrub: scene time.
     SetTime(f64),
     SetSpeed(f64),
@@ -85,7 +120,11 @@ pub enum Command {
     /// or, where a key is, pins every such function there.
     AddOrUpdateKey,
     DeleteKeyAtPlayhead,
-    SetKeyShape { key: usize, interpolation: Interpolation, ease: Ease },
+    SetKeyShape {
+        key: usize,
+        interpolation: Interpolation,
+        ease: Ease,
+    },
 
     // Background jobs.
     SetRaytraceForm(RaytraceForm),
@@ -260,7 +299,14 @@ impl ViewerState {
             height_px: 720.0,
             view_origin_px: [0.0, 0.0],
             view_rect_known: false,
-            edit: EditState { grid_overlay: false, selected_function: None, selected_point: None, axis_lock: None, gesture: None, save_text: String::new() },
+            edit: EditState {
+                grid_overlay: false,
+                selected_function: None,
+                selected_point: None,
+                axis_lock: None,
+                gesture: None,
+                save_text: String::new(),
+            },
             history: History::default(),
             playback: Playback { playing: false, speed: 1.0, follow_camera: false },
             raytrace_form: RaytraceForm::default(),
@@ -279,7 +325,8 @@ impl ViewerState {
     /// The scene's camera at the current time, fitted to a sample of the attractor where the
     /// scene leaves target and distance open (the same framing as `nlifs render`).
     fn framed_camera(&self) -> OrbitCamera {
-        let sample = self.compiled.as_ref().map(|c| chaos_game::attractor_sample(c, self.live.seed)).unwrap_or_default();
+        let sample =
+            self.compiled.as_ref().map(|c| chaos_game::attractor_sample(c, self.live.seed)).unwrap_or_default();
         crate::render::frame_camera(&self.scene, self.t_secs, self.bounds, &sample, self.view_aspect())
     }
 
@@ -413,7 +460,11 @@ impl ViewerState {
                 }
                 Command::FrameAttractor => {
                     // Keep the user's angles and projection; fit target and distance.
-                    let sample = self.compiled.as_ref().map(|c| chaos_game::attractor_sample(c, self.live.seed)).unwrap_or_default();
+                    let sample = self
+                        .compiled
+                        .as_ref()
+                        .map(|c| chaos_game::attractor_sample(c, self.live.seed))
+                        .unwrap_or_default();
                     if sample.is_empty() {
                         let dim = self.scene.domain.dimension();
                         self.camera.target = OrbitCamera::framing(self.bounds, dim).target;
@@ -448,16 +499,20 @@ impl ViewerState {
                     self.edit.selected_function = function;
                 }
                 Command::SelectPoint(point) => {
-                    let count = self.edit.selected_function.and_then(|f| self.function_grid(f)).map_or(0, |g| g.points.len());
+                    let count =
+                        self.edit.selected_function.and_then(|f| self.function_grid(f)).map_or(0, |g| g.points.len());
                     self.edit.selected_point = point.filter(|&p| p < count);
                 }
                 Command::SetAxisLock(axis) => self.edit.axis_lock = axis.filter(|&a| a < self.scene.domain.dimension()),
                 Command::BeginPointDrag { function, point } => {
                     self.end_gesture();
-                    if let Some(start) = self.function_grid(function).filter(|g| g.editable).and_then(|g| g.points.get(point).copied()) {
+                    if let Some(start) =
+                        self.function_grid(function).filter(|g| g.editable).and_then(|g| g.points.get(point).copied())
+                    {
                         self.edit.selected_function = Some(function);
                         self.edit.selected_point = Some(point);
-                        self.edit.gesture = Some(Gesture { edits: Vec::new(), drag: Some(PointDrag { function, point, start }) });
+                        self.edit.gesture =
+                            Some(Gesture { edits: Vec::new(), drag: Some(PointDrag { function, point, start }) });
                     }
                 }
                 Command::DragPoint { delta_px } => {
@@ -474,11 +529,18 @@ impl ViewerState {
                 Command::EndGesture => self.end_gesture(),
                 Command::Undo | Command::Redo => {
                     self.end_gesture();
-                    let result = if command == Command::Undo { self.history.undo(&mut self.scene) } else { self.history.redo(&mut self.scene) };
+                    let result = if command == Command::Undo {
+                        self.history.undo(&mut self.scene)
+                    } else {
+                        self.history.redo(&mut self.scene)
+                    };
                     match result {
                         Ok(true) => edited = true,
                         Ok(false) => {}
-                        Err(e) => self.error = Some(format!("cannot {}: {e}", if command == Command::Undo { "undo" } else { "redo" })),
+                        Err(e) => {
+                            self.error =
+                                Some(format!("cannot {}: {e}", if command == Command::Undo { "undo" } else { "redo" }))
+                        }
                     }
                 }
                 Command::SetSaveText(text) => self.edit.save_text = text,
@@ -628,8 +690,12 @@ pub struct FunctionGrid {
 /// The grid of a definition: grid and builder functions (resolved); None for the others.
 pub fn definition_grid(scene: &Scene, def: &FunctionDef) -> Option<FunctionGrid> {
     match (def, scene.resolve(def)) {
-        (FunctionDef::Grid { points }, _) => Some(FunctionGrid { dims: scene.domain.dims(), points: points.clone(), editable: true }),
-        (FunctionDef::Builder { .. }, crate::model::Map::Grid(g)) => Some(FunctionGrid { dims: g.grid.dims(), points: g.points, editable: false }),
+        (FunctionDef::Grid { points }, _) => {
+            Some(FunctionGrid { dims: scene.domain.dims(), points: points.clone(), editable: true })
+        }
+        (FunctionDef::Builder { .. }, crate::model::Map::Grid(g)) => {
+            Some(FunctionGrid { dims: g.grid.dims(), points: g.points, editable: false })
+        }
         _ => None,
     }
 }
@@ -679,7 +745,10 @@ impl ViewerState {
         let edits = &mut self.edit.gesture.get_or_insert_with(Gesture::default).edits;
         // A drag's many small moves of one definition fold into one edit (before of the first,
         // after of the last), so a long drag stays one small undo step.
-        if let (Some(Edit::SetFunction { function: f0, key: k0, after: a0, .. }), Edit::SetFunction { function, key, after, .. }) = (edits.last_mut(), &edit)
+        if let (
+            Some(Edit::SetFunction { function: f0, key: k0, after: a0, .. }),
+            Edit::SetFunction { function, key, after, .. },
+        ) = (edits.last_mut(), &edit)
             && f0 == function
             && k0 == key
         {
@@ -695,7 +764,11 @@ impl ViewerState {
         if let Some(mut gesture) = self.edit.gesture.take()
             && !gesture.edits.is_empty()
         {
-            self.history.record_applied(if gesture.edits.len() == 1 { gesture.edits.remove(0) } else { Edit::Batch(gesture.edits) });
+            self.history.record_applied(if gesture.edits.len() == 1 {
+                gesture.edits.remove(0)
+            } else {
+                Edit::Batch(gesture.edits)
+            });
         }
     }
 
@@ -748,7 +821,10 @@ impl ViewerState {
     /// pins them all in the key that is there (one undo step).
     fn add_or_update_key(&mut self) -> bool {
         let t = self.playhead_secs();
-        let mut key = self.key_at_playhead().and_then(|k| self.scene.timeline.as_ref().map(|tl| tl.keys[k].clone())).unwrap_or_else(|| Key::new(t));
+        let mut key = self
+            .key_at_playhead()
+            .and_then(|k| self.scene.timeline.as_ref().map(|tl| tl.keys[k].clone()))
+            .unwrap_or_else(|| Key::new(t));
         for (i, f) in self.scene.functions.iter().enumerate() {
             if matches!(f.def, FunctionDef::Grid { .. } | FunctionDef::Builder { .. }) {
                 key.set_function(i, Some(self.scene.function_def_at(i, self.t_secs)));

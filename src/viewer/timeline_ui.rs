@@ -44,11 +44,18 @@ pub fn timeline_ui(ui: &mut egui::Ui, state: &ViewerState, commands: &mut Vec<Co
             commands.push(Command::SetLoopMode(mode));
         }
         let mut follow = state.playback.follow_camera;
-        if ui.checkbox(&mut follow, "keyed camera").on_hover_text("take the camera from the scene's keys as time moves").changed() {
+        if ui
+            .checkbox(&mut follow, "keyed camera")
+            .on_hover_text("take the camera from the scene's keys as time moves")
+            .changed()
+        {
             commands.push(Command::SetFollowCamera(follow));
         }
         let mut duration = tl.duration_secs;
-        if ui.add(egui::DragValue::new(&mut duration).speed(0.05).range(0.01..=3600.0).prefix("duration ").suffix(" s")).changed() {
+        if ui
+            .add(egui::DragValue::new(&mut duration).speed(0.05).range(0.01..=3600.0).prefix("duration ").suffix(" s"))
+            .changed()
+        {
             commands.push(Command::SetDuration(duration));
         }
     });
@@ -71,11 +78,14 @@ pub fn timeline_ui(ui: &mut egui::Ui, state: &ViewerState, commands: &mut Vec<Co
                         ui.selectable_value(&mut interpolation, i, i.name());
                     }
                 });
-                egui::ComboBox::from_id_salt("key_ease").selected_text(format!("ease {}", ease.name())).show_ui(ui, |ui| {
-                    for e in EASES {
-                        ui.selectable_value(&mut ease, e, e.name());
-                    }
-                });
+                egui::ComboBox::from_id_salt("key_ease").selected_text(format!("ease {}", ease.name())).show_ui(
+                    ui,
+                    |ui| {
+                        for e in EASES {
+                            ui.selectable_value(&mut ease, e, e.name());
+                        }
+                    },
+                );
                 if (interpolation, ease) != (key_data.interpolation, key_data.ease) {
                     commands.push(Command::SetKeyShape { key: k, interpolation, ease });
                 }
@@ -101,15 +111,23 @@ fn keys_strip_ui(ui: &mut egui::Ui, state: &ViewerState, d: f64, playhead: f64, 
         let r = 5.0;
         let at = (key.t_secs - playhead).abs() <= crate::timeline::KEY_TIME_TOL_SECS;
         let fill = if at { Color32::from_rgb(255, 200, 80) } else { Color32::from_rgb(170, 170, 190) };
-        painter.add(egui::Shape::convex_polygon(vec![c + egui::vec2(0.0, -r), c + egui::vec2(r, 0.0), c + egui::vec2(0.0, r), c + egui::vec2(-r, 0.0)], fill, Stroke::NONE));
+        painter.add(egui::Shape::convex_polygon(
+            vec![c + egui::vec2(0.0, -r), c + egui::vec2(r, 0.0), c + egui::vec2(0.0, r), c + egui::vec2(-r, 0.0)],
+            fill,
+            Stroke::NONE,
+        ));
     }
     let x = x_of(playhead);
-    painter.line_segment([egui::pos2(x, rect.top()), egui::pos2(x, rect.bottom())], Stroke::new(2.0, Color32::from_rgb(255, 110, 90)));
+    painter.line_segment(
+        [egui::pos2(x, rect.top()), egui::pos2(x, rect.bottom())],
+        Stroke::new(2.0, Color32::from_rgb(255, 110, 90)),
+    );
     if response.clicked()
         && let Some(pos) = response.interact_pointer_pos()
     {
         // The nearest key within 8 px, else the time under the cursor.
-        let nearest = tl.keys.iter().map(|k| ((x_of(k.t_secs) - pos.x).abs(), k.t_secs)).min_by(|a, b| a.0.total_cmp(&b.0));
+        let nearest =
+            tl.keys.iter().map(|k| ((x_of(k.t_secs) - pos.x).abs(), k.t_secs)).min_by(|a, b| a.0.total_cmp(&b.0));
         let t = match nearest {
             Some((dx, t)) if dx <= 8.0 => t,
             _ => (((pos.x - rect.left() - 8.0) / (rect.width() - 16.0)).clamp(0.0, 1.0) as f64) * d,

@@ -4,9 +4,9 @@
 use egui::{Color32, RichText};
 
 use crate::camera::Projection;
+use crate::gpu::cpu_route::ChaosBackend;
 use crate::model::builder::Step;
 use crate::scene::FunctionDef;
-use crate::gpu::cpu_route::ChaosBackend;
 use crate::splat::SplatMode;
 
 use super::jobs::JobView;
@@ -15,10 +15,18 @@ use super::state::{Command, ViewerState};
 /// The left side panel with every section, the timeline at the bottom, the grid overlay, the
 /// ray-traced image window and the keyboard shortcuts. `ppp`: pixels per egui point. Returns
 /// the rectangle (egui points) the panels leave to the view.
-pub fn panels_ui(ui: &mut egui::Ui, state: &ViewerState, jobs: &JobView, ppp: f32, commands: &mut Vec<Command>) -> egui::Rect {
+pub fn panels_ui(
+    ui: &mut egui::Ui,
+    state: &ViewerState,
+    jobs: &JobView,
+    ppp: f32,
+    commands: &mut Vec<Command>,
+) -> egui::Rect {
     shortcuts_ui(ui.ctx(), state, commands);
     if state.scene.timeline.is_some() {
-        egui::Panel::bottom("nlifs_timeline").resizable(false).show(ui, |ui| super::timeline_ui::timeline_ui(ui, state, commands));
+        egui::Panel::bottom("nlifs_timeline")
+            .resizable(false)
+            .show(ui, |ui| super::timeline_ui::timeline_ui(ui, state, commands));
     }
     egui::Panel::left("nlifs_panel").default_size(310.0).resizable(true).show(ui, |ui| {
         egui::ScrollArea::vertical().show(ui, |ui| {
@@ -51,7 +59,9 @@ fn shortcuts_ui(ctx: &egui::Context, state: &ViewerState, commands: &mut Vec<Com
     }
     use egui::{Key, KeyboardShortcut, Modifiers};
     ctx.input_mut(|i| {
-        if i.consume_shortcut(&KeyboardShortcut::new(Modifiers::COMMAND | Modifiers::SHIFT, Key::Z)) || i.consume_shortcut(&KeyboardShortcut::new(Modifiers::COMMAND, Key::Y)) {
+        if i.consume_shortcut(&KeyboardShortcut::new(Modifiers::COMMAND | Modifiers::SHIFT, Key::Z))
+            || i.consume_shortcut(&KeyboardShortcut::new(Modifiers::COMMAND, Key::Y))
+        {
             commands.push(Command::Redo);
         }
         if i.consume_shortcut(&KeyboardShortcut::new(Modifiers::COMMAND, Key::Z)) {
@@ -81,7 +91,11 @@ fn shortcuts_ui(ctx: &egui::Context, state: &ViewerState, commands: &mut Vec<Com
 
 fn scene_ui(ui: &mut egui::Ui, state: &ViewerState, commands: &mut Vec<Command>) {
     egui::CollapsingHeader::new("Scene").default_open(true).show(ui, |ui| {
-        ui.label(format!("{} — {}", state.scene.name, state.scene_path.as_ref().map_or("built in".into(), |p| p.display().to_string())));
+        ui.label(format!(
+            "{} — {}",
+            state.scene.name,
+            state.scene_path.as_ref().map_or("built in".into(), |p| p.display().to_string())
+        ));
         let mut text = state.path_text.clone();
         ui.horizontal(|ui| {
             let edit = ui.text_edit_singleline(&mut text);
@@ -118,7 +132,10 @@ fn functions_ui(ui: &mut egui::Ui, state: &ViewerState, commands: &mut Vec<Comma
                 let mut explicit = f.probability.is_some();
                 let mut p = f.probability.unwrap_or(0.0);
                 if ui.checkbox(&mut explicit, "p").changed() {
-                    commands.push(Command::SetFunctionProbability { function: i, probability: explicit.then_some(p.max(0.01)) });
+                    commands.push(Command::SetFunctionProbability {
+                        function: i,
+                        probability: explicit.then_some(p.max(0.01)),
+                    });
                 }
                 if explicit && ui.add(egui::Slider::new(&mut p, 0.0..=1.0).max_decimals(3)).changed() {
                     commands.push(Command::SetFunctionProbability { function: i, probability: Some(p) });
@@ -150,10 +167,18 @@ fn builder_ui(ui: &mut egui::Ui, state: &ViewerState, commands: &mut Vec<Command
             for (k, step) in builder.steps.iter().enumerate() {
                 let mut value = step.clone();
                 let changed = match &mut value {
-                    Step::Taper { axis, amount, .. } => ui.add(egui::Slider::new(amount, -1.0..=1.0).text(format!("taper {}", axis.name()))).changed(),
-                    Step::Twist { axis, degrees, .. } => ui.add(egui::Slider::new(degrees, -360.0..=360.0).text(format!("twist {} °", axis.name()))).changed(),
-                    Step::Bend { axis, degrees, .. } => ui.add(egui::Slider::new(degrees, -180.0..=180.0).text(format!("bend {} °", axis.name()))).changed(),
-                    Step::Rotate { axis, degrees, .. } => ui.add(egui::Slider::new(degrees, -180.0..=180.0).text(format!("rotate {} °", axis.name()))).changed(),
+                    Step::Taper { axis, amount, .. } => {
+                        ui.add(egui::Slider::new(amount, -1.0..=1.0).text(format!("taper {}", axis.name()))).changed()
+                    }
+                    Step::Twist { axis, degrees, .. } => ui
+                        .add(egui::Slider::new(degrees, -360.0..=360.0).text(format!("twist {} °", axis.name())))
+                        .changed(),
+                    Step::Bend { axis, degrees, .. } => ui
+                        .add(egui::Slider::new(degrees, -180.0..=180.0).text(format!("bend {} °", axis.name())))
+                        .changed(),
+                    Step::Rotate { axis, degrees, .. } => ui
+                        .add(egui::Slider::new(degrees, -180.0..=180.0).text(format!("rotate {} °", axis.name())))
+                        .changed(),
                     Step::Scale { by, .. } => {
                         let mut c = false;
                         for (a, label) in ["scale x", "scale y", "scale z"].iter().enumerate() {
@@ -209,7 +234,11 @@ fn render_ui(ui: &mut egui::Ui, state: &ViewerState, commands: &mut Vec<Command>
         let mut perspective = state.camera.projection == Projection::Perspective;
         ui.horizontal(|ui| {
             if ui.checkbox(&mut perspective, "perspective (P)").changed() {
-                commands.push(Command::SetProjection(if perspective { Projection::Perspective } else { Projection::Parallel }));
+                commands.push(Command::SetProjection(if perspective {
+                    Projection::Perspective
+                } else {
+                    Projection::Parallel
+                }));
             }
             if ui.button("Frame (F)").clicked() {
                 commands.push(Command::FrameAttractor);
@@ -250,7 +279,10 @@ fn statistics_ui(ui: &mut egui::Ui, state: &ViewerState) {
             if let Some(l) = f.lipschitz_bound
                 && l >= 1.0
             {
-                ui.colored_label(Color32::from_rgb(255, 110, 90), format!("warning: {} may not be contractive (bound {l:.3} ≥ 1)", f.name));
+                ui.colored_label(
+                    Color32::from_rgb(255, 110, 90),
+                    format!("warning: {} may not be contractive (bound {l:.3} ≥ 1)", f.name),
+                );
             }
         }
     });

@@ -37,7 +37,12 @@ impl UiLayer {
         let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
             label: Some("composite"),
             layout: None,
-            vertex: wgpu::VertexState { module: &module, entry_point: Some("fullscreen"), compilation_options: Default::default(), buffers: &[] },
+            vertex: wgpu::VertexState {
+                module: &module,
+                entry_point: Some("fullscreen"),
+                compilation_options: Default::default(),
+                buffers: &[],
+            },
             primitive: wgpu::PrimitiveState::default(),
             depth_stencil: None,
             multisample: wgpu::MultisampleState::default(),
@@ -45,7 +50,11 @@ impl UiLayer {
                 module: &module,
                 entry_point: Some("composite"),
                 compilation_options: Default::default(),
-                targets: &[Some(wgpu::ColorTargetState { format, blend: Some(wgpu::BlendState::PREMULTIPLIED_ALPHA_BLENDING), write_mask: wgpu::ColorWrites::ALL })],
+                targets: &[Some(wgpu::ColorTargetState {
+                    format,
+                    blend: Some(wgpu::BlendState::PREMULTIPLIED_ALPHA_BLENDING),
+                    write_mask: wgpu::ColorWrites::ALL,
+                })],
             }),
             multiview_mask: None,
             cache: None,
@@ -73,7 +82,8 @@ impl UiLayer {
             self.target = Some(self.make_target(device, size_px));
             self.shown = None;
         }
-        let unchanged = !textures_changed && self.shown.as_ref().is_some_and(|(s, ppp)| *ppp == pixels_per_point && *s == shapes);
+        let unchanged =
+            !textures_changed && self.shown.as_ref().is_some_and(|(s, ppp)| *ppp == pixels_per_point && *s == shapes);
         if unchanged {
             return Vec::new();
         }
@@ -88,7 +98,10 @@ impl UiLayer {
                     view: &target.view,
                     depth_slice: None,
                     resolve_target: None,
-                    ops: wgpu::Operations { load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT), store: wgpu::StoreOp::Store },
+                    ops: wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+                        store: wgpu::StoreOp::Store,
+                    },
                 })],
                 depth_stencil_attachment: None,
                 timestamp_writes: None,
