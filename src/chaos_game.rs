@@ -3,8 +3,8 @@
 //! cell pools, the selection table) and the same loop shape.
 //!
 //! The IFS is compiled into a flat form for speed: every grid cell stores the coefficients of
-//! its trilinear interpolant in local coordinates, p = a + u·b + v·c + w·d + uv·e + uw·f + vw·g
-//! + uvw·h, evaluated in Horner form. An affine map is one unbounded cell with only a, b, c, d.
+//! its trilinear interpolant in local coordinates, p = a + u·b + v·c + w·d + uv·e + uw·f +
+//! vw·g + uvw·h, evaluated in Horner form. An affine map is one unbounded cell with only a, b, c, d.
 //! A 2D map has a single cell along z whose local coordinate is always 0.
 //!
 //! Work is split into chunks of [`ORBITS_PER_CHUNK`] orbits advanced together (independent
@@ -306,10 +306,10 @@ impl CompiledIfs {
         let (iz, w) = k.locate(&f.axes[2], p.z);
         let cell = f.cell_base as usize + ix * f.stride_x as usize + iy * f.stride_y as usize + iz;
         debug_assert!(cell < k.cells.len());
+        #[expect(unsafe_code, reason = "tables bounds-checked once when compiled")]
         // SAFETY: `locate` returns ix, iy, iz within the function's cell counts (FastKernel::new
         // checked that every bin maps to a valid cell and that the counts, strides and bases
         // stay inside `cells`), so `cell` indexes the function's own cells.
-        #[allow(unsafe_code)]
         let c = unsafe { k.cells.get_unchecked(cell) };
         let v3 = |i: usize| Vec3::new(c[3 * i], c[3 * i + 1], c[3 * i + 2]);
         let inner = v3(3) + u * v3(5) + v * (v3(6) + u * v3(7));
@@ -410,10 +410,10 @@ impl FastKernel {
         // comparison maps to last_bin = 0.
         let b = (x - a.lo) * a.inv_bin;
         let b = if b < a.last_bin { b } else { a.last_bin };
+        #[expect(unsafe_code, reason = "tables bounds-checked once when compiled")]
         // SAFETY: b is finite and in [0, last_bin] (see above), so the conversion is exact, and
         // FastKernel::new checked that last_bin + 1 table entries at bin_offset hold cells
         // ≤ last_cell and that last_cell + 2 coordinates follow coord_offset; i stays ≤ last_cell.
-        #[allow(unsafe_code)]
         unsafe {
             let bin = b.to_int_unchecked::<u32>() as usize;
             let mut i = *self.bin_cells.get_unchecked(a.bin_offset as usize + bin) as usize;
@@ -502,8 +502,8 @@ impl LaneKernel {
     #[inline(always)]
     fn select(&self, r: u32) -> usize {
         let r24 = r >> (32 - SELECT_BITS);
+        #[expect(unsafe_code, reason = "tables bounds-checked once when compiled")]
         // SAFETY: r >> (32 - SELECT_BUCKET_BITS) < 2^SELECT_BUCKET_BITS = buckets.len().
-        #[allow(unsafe_code)]
         let (first, next) = unsafe { *self.buckets.get_unchecked((r >> (32 - SELECT_BUCKET_BITS)) as usize) };
         (first + (r24 >= next) as u32) as usize
     }
@@ -515,9 +515,9 @@ impl LaneKernel {
     fn map<const MX: bool, const MY: bool, const MZ: bool>(&self, fi: usize, p: Vec3A) -> Vec3A {
         debug_assert_eq!([MX, MY, MZ], self.multi);
         debug_assert!(fi < self.functions.len());
+        #[expect(unsafe_code, reason = "tables bounds-checked once when compiled")]
         // SAFETY: fi comes from `select`, whose buckets hold at most n − 1 thresholds below
         // the bucket's start plus at most one inside it: fi ≤ n − 1 (n functions).
-        #[allow(unsafe_code)]
         let f = unsafe { self.functions.get_unchecked(fi) };
         // _mm_max_ps / _mm_min_ps: x > lo ? x : lo, then x < hi ? x : hi; NaN goes to lo,
         // as in FastKernel::locate.
@@ -525,12 +525,12 @@ impl LaneKernel {
         // See FastKernel::locate: ≥ 0 and ≤ last_bin, NaN mapped to last_bin = 0.
         let b = ((q - f.lo) * f.inv_bin).min(f.last_bin);
         let locate = |a: usize, x: f32, b: f32| -> (usize, [f32; 2]) {
+            #[expect(unsafe_code, reason = "tables bounds-checked once when compiled")]
             // SAFETY: b is finite and in [0, last_bin] (see above), so the conversion is
             // exact; LaneKernel::new copied last_bin + 1 bins at bin_offset from FastKernel's
             // checked table, whose cells are ≤ last_cell; the +1 step happens only below
             // last_cell (next is +inf there, and x ≤ hi is finite); FastKernel::new checked
             // that last_cell + 2 coordinates follow coord_offset.
-            #[allow(unsafe_code)]
             unsafe {
                 let bin = b.to_int_unchecked::<u32>() as usize;
                 let (cell, next) = *self.bins.get_unchecked(f.bin_offset[a] as usize + bin);
@@ -563,8 +563,8 @@ impl LaneKernel {
             uvw.z
         };
         debug_assert!(cell < self.cells.len());
+        #[expect(unsafe_code, reason = "tables bounds-checked once when compiled")]
         // SAFETY: as in CompiledIfs::map_fast, checked by FastKernel::new.
-        #[allow(unsafe_code)]
         let c = unsafe { self.cells.get_unchecked(cell) };
         let (u, v, w) = (Vec3A::splat(u), Vec3A::splat(v), Vec3A::splat(w));
         let inner = c[3] + u * c[5] + v * (c[6] + u * c[7]);

@@ -110,10 +110,10 @@ impl SplatView {
         // A multiplication by the inverse range (one division per view, not per point); the
         // vector splats (`x86.rs`) and the GPU do the same.
         let t = ((q.z - self.near) * (1.0 / (self.far - self.near))).clamp(0.0, 1.0);
-        // SAFETY: 0 ≤ x < width and 0 ≤ y < height (checked above, NaN fails the check), so
-        // the truncations are exact; the same values as `as usize`.
-        #[allow(unsafe_code)]
-        let (ix, iy) = unsafe { (x.to_int_unchecked::<u32>() as usize, y.to_int_unchecked::<u32>() as usize) };
+        // 0 ≤ x < width and 0 ≤ y < height (checked above, NaN fails the check), so the
+        // truncations are exact. The reference splat stays safe: the vector splats are tested
+        // against it.
+        let (ix, iy) = (x as u32 as usize, y as u32 as usize);
         Some((iy * self.width as usize + ix, t))
     }
 
@@ -238,9 +238,8 @@ impl Framebuffer {
                         // with a saturating `as u32`.
                         let d = t * scale;
                         let d = if d > 0.0 { d } else { 0.0 };
-                        // SAFETY: 0 ≤ d ≤ scale < 2^24, so the truncation is exact.
-                        #[allow(unsafe_code)]
-                        let key = unsafe { d.to_int_unchecked::<u32>() } << 8 | fi as u32;
+                        // 0 ≤ d ≤ scale < 2^24, so the truncation is exact.
+                        let key = (d as u32) << 8 | fi as u32;
                         let slot = &mut self.closest[idx];
                         if key < *slot {
                             *slot = key;

@@ -25,7 +25,10 @@
 //! Everything here requires AVX2 (the 16-wide code AVX-512F): the functions are reached only
 //! through [`SimdKernel::run`] and the test entry points, which check the CPU first. Hence the module-wide `unsafe_code` allowance: the intrinsics are `unsafe` to call
 //! outside a `#[target_feature]` function; the memory accesses carry their own SAFETY notes.
-#![allow(unsafe_code)]
+#![expect(
+    unsafe_code,
+    reason = "intrinsics need unsafe outside #[target_feature] functions; callers check the CPU first"
+)]
 
 use std::arch::x86_64::*;
 
@@ -277,6 +280,7 @@ impl SimdKernel {
 
     #[inline(always)]
     unsafe fn select(&self, r: __m256i) -> __m256i {
+        // SAFETY: the caller checked the CPU features (module doc); memory accesses carry their own notes.
         unsafe {
             let r24 = _mm256_srli_epi32::<{ (32 - SELECT_BITS) as i32 }>(r);
             let mut fi = _mm256_setzero_si256();
@@ -290,6 +294,7 @@ impl SimdKernel {
     /// The map of 8 points by functions `fi` (each < the function count).
     #[inline(always)]
     unsafe fn map<const L: u8>(&self, fi: __m256i, p: [__m256; 3]) -> [__m256; 3] {
+        // SAFETY: the caller checked the CPU features (module doc); memory accesses carry their own notes.
         unsafe {
             // Closures would not inherit the caller's target features: a small macro instead.
             macro_rules! by_fn {
@@ -349,6 +354,7 @@ impl SimdKernel {
     /// index as its sign, `cell_coefs` is cell · 24.
     #[inline(always)]
     unsafe fn coef<const L: u8>(&self, j: usize, cell: __m256i, upper: __m256, cell_coefs: __m256i) -> __m256 {
+        // SAFETY: the caller checked the CPU features (module doc); memory accesses carry their own notes.
         unsafe {
             {
                 match L {
@@ -373,6 +379,7 @@ impl SimdKernel {
     /// One chaos-game step of 8 orbits: advance the generators, select, map.
     #[inline(always)]
     unsafe fn step<const L: u8>(&self, rng: &mut __m256i, p: [__m256; 3]) -> ([__m256; 3], __m256i) {
+        // SAFETY: the caller checked the CPU features (module doc); memory accesses carry their own notes.
         unsafe {
             let old = *rng;
             *rng = _mm256_add_epi32(
@@ -393,6 +400,7 @@ impl SimdKernel {
     /// [`Self::select`], 16 lanes.
     #[inline(always)]
     unsafe fn select16(&self, r: __m512i) -> __m512i {
+        // SAFETY: the caller checked the CPU features (module doc); memory accesses carry their own notes.
         unsafe {
             let r24 = _mm512_srli_epi32::<{ 32 - SELECT_BITS }>(r);
             let mut fi = _mm512_setzero_si512();
@@ -407,6 +415,7 @@ impl SimdKernel {
     /// [`Self::map`], 16 lanes; `L` is PERMUTE16 or GATHER.
     #[inline(always)]
     unsafe fn map16<const L: u8>(&self, fi: __m512i, p: [__m512; 3]) -> [__m512; 3] {
+        // SAFETY: the caller checked the CPU features (module doc); memory accesses carry their own notes.
         unsafe {
             macro_rules! by_fn {
                 ($table:expr) => {
@@ -466,6 +475,7 @@ impl SimdKernel {
     /// [`Self::step`], 16 lanes.
     #[inline(always)]
     unsafe fn step16<const L: u8>(&self, rng: &mut __m512i, p: [__m512; 3]) -> ([__m512; 3], __m512i) {
+        // SAFETY: the caller checked the CPU features (module doc); memory accesses carry their own notes.
         unsafe {
             let old = *rng;
             *rng = _mm512_add_epi32(

@@ -459,7 +459,7 @@ mod tests {
             for _ in 0..2000 {
                 let p = random_in(&mut r, lo, hi);
                 // Near pairs probe the local Jacobian; far pairs the global behaviour.
-                let q = if r.next_u32() % 2 == 0 {
+                let q = if r.next_u32().is_multiple_of(2) {
                     p + (random_in(&mut r, DVec3::splat(-1.0), DVec3::splat(1.0)) * 1e-3)
                 } else {
                     random_in(&mut r, lo, hi)

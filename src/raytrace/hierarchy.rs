@@ -481,14 +481,14 @@ impl Hierarchy {
     ) -> Option<Hit> {
         match self.simd {
             #[cfg(target_arch = "x86_64")]
-            #[allow(unsafe_code)]
+            #[expect(unsafe_code, reason = "entered after runtime CPU feature detection")]
             // SAFETY: `simd` is only ever set to a form that `Simd::detect` found the CPU runs.
             Simd::Avx512 => unsafe { self.closest_avx512(ray, t_min, t_max, root_entry, hint, scratch) },
             #[cfg(target_arch = "x86_64")]
-            #[allow(unsafe_code)]
+            #[expect(unsafe_code, reason = "entered after runtime CPU feature detection")]
             // SAFETY: as above.
             Simd::Avx2 => unsafe { self.closest_avx2(ray, t_min, t_max, root_entry, hint, scratch) },
-            #[allow(unsafe_code)]
+            #[expect(unsafe_code, reason = "entered after runtime CPU feature detection")]
             // SAFETY: the portable lanes use only the baseline target's instructions.
             _ => unsafe { self.closest::<Portable>(ray, t_min, t_max, root_entry, hint, scratch) },
         }
@@ -505,7 +505,7 @@ impl Hierarchy {
         hint: u32,
         scratch: &mut Scratch,
     ) -> Option<Hit> {
-        #[allow(unsafe_code)]
+        #[expect(unsafe_code, reason = "entered after runtime CPU feature detection")]
         // SAFETY: this function only runs where AVX-512F is enabled.
         unsafe {
             self.closest::<Avx512>(ray, t_min, t_max, root_entry, hint, scratch)
@@ -523,7 +523,7 @@ impl Hierarchy {
         hint: u32,
         scratch: &mut Scratch,
     ) -> Option<Hit> {
-        #[allow(unsafe_code)]
+        #[expect(unsafe_code, reason = "entered after runtime CPU feature detection")]
         // SAFETY: the portable lanes need nothing beyond the baseline target.
         unsafe {
             self.closest::<Portable>(ray, t_min, t_max, root_entry, hint, scratch)
@@ -535,7 +535,7 @@ impl Hierarchy {
     ///
     /// # Safety
     /// The CPU must run the instructions of `L`.
-    #[allow(unsafe_code)]
+    #[expect(unsafe_code, reason = "entered after runtime CPU feature detection")]
     #[inline(always)]
     unsafe fn closest<L: Lanes>(
         &self,
@@ -547,7 +547,7 @@ impl Hierarchy {
         scratch: &mut Scratch,
     ) -> Option<Hit> {
         let mut best = Hit { t: t_max, node: u32::MAX, triangle: u32::MAX, u: 0.0, v: 0.0 };
-        let Some(root) = self.nodes.first() else { return None };
+        let root = self.nodes.first()?;
         match root.kind {
             NodeKind::Sphere => {
                 return sphere_surface(ray, root.centre, root.radius, t_min, t_max).map(|t| Hit { t, node: 0, ..best });
@@ -652,14 +652,14 @@ impl Hierarchy {
         }
         match self.simd {
             #[cfg(target_arch = "x86_64")]
-            #[allow(unsafe_code)]
+            #[expect(unsafe_code, reason = "entered after runtime CPU feature detection")]
             // SAFETY: `simd` is only ever set to a form that `Simd::detect` found the CPU runs.
             Simd::Avx512 => unsafe { self.any_avx512(ray, t_min, t_max, scratch) },
             #[cfg(target_arch = "x86_64")]
-            #[allow(unsafe_code)]
+            #[expect(unsafe_code, reason = "entered after runtime CPU feature detection")]
             // SAFETY: as above.
             Simd::Avx2 => unsafe { self.any_avx2(ray, t_min, t_max, scratch) },
-            #[allow(unsafe_code)]
+            #[expect(unsafe_code, reason = "entered after runtime CPU feature detection")]
             // SAFETY: the portable lanes use only the baseline target's instructions.
             _ => unsafe { self.any::<Portable>(ray, t_min, t_max, scratch) },
         }
@@ -668,7 +668,7 @@ impl Hierarchy {
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx512f")]
     fn any_avx512(&self, ray: &Ray, t_min: f32, t_max: f32, scratch: &mut Scratch) -> Option<u32> {
-        #[allow(unsafe_code)]
+        #[expect(unsafe_code, reason = "entered after runtime CPU feature detection")]
         // SAFETY: this function only runs where AVX-512F is enabled.
         unsafe {
             self.any::<Avx512>(ray, t_min, t_max, scratch)
@@ -678,7 +678,7 @@ impl Hierarchy {
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
     fn any_avx2(&self, ray: &Ray, t_min: f32, t_max: f32, scratch: &mut Scratch) -> Option<u32> {
-        #[allow(unsafe_code)]
+        #[expect(unsafe_code, reason = "entered after runtime CPU feature detection")]
         // SAFETY: the portable lanes need nothing beyond the baseline target.
         unsafe {
             self.any::<Portable>(ray, t_min, t_max, scratch)
@@ -689,7 +689,7 @@ impl Hierarchy {
     ///
     /// # Safety
     /// The CPU must run the instructions of `L`.
-    #[allow(unsafe_code)]
+    #[expect(unsafe_code, reason = "entered after runtime CPU feature detection")]
     #[inline(always)]
     unsafe fn any<L: Lanes>(&self, ray: &Ray, t_min: f32, t_max: f32, scratch: &mut Scratch) -> Option<u32> {
         let root = self.nodes.first()?;

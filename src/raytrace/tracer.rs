@@ -194,22 +194,22 @@ impl Tracer<'_> {
         let mut lit: u32 = 0;
         let mut on_ground: u32 = 0;
         for (k, ray) in rays.iter().enumerate() {
-            if entry[k] < f32::INFINITY {
-                if let Some(hit) = self.hierarchy.intersect_entered(
+            if entry[k] < f32::INFINITY
+                && let Some(hit) = self.hierarchy.intersect_entered(
                     ray,
                     0.0,
                     t_ground[k],
                     entry[k],
                     scratch.last_hit,
                     &mut scratch.stacks,
-                ) {
-                    scratch.last_hit = hit.node;
-                    (point[k], normal[k]) = self.hierarchy.surface(ray, &hit);
-                    albedo[k] = self.albedo(&hit);
-                    specular[k] = 0.25;
-                    lit |= 1 << k;
-                    continue;
-                }
+                )
+            {
+                scratch.last_hit = hit.node;
+                (point[k], normal[k]) = self.hierarchy.surface(ray, &hit);
+                albedo[k] = self.albedo(&hit);
+                specular[k] = 0.25;
+                lit |= 1 << k;
+                continue;
             }
             if t_ground[k].is_finite() {
                 point[k] = ray.origin + t_ground[k] * ray.dir;

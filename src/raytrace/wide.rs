@@ -98,7 +98,7 @@ pub struct ClosestLanes {
 /// A compiled form of the lane pass. The decisions are those of `sphere_surface` (leaf
 /// spheres) and of `Hierarchy::root_entry` (bounds: overlap with (t_min, t_max), entry clamped to t_min),
 /// on bit-identical roots.
-#[allow(unsafe_code)]
+#[expect(unsafe_code, reason = "entered after runtime CPU feature detection")]
 pub trait Lanes {
     /// The nearest-hit pass over `w`.
     ///
@@ -118,7 +118,7 @@ pub trait Lanes {
 /// the traversal for (the baseline or AVX2).
 pub struct Portable;
 
-#[allow(unsafe_code)]
+#[expect(unsafe_code, reason = "entered after runtime CPU feature detection")]
 impl Lanes for Portable {
     #[inline(always)]
     unsafe fn closest(w: &WideNode, origin: [f32; 3], dir: [f32; 3], t_min: f32, t_max: f32) -> ClosestLanes {
@@ -162,7 +162,7 @@ impl Lanes for Portable {
 pub struct Avx512;
 
 #[cfg(target_arch = "x86_64")]
-#[allow(unsafe_code)]
+#[expect(unsafe_code, reason = "entered after runtime CPU feature detection")]
 impl Lanes for Avx512 {
     #[inline(always)]
     unsafe fn closest(w: &WideNode, origin: [f32; 3], dir: [f32; 3], t_min: f32, t_max: f32) -> ClosestLanes {
@@ -178,14 +178,14 @@ impl Lanes for Avx512 {
 }
 
 #[cfg(target_arch = "x86_64")]
-#[allow(unsafe_code)]
+#[expect(unsafe_code, reason = "entered after runtime CPU feature detection")]
 mod avx512 {
     use std::arch::x86_64::*;
 
     use super::{ClosestLanes, LANES, Mask, WideNode};
 
     const CHUNKS: usize = LANES / CHUNK;
-    const _: () = assert!(LANES % CHUNK == 0 && LANES <= 64, "whole __m512 chunks, masks fit in u64");
+    const _: () = assert!(LANES.is_multiple_of(CHUNK) && LANES <= 64, "whole __m512 chunks, masks fit in u64");
 
     use super::CHUNK;
 

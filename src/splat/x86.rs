@@ -8,7 +8,10 @@
 //! Everything here requires AVX2: [`splat`] checks the CPU before entering. Hence the
 //! module-wide `unsafe_code` allowance: the intrinsics are `unsafe` to call outside a
 //! `#[target_feature]` function; the memory accesses carry their own SAFETY notes.
-#![allow(unsafe_code)]
+#![expect(
+    unsafe_code,
+    reason = "intrinsics need unsafe outside #[target_feature] functions; callers check the CPU first"
+)]
 
 use std::arch::x86_64::*;
 
@@ -58,6 +61,7 @@ pub(super) fn splat_with(fb: &mut Framebuffer, batch: PointBatch<'_>, wide: bool
 unsafe fn project8(view: &SplatView, x: __m256, y: __m256, z: __m256) -> (__m256i, __m256i, __m256) {
     let m = view.pixel_from_world;
     let (c0, c1, c2, c3) = (m.x_axis, m.y_axis, m.z_axis, m.w_axis);
+    // SAFETY: the caller checked the CPU features (module doc); no memory is accessed.
     unsafe {
         // glam's Mat4 · Vec4 with w = 1: ((c0 x + c1 y) + c2 z) + c3 · 1, and c3 · 1 = c3.
         // A macro, as closures would not have the caller's target features.
