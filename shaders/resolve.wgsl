@@ -1,12 +1,13 @@
-// Resolve of the accumulation buffer to the screen, twin of `Framebuffer::resolve` in
-// `src/splat.rs`: closest keys become depth-cued function colours, sums become average colours,
-// and density mode scales the average by log(1 + count) / log(1 + max count). The max count
-// comes from `max_count`, a workgroup reduction run before the draw.
+// Resolve of the accumulation buffer to the screen. Its CPU twin is `src/resolve.rs` (same
+// constants, parameters and loop shape; keep in sync), its host side `src/gpu/resolve.rs`, and
+// `tests/resolve.rs` compares the two. Closest keys become depth-cued function colours, sums
+// become average colours, and density mode scales the average by log(1 + count) / log(1 + max
+// count). The max count comes from `max_count`, a workgroup reduction run before the draw.
 //
 // Optional screen-space shading (closest mode): normals from the depth of the neighbouring
 // pixels' keys, lit by a head light, so that 3D point sets read as solids.
 
-// Mirrors `ResolveParams` in src/gpu/resolve.rs.
+// Mirrors `ResolveParams` in src/resolve.rs (one mirror, used by both resolves): keep in sync.
 struct ResolveParams {
     // rgb: linear background; w: depth cue.
     background: vec4<f32>,

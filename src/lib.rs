@@ -14,6 +14,7 @@ pub mod model;
 pub mod raytrace;
 pub mod record;
 pub mod render;
+pub mod resolve;
 pub mod rng;
 pub mod scene;
 pub mod splat;

@@ -19,6 +19,7 @@ use std::path::{Path, PathBuf};
 use glam::DVec3;
 
 use crate::chaos_game::{self, CompiledIfs};
+use crate::resolve::{ResolveStyle, resolve_image};
 use crate::scene::{Scene, linear_to_srgb, srgb_to_linear};
 use crate::splat::{Framebuffer, SplatView};
 use crate::timeline::LoopMode;
@@ -175,7 +176,7 @@ impl<'a> Recorder<'a> {
                 Framebuffer::merge,
                 || {},
             );
-            images.push(fb.resolve());
+            images.push(resolve_image(&fb, &camera, &ResolveStyle::default()));
         }
         Ok(if images.len() == 1 { images.remove(0) } else { average_linear(&images) })
     }

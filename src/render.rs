@@ -6,6 +6,7 @@ use glam::DVec3;
 
 use crate::camera::OrbitCamera;
 use crate::chaos_game::{self, CompiledIfs};
+use crate::resolve::{ResolveStyle, resolve_image};
 use crate::scene::{RenderSettings, Scene};
 use crate::splat::{Framebuffer, SplatView};
 
@@ -62,7 +63,8 @@ pub fn render_cpu(
             progress(d, chunks as u64);
         },
     );
-    Ok(Rendered { image: framebuffer.resolve(), camera, bounds, framebuffer })
+    let image = resolve_image(&framebuffer, &camera, &ResolveStyle::default());
+    Ok(Rendered { image, camera, bounds, framebuffer })
 }
 
 /// The scene's camera; where the scene leaves both target and distance open, fitted to a sample

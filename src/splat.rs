@@ -1,5 +1,6 @@
-//! Splatting chaos-game points into a framebuffer and resolving it to an image (CPU reference;
-//! the GPU twin is `shaders/splat.wgsl` + `shaders/resolve.wgsl`).
+//! Splatting chaos-game points into a framebuffer (CPU reference; on the GPU the chaos game
+//! splats as it goes, in `shaders/chaos_game.wgsl`). The framebuffer becomes an image in
+//! [`crate::resolve`].
 //!
 //! Three modes, as in the paper plus one from the fractal-flame tradition:
 //! - `Closest`: per pixel the point nearest the viewer, its function's colour depth-cued
@@ -15,7 +16,6 @@ use glam::{Mat4, Vec3, Vec4};
 
 use crate::camera::OrbitCamera;
 use crate::chaos_game::{PointBatch, PointSink};
-use crate::scene::linear_to_srgb;
 
 #[cfg(target_arch = "x86_64")]
 mod x86;
@@ -37,6 +37,16 @@ impl SplatMode {
             "average" => Some(SplatMode::Average),
             "density" => Some(SplatMode::Density),
             _ => None,
+        }
+    }
+
+    /// The mode's number in the shaders (`params.mode`, the `SPLAT_MODE` and `RESOLVE_MODE`
+    /// pipeline constants of `chaos_game.wgsl` and `resolve.wgsl`).
+    pub fn index(self) -> u32 {
+        match self {
+            SplatMode::Closest => 0,
+            SplatMode::Average => 1,
+            SplatMode::Density => 2,
         }
     }
 
@@ -169,47 +179,6 @@ impl Framebuffer {
             SplatMode::Closest => self.closest.iter().filter(|&&k| k != EMPTY).count(),
             _ => self.accum.iter().filter(|a| a[3] > 0).count(),
         }
-    }
-
-    /// Resolves to an 8-bit sRGB image.
-    pub fn resolve(&self) -> image::RgbImage {
-        let v = &self.view;
-        let bg = v.background;
-        let to_srgb8 = |c: [f32; 3]| -> [u8; 3] { c.map(|x| (linear_to_srgb(x) * 255.0 + 0.5) as u8) };
-        let mut img = image::RgbImage::new(v.width, v.height);
-        let max_count = self.accum.iter().map(|a| a[3]).max().unwrap_or(0).max(1);
-        let log_max = (1.0 + max_count as f32).ln();
-        for (i, px) in img.pixels_mut().enumerate() {
-            let c = match v.mode {
-                SplatMode::Closest => {
-                    let key = self.closest[i];
-                    if key == EMPTY {
-                        bg
-                    } else {
-                        let fi = (key & 0xff) as usize;
-                        let t = (key >> 8) as f32 / ((1u32 << DEPTH_BITS) - 1) as f32;
-                        v.cue(self.colors[fi.min(self.colors.len() - 1)], t)
-                    }
-                }
-                SplatMode::Average | SplatMode::Density => {
-                    let a = self.accum[i];
-                    if a[3] == 0 {
-                        bg
-                    } else {
-                        let n = a[3] as f32 * COLOR_SCALE;
-                        let avg = [a[0] as f32 / n, a[1] as f32 / n, a[2] as f32 / n];
-                        if v.mode == SplatMode::Average {
-                            avg
-                        } else {
-                            let b = (1.0 + a[3] as f32).ln() / log_max;
-                            [0, 1, 2].map(|k| bg[k] + (avg[k] - bg[k]) * b)
-                        }
-                    }
-                }
-            };
-            *px = image::Rgb(to_srgb8(c));
-        }
-        img
     }
 }
 

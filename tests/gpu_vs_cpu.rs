@@ -15,6 +15,7 @@ use nlifs::gpu::chaos_game::{FrameArgs, GpuChaosGame};
 use nlifs::gpu::cpu_route::{ChaosBackend, frame_chunks};
 use nlifs::gpu::live::{LiveSettings, LiveView};
 use nlifs::gpu::render::{read_buffer, snapshot};
+use nlifs::resolve::{ResolveStyle, resolve_image};
 use nlifs::rng::Pcg32;
 use nlifs::scene::Scene;
 use nlifs::splat::{Framebuffer, SplatMode, SplatView};
@@ -243,7 +244,7 @@ fn cpu_route_uploads_the_cpu_framebuffer() {
         // The resolve (unchanged) draws the uploaded accumulation: as many pixels differ from
         // the background as the CPU framebuffer covers, give or take rounding to 8 bits.
         let image = snapshot(&ctx, &mut live).unwrap();
-        let bg = expected.resolve().get_pixel(0, 0).0;
+        let bg = resolve_image(&expected, &camera, &ResolveStyle::default()).get_pixel(0, 0).0;
         let drawn = image.pixels().filter(|p| (0..3).any(|k| (p.0[k] as i32 - bg[k] as i32).abs() > 2)).count();
         assert!(
             drawn as f64 > 0.9 * previous_covered as f64,

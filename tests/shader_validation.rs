@@ -4,8 +4,8 @@
 
 use nlifs::chaos_game::{Cell, KernelFunction};
 use nlifs::gpu::chaos_game::ChaosParams;
-use nlifs::gpu::resolve::ResolveParams;
 use nlifs::gpu::shaders::{PROGRAMS, program};
+use nlifs::resolve::ResolveParams;
 
 /// (program, WGSL struct, size of its Rust mirror). Shader-interface structs (vertex outputs)
 /// have no memory layout and no mirror.

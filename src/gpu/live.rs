@@ -18,8 +18,9 @@ use crate::splat::{SplatMode, SplatView};
 
 use super::chaos_game::{FrameArgs, GpuChaosGame};
 use super::cpu_route::{ChaosBackend, ChaosRoute, CpuChaosGame};
-use super::resolve::{GpuResolve, ResolveArgs};
+use super::resolve::GpuResolve;
 use super::{GpuContext, GpuError};
+use crate::resolve::ResolveArgs;
 
 /// Settings of the live view (the viewer's render panel edits them).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -307,7 +308,7 @@ impl LiveView {
             perspective,
             origin_px,
         };
-        self.resolve.draw(&ctx.device, &ctx.queue, encoder, &self.game, &args, target, format);
+        self.resolve.draw(ctx, encoder, &self.game, &args, target, format);
     }
 
     /// Reads the accumulation buffer back (four u32 per pixel, as `Framebuffer` after a

@@ -1,10 +1,14 @@
 //! Host side of `shaders/resolve.wgsl`: the max-count reduction (density mode) and the
 //! full-screen draw that turns the accumulation buffer into colours on any render target, the
-//! window's surface or an offscreen texture alike (`draw(&TextureView)`).
+//! window's surface or an offscreen texture alike (`draw(&TextureView)`). Its parameters
+//! ([`ResolveArgs`], [`ResolveParams`]) and its CPU twin live in `src/resolve.rs`; keep the
+//! three in sync.
 
+use crate::resolve::{ResolveArgs, ResolveParams};
 use crate::splat::SplatMode;
 
-use super::chaos_game::{GpuChaosGame, mode_index};
+use super::GpuContext;
+use super::chaos_game::GpuChaosGame;
 
 fn entry(binding: u32, buffer: &wgpu::Buffer) -> wgpu::BindGroupEntry<'_> {
     wgpu::BindGroupEntry { binding, resource: buffer.as_entire_binding() }
@@ -12,46 +16,6 @@ fn entry(binding: u32, buffer: &wgpu::Buffer) -> wgpu::BindGroupEntry<'_> {
 
 /// Bytes of the colour table bound as a uniform (`colors` in `shaders/resolve.wgsl`).
 const COLORS_BYTES: u64 = 256 * 16;
-
-/// Mirrors `struct ResolveParams` in `shaders/resolve.wgsl`: keep in sync.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct ResolveParams {
-    pub background: [f32; 4],
-    pub width: u32,
-    pub height: u32,
-    pub mode: u32,
-    pub encode_srgb: u32,
-    pub shading: f32,
-    pub near: f32,
-    pub far: f32,
-    pub pixel_size: f32,
-    pub perspective: u32,
-    pub point_radius_px: u32,
-    pub origin_x: u32,
-    pub origin_y: u32,
-}
-const _: () = assert!(std::mem::size_of::<ResolveParams>() == 64);
-
-/// What the resolve needs besides the accumulation buffer.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct ResolveArgs {
-    pub mode: SplatMode,
-    pub background: [f32; 3],
-    pub depth_cue: f32,
-    /// 0: flat colours; 1: full screen-space shading (closest mode only).
-    pub shading: f32,
-    /// Closest mode: each pixel shows the nearest key within this radius.
-    pub point_radius_px: u32,
-    pub near: f32,
-    pub far: f32,
-    /// View-space size of a pixel at unit distance (perspective) or absolute (parallel).
-    pub pixel_size: f32,
-    pub perspective: bool,
-    /// Where in the target the accumulation's pixel (0, 0) goes: the draw covers the rectangle
-    /// of the accumulation's size there (the rest of the target is cleared to black).
-    pub origin_px: [u32; 2],
-}
 
 /// What a draw pipeline is specialized for: target format, splat mode, shading on.
 type DrawKey = (wgpu::TextureFormat, SplatMode, bool);
@@ -103,7 +67,7 @@ impl GpuResolve {
         }
         let (format, mode, shaded) = key;
         let constants = [
-            ("RESOLVE_MODE", mode_index(mode) as f64),
+            ("RESOLVE_MODE", mode.index() as f64),
             ("SHADED", shaded as u32 as f64),
             ("ENCODE_SRGB", !format.is_srgb() as u32 as f64),
         ];
@@ -133,35 +97,17 @@ impl GpuResolve {
     }
 
     /// Records the resolve of `game`'s accumulation buffer onto `target` (of `format`).
-    #[expect(
-        clippy::too_many_arguments,
-        reason = "one argument per binding of the resolve pass; regrouped when the resolve gets its CPU twin"
-    )]
     pub fn draw(
         &mut self,
-        device: &wgpu::Device,
-        queue: &wgpu::Queue,
+        ctx: &GpuContext,
         encoder: &mut wgpu::CommandEncoder,
         game: &GpuChaosGame,
         args: &ResolveArgs,
         target: &wgpu::TextureView,
         format: wgpu::TextureFormat,
     ) {
-        let params = ResolveParams {
-            background: [args.background[0], args.background[1], args.background[2], args.depth_cue],
-            width: game.width,
-            height: game.height,
-            mode: mode_index(args.mode),
-            encode_srgb: (!format.is_srgb()) as u32,
-            shading: if args.mode == SplatMode::Closest { args.shading } else { 0.0 },
-            near: args.near,
-            far: args.far,
-            pixel_size: args.pixel_size,
-            perspective: args.perspective as u32,
-            point_radius_px: if args.mode == SplatMode::Closest { args.point_radius_px.min(8) } else { 0 },
-            origin_x: args.origin_px[0],
-            origin_y: args.origin_px[1],
-        };
+        let (device, queue) = (&ctx.device, &ctx.queue);
+        let params = args.params(game.width, game.height, !format.is_srgb());
         queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
         let pipeline_index = self.draw_pipeline(device, (format, args.mode, params.shading > 0.0));
         if self.bound.as_ref().is_none_or(|b| b.0 != game.generation) {
