@@ -31,7 +31,8 @@ pub struct RecordArgs {
     /// Points per frame (default: the scene's render.points at the frame's time).
     #[arg(long, value_parser = clap::value_parser!(u64).range(1..))]
     points_per_frame: Option<u64>,
-    #[arg(long, value_enum, default_value_t = RecordBackend::Auto)]
+    /// Where frames are rendered: cpu, the only recorder in this build (it has no GPU path).
+    #[arg(long, value_enum, default_value_t = RecordBackend::Cpu)]
     backend: RecordBackend,
     /// Keep frames that are already complete (decode fully); redo anything else.
     #[arg(long)]
@@ -50,24 +51,21 @@ pub struct RecordArgs {
     print_frame_count: bool,
 }
 
+/// The recorders that exist. A GPU recorder would add a variant here.
 #[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
 enum RecordBackend {
-    Gpu,
     Cpu,
-    Auto,
 }
 
 pub fn record(args: RecordArgs) -> anyhow::Result<()> {
+    // The only recorder there is; a GPU one would be chosen here.
+    let RecordBackend::Cpu = args.backend;
     let scene = load(&args.scene)?;
     if !(args.fps > 0.0 && args.fps.is_finite()) {
         return Err(BadInput(format!("--fps must be a positive number, found {}", args.fps)).into());
     }
     if !(0.0..=1.0).contains(&args.shutter) {
         return Err(BadInput(format!("--shutter must lie in 0..1, found {}", args.shutter)).into());
-    }
-    if args.backend != RecordBackend::Cpu && !args.print_frame_count {
-        // The GPU recorder is not part of this build; the CPU path gives the same frames' content.
-        eprintln!("note: no GPU recording path in this build; rendering frames on the CPU");
     }
     if args.video.is_some() && !record::ffmpeg_available() {
         return Err(BadInput("--video needs ffmpeg, which was not found on PATH; install ffmpeg or leave out --video (frames can be encoded later)".into()).into());
