@@ -6,8 +6,10 @@ use std::path::{Path, PathBuf};
 use std::sync::atomic::AtomicBool;
 
 use glam::{DVec3, Vec3};
-use nlifs::raytrace::hierarchy::{Hierarchy, InitialObject, NodeKind, Ray, Scratch, Stop};
+use nlifs::raytrace::geometry::{NodeKind, Ray};
+use nlifs::raytrace::hierarchy::{Hierarchy, InitialObject, Stop};
 use nlifs::raytrace::mesh::Mesh;
+use nlifs::raytrace::search::Scratch;
 use nlifs::raytrace::wide::Simd;
 use nlifs::raytrace::{self, Initial, RaytraceError, RaytraceSettings};
 use nlifs::rng::Pcg32;

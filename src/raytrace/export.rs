@@ -7,7 +7,8 @@ use std::io::Write;
 
 use glam::Vec3;
 
-use super::hierarchy::{Hierarchy, NodeKind};
+use super::geometry::NodeKind;
+use super::hierarchy::Hierarchy;
 use super::tracer::Shading;
 use crate::camera::{OrbitCamera, Projection};
 use crate::export::write_glb;

@@ -7,7 +7,7 @@ use std::path::Path;
 
 use glam::{DMat4, DVec3, Vec3};
 
-use super::RaytraceError;
+use super::error::RaytraceError;
 
 /// An indexed triangle mesh in the scene's coordinates (f64 so that deep compositions of maps
 /// stay accurate before they are rounded for tracing).

@@ -1,14 +1,19 @@
 //! Ray-traced stills of the deterministic approximation W^n(A) of a scene's attractor, with the
 //! nested W^k(A) as bounding hierarchy (Gröller's rendering section, after Hart & DeFanti).
 //!
-//! The split follows pbrt: `hierarchy` builds and traverses the nodes (it knows only spheres
-//! and triangles), `tracer` makes camera rays, shades and samples, `mesh` provides the mesh
-//! initial objects (grid surface, glTF), `export` writes W^n(A) as glTF or as a POV-Ray scene.
+//! The split follows pbrt: `geometry` holds the node, ray and hit types and the ray–sphere
+//! roots; `hierarchy` builds the nodes (it knows only spheres and triangles), `wide` collapses
+//! them into the wide nodes that `search` traverses; `tracer` makes camera rays, shades and
+//! samples, `mesh` provides the mesh initial objects (grid surface, glTF), `export` writes
+//! W^n(A) as glTF or as a POV-Ray scene.
 //! [`render`] is the entry point for the command line and for a viewer's background thread.
 
+mod error;
 pub mod export;
+pub mod geometry;
 pub mod hierarchy;
 pub mod mesh;
+pub mod search;
 pub mod tracer;
 pub mod wide;
 
@@ -20,32 +25,10 @@ use glam::{DVec3, Vec3};
 use crate::camera::{OrbitCamera, Projection};
 use crate::model::Ifs;
 use crate::scene::Scene;
+pub use error::RaytraceError;
 use hierarchy::{Hierarchy, InitialObject, PixelFootprint, Stop};
 use mesh::Mesh;
 pub use tracer::{ColorMode, Light, Shading, TraceStats};
-
-#[derive(Debug, thiserror::Error)]
-pub enum RaytraceError {
-    #[error("the scene has no enabled function")]
-    NoFunctions,
-    #[error("the scene has {0} enabled functions; the ray tracer handles at most 16")]
-    TooManyFunctions(usize),
-    #[error("enabled function {0} has no Lipschitz bound (Julia maps cannot be ray traced)")]
-    NoLipschitzBound(usize),
-    #[error("{path}: not a usable glTF mesh: {message}")]
-    Gltf { path: String, message: String },
-    #[error("too large: {0}")]
-    TooLarge(String),
-    #[error("cancelled")]
-    Cancelled,
-}
-
-impl RaytraceError {
-    /// Whether the user's input caused it (exit code 2 on the command line).
-    pub fn is_bad_input(&self) -> bool {
-        !matches!(self, RaytraceError::Cancelled)
-    }
-}
 
 /// The initial object A.
 #[derive(Clone, Debug, PartialEq, Default)]

@@ -8,8 +8,10 @@ use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use glam::Vec3;
 use rayon::prelude::*;
 
-use super::RaytraceError;
-use super::hierarchy::{Hierarchy, Hit, Ray, Scratch};
+use super::error::RaytraceError;
+use super::geometry::{Hit, Ray};
+use super::hierarchy::Hierarchy;
+use super::search::Scratch;
 use crate::camera::{OrbitCamera, Projection};
 use crate::rng::Pcg32;
 use crate::scene::linear_to_srgb;

@@ -9,17 +9,17 @@
 //! lanes of mixed depth. The lane bounds are the hierarchy's own spheres (grown bottom-up to
 //! enclose their children), so the culling argument is unchanged: a skipped lane's bound holds
 //! every leaf below it. The lane test computes the closest-approach roots exactly as
-//! [`super::hierarchy::sphere_roots`] does, the same operations in the same order and no fused
+//! [`super::geometry::sphere_roots`] does, the same operations in the same order and no fused
 //! multiply-add, so a leaf's t is bit for bit what the scalar test (and brute force) gives. A
 //! miss leaves NaN roots, which fail every comparison, so no separate miss mask is needed.
 //!
 //! Two implementations of the lane pass ([`Lanes`]): [`Avx512`] with intrinsics, and
 //! [`Portable`] loops over plain arrays for the compiler to vectorise (left to the compiler with
 //! AVX-512 enabled they were no faster than the scalar search: it built the masks through
-//! shuffles and spilled). The traversal in `hierarchy` is compiled once per form, chosen at run
+//! shuffles and spilled). The traversal in `search` is compiled once per form, chosen at run
 //! time ([`Simd::detect`]): AVX-512F, AVX2 with the portable pass, or the baseline target.
 
-use super::hierarchy::{Node, NodeKind};
+use super::geometry::{Node, NodeKind};
 
 /// f32 lanes of one AVX-512 register.
 const CHUNK: usize = 16;

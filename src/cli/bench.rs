@@ -1,0 +1,197 @@
+//! `nlifs bench`: throughput figures for the documents. The ray tracer against POV-Ray on the
+//! same spheres, the GPU chaos game, the CPU chaos game on one core, and how much of an
+//! attractor a budget of points covers under each probability choice.
+
+use std::path::{Path, PathBuf};
+use std::sync::atomic::AtomicBool;
+use std::time::Instant;
+
+use anyhow::Context;
+use clap::Subcommand;
+
+use nlifs::io::save_png;
+use nlifs::raytrace::{self, RaytraceSettings};
+
+use super::export::write_pov;
+use super::load;
+
+#[derive(Subcommand)]
+pub enum BenchCommand {
+    /// Rays per second and 1920×1080 stills of tapering (n = 6) and plant2 (n = 7), side by side
+    /// with POV-Ray 3.7 rendering the same spheres.
+    Raytrace {
+        /// Directory with the paper scenes.
+        #[arg(long, default_value = "scenes")]
+        scenes: PathBuf,
+        #[arg(long, default_value_t = 1920)]
+        width: u32,
+        #[arg(long, default_value_t = 1080)]
+        height: u32,
+        /// Samples per pixel (POV-Ray: +AM1 +A0.0 +R2, 1 + 4 rays per supersampled pixel).
+        #[arg(long, default_value_t = 5)]
+        spp: u32,
+        /// Skip POV-Ray.
+        #[arg(long)]
+        no_povray: bool,
+        /// Where to keep the images and .pov files.
+        #[arg(long, default_value = "target/bench-raytrace")]
+        out: PathBuf,
+    },
+    /// GPU chaos game: points/s (map + splat) and frames/s at 1280×720, and frames to converge
+    /// after a scene edit.
+    Gpu {
+        #[arg(default_value = "scenes/plant2.toml")]
+        scene: PathBuf,
+        /// Persistent GPU points.
+        #[arg(long, default_value_t = 1 << 20)]
+        points: u32,
+        /// Steps per point per frame.
+        #[arg(long, default_value_t = 1)]
+        steps: u32,
+        /// Frames to time.
+        #[arg(long, default_value_t = 60)]
+        frames: u32,
+    },
+    /// CPU chaos game on one core: map only and map + splat at 1920×1080.
+    Cpu {
+        /// Scene to run (default: the paper's tapering).
+        #[arg(default_value = "scenes/tapering.toml")]
+        scene: PathBuf,
+        #[arg(long, default_value_t = 50_000_000)]
+        points: u64,
+        #[arg(long, default_value_t = 3)]
+        repeats: usize,
+    },
+    /// How much of the attractor a fixed budget of points covers under uniform, contractivity
+    /// and locally adaptive probabilities.
+    Coverage {
+        scene: PathBuf,
+        #[arg(long, default_value_t = 200_000)]
+        budget: u64,
+        #[arg(long, default_value_t = 40_000_000)]
+        reference: u64,
+        #[arg(long, default_value_t = 512)]
+        size: u32,
+    },
+}
+
+pub fn run(command: BenchCommand) -> anyhow::Result<()> {
+    match command {
+        BenchCommand::Raytrace { scenes, width, height, spp, no_povray, out } => {
+            raytrace(&scenes, width, height, spp, no_povray, &out)
+        }
+        BenchCommand::Gpu { scene, points, steps, frames } => {
+            let scene = load(&scene)?;
+            let report = nlifs::gpu::bench::run(&scene, points, steps, frames)?;
+            println!("{report}");
+            Ok(())
+        }
+        BenchCommand::Cpu { scene, points, repeats } => cpu(&scene, points, repeats),
+        BenchCommand::Coverage { scene, budget, reference, size } => {
+            let s = load(&scene)?;
+            println!("{}: share of the attractor's {size}x{size} pixels lit by {budget} points", s.name);
+            for (name, share) in nlifs::bench::coverage(&s, budget, reference, size) {
+                println!("  {name:<14} {:6.2} %", 100.0 * share);
+            }
+            Ok(())
+        }
+    }
+}
+
+fn cpu(path: &Path, points: u64, repeats: usize) -> anyhow::Result<()> {
+    let scene = load(path)?;
+    eprintln!("CPU chaos game, one thread, {} ({points} points, best of {repeats})", scene.name);
+    let r = nlifs::bench::cpu(&scene, points, 1920, 1080, repeats.max(1));
+    println!("map only:                 {:8.1} M points/s", r.map_points_per_sec / 1e6);
+    for (mode, rate) in r.splat_points_per_sec {
+        println!("map + splat 1920x1080 {:<8} {:8.1} M points/s", mode.name(), rate / 1e6);
+    }
+    Ok(())
+}
+
+/// (own, waited-for children's) CPU seconds, user + system, from /proc/self/stat (Linux; zeros
+/// elsewhere). CPU time is what the comparison uses: the machine is shared, so wall-clock
+/// time depends on what else runs.
+fn cpu_secs() -> (f64, f64) {
+    let Ok(stat) = std::fs::read_to_string("/proc/self/stat") else { return (0.0, 0.0) };
+    // Fields after the parenthesised command name; utime is field 14 (index 11 here).
+    let rest = stat.rsplit_once(')').map_or("", |(_, r)| r);
+    let f: Vec<f64> = rest.split_whitespace().map(|v| v.parse().unwrap_or(0.0)).collect();
+    if f.len() < 15 {
+        return (0.0, 0.0);
+    }
+    let tick = 100.0; // USER_HZ on Linux
+    ((f[11] + f[12]) / tick, (f[13] + f[14]) / tick)
+}
+
+fn raytrace(scenes: &Path, width: u32, height: u32, spp: u32, no_povray: bool, out: &Path) -> anyhow::Result<()> {
+    std::fs::create_dir_all(out)?;
+    let threads = rayon::current_num_threads();
+    println!(
+        "machine: {} threads in rayon's pool; {width}×{height}, {spp} spp, 2 lights with shadows, ground plane",
+        threads
+    );
+    for (name, depth) in [("tapering", 6u32), ("plant2", 7)] {
+        let scene = load(&scenes.join(format!("{name}.toml")))?;
+        let settings = RaytraceSettings { width, height, spp, depth, ..Default::default() };
+        let cancel = AtomicBool::new(false);
+        let cpu_before = cpu_secs().0;
+        let traced = raytrace::render(&scene, 0.0, None, &settings, &|_, _| {}, &cancel)?;
+        let cpu = cpu_secs().0 - cpu_before;
+        let png = out.join(format!("{name}_n{depth}_nlifs.png"));
+        save_png(&png, &traced.image)?;
+        let rays = (traced.stats.primary_rays + traced.stats.shadow_rays) as f64;
+        println!(
+            "{name} n={depth}: {} spheres, build {:.3} s, trace {:.2} s wall, {:.2} s CPU (build + trace), {:.1} M rays ({:.2} M primary), {:.2} Mrays per CPU second  -> {}",
+            traced.leaf_count,
+            traced.build_secs,
+            traced.trace_secs,
+            cpu,
+            rays / 1e6,
+            traced.stats.primary_rays as f64 / 1e6,
+            rays / cpu.max(1e-9) / 1e6,
+            png.display()
+        );
+        if no_povray {
+            continue;
+        }
+        let pov = out.join(format!("{name}_n{depth}.pov"));
+        write_pov(&scene, 0.0, depth, width, height, &pov)?;
+        let pov_png = out.join(format!("{name}_n{depth}_povray.png"));
+        let start = Instant::now();
+        let children_before = cpu_secs().1;
+        let status = std::process::Command::new("povray")
+            .arg(format!("+I{}", pov.display()))
+            .arg(format!("+O{}", pov_png.display()))
+            .args([
+                format!("+W{width}"),
+                format!("+H{height}"),
+                "+A0.0".into(),
+                "+AM1".into(),
+                "+R2".into(),
+                format!("+WT{threads}"),
+                "-D".into(),
+                "-V".into(),
+                "+FN".into(),
+                "-GA".into(),
+            ])
+            .stdout(std::process::Stdio::null())
+            .stderr(std::process::Stdio::null())
+            .status()
+            .context("cannot run povray")?;
+        let pov_secs = start.elapsed().as_secs_f64();
+        let pov_cpu = cpu_secs().1 - children_before;
+        if !status.success() {
+            println!("  povray failed ({status})");
+            continue;
+        }
+        let ours = traced.build_secs + traced.trace_secs;
+        println!(
+            "  POV-Ray 3.7: {pov_secs:.2} s wall, {pov_cpu:.2} s CPU (parse + bounding + trace, {threads} threads) -> {}\n  nlifs: {ours:.2} s wall, {cpu:.2} s CPU: {:.1}× faster by CPU time, {:.1}× by wall time",
+            pov_png.display(),
+            pov_cpu / cpu.max(1e-9),
+            pov_secs / ours
+        );
+    }
+    Ok(())
+}

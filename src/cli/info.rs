@@ -1,0 +1,101 @@
+//! `nlifs info`: the contractivity, Lipschitz bounds, containment and probabilities of a
+//! scene's functions, and for animated scenes the timeline check, as a table or JSON.
+
+use std::path::PathBuf;
+
+use clap::Args;
+
+use nlifs::model::IfsReport;
+
+use super::load;
+
+/// Samples strictly between neighbouring keys for the timeline check of `nlifs info`.
+const TIMELINE_SAMPLES_PER_INTERVAL: usize = 8;
+
+#[derive(Args)]
+pub struct InfoArgs {
+    scene: PathBuf,
+    /// Print JSON instead of a table.
+    #[arg(long)]
+    json: bool,
+    /// Scene time in seconds.
+    #[arg(long, default_value_t = 0.0)]
+    time: f64,
+}
+
+fn fmt_opt(v: Option<f64>) -> String {
+    v.map_or("—".into(), |x| format!("{x:.4}"))
+}
+
+pub fn info(args: InfoArgs) -> anyhow::Result<()> {
+    let scene = load(&args.scene)?;
+    let ifs = scene.at(args.time);
+    let report: IfsReport = ifs.report();
+    // Sampled along the whole timeline, for animated scenes.
+    let timeline = nlifs::timeline::check_timeline(&scene, TIMELINE_SAMPLES_PER_INTERVAL);
+    if args.json {
+        let mut value = serde_json::to_value(&report)?;
+        if let (Some(check), Some(obj)) = (&timeline, value.as_object_mut()) {
+            obj.insert("timeline".into(), serde_json::to_value(check)?);
+        }
+        println!("{}", serde_json::to_string_pretty(&value)?);
+        return Ok(());
+    }
+    let d = scene.domain.dims();
+    println!(
+        "{} ({}D, grid {}×{}×{}, probabilities: {})",
+        scene.name, report.dimension, d[0], d[1], d[2], report.probability_mode
+    );
+    if !scene.description.is_empty() {
+        println!("{}", scene.description);
+    }
+    println!(
+        "{:<12} {:<8} {:>10} {:>15} {:>10} {:>11}",
+        "function", "kind", "grid_ratio", "lipschitz_bound", "contained", "probability"
+    );
+    for f in &report.functions {
+        let contained = match f.contained {
+            None => "n/a".to_string(),
+            Some(true) => "yes".to_string(),
+            Some(false) => format!("NO ({})", f.outside.len()),
+        };
+        println!(
+            "{:<12} {:<8} {:>10} {:>15} {:>10} {:>11.4}",
+            f.name,
+            f.kind,
+            fmt_opt(f.grid_ratio),
+            fmt_opt(f.lipschitz_bound),
+            contained,
+            f.probability
+        );
+        for (k, p) in &f.outside {
+            println!("    point {k} at ({:.4}, {:.4}, {:.4}) lies outside the grid", p[0], p[1], p[2]);
+        }
+        if let Some(l) = f.lipschitz_bound
+            && l >= 1.0
+        {
+            println!("    warning: {} may not be contractive (Lipschitz bound {l:.4} ≥ 1)", f.name);
+        }
+    }
+    println!(
+        "IFS: max grid_ratio {}, max lipschitz_bound {}, all contained: {}",
+        fmt_opt(report.max_grid_ratio),
+        fmt_opt(report.max_lipschitz_bound),
+        report.all_contained.map_or("n/a", |c| if c { "yes" } else { "NO" })
+    );
+    if let Some(check) = timeline {
+        print!(
+            "timeline: {}, {:.3} s, {} keys; checked at {} times (keys and {} between each): ",
+            check.loop_mode, check.duration_secs, check.keys, check.samples, TIMELINE_SAMPLES_PER_INTERVAL
+        );
+        if check.problems.is_empty() {
+            println!("contractive and contained throughout");
+        } else {
+            println!("{} problems", check.problems.len());
+            for p in &check.problems {
+                println!("    {p}");
+            }
+        }
+    }
+    Ok(())
+}

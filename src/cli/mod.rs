@@ -1,0 +1,119 @@
+//! The `nlifs` command line: a thin layer over the library that parses arguments, shows
+//! progress, adds context to errors and maps bad input to exit code 2.
+//!
+//! This file holds the command tree, the dispatch, the exit-code mapping and what every command
+//! uses (the bad-input error, scene loading, the progress bar). Each command lives in a module
+//! of its own that owns its arguments and its output; `args` holds the argument types several
+//! commands share.
+
+mod args;
+mod bench;
+mod export;
+mod info;
+mod record;
+mod render;
+mod snapshot;
+mod view;
+
+use std::path::Path;
+use std::process::ExitCode;
+
+use clap::{Parser, Subcommand};
+use indicatif::{ProgressBar, ProgressStyle};
+
+use nlifs::scene::Scene;
+
+#[derive(Parser)]
+#[command(
+    name = "nlifs",
+    version,
+    about = "Model and render nonlinear iterated function systems defined by grid distortion",
+    long_about = "Model and render nonlinear iterated function systems (IFS) whose functions distort \
+a regular 2D or 3D grid, after E. Gröller. Scenes are TOML files (see scenes/ and README.md).\n\n\
+Examples:\n  nlifs info scenes/tapering.toml\n  nlifs render scenes/plant2.toml -o plant2.png\n  \
+nlifs export points scenes/fantasy.toml -o fantasy.glb"
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Option<Command>,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Contractivity, Lipschitz bounds, containment and probabilities of a scene's functions.
+    Info(info::InfoArgs),
+    /// Render a still with the chaos game (headless).
+    Render(render::RenderArgs),
+    /// Export geometry.
+    #[command(subcommand)]
+    Export(export::ExportCommand),
+    /// Render an animated scene to DIR/frame_00000.png, ... (optionally a video).
+    Record(record::RecordArgs),
+    /// Ray-trace a still of the deterministic approximation W^n(A) (spheres or meshes).
+    Snapshot(snapshot::SnapshotArgs),
+    /// Open the interactive viewer (GPU) on a scene; `nlifs` alone opens it on a built-in scene.
+    View(view::ViewArgs),
+    /// Benchmarks (throughput figures for the README).
+    #[command(subcommand)]
+    Bench(bench::BenchCommand),
+}
+
+/// An error caused by the user's input: exit code 2.
+#[derive(Debug, thiserror::Error)]
+#[error("{0}")]
+struct BadInput(String);
+
+/// Parses the command line and runs it: exit code 0 on success, 2 for bad input (arguments,
+/// scene files, geometry the ray tracer refuses), 1 for anything else.
+pub fn main() -> ExitCode {
+    env_logger::Builder::from_env(env_logger::Env::default().default_filter_or("warn")).init();
+    let cli = match Cli::try_parse() {
+        Ok(cli) => cli,
+        Err(e) => {
+            let code = if e.use_stderr() { 2 } else { 0 };
+            let _ = e.print();
+            return ExitCode::from(code);
+        }
+    };
+    match run(cli) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            let bad_input = e.chain().any(|c| {
+                c.is::<BadInput>()
+                    || c.downcast_ref::<nlifs::raytrace::RaytraceError>().is_some_and(|e| e.is_bad_input())
+                    || c.is::<nlifs::scene::LoadError>()
+                    || c.is::<nlifs::scene::SceneError>()
+            });
+            ExitCode::from(if bad_input { 2 } else { 1 })
+        }
+    }
+}
+
+fn run(cli: Cli) -> anyhow::Result<()> {
+    match cli.command {
+        None => view::view(view::ViewArgs::default()),
+        Some(Command::View(args)) => view::view(args),
+        Some(Command::Info(args)) => info::info(args),
+        Some(Command::Render(args)) => render::render(args),
+        Some(Command::Export(command)) => export::run(command),
+        Some(Command::Record(args)) => record::record(args),
+        Some(Command::Snapshot(args)) => snapshot::snapshot(args),
+        Some(Command::Bench(command)) => bench::run(command),
+    }
+}
+
+fn load(path: &Path) -> anyhow::Result<Scene> {
+    Ok(Scene::load(path)?)
+}
+
+fn progress_bar(total: u64, what: &str) -> ProgressBar {
+    let bar = ProgressBar::new(total);
+    bar.set_style(
+        ProgressStyle::with_template("{msg} [{bar:30}] {pos}/{len} {elapsed_precise} left {eta}")
+            .unwrap_or_else(|_| ProgressStyle::default_bar())
+            .progress_chars("=> "),
+    );
+    bar.set_message(what.to_string());
+    bar
+}
