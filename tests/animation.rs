@@ -1,6 +1,8 @@
 //! Animation: timeline parsing and interpolation through `Scene::at`, camera and render at a
 //! time, loop modes, parameter versus point interpolation, and recording determinism / resume.
 
+mod common;
+
 use glam::DVec3;
 use nlifs::model::Map;
 use nlifs::scene::Scene;
@@ -315,7 +317,7 @@ fn timeline_errors_are_located() {
 
 #[test]
 fn example_scene_loads_and_loops() {
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/twist-anim.toml");
+    let path = common::scene_path("twist-anim");
     let scene = Scene::load(&path).unwrap();
     let tl = scene.timeline.as_ref().unwrap();
     assert_eq!(tl.loop_mode, timeline::LoopMode::Loop);
@@ -332,7 +334,7 @@ fn example_scene_loads_and_loops() {
 use nlifs::record::{self, RecordSettings, Recorder};
 
 fn example_scene() -> Scene {
-    Scene::load(&std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/twist-anim.toml")).unwrap()
+    common::load_scene("twist-anim")
 }
 
 /// Small, fast frames: 64×48, 20 000 points.
@@ -348,10 +350,7 @@ fn small_settings(scene: &Scene, motion_blur_samples: u32) -> RecordSettings {
 }
 
 fn temp_dir(name: &str) -> std::path::PathBuf {
-    let dir = std::env::temp_dir().join(format!("nlifs-anim-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
+    common::temp_dir(&format!("anim-{name}"))
 }
 
 fn frame_bytes(dir: &std::path::Path, k: u32) -> Vec<u8> {
@@ -397,10 +396,9 @@ fn chunked_recording_equals_one_run() {
 #[test]
 fn resume_restores_deleted_and_truncated_frames() {
     let dir = temp_dir("resume");
-    let exe = env!("CARGO_BIN_EXE_nlifs");
-    let scene_path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/twist-anim.toml");
+    let scene_path = common::scene_path("twist-anim");
     let run = |extra: &[&str]| {
-        let out = std::process::Command::new(exe)
+        let out = common::nlifs_command()
             .arg("record")
             .arg(&scene_path)
             .arg("-o")
@@ -462,8 +460,8 @@ fn motion_blur_is_deterministic_and_blurs() {
 #[test]
 fn killing_a_recording_leaves_only_whole_frames() {
     let dir = temp_dir("kill");
-    let scene_path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/twist-anim.toml");
-    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_nlifs"))
+    let scene_path = common::scene_path("twist-anim");
+    let mut child = common::nlifs_command()
         .arg("record")
         .arg(&scene_path)
         .arg("-o")
@@ -488,7 +486,7 @@ fn killing_a_recording_leaves_only_whole_frames() {
     // A resumed run cleans up the killed run's temporary file (faked here in case the kill
     // landed between frames) and completes the sequence.
     std::fs::write(dir.join(".frame_00003.png.999999.tmp"), b"partial").unwrap();
-    let status = std::process::Command::new(env!("CARGO_BIN_EXE_nlifs"))
+    let status = common::nlifs_command()
         .arg("record")
         .arg(&scene_path)
         .arg("-o")
@@ -592,7 +590,7 @@ matrix = [[1.2, 0], [0, 1.2]]
 
 #[test]
 fn to_toml_round_trips_every_scene() {
-    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
+    let dir = common::repo_path("scenes");
     let mut scenes: Vec<(String, Scene)> = std::fs::read_dir(&dir)
         .unwrap()
         .filter_map(|e| e.ok())

@@ -2,21 +2,14 @@
 //! Sierpinski triangle's box-counting dimension, the closed-form bound W^n(A) of a linear IFS,
 //! determinism of rendered bytes, and the command line's handling of bad input.
 
-use std::path::{Path, PathBuf};
+mod common;
 
+use common::{load_scene as load, run_nlifs as nlifs, scene_path};
 use glam::{DMat3, DVec3, Vec3};
 use nlifs::chaos_game::{self, CollectSink, CompiledIfs};
 use nlifs::model::Map;
 use nlifs::render::render_cpu;
 use nlifs::scene::Scene;
-
-fn scene_path(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes").join(format!("{name}.toml"))
-}
-
-fn load(name: &str) -> Scene {
-    Scene::load(&scene_path(name)).unwrap_or_else(|e| panic!("{e}"))
-}
 
 fn points_of(scene: &Scene, n: u64, seed: u32) -> Vec<Vec3> {
     let compiled = CompiledIfs::new(&scene.at(0.0)).unwrap();
@@ -64,7 +57,7 @@ fn printed_tables_need_the_documented_corrections() {
 
 #[test]
 fn every_shipped_scene_loads_and_is_contractive() {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
+    let dir = common::repo_path("scenes");
     let mut n = 0;
     for entry in std::fs::read_dir(dir).unwrap() {
         let path = entry.unwrap().path();
@@ -304,14 +297,9 @@ fn malformed_scenes_give_specific_errors() {
     assert!(cases.len() >= 20);
 }
 
-fn nlifs(args: &[&str]) -> std::process::Output {
-    std::process::Command::new(env!("CARGO_BIN_EXE_nlifs")).args(args).output().unwrap()
-}
-
 #[test]
 fn cli_bad_input_exits_2_with_a_message() {
-    let dir = std::env::temp_dir().join(format!("nlifs-cli-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = common::temp_dir("cli");
     let bad = dir.join("bad.toml");
     std::fs::write(&bad, "version = 1\n[grid]\nx = [0, 1]\ny = [1, 0]\n").unwrap();
     let out = nlifs(&["info", bad.to_str().unwrap()]);
@@ -339,8 +327,7 @@ fn cli_bad_input_exits_2_with_a_message() {
 
 #[test]
 fn exports_points_as_ply_and_glb() {
-    let dir = std::env::temp_dir().join(format!("nlifs-export-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = common::temp_dir("export");
     let scene = scene_path("tapering");
     let ply = dir.join("t.ply");
     let glb = dir.join("t.glb");

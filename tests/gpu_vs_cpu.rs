@@ -8,9 +8,11 @@
 //! 3. The live view's CPU route uploads exactly the CPU framebuffer of its frames and shows the
 //!    same densities as the GPU route.
 
+mod common;
+
+use common::{Density, assert_densities_agree, coarse_density, gpu};
 use glam::Vec3;
 use nlifs::chaos_game::{self, CompiledIfs, ORBITS_PER_CHUNK, run_chunk};
-use nlifs::gpu::GpuContext;
 use nlifs::gpu::chaos_game::{FrameArgs, GpuChaosGame};
 use nlifs::gpu::cpu_route::{ChaosBackend, frame_chunks};
 use nlifs::gpu::live::{LiveSettings, LiveView};
@@ -20,24 +22,13 @@ use nlifs::rng::Pcg32;
 use nlifs::scene::Scene;
 use nlifs::splat::{Framebuffer, SplatMode, SplatView};
 
-fn gpu() -> Option<GpuContext> {
-    match GpuContext::headless() {
-        Ok(ctx) => Some(ctx),
-        Err(e) if std::env::var("NLIFS_REQUIRE_GPU").as_deref() == Ok("1") => panic!("NLIFS_REQUIRE_GPU=1 but {e}"),
-        Err(e) => {
-            eprintln!("\n*** SKIPPING GPU TEST: {e} ***\n");
-            None
-        }
-    }
-}
-
 fn scene(name: &str, adaptive: bool) -> Scene {
-    let path = format!("{}/scenes/{name}.toml", env!("CARGO_MANIFEST_DIR"));
+    let path = common::scene_path(name);
     let mut text = std::fs::read_to_string(&path).unwrap();
     if adaptive {
         text = text.replacen("\n[grid]", "\nprobabilities = \"adaptive\"\n\n[grid]", 1);
     }
-    Scene::parse(&text, &path).unwrap()
+    Scene::parse(&text, &path.display().to_string()).unwrap()
 }
 
 #[test]
@@ -95,19 +86,6 @@ fn first_step_matches_cpu_bit_for_bit_streams() {
     }
 }
 
-/// Counts per coarse cell of a per-pixel count image, normalized to sum 1.
-fn coarse(counts: &[u32], width: usize, height: usize, cells: (usize, usize)) -> Vec<f64> {
-    let mut out = vec![0.0; cells.0 * cells.1];
-    for y in 0..height {
-        for x in 0..width {
-            out[(y * cells.1 / height) * cells.0 + x * cells.0 / width] += counts[y * width + x] as f64;
-        }
-    }
-    let total: f64 = out.iter().sum();
-    assert!(total > 0.0);
-    out.iter().map(|c| c / total).collect()
-}
-
 #[test]
 fn densities_match_cpu() {
     let Some(ctx) = gpu() else { return };
@@ -158,24 +136,16 @@ fn densities_match_cpu() {
 
         let n_gpu: f64 = gpu_counts.iter().map(|&c| c as f64).sum();
         let n_cpu: f64 = cpu_counts.iter().map(|&c| c as f64).sum();
-        let pg = coarse(&gpu_counts, width as usize, height as usize, cells);
-        let pc = coarse(&cpu_counts, width as usize, height as usize, cells);
-        let mut worst: f64 = 0.0;
-        for i in 0..pg.len() {
-            let p = 0.5 * (pg[i] + pc[i]);
-            // 6 standard deviations of the difference of two frequencies with variance
-            // ≤ k p (1 − p) / N each.
-            let sigma = (k as f64 * p * (1.0 - p) * (1.0 / n_gpu + 1.0 / n_cpu)).sqrt();
-            let tol = 6.0 * sigma + 1e-12;
-            let d = (pg[i] - pc[i]).abs();
-            worst = worst.max(d / tol);
-            assert!(
-                d <= tol,
-                "{name}: cell {i}: GPU {} vs CPU {} (|Δ| {d:.3e} > tolerance {tol:.3e}; {n_gpu} vs {n_cpu} samples)",
-                pg[i],
-                pc[i]
-            );
-        }
+        let pg = coarse_density(&gpu_counts, width as usize, height as usize, cells);
+        let pc = coarse_density(&cpu_counts, width as usize, height as usize, cells);
+        // Within 6 standard deviations of the difference of two frequencies with variance
+        // ≤ k p (1 − p) / N each.
+        let worst = assert_densities_agree(
+            name,
+            &Density { label: "GPU", density: &pg, samples: n_gpu, steps_per_orbit: k as f64 },
+            &Density { label: "CPU", density: &pc, samples: n_cpu, steps_per_orbit: k as f64 },
+            cells,
+        );
         eprintln!("{name}: {n_gpu} GPU / {n_cpu} CPU samples, worst |Δ|/tolerance {worst:.3}");
     }
 }
@@ -289,16 +259,13 @@ fn cpu_route_densities_match_gpu_route() {
     let n_gpu: f64 = gpu_counts.iter().map(|&c| c as f64).sum();
     let n_cpu: f64 = cpu_counts.iter().map(|&c| c as f64).sum();
     assert!(n_cpu > 0.5 * splats as f64, "{n_cpu} of {splats} CPU-route points on screen");
-    let pg = coarse(&gpu_counts, width as usize, height as usize, cells);
-    let pc = coarse(&cpu_counts, width as usize, height as usize, cells);
-    let mut worst: f64 = 0.0;
-    for i in 0..pg.len() {
-        let p = 0.5 * (pg[i] + pc[i]);
-        let sigma = (p * (1.0 - p) * (gpu_k / n_gpu + cpu_k as f64 / n_cpu)).sqrt();
-        let tol = 6.0 * sigma + 1e-12;
-        let d = (pg[i] - pc[i]).abs();
-        worst = worst.max(d / tol);
-        assert!(d <= tol, "cell {i}: GPU route {} vs CPU route {} (|Δ| {d:.3e} > tolerance {tol:.3e})", pg[i], pc[i]);
-    }
+    let pg = coarse_density(&gpu_counts, width as usize, height as usize, cells);
+    let pc = coarse_density(&cpu_counts, width as usize, height as usize, cells);
+    let worst = assert_densities_agree(
+        "CPU route vs GPU route",
+        &Density { label: "GPU route", density: &pg, samples: n_gpu, steps_per_orbit: gpu_k },
+        &Density { label: "CPU route", density: &pc, samples: n_cpu, steps_per_orbit: cpu_k as f64 },
+        cells,
+    );
     eprintln!("CPU route vs GPU route: {n_gpu} / {n_cpu} samples, worst |Δ|/tolerance {worst:.3}");
 }

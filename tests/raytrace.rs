@@ -2,9 +2,11 @@
 //! seeded rays for each paper scene; the Lipschitz spheres against mapped samples (the
 //! superset property); a small golden image from the deterministic CPU tracer; bad glTF.
 
-use std::path::{Path, PathBuf};
+mod common;
+
 use std::sync::atomic::AtomicBool;
 
+use common::load_scene as scene;
 use glam::{DVec3, Vec3};
 use nlifs::raytrace::geometry::{NodeKind, Ray};
 use nlifs::raytrace::hierarchy::{Hierarchy, InitialObject, Stop};
@@ -13,14 +15,8 @@ use nlifs::raytrace::search::Scratch;
 use nlifs::raytrace::wide::Simd;
 use nlifs::raytrace::{self, Initial, RaytraceError, RaytraceSettings};
 use nlifs::rng::Pcg32;
-use nlifs::scene::Scene;
 
 const SCENES: [&str; 5] = ["tapering", "twisting", "fantasy", "plant1", "plant2"];
-
-fn scene(name: &str) -> Scene {
-    Scene::load(&Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes").join(format!("{name}.toml")))
-        .expect("paper scene loads")
-}
 
 fn unit_vector(rng: &mut Pcg32) -> Vec3 {
     loop {
@@ -212,10 +208,6 @@ fn mapped_points_stay_inside_their_ancestors() {
     }
 }
 
-fn golden_dir() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests").join("golden")
-}
-
 /// A 128×96 still of tapering W^3(sphere) at 2 spp. Tolerance: the image is a deterministic
 /// function of the inputs on one build, but libm's sqrt/pow and FMA contraction may differ
 /// across platforms by a few ulps, which moves silhouette and shadow-edge samples. So: mean
@@ -226,47 +218,22 @@ fn golden_image_tapering_spheres() {
     let settings = RaytraceSettings { width: 128, height: 96, spp: 2, depth: 3, ..Default::default() };
     let traced = raytrace::render(&scene, 0.0, None, &settings, &|_, _| {}, &AtomicBool::new(false)).unwrap();
     let actual = traced.image;
-    let path = golden_dir().join("tapering_n3_spheres.png");
-    if std::env::var_os("REPLACE").is_some() || !path.exists() {
-        nlifs::io::save_png(&path, &actual).unwrap();
-        eprintln!("wrote golden image {}", path.display());
-        if std::env::var_os("REPLACE").is_none() {
-            panic!("golden image {} was missing and has been written; check it and rerun", path.display());
-        }
-        return;
-    }
-    let expected = image::open(&path).unwrap().to_rgb8();
-    assert_eq!(expected.dimensions(), actual.dimensions());
-    let mut sum = 0u64;
-    let mut bad = 0usize;
-    let mut diff = image::RgbImage::new(actual.width(), actual.height());
-    for ((a, e), d) in actual.pixels().zip(expected.pixels()).zip(diff.pixels_mut()) {
-        let delta = [0, 1, 2].map(|c| (a[c] as i32 - e[c] as i32).unsigned_abs() as u8);
-        sum += delta.iter().map(|&v| v as u64).sum::<u64>();
-        if delta.iter().any(|&v| v > 16) {
-            bad += 1;
-        }
-        *d = image::Rgb(delta.map(|v| v.saturating_mul(8)));
-    }
-    let mean = sum as f64 / (3 * actual.width() * actual.height()) as f64;
+    let name = "tapering_n3_spheres";
+    let Some(expected) = common::golden_or_replace(name, &actual) else { return };
+    let diff = common::Difference::of(&actual, &expected);
+    let (mean, bad) = (diff.mean_levels(), diff.pixels_over(16));
     let pixels = (actual.width() * actual.height()) as usize;
     if mean > 0.5 || bad * 100 > pixels {
-        let out = std::env::temp_dir();
-        let (a, d) = (out.join("tapering_n3_spheres.actual.png"), out.join("tapering_n3_spheres.diff.png"));
-        nlifs::io::save_png(&a, &actual).unwrap();
-        nlifs::io::save_png(&d, &diff).unwrap();
         panic!(
-            "golden image differs: mean {mean:.3} levels, {bad} pixels > 16 levels; actual {}, diff ×8 {}",
-            a.display(),
-            d.display()
+            "golden image differs: mean {mean:.3} levels, {bad} pixels > 16 levels; {}",
+            diff.write_failure_images(name, &actual)
         );
     }
 }
 
 #[test]
 fn bad_gltf_is_an_error_not_a_panic() {
-    let dir = std::env::temp_dir().join(format!("nlifs-raytrace-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = common::temp_dir("raytrace");
     let ifs = scene("tapering").at(0.0);
     let cases: [(&str, &[u8]); 3] = [
         ("garbage.glb", b"this is not a glTF file"),
@@ -289,8 +256,7 @@ fn bad_gltf_is_an_error_not_a_panic() {
 /// tapering is 4 icospheres of 80 triangles, so W^1 of plant2 with it as A has 5 · 320.
 #[test]
 fn exported_mesh_round_trips_as_initial_object() {
-    let dir = std::env::temp_dir().join(format!("nlifs-raytrace-rt-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = common::temp_dir("raytrace-rt");
     let tapering = scene("tapering").at(0.0);
     let h = raytrace::build_fixed(&tapering, &Initial::Sphere, 1).unwrap();
     let colors: Vec<[f32; 3]> = tapering.functions.iter().map(|f| f.color).collect();

@@ -1,6 +1,8 @@
 //! Grid editing, undo / redo, keys at the playhead, playback and saving in the viewer's plain
 //! state: commands in, scene out, no window and no GPU.
 
+mod common;
+
 use glam::DVec3;
 use nlifs::gpu::live::LiveSettings;
 use nlifs::scene::{FunctionDef, Scene};
@@ -9,7 +11,7 @@ use nlifs::viewer::grid_edit;
 use nlifs::viewer::state::{Command, ViewerState};
 
 fn state_for(file: &str) -> ViewerState {
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes").join(file);
+    let path = common::repo_path("scenes").join(file);
     let scene = Scene::load(&path).unwrap();
     ViewerState::new(scene, Some(path), LiveSettings::default())
 }
@@ -181,8 +183,7 @@ fn playing_advances_time_and_wraps_per_loop_mode() {
 fn save_writes_a_file_that_loads_back_equal() {
     let mut s = state_for("plant1.toml");
     s.apply([Command::SetPoint { function: 2, point: 3, p: DVec3::new(0.125, 7.5, -3.25) }, Command::EndGesture]);
-    let dir = std::env::temp_dir().join(format!("nlifs-viewer-editing-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = common::temp_dir("viewer-editing");
     let path = dir.join("edited.toml");
     let c = s.apply([Command::SaveScene(path.clone())]);
     assert!(!c.scene_replaced && s.error.is_none(), "{:?}", s.error);
@@ -210,9 +211,7 @@ fn wait_jobs(jobs: &mut nlifs::viewer::jobs::Jobs, ctx: &egui::Context) {
 #[test]
 fn ray_trace_and_record_jobs_run_in_the_background_and_cancel() {
     use nlifs::viewer::state::{RaytraceForm, RecordForm};
-    let dir = std::env::temp_dir().join(format!("nlifs-viewer-jobs-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = common::temp_dir("viewer-jobs");
     let ctx = egui::Context::default();
     let mut jobs = nlifs::viewer::jobs::Jobs::default();
 

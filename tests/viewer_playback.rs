@@ -7,25 +7,21 @@
 //! A measurement for docs/viewer-editing.md: `cargo test --release --test viewer_playback --
 //! --ignored --nocapture` (needs a GPU adapter; lavapipe will do).
 
+mod common;
+
 use nlifs::chaos_game::CompiledIfs;
 use nlifs::gpu::GpuContext;
 use nlifs::gpu::live::{LiveSettings, LiveView};
-use nlifs::scene::Scene;
 use nlifs::splat::SplatMode;
 
 const W: u32 = 320;
 const H: u32 = 180;
 const CELLS: (u32, u32) = (32, 18);
 
+/// The coarse density of a density-mode accumulation (its fourth word per pixel is the count).
 fn coarse_density(accum: &[u32]) -> Vec<f64> {
-    let mut out = vec![0.0; (CELLS.0 * CELLS.1) as usize];
-    for y in 0..H {
-        for x in 0..W {
-            out[((y * CELLS.1 / H) * CELLS.0 + x * CELLS.0 / W) as usize] += accum[4 * (y * W + x) as usize + 3] as f64;
-        }
-    }
-    let total = out.iter().sum::<f64>().max(1.0);
-    out.iter().map(|c| c / total).collect()
+    let counts: Vec<u32> = accum.chunks(4).take((W * H) as usize).map(|a| a[3]).collect();
+    common::coarse_density(&counts, W as usize, H as usize, (CELLS.0 as usize, CELLS.1 as usize))
 }
 
 fn l1(a: &[f64], b: &[f64]) -> f64 {
@@ -42,16 +38,8 @@ fn frame(ctx: &GpuContext, live: &mut LiveView) -> Vec<f64> {
 #[test]
 #[ignore = "measurement for docs/viewer-editing.md; run with --ignored --nocapture"]
 fn playback_through_a_key_reconverges() {
-    let ctx = match GpuContext::headless() {
-        Ok(c) => c,
-        Err(e) => {
-            assert!(std::env::var("NLIFS_REQUIRE_GPU").is_err(), "no GPU adapter: {e}");
-            eprintln!("SKIPPED: no GPU adapter ({e})");
-            return;
-        }
-    };
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/twist-anim.toml");
-    let scene = Scene::load(&path).unwrap();
+    let Some(ctx) = common::gpu() else { return };
+    let scene = common::load_scene("twist-anim");
     let bounds = nlifs::record::timeline_bounds(&scene).unwrap();
     let camera = scene.camera_for_at(0.0, bounds);
     let settings = LiveSettings {

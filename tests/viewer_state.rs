@@ -3,6 +3,8 @@
 //! here rather than next to `src/viewer/state.rs` because the foundation's lib tests do not
 //! compile at e5acdfd.)
 
+mod common;
+
 use nlifs::gpu::live::LiveSettings;
 use nlifs::viewer::state::{Changes, Command, ViewerState};
 
@@ -14,8 +16,7 @@ fn state() -> ViewerState {
 fn bad_scene_keeps_the_last_good_one() {
     let mut s = state();
     let before = s.scene.clone();
-    let dir = std::env::temp_dir().join(format!("nlifs-viewer-test-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = common::temp_dir("viewer-test");
     let bad = dir.join("bad.toml");
     std::fs::write(&bad, "version = 1\n[grid]\nx = [0, 1]\ny = \"oops\"\n").unwrap();
     let changes = s.apply([Command::OpenScene(bad.clone())]);

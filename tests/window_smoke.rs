@@ -7,6 +7,8 @@
 //! loudly, unless NLIFS_REQUIRE_GPU=1, in which case it fails. Failing screenshots are kept in
 //! the temporary directory printed by the test.
 
+mod common;
+
 use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
@@ -16,15 +18,6 @@ use std::time::{Duration, Instant};
 const VIEW_X0: u32 = 420;
 /// A pixel "differs" when a channel moves by more than this (8-bit).
 const DIFF: i32 = 30;
-
-fn require() -> bool {
-    std::env::var("NLIFS_REQUIRE_GPU").as_deref() == Ok("1")
-}
-
-fn skip(why: &str) {
-    assert!(!require(), "NLIFS_REQUIRE_GPU=1 but {why}");
-    eprintln!("\n*** SKIPPING WINDOW TEST: {why} ***\n");
-}
 
 fn have(tool: &str) -> bool {
     Command::new("sh")
@@ -96,15 +89,14 @@ fn viewer_on_the_gpu_route_shows_the_attractor_and_drag_orbits() {
 fn check_viewer(chaos_backend: Option<&str>) {
     for tool in ["Xvfb", "xdotool", "import"] {
         if !have(tool) {
-            return skip(&format!("{tool} is not installed"));
+            return common::skip(&format!("window test: {tool} is not installed"));
         }
     }
     if !nlifs::gpu::adapter_available() {
-        return skip("no GPU adapter");
+        return common::skip("window test: no GPU adapter");
     }
     let label = chaos_backend.unwrap_or("auto");
-    let dir: PathBuf = std::env::temp_dir().join(format!("nlifs-window-smoke-{}-{label}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir: PathBuf = common::temp_dir(&format!("window-smoke-{label}"));
     let runtime = dir.join("xdg");
     std::fs::create_dir_all(&runtime).unwrap();
     #[cfg(unix)]
@@ -125,8 +117,8 @@ fn check_viewer(chaos_backend: Option<&str>) {
     let _xvfb = Guard(xvfb);
     let display = format!(":{}", line.trim());
 
-    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/plant2.toml");
-    let viewer = Command::new(env!("CARGO_BIN_EXE_nlifs"))
+    let scene = common::scene_path("plant2");
+    let viewer = common::nlifs_command()
         .arg("view")
         .arg(&scene)
         .args(["--points", "262144", "--exit-after-secs", "240"])

@@ -1,0 +1,261 @@
+//! Helpers the integration suites share (each includes this file with `mod common;`): paths in
+//! the repository, running the binary, fresh temporary folders, the rule for tests that need a
+//! GPU adapter, coarse normalized densities and their 6σ comparison, and image comparisons that
+//! write the actual and difference images on failure and say where.
+//!
+//! The GPU rule: without an adapter a GPU test skips with a loud message, unless
+//! `NLIFS_REQUIRE_GPU=1`, in which case a missing adapter (or tool) is a failure, so that CI on
+//! lavapipe cannot pass by skipping.
+#![allow(dead_code, reason = "each suite compiles this file and uses a subset of it")]
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+use nlifs::gpu::GpuContext;
+use nlifs::scene::Scene;
+
+/// A path relative to the repository root.
+pub fn repo_path(relative: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join(relative)
+}
+
+/// `scenes/<name>.toml`.
+pub fn scene_path(name: &str) -> PathBuf {
+    repo_path("scenes").join(format!("{name}.toml"))
+}
+
+/// The shipped scene `scenes/<name>.toml`, loaded (a load error fails the test with its message).
+pub fn load_scene(name: &str) -> Scene {
+    Scene::load(&scene_path(name)).unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// The `nlifs` binary that cargo built for this test run, as a command to add arguments to.
+pub fn nlifs_command() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_nlifs"))
+}
+
+/// Runs `nlifs` with `args` to completion and returns its exit status and output.
+pub fn run_nlifs(args: &[&str]) -> Output {
+    nlifs_command().args(args).output().expect("start the nlifs binary")
+}
+
+/// A fresh, empty folder `nlifs-<name>-<pid>` in the system's temporary directory (whatever an
+/// earlier run left there is removed first).
+pub fn temp_dir(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("nlifs-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// Whether `NLIFS_REQUIRE_GPU=1`: a missing adapter or tool fails the test instead of skipping it.
+pub fn gpu_required() -> bool {
+    std::env::var("NLIFS_REQUIRE_GPU").as_deref() == Ok("1")
+}
+
+/// Skips a test that cannot run here, loudly; fails it instead when `NLIFS_REQUIRE_GPU=1`.
+pub fn skip(why: &str) {
+    assert!(!gpu_required(), "NLIFS_REQUIRE_GPU=1 but {why}");
+    eprintln!("\n*** SKIPPED: {why} ***\n");
+}
+
+/// A headless GPU context, or `None` after [`skip`] when there is no adapter.
+pub fn gpu() -> Option<GpuContext> {
+    match GpuContext::headless() {
+        Ok(ctx) => Some(ctx),
+        Err(e) => {
+            skip(&format!("no GPU adapter: {e}"));
+            None
+        }
+    }
+}
+
+/// Per-pixel counts (row-major, `width` × `height`) summed over a coarse grid of `cells`
+/// (columns, rows) and normalized to sum 1: the distribution of samples over the cells.
+pub fn coarse_density(counts: &[u32], width: usize, height: usize, cells: (usize, usize)) -> Vec<f64> {
+    assert_eq!(counts.len(), width * height, "counts of a {width}×{height} image");
+    let mut out = vec![0.0; cells.0 * cells.1];
+    for y in 0..height {
+        for x in 0..width {
+            out[(y * cells.1 / height) * cells.0 + x * cells.0 / width] += counts[y * width + x] as f64;
+        }
+    }
+    let total: f64 = out.iter().sum();
+    assert!(total > 0.0, "no samples on the {width}×{height} image");
+    out.iter().map(|c| c / total).collect()
+}
+
+/// One side of a density comparison: a coarse density, how many samples made it, and the
+/// length of the orbits they came in (samples of one orbit are correlated).
+pub struct Density<'a> {
+    pub label: &'a str,
+    pub density: &'a [f64],
+    pub samples: f64,
+    pub steps_per_orbit: f64,
+}
+
+/// Asserts that two coarse densities agree in every cell within 6 standard deviations of the
+/// difference of two sample frequencies, and returns the worst |Δ| / tolerance.
+///
+/// The bound: a cell's frequency over N samples taken in orbits of k steps has variance at most
+/// k·p(1−p)/N (at worst the k samples of an orbit are perfectly correlated; Cauchy–Schwarz on
+/// the covariances), so the difference of two independent estimates has
+/// σ² ≤ p(1−p)·(k_a/N_a + k_b/N_b), with p the mean of the two. On failure a picture of both
+/// densities and of |Δ| / tolerance per cell is written and its path is in the message.
+#[track_caller]
+pub fn assert_densities_agree(what: &str, a: &Density, b: &Density, cells: (usize, usize)) -> f64 {
+    assert_eq!(a.density.len(), cells.0 * cells.1);
+    assert_eq!(b.density.len(), cells.0 * cells.1);
+    let mut ratios = Vec::with_capacity(a.density.len());
+    let mut failures = Vec::new();
+    for (i, (&pa, &pb)) in a.density.iter().zip(b.density).enumerate() {
+        let p = 0.5 * (pa + pb);
+        let sigma = (p * (1.0 - p) * (a.steps_per_orbit / a.samples + b.steps_per_orbit / b.samples)).sqrt();
+        let tol = 6.0 * sigma + 1e-12;
+        let d = (pa - pb).abs();
+        ratios.push(d / tol);
+        if d > tol {
+            failures.push(format!(
+                "cell {i} (column {}, row {}): {} {pa} vs {} {pb} (|Δ| {d:.3e} > tolerance {tol:.3e})",
+                i % cells.0,
+                i / cells.0,
+                a.label,
+                b.label
+            ));
+        }
+    }
+    if !failures.is_empty() {
+        let picture = density_picture(a.density, b.density, &ratios, cells);
+        let path = failure_path(&format!("{}.densities.png", file_stem_of(what)));
+        picture.save(&path).unwrap();
+        panic!(
+            "{what}: {} of {} cells differ beyond 6σ ({} vs {} samples):\n  {}\npicture ({}, {}, |Δ|/tolerance with red above 1): {}",
+            failures.len(),
+            ratios.len(),
+            a.samples,
+            b.samples,
+            failures.join("\n  "),
+            a.label,
+            b.label,
+            path.display()
+        );
+    }
+    ratios.into_iter().fold(0.0, f64::max)
+}
+
+/// Three panels side by side, 8 pixels a cell: density a, density b (grey, scaled to their
+/// common maximum) and |Δ| / tolerance (grey up to 1, red above).
+fn density_picture(a: &[f64], b: &[f64], ratios: &[f64], cells: (usize, usize)) -> image::RgbImage {
+    const SCALE: u32 = 8;
+    let (cw, ch) = (cells.0 as u32, cells.1 as u32);
+    let max = a.iter().chain(b).copied().fold(f64::MIN_POSITIVE, f64::max);
+    let mut img = image::RgbImage::new(3 * cw * SCALE + 2 * SCALE, ch * SCALE);
+    for (panel, values) in [a, b, ratios].into_iter().enumerate() {
+        for (i, &v) in values.iter().enumerate() {
+            let pixel = if panel < 2 {
+                let g = (255.0 * v / max).round() as u8;
+                [g, g, g]
+            } else if v > 1.0 {
+                [255, 0, 0]
+            } else {
+                let g = (255.0 * v).round() as u8;
+                [g, g, g]
+            };
+            let (x0, y0) = (panel as u32 * (cw + 1) * SCALE + (i as u32 % cw) * SCALE, (i as u32 / cw) * SCALE);
+            for y in y0..y0 + SCALE {
+                for x in x0..x0 + SCALE {
+                    img.put_pixel(x, y, image::Rgb(pixel));
+                }
+            }
+        }
+    }
+    img
+}
+
+fn file_stem_of(what: &str) -> String {
+    what.chars().map(|c| if c.is_ascii_alphanumeric() || c == '-' || c == '_' { c } else { '_' }).collect()
+}
+
+/// Where failing image tests write what they saw: `nlifs-test-failures/` in the system's
+/// temporary directory, kept after the run.
+pub fn failure_path(file_name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join("nlifs-test-failures");
+    std::fs::create_dir_all(&dir).unwrap();
+    dir.join(file_name)
+}
+
+/// Per-channel absolute differences of two images of the same size.
+pub struct Difference {
+    /// |actual − expected| per channel.
+    pub delta: image::RgbImage,
+}
+
+impl Difference {
+    pub fn of(actual: &image::RgbImage, expected: &image::RgbImage) -> Self {
+        assert_eq!(actual.dimensions(), expected.dimensions(), "image sizes differ");
+        let mut delta = image::RgbImage::new(actual.width(), actual.height());
+        for ((a, e), d) in actual.pixels().zip(expected.pixels()).zip(delta.pixels_mut()) {
+            *d = image::Rgb([0, 1, 2].map(|c| a[c].abs_diff(e[c])));
+        }
+        Self { delta }
+    }
+
+    /// Mean absolute channel difference, in 8-bit levels.
+    pub fn mean_levels(&self) -> f64 {
+        let sum: u64 = self.delta.as_raw().iter().map(|&v| v as u64).sum();
+        sum as f64 / self.delta.as_raw().len().max(1) as f64
+    }
+
+    /// How many pixels have a channel that differs by more than `levels`.
+    pub fn pixels_over(&self, levels: u8) -> usize {
+        self.delta.pixels().filter(|d| d.0.iter().any(|&v| v > levels)).count()
+    }
+
+    /// Writes `<name>.actual.png` and `<name>.diff.png` (the differences ×8) with
+    /// [`failure_path`] and returns a sentence naming both, for the failure message.
+    pub fn write_failure_images(&self, name: &str, actual: &image::RgbImage) -> String {
+        let (a, d) = (failure_path(&format!("{name}.actual.png")), failure_path(&format!("{name}.diff.png")));
+        actual.save(&a).unwrap();
+        let mut amplified = self.delta.clone();
+        amplified.as_mut().iter_mut().for_each(|v| *v = v.saturating_mul(8));
+        amplified.save(&d).unwrap();
+        format!("actual {}, difference ×8 {}", a.display(), d.display())
+    }
+}
+
+/// `tests/golden/<name>.png`.
+pub fn golden_path(name: &str) -> PathBuf {
+    repo_path("tests/golden").join(format!("{name}.png"))
+}
+
+/// The golden image `name`, or `None` after writing `actual` as the golden image when `REPLACE`
+/// is set. A missing golden image is written too, and the test fails so that it gets looked at.
+pub fn golden_or_replace(name: &str, actual: &image::RgbImage) -> Option<image::RgbImage> {
+    let path = golden_path(name);
+    let replace = std::env::var_os("REPLACE").is_some();
+    if replace || !path.exists() {
+        actual.save(&path).unwrap();
+        eprintln!("wrote golden image {}", path.display());
+        assert!(replace, "golden image {} was missing and has been written; look at it and rerun", path.display());
+        return None;
+    }
+    Some(image::open(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display())).to_rgb8())
+}
+
+/// Asserts that `actual` has exactly the pixels of the golden image `name` (`REPLACE=1`
+/// rewrites it). Pixels, not file bytes: the PNG encoder's choices are not what is tested.
+#[track_caller]
+pub fn assert_golden_exact(name: &str, actual: &image::RgbImage) {
+    let Some(expected) = golden_or_replace(name, actual) else { return };
+    assert_eq!(actual.dimensions(), expected.dimensions(), "{name}: size differs from {}", golden_path(name).display());
+    if actual.as_raw() != expected.as_raw() {
+        let diff = Difference::of(actual, &expected);
+        panic!(
+            "{name}: {} pixels differ from {} (largest channel difference {}); {}",
+            diff.pixels_over(0),
+            golden_path(name).display(),
+            diff.delta.as_raw().iter().max().unwrap(),
+            diff.write_failure_images(name, actual)
+        );
+    }
+}
