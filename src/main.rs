@@ -387,8 +387,8 @@ fn record(args: RecordArgs) -> anyhow::Result<()> {
 }
 
 fn view(args: ViewArgs) -> anyhow::Result<()> {
-    use nlifs::gpu::cpu_route::ChaosBackend;
-    let mut live = nlifs::gpu::live::LiveSettings::default();
+    use nlifs::live::ChaosBackend;
+    let mut live = nlifs::live::LiveSettings::default();
     if let Some(n) = args.points {
         live.point_count = n;
     }

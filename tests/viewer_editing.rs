@@ -2,7 +2,7 @@
 //! state: commands in, scene out, no window and no GPU.
 
 use glam::DVec3;
-use nlifs::gpu::live::LiveSettings;
+use nlifs::live::LiveSettings;
 use nlifs::scene::{FunctionDef, Scene};
 use nlifs::timeline::{Ease, Interpolation, LoopMode};
 use nlifs::viewer::grid_edit;

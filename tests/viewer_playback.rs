@@ -9,7 +9,7 @@
 
 use nlifs::chaos_game::CompiledIfs;
 use nlifs::gpu::GpuContext;
-use nlifs::gpu::live::{LiveSettings, LiveView};
+use nlifs::live::{LiveSettings, LiveView};
 use nlifs::scene::Scene;
 use nlifs::splat::SplatMode;
 

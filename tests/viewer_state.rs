@@ -3,7 +3,7 @@
 //! here rather than next to `src/viewer/state.rs` because the foundation's lib tests do not
 //! compile at e5acdfd.)
 
-use nlifs::gpu::live::LiveSettings;
+use nlifs::live::LiveSettings;
 use nlifs::viewer::state::{Changes, Command, ViewerState};
 
 fn state() -> ViewerState {

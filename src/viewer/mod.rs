@@ -32,8 +32,8 @@ use winit::keyboard::{Key, NamedKey};
 use winit::window::{Window, WindowId};
 
 use crate::camera::Projection;
-use crate::gpu::live::{LiveSettings, LiveView};
 use crate::gpu::{GpuContext, GpuError};
+use crate::live::{ChaosRoute, LiveSettings, LiveView};
 
 pub use state::{Command, ViewerState};
 
@@ -171,7 +171,7 @@ struct FrameLog {
     ui_renders: u64,
     ui_renders_reported: u64,
     /// Where the chaos game ran (set every frame).
-    route: crate::gpu::cpu_route::ChaosRoute,
+    route: ChaosRoute,
 }
 
 impl FrameLog {
@@ -378,7 +378,7 @@ impl ApplicationHandler for App {
             && self.started.elapsed().as_secs_f64() >= limit
         {
             if let (Some(path), Some(gfx)) = (&self.options.screenshot, &mut self.gfx) {
-                match crate::gpu::render::snapshot(&gfx.ctx, &mut gfx.live) {
+                match gfx.live.snapshot(&gfx.ctx) {
                     Ok(image) => {
                         if let Err(e) = crate::io::save_png(path, &image) {
                             eprintln!("cannot write {}: {e}", path.display());
@@ -464,14 +464,14 @@ impl App {
             && let Err(e) = gfx.live.set_settings(&gfx.ctx, self.state.live)
         {
             self.state.error = Some(e.to_string());
-            self.state.live = gfx.live.settings;
+            self.state.live = *gfx.live.settings();
         }
         if !minimized && gfx.live.size() != (size_px[0], size_px[1]) {
             gfx.live.resize(&gfx.ctx, size_px[0], size_px[1]);
         }
         gfx.live.set_camera(&self.state.camera);
         if let Some(path) = changes.screenshot {
-            self.state.message = Some(match crate::gpu::render::snapshot(&gfx.ctx, &mut gfx.live) {
+            self.state.message = Some(match gfx.live.snapshot(&gfx.ctx) {
                 Ok(image) => match crate::io::save_png(&path, &image) {
                     Ok(()) => format!("saved {}", path.display()),
                     Err(e) => format!("cannot write {}: {e}", path.display()),

@@ -18,7 +18,7 @@ use glam::DVec3;
 use crate::camera::{OrbitCamera, Projection};
 use crate::chaos_game::{self, CompiledIfs};
 use crate::edit::{Edit, History};
-use crate::gpu::live::LiveSettings;
+use crate::live::LiveSettings;
 use crate::model::IfsReport;
 use crate::model::builder::Step;
 use crate::scene::{FunctionDef, Scene};
@@ -235,8 +235,8 @@ pub struct FrameStats {
     pub frame_secs: f64,
     pub points_per_sec: f64,
     pub frames: u64,
-    /// Where the chaos game runs and why (the live view's [`crate::gpu::cpu_route::ChaosRoute`]).
-    pub chaos_route: crate::gpu::cpu_route::ChaosRoute,
+    /// Where the chaos game runs and why (the live view's [`crate::live::ChaosRoute`]).
+    pub chaos_route: crate::live::ChaosRoute,
 }
 
 #[derive(Clone, Debug)]

@@ -4,7 +4,7 @@
 use egui::{Color32, RichText};
 
 use crate::camera::Projection;
-use crate::gpu::cpu_route::ChaosBackend;
+use crate::live::ChaosBackend;
 use crate::model::builder::Step;
 use crate::scene::FunctionDef;
 use crate::splat::SplatMode;
