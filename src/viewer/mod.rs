@@ -12,10 +12,19 @@
 //! [`Command::Tick`] with the measured frame interval, and the scene edit that follows keeps the
 //! points (accumulation cleared). A left press near a grid point (grid overlay on) starts a point
 //! drag instead of an orbit. Ray-tracing and recording run on threads (`jobs.rs`).
+//!
+//! The files: `state.rs` (plain data), `command.rs` (what can change it), `apply.rs` (the
+//! command logic), `picking.rs` (projection, picking and drag maths on a `SplatView`), the UI
+//! files that read the state and emit commands (`ui.rs` with the side panel, `grid_edit_ui.rs`,
+//! `jobs_ui.rs`, `timeline_ui.rs`), `ui_layer.rs` (egui on wgpu) and `jobs.rs`. State, command
+//! and apply import no UI file.
 
-pub mod edit_ui;
-pub mod grid_edit;
+pub mod apply;
+pub mod command;
+pub mod grid_edit_ui;
 pub mod jobs;
+pub mod jobs_ui;
+pub mod picking;
 pub mod state;
 pub mod timeline_ui;
 pub mod ui;
@@ -35,7 +44,8 @@ use crate::camera::Projection;
 use crate::gpu::{GpuContext, GpuError};
 use crate::live::{ChaosRoute, LiveSettings, LiveView};
 
-pub use state::{Command, ViewerState};
+pub use command::Command;
+pub use state::ViewerState;
 
 #[derive(Debug, thiserror::Error)]
 pub enum ViewerError {
@@ -307,7 +317,7 @@ impl ApplicationHandler for App {
                 let picked = (button == MouseButton::Left)
                     .then_some(self.cursor)
                     .flatten()
-                    .and_then(|(x, y)| grid_edit::pick_point(&self.state, [x as f32, y as f32]));
+                    .and_then(|(x, y)| self.state.pick_point([x as f32, y as f32]));
                 match picked {
                     Some((function, point)) => {
                         self.commands.push(Command::BeginPointDrag { function, point });
