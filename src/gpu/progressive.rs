@@ -4,8 +4,8 @@
 //! it too, and while nothing changes frames accumulate until `max_splats` points were splatted
 //! (then the image is converged and the GPU idles).
 //!
-//! This is the GPU half of the live view (`crate::live::LiveView`, which adds the CPU point
-//! source and the viewer's settings) and, on its own, the engine of `render --backend gpu` and
+//! This is the GPU half of the live view (`src/live/`, the layer above, which adds the CPU
+//! point source and the viewer's settings) and, on its own, the engine of `render --backend gpu` and
 //! of the GPU benchmarks. A point source outside the GPU writes its frames into the same
 //! accumulation ([`Progressive::begin_uploaded_frame`], [`Progressive::finish_uploaded_frame`]),
 //! so both are resolved by the same pass and cleared at the same moments.
