@@ -10,6 +10,7 @@ pub mod edit;
 pub mod export;
 pub mod gpu;
 pub mod io;
+pub mod live;
 pub mod model;
 pub mod raytrace;
 pub mod record;

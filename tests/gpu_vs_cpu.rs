@@ -14,9 +14,9 @@ use common::{Density, assert_densities_agree, coarse_density, gpu};
 use glam::Vec3;
 use nlifs::chaos_game::{self, CompiledIfs, ORBITS_PER_CHUNK, run_chunk};
 use nlifs::gpu::chaos_game::{FrameArgs, GpuChaosGame};
-use nlifs::gpu::cpu_route::{ChaosBackend, frame_chunks};
-use nlifs::gpu::live::{LiveSettings, LiveView};
-use nlifs::gpu::render::{read_buffer, snapshot};
+use nlifs::gpu::readback::read_buffer;
+use nlifs::live::cpu_source::frame_chunks;
+use nlifs::live::{ChaosBackend, LiveSettings, LiveView};
 use nlifs::resolve::{ResolveStyle, resolve_image};
 use nlifs::rng::Pcg32;
 use nlifs::scene::Scene;
@@ -213,7 +213,7 @@ fn cpu_route_uploads_the_cpu_framebuffer() {
         assert!(previous_covered > 500, "{mode:?}: {previous_covered} pixels covered");
         // The resolve (unchanged) draws the uploaded accumulation: as many pixels differ from
         // the background as the CPU framebuffer covers, give or take rounding to 8 bits.
-        let image = snapshot(&ctx, &mut live).unwrap();
+        let image = live.snapshot(&ctx).unwrap();
         let bg = resolve_image(&expected, &camera, &ResolveStyle::default()).get_pixel(0, 0).0;
         let drawn = image.pixels().filter(|p| (0..3).any(|k| (p.0[k] as i32 - bg[k] as i32).abs() > 2)).count();
         assert!(
@@ -248,7 +248,7 @@ fn cpu_route_densities_match_gpu_route() {
             ctx.queue.submit([encoder.finish()]);
         }
         let accum = live.read_accum(&ctx).unwrap();
-        (accum.chunks(4).take((width * height) as usize).map(|a| a[3]).collect(), live.splats_since_clear)
+        (accum.chunks(4).take((width * height) as usize).map(|a| a[3]).collect(), live.splats_since_clear())
     };
     // GPU route: one frame, 2^18 orbits of 4 steps after the transient.
     let (gpu_counts, _) = counts(ChaosBackend::Gpu, 1);

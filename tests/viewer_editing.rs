@@ -4,11 +4,12 @@
 mod common;
 
 use glam::DVec3;
-use nlifs::gpu::live::LiveSettings;
+use nlifs::live::LiveSettings;
 use nlifs::scene::{FunctionDef, Scene};
 use nlifs::timeline::{Ease, Interpolation, LoopMode};
-use nlifs::viewer::grid_edit;
-use nlifs::viewer::state::{Command, ViewerState};
+use nlifs::viewer::command::Command;
+use nlifs::viewer::picking;
+use nlifs::viewer::state::ViewerState;
 
 fn state_for(file: &str) -> ViewerState {
     let path = common::repo_path("scenes").join(file);
@@ -22,7 +23,7 @@ fn grid_points(s: &ViewerState, f: usize) -> Vec<DVec3> {
 
 /// The projected pixel position of a function's grid point in the state's view.
 fn pixel_of(s: &ViewerState, f: usize, i: usize) -> glam::Vec2 {
-    grid_edit::project(&grid_edit::view_of(s), grid_points(s, f)[i]).unwrap()
+    picking::project(&s.splat_view(), grid_points(s, f)[i]).unwrap()
 }
 
 #[test]
@@ -34,7 +35,7 @@ fn a_drag_gesture_is_one_undo_step_and_undo_redo_restore_exactly() {
     let start = grid_points(&s, f)[i];
     let at = pixel_of(&s, f, i);
     // Picking at the point's projection finds it.
-    assert_eq!(grid_edit::pick_point(&s, [at.x + 2.0, at.y - 1.0]), Some((f, i)));
+    assert_eq!(s.pick_point([at.x + 2.0, at.y - 1.0]), Some((f, i)));
     s.apply([Command::BeginPointDrag { function: f, point: i }]);
     let mut changes = Vec::new();
     for k in 1..=10 {
@@ -210,7 +211,7 @@ fn wait_jobs(jobs: &mut nlifs::viewer::jobs::Jobs, ctx: &egui::Context) {
 
 #[test]
 fn ray_trace_and_record_jobs_run_in_the_background_and_cancel() {
-    use nlifs::viewer::state::{RaytraceForm, RecordForm};
+    use nlifs::viewer::command::{RaytraceForm, RecordForm};
     let dir = common::temp_dir("viewer-jobs");
     let ctx = egui::Context::default();
     let mut jobs = nlifs::viewer::jobs::Jobs::default();

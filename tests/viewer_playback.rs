@@ -11,7 +11,7 @@ mod common;
 
 use nlifs::chaos_game::CompiledIfs;
 use nlifs::gpu::GpuContext;
-use nlifs::gpu::live::{LiveSettings, LiveView};
+use nlifs::live::{LiveSettings, LiveView};
 use nlifs::splat::SplatMode;
 
 const W: u32 = 320;

@@ -1,12 +1,14 @@
 //! The viewer's state and commands, headless: a bad scene keeps the last good one with a
 //! located error, edits recompile, camera moves do not, stale indices are ignored. (These sit
-//! here rather than next to `src/viewer/state.rs` because the foundation's lib tests do not
+//! here rather than next to `src/viewer/apply.rs` because the foundation's lib tests do not
 //! compile at e5acdfd.)
 
 mod common;
 
-use nlifs::gpu::live::LiveSettings;
-use nlifs::viewer::state::{Changes, Command, ViewerState};
+use nlifs::live::LiveSettings;
+use nlifs::viewer::apply::Changes;
+use nlifs::viewer::command::Command;
+use nlifs::viewer::state::ViewerState;
 
 fn state() -> ViewerState {
     ViewerState::new(ViewerState::default_scene(), None, LiveSettings::default())
@@ -46,7 +48,7 @@ fn edits_recompile_and_camera_moves_do_not() {
 #[test]
 fn the_first_view_rect_frames_the_attractor_in_it_and_later_ones_keep_the_camera() {
     use nlifs::chaos_game::attractor_sample;
-    use nlifs::viewer::grid_edit::{project, view_of};
+    use nlifs::viewer::picking::project;
     let mut s = state();
     // A narrow view (a wide panel on the left): framing for the default 16:9 window would put
     // the plant's sides outside it.
@@ -54,7 +56,7 @@ fn the_first_view_rect_frames_the_attractor_in_it_and_later_ones_keep_the_camera
     let changes = s.apply([Command::SetViewRect { origin_px: [371.0, 0.0], size_px: [w, h] }]);
     assert!(changes.camera);
     assert_eq!((s.width_px, s.height_px, s.view_origin_px), (w, h, [371.0, 0.0]));
-    let view = view_of(&s);
+    let view = s.splat_view();
     let sample = attractor_sample(s.compiled.as_ref().unwrap(), s.live.seed);
     let (mut lo, mut hi) = (glam::Vec2::splat(f32::MAX), glam::Vec2::splat(f32::MIN));
     for p in &sample {

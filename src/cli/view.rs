@@ -5,7 +5,7 @@ use std::path::PathBuf;
 use anyhow::Context;
 use clap::{Args, ValueEnum};
 
-use nlifs::gpu::cpu_route::ChaosBackend;
+use nlifs::live::ChaosBackend;
 
 #[derive(Args, Default)]
 pub struct ViewArgs {
@@ -59,7 +59,7 @@ impl From<ChaosBackendArg> for ChaosBackend {
 }
 
 pub fn view(args: ViewArgs) -> anyhow::Result<()> {
-    let mut live = nlifs::gpu::live::LiveSettings::default();
+    let mut live = nlifs::live::LiveSettings::default();
     if let Some(n) = args.points {
         live.point_count = n;
     }

@@ -12,7 +12,7 @@ use crate::model::builder::Step;
 use crate::scene::{FunctionDef, Scene};
 use crate::splat::SplatMode;
 
-use super::live::{LiveSettings, LiveView};
+use super::progressive::{Progressive, ProgressiveSettings};
 use super::{GpuContext, GpuError};
 
 pub struct BenchReport {
@@ -76,7 +76,7 @@ impl fmt::Display for BenchReport {
 
 fn submit_frame(
     ctx: &GpuContext,
-    live: &mut LiveView,
+    live: &mut Progressive,
     target: Option<(&wgpu::TextureView, wgpu::TextureFormat)>,
 ) -> u64 {
     let mut encoder = ctx.device.create_command_encoder(&Default::default());
@@ -147,15 +147,20 @@ pub fn run(scene: &Scene, points: u32, steps: u32, frames: u32) -> Result<BenchR
     let bounds = chaos_game::attractor_bounds(&ifs, scene.render.seed);
     let camera = scene.camera_for(bounds);
     let (width, height) = (1280, 720);
-    let settings =
-        LiveSettings { point_count: points, steps_per_frame: steps, max_splats: u64::MAX, ..LiveSettings::default() };
+    let settings = ProgressiveSettings {
+        point_count: points,
+        steps_per_frame: steps,
+        max_splats: u64::MAX,
+        ..ProgressiveSettings::default()
+    };
 
     // Throughput: frames into an offscreen target of the window's size.
-    let mut live = LiveView::new(&ctx, settings, width, height)?;
+    let mut live = Progressive::new(&ctx, settings, width, height)?;
     live.set_ifs(&ctx, &ifs, bounds, true);
     live.set_camera(&camera);
     let format = wgpu::TextureFormat::Rgba8UnormSrgb;
-    let texture = super::render::offscreen_texture(&ctx, "bench", width, height, format, wgpu::TextureUsages::empty());
+    let texture =
+        super::readback::offscreen_texture(&ctx, "bench", width, height, format, wgpu::TextureUsages::empty());
     let view = texture.create_view(&Default::default());
     for _ in 0..3 {
         submit_frame(&ctx, &mut live, Some((&view, format)));
@@ -171,7 +176,7 @@ pub fn run(scene: &Scene, points: u32, steps: u32, frames: u32) -> Result<BenchR
 
     // Each stage alone, to see where the time goes.
     let stage_frames = (frames / 2).max(5);
-    let time_stage = |live: &mut LiveView, stage: &dyn Fn(&mut LiveView, &mut wgpu::CommandEncoder)| {
+    let time_stage = |live: &mut Progressive, stage: &dyn Fn(&mut Progressive, &mut wgpu::CommandEncoder)| {
         wait(&ctx);
         let cpu0 = process_cpu_secs();
         let start = Instant::now();
@@ -193,12 +198,12 @@ pub fn run(scene: &Scene, points: u32, steps: u32, frames: u32) -> Result<BenchR
     // Convergence after an edit, in density mode on a smaller view (readbacks every frame).
     let (w, h) = (320, 180);
     let cells = (32, 18);
-    let density = LiveSettings { mode: SplatMode::Density, ..settings };
+    let density = ProgressiveSettings { mode: SplatMode::Density, ..settings };
     let edited_scene = edited(scene);
     let edited_ifs = CompiledIfs::new(&edited_scene.at(0.0)).ok_or(GpuError::NoFunctions)?;
     // Both runs use the bounds of the original so that the views agree.
     let reference = {
-        let mut r = LiveView::new(&ctx, LiveSettings { steps_per_frame: 16, seed: 99, ..density }, w, h)?;
+        let mut r = Progressive::new(&ctx, ProgressiveSettings { steps_per_frame: 16, seed: 99, ..density }, w, h)?;
         r.set_ifs(&ctx, &edited_ifs, bounds, true);
         r.set_camera(&camera);
         for _ in 0..8 {
@@ -206,14 +211,14 @@ pub fn run(scene: &Scene, points: u32, steps: u32, frames: u32) -> Result<BenchR
         }
         coarse_density(&r.read_accum(&ctx)?, w, h, cells)
     };
-    let mut live = LiveView::new(&ctx, density, w, h)?;
+    let mut live = Progressive::new(&ctx, density, w, h)?;
     live.set_ifs(&ctx, &ifs, bounds, true);
     live.set_camera(&camera);
     for _ in 0..4 {
         submit_frame(&ctx, &mut live, None);
     }
     live.set_ifs(&ctx, &edited_ifs, bounds, false);
-    let mut fresh = LiveView::new(&ctx, LiveSettings { seed: 7, ..density }, w, h)?;
+    let mut fresh = Progressive::new(&ctx, ProgressiveSettings { seed: 7, ..density }, w, h)?;
     fresh.set_ifs(&ctx, &edited_ifs, bounds, true);
     fresh.set_camera(&camera);
     let mut convergence = Vec::new();

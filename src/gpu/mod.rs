@@ -1,5 +1,7 @@
 //! The GPU side of nlifs (wgpu): the device context, the WGSL sources, the compute chaos game
-//! with its splat, the resolve pass, and a headless renderer. Every stage has a CPU twin with
+//! with its splat, the resolve pass, the progressive render that keeps both running across
+//! frames, readback and offscreen targets, and a headless renderer. The live view on top of this
+//! (`crate::live`) adds the CPU point source and the viewer's settings; nothing here imports it. Every stage has a CPU twin with
 //! the same stem (`chaos_game`, `splat`/`resolve`), and `tests/gpu_vs_cpu.rs` compares them.
 //!
 //! Without an adapter everything here returns [`GpuError::NoAdapter`]; callers fall back to the
@@ -7,8 +9,8 @@
 
 pub mod bench;
 pub mod chaos_game;
-pub mod cpu_route;
-pub mod live;
+pub mod progressive;
+pub mod readback;
 pub mod render;
 pub mod resolve;
 pub mod shaders;

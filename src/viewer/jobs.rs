@@ -11,7 +11,7 @@ use std::thread::JoinHandle;
 use crate::raytrace::{RaytraceSettings, Traced};
 use crate::record::{RecordSettings, Recorder};
 
-use super::state::JobRequest;
+use super::command::JobRequest;
 
 struct Running<T> {
     cancel: Arc<AtomicBool>,

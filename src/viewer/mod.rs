@@ -12,10 +12,19 @@
 //! [`Command::Tick`] with the measured frame interval, and the scene edit that follows keeps the
 //! points (accumulation cleared). A left press near a grid point (grid overlay on) starts a point
 //! drag instead of an orbit. Ray-tracing and recording run on threads (`jobs.rs`).
+//!
+//! The files: `state.rs` (plain data), `command.rs` (what can change it), `apply.rs` (the
+//! command logic), `picking.rs` (projection, picking and drag maths on a `SplatView`), the UI
+//! files that read the state and emit commands (`ui.rs` with the side panel, `grid_edit_ui.rs`,
+//! `jobs_ui.rs`, `timeline_ui.rs`), `ui_layer.rs` (egui on wgpu) and `jobs.rs`. State, command
+//! and apply import no UI file.
 
-pub mod edit_ui;
-pub mod grid_edit;
+pub mod apply;
+pub mod command;
+pub mod grid_edit_ui;
 pub mod jobs;
+pub mod jobs_ui;
+pub mod picking;
 pub mod state;
 pub mod timeline_ui;
 pub mod ui;
@@ -32,10 +41,11 @@ use winit::keyboard::{Key, NamedKey};
 use winit::window::{Window, WindowId};
 
 use crate::camera::Projection;
-use crate::gpu::live::{LiveSettings, LiveView};
 use crate::gpu::{GpuContext, GpuError};
+use crate::live::{ChaosRoute, LiveSettings, LiveView};
 
-pub use state::{Command, ViewerState};
+pub use command::Command;
+pub use state::ViewerState;
 
 #[derive(Debug, thiserror::Error)]
 pub enum ViewerError {
@@ -171,7 +181,7 @@ struct FrameLog {
     ui_renders: u64,
     ui_renders_reported: u64,
     /// Where the chaos game ran (set every frame).
-    route: crate::gpu::cpu_route::ChaosRoute,
+    route: ChaosRoute,
 }
 
 impl FrameLog {
@@ -307,7 +317,7 @@ impl ApplicationHandler for App {
                 let picked = (button == MouseButton::Left)
                     .then_some(self.cursor)
                     .flatten()
-                    .and_then(|(x, y)| grid_edit::pick_point(&self.state, [x as f32, y as f32]));
+                    .and_then(|(x, y)| self.state.pick_point([x as f32, y as f32]));
                 match picked {
                     Some((function, point)) => {
                         self.commands.push(Command::BeginPointDrag { function, point });
@@ -378,7 +388,7 @@ impl ApplicationHandler for App {
             && self.started.elapsed().as_secs_f64() >= limit
         {
             if let (Some(path), Some(gfx)) = (&self.options.screenshot, &mut self.gfx) {
-                match crate::gpu::render::snapshot(&gfx.ctx, &mut gfx.live) {
+                match gfx.live.snapshot(&gfx.ctx) {
                     Ok(image) => {
                         if let Err(e) = crate::io::save_png(path, &image) {
                             eprintln!("cannot write {}: {e}", path.display());
@@ -464,14 +474,14 @@ impl App {
             && let Err(e) = gfx.live.set_settings(&gfx.ctx, self.state.live)
         {
             self.state.error = Some(e.to_string());
-            self.state.live = gfx.live.settings;
+            self.state.live = *gfx.live.settings();
         }
         if !minimized && gfx.live.size() != (size_px[0], size_px[1]) {
             gfx.live.resize(&gfx.ctx, size_px[0], size_px[1]);
         }
         gfx.live.set_camera(&self.state.camera);
         if let Some(path) = changes.screenshot {
-            self.state.message = Some(match crate::gpu::render::snapshot(&gfx.ctx, &mut gfx.live) {
+            self.state.message = Some(match gfx.live.snapshot(&gfx.ctx) {
                 Ok(image) => match crate::io::save_png(&path, &image) {
                     Ok(()) => format!("saved {}", path.display()),
                     Err(e) => format!("cannot write {}: {e}", path.display()),

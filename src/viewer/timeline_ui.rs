@@ -7,7 +7,8 @@ use egui::{Color32, Sense, Stroke};
 
 use crate::timeline::{Ease, Interpolation, LoopMode};
 
-use super::state::{Command, ViewerState};
+use super::command::Command;
+use super::state::ViewerState;
 
 const INTERPOLATIONS: [Interpolation; 3] = [Interpolation::Hold, Interpolation::Linear, Interpolation::CatmullRom];
 const EASES: [Ease; 4] = [Ease::None, Ease::In, Ease::Out, Ease::InOut];

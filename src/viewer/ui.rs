@@ -4,13 +4,14 @@
 use egui::{Color32, RichText};
 
 use crate::camera::Projection;
-use crate::gpu::cpu_route::ChaosBackend;
+use crate::live::ChaosBackend;
 use crate::model::builder::Step;
 use crate::scene::FunctionDef;
 use crate::splat::SplatMode;
 
+use super::command::Command;
 use super::jobs::JobView;
-use super::state::{Command, ViewerState};
+use super::state::ViewerState;
 
 /// The left side panel with every section, the timeline at the bottom, the grid overlay, the
 /// ray-traced image window and the keyboard shortcuts. `ppp`: pixels per egui point. Returns
@@ -33,21 +34,21 @@ pub fn panels_ui(
             ui.heading("nlifs");
             scene_ui(ui, state, commands);
             functions_ui(ui, state, commands);
-            super::edit_ui::grid_edit_ui(ui, state, commands);
+            super::grid_edit_ui::grid_edit_ui(ui, state, commands);
             builder_ui(ui, state, commands);
             render_ui(ui, state, commands);
             statistics_ui(ui, state);
             screenshot_ui(ui, state, commands);
-            super::edit_ui::raytrace_ui(ui, state, jobs, commands);
+            super::jobs_ui::raytrace_ui(ui, state, jobs, commands);
             if state.scene.timeline.is_some() {
-                super::edit_ui::record_ui(ui, state, jobs, commands);
+                super::jobs_ui::record_ui(ui, state, jobs, commands);
             }
         });
     });
     // The overlay is clipped to what the panels leave of the view.
     let view_rect = ui.available_rect_before_wrap();
-    super::grid_edit::grid_overlay_ui(ui.ctx(), view_rect, state, ppp);
-    super::edit_ui::raytrace_window_ui(ui.ctx(), jobs, commands);
+    super::grid_edit_ui::grid_overlay_ui(ui.ctx(), view_rect, state, ppp);
+    super::jobs_ui::raytrace_window_ui(ui.ctx(), jobs, commands);
     view_rect
 }
 

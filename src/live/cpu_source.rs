@@ -1,6 +1,7 @@
-//! The live view's CPU route: the chaos game of [`crate::chaos_game::run_chunk`] splatted on the
-//! CPU into persistent [`Framebuffer`]s (one per rayon worker), merged and uploaded into the GPU
-//! accumulation buffer, which the unchanged resolve pass then draws. On a software adapter
+//! The live view's CPU point source: the chaos game of [`crate::chaos_game::run_chunk`] splatted
+//! on the CPU into persistent [`Framebuffer`]s (one per rayon worker) and merged; the live view
+//! uploads the merged accumulation into the GPU accumulation buffer, which the unchanged resolve
+//! pass then draws. Nothing here touches the GPU. On a software adapter
 //! (lavapipe) the GPU chaos game costs the same CPU cores several times more than the CPU
 //! kernel, so the viewer's `auto` backend takes this route there (docs/live-view.md).
 //!
@@ -18,63 +19,6 @@ use rayon::prelude::*;
 
 use crate::chaos_game::{CompiledIfs, ORBITS_PER_CHUNK, STEPS_PER_ORBIT, run_chunk};
 use crate::splat::{EMPTY, Framebuffer, SplatMode, SplatView};
-
-/// Which chaos game the live view runs.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub enum ChaosBackend {
-    /// The compute shader (points persist on the GPU).
-    #[default]
-    Gpu,
-    /// The CPU kernel; the GPU only resolves.
-    Cpu,
-    /// CPU on a software adapter (lavapipe, llvmpipe), GPU otherwise.
-    Auto,
-}
-
-impl ChaosBackend {
-    pub const ALL: [ChaosBackend; 3] = [ChaosBackend::Auto, ChaosBackend::Gpu, ChaosBackend::Cpu];
-
-    pub fn parse(s: &str) -> Option<Self> {
-        match s {
-            "gpu" => Some(Self::Gpu),
-            "cpu" => Some(Self::Cpu),
-            "auto" => Some(Self::Auto),
-            _ => None,
-        }
-    }
-
-    pub fn name(self) -> &'static str {
-        match self {
-            Self::Gpu => "gpu",
-            Self::Cpu => "cpu",
-            Self::Auto => "auto",
-        }
-    }
-
-    /// The route this setting takes on an adapter of `device_type`, and why.
-    pub fn route(self, device_type: wgpu::DeviceType) -> ChaosRoute {
-        let software = device_type == wgpu::DeviceType::Cpu;
-        match self {
-            Self::Gpu => ChaosRoute { cpu: false, reason: "chosen: gpu" },
-            Self::Cpu => ChaosRoute { cpu: true, reason: "chosen: cpu" },
-            Self::Auto if software => ChaosRoute { cpu: true, reason: "auto: software adapter" },
-            Self::Auto => ChaosRoute { cpu: false, reason: "auto: hardware adapter" },
-        }
-    }
-}
-
-/// Where the chaos game runs, and why (the viewer's statistics show both).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct ChaosRoute {
-    pub cpu: bool,
-    pub reason: &'static str,
-}
-
-impl ChaosRoute {
-    pub fn name(&self) -> &'static str {
-        if self.cpu { "cpu" } else { "gpu" }
-    }
-}
 
 /// How a frame of `points` splats splits over `workers`: (chunks, steps per orbit). The chunk
 /// count is a multiple of `workers` (each runs the same number) and chunks hold at most
@@ -198,16 +142,9 @@ fn merge(workers: &[Framebuffer], merged: &mut [u32]) {
 }
 
 impl CpuChaosGame {
-    /// The merged accumulation in the GPU layout (what [`Self::upload`] writes).
+    /// The merged accumulation in the GPU layout (what the live view uploads).
     pub fn merged(&self) -> &[u32] {
         &self.merged
-    }
-
-    /// Writes the merged accumulation to the start of the GPU accumulation buffer.
-    pub fn upload(&self, queue: &wgpu::Queue, accum: &wgpu::Buffer) {
-        if !self.merged.is_empty() {
-            queue.write_buffer(accum, 0, bytemuck::cast_slice(&self.merged));
-        }
     }
 }
 
@@ -227,16 +164,5 @@ mod tests {
             assert!(total < points + chunks as u64 * ORBITS_PER_CHUNK as u64, "{points} {workers}: {total}");
         }
         assert_eq!(frame_chunks(1 << 20, 2), (4, 4096));
-    }
-
-    #[test]
-    fn auto_takes_the_cpu_on_software_adapters_only() {
-        assert!(ChaosBackend::Auto.route(wgpu::DeviceType::Cpu).cpu);
-        assert!(!ChaosBackend::Auto.route(wgpu::DeviceType::DiscreteGpu).cpu);
-        assert!(!ChaosBackend::Gpu.route(wgpu::DeviceType::Cpu).cpu);
-        assert!(ChaosBackend::Cpu.route(wgpu::DeviceType::IntegratedGpu).cpu);
-        for b in ChaosBackend::ALL {
-            assert_eq!(ChaosBackend::parse(b.name()), Some(b));
-        }
     }
 }

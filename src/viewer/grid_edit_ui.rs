@@ -1,12 +1,16 @@
-//! Panels for grid editing (overlay toggle, function and point selection, axis lock, numeric
-//! entry, undo / redo, save) and for the background jobs (ray-trace this view, record the
-//! timeline) with their progress bars. They only read the state and emit commands.
+//! Grid editing in the viewer's UI: the panel (overlay toggle, function and point selection,
+//! axis lock, numeric entry, undo / redo, save) and the overlay drawn over the view (the initial
+//! grid and every function's transformed grid as lines, the paper's plates 5 and 7, with the
+//! selected function's points). Both only read the state and emit commands; the overlay projects
+//! with the same [`SplatView`] as picking (`picking.rs`), so lines sit on the splatted points.
 
-use egui::{Color32, RichText};
-use glam::DVec3;
+use glam::{DVec3, Vec2};
 
-use super::jobs::JobView;
-use super::state::{Command, RaytraceForm, RecordForm, ViewerState};
+use crate::splat::SplatView;
+
+use super::command::Command;
+use super::picking::{FunctionGrid, definition_grid, grid_lines, project};
+use super::state::ViewerState;
 
 pub fn grid_edit_ui(ui: &mut egui::Ui, state: &ViewerState, commands: &mut Vec<Command>) {
     egui::CollapsingHeader::new("Grid editing").default_open(true).show(ui, |ui| {
@@ -123,93 +127,98 @@ pub fn grid_edit_ui(ui: &mut egui::Ui, state: &ViewerState, commands: &mut Vec<C
     });
 }
 
-fn progress_ui(
-    ui: &mut egui::Ui,
-    fraction: Option<f32>,
-    message: &Option<String>,
-    cancel: Command,
-    commands: &mut Vec<Command>,
+fn srgb(color: [f32; 3], alpha: f32) -> egui::Color32 {
+    let c = color.map(|v| (crate::scene::linear_to_srgb(v).clamp(0.0, 1.0) * 255.0).round() as u8);
+    egui::Color32::from_rgba_unmultiplied(c[0], c[1], c[2], (alpha * 255.0).round() as u8)
+}
+
+/// egui position (points) of view pixel `q` in a view whose corner is at window pixel `origin`.
+fn to_egui(q: Vec2, origin: [f32; 2], ppp: f32) -> egui::Pos2 {
+    egui::pos2((q.x + origin[0]) / ppp, (q.y + origin[1]) / ppp)
+}
+
+fn draw_grid(
+    painter: &egui::Painter,
+    view: &SplatView,
+    origin: [f32; 2],
+    grid: &FunctionGrid,
+    ppp: f32,
+    stroke: egui::Stroke,
 ) {
-    if let Some(f) = fraction {
-        ui.horizontal(|ui| {
-            ui.add(egui::ProgressBar::new(f).show_percentage().desired_width(180.0));
-            if ui.button("Cancel").clicked() {
-                commands.push(cancel);
+    let projected: Vec<Option<egui::Pos2>> =
+        grid.points.iter().map(|p| project(view, *p).map(|q| to_egui(q, origin, ppp))).collect();
+    for (a, b) in grid_lines(grid.dims) {
+        if let (Some(Some(pa)), Some(Some(pb))) = (projected.get(a), projected.get(b)) {
+            painter.line_segment([*pa, *pb], stroke);
+        }
+    }
+}
+
+/// Draws the initial grid, every enabled function's grid, the selected function's points
+/// (the selected one ringed) and, with a timeline, faint ghosts of the selected function's grid
+/// at the neighbouring keys. `ppp`: egui points per window pixel inverse (pixels per point).
+pub fn grid_overlay_ui(ctx: &egui::Context, clip: egui::Rect, state: &ViewerState, ppp: f32) {
+    if !state.edit.grid_overlay {
+        return;
+    }
+    let painter = ctx
+        .layer_painter(egui::LayerId::new(egui::Order::Background, egui::Id::unique("nlifs_grid_overlay")))
+        .with_clip_rect(clip);
+    let view = state.splat_view();
+    let initial =
+        FunctionGrid { dims: state.scene.domain.dims(), points: state.scene.domain.points(), editable: false };
+    draw_grid(
+        &painter,
+        &view,
+        state.view_origin_px,
+        &initial,
+        ppp,
+        egui::Stroke::new(1.0, egui::Color32::from_white_alpha(110)),
+    );
+    let selected = state.edit.selected_function;
+    if let (Some(f), Some(tl)) = (selected, &state.scene.timeline) {
+        let t = state.playhead_secs();
+        let tol = crate::timeline::KEY_TIME_TOL_SECS;
+        let with_f: Vec<_> = tl.keys.iter().filter(|k| k.function(f).is_some()).collect();
+        let before = with_f.iter().rev().find(|k| k.t_secs < t - tol);
+        let after = with_f.iter().find(|k| k.t_secs > t + tol);
+        for key in [before, after].into_iter().flatten() {
+            if let Some(grid) = key.function(f).and_then(|d| definition_grid(&state.scene, d)) {
+                draw_grid(
+                    &painter,
+                    &view,
+                    state.view_origin_px,
+                    &grid,
+                    ppp,
+                    egui::Stroke::new(1.0, srgb(state.scene.functions[f].color, 0.25)),
+                );
             }
-        });
+        }
     }
-    if let Some(m) = message {
-        ui.small(m);
-    }
-}
-
-pub fn raytrace_ui(ui: &mut egui::Ui, state: &ViewerState, jobs: &JobView, commands: &mut Vec<Command>) {
-    egui::CollapsingHeader::new("Ray-trace this view").default_open(false).show(ui, |ui| {
-        let mut form: RaytraceForm = state.raytrace_form.clone();
-        ui.horizontal(|ui| {
-            ui.add(egui::DragValue::new(&mut form.depth).range(0..=12).prefix("depth "));
-            ui.add(egui::DragValue::new(&mut form.spp).range(1..=64).prefix("spp "));
-        });
-        ui.horizontal(|ui| {
-            ui.add(egui::DragValue::new(&mut form.width).range(16..=4096).prefix("w "));
-            ui.add(egui::DragValue::new(&mut form.height).range(16..=4096).prefix("h "));
-        });
-        ui.horizontal(|ui| {
-            ui.label("PNG");
-            ui.text_edit_singleline(&mut form.png_text);
-        });
-        if form != state.raytrace_form {
-            commands.push(Command::SetRaytraceForm(form));
+    for (f, spec) in state.scene.functions.iter().enumerate() {
+        if !spec.enabled && selected != Some(f) {
+            continue;
         }
-        if ui.add_enabled(jobs.raytrace.is_none(), egui::Button::new("Ray-trace this view")).clicked() {
-            commands.push(Command::StartRaytrace);
+        let Some(grid) = state.function_grid(f) else { continue };
+        let (width, alpha) = if selected == Some(f) {
+            (2.0, 1.0)
+        } else if selected.is_some() {
+            (1.0, 0.35)
+        } else {
+            (1.2, 0.8)
+        };
+        draw_grid(&painter, &view, state.view_origin_px, &grid, ppp, egui::Stroke::new(width, srgb(spec.color, alpha)));
+        if selected == Some(f) || (selected.is_none() && grid.editable) {
+            for (i, p) in grid.points.iter().enumerate() {
+                let Some(q) = project(&view, *p) else { continue };
+                let pos = to_egui(q, state.view_origin_px, ppp);
+                let is_selected = selected == Some(f) && state.edit.selected_point == Some(i);
+                if is_selected {
+                    painter.circle_stroke(pos, 6.0, egui::Stroke::new(2.0, egui::Color32::WHITE));
+                }
+                let fill = if grid.editable { srgb(spec.color, 1.0) } else { egui::Color32::from_gray(150) };
+                painter.circle_filled(pos, if is_selected { 4.0 } else { 2.5 }, fill);
+            }
         }
-        progress_ui(ui, jobs.raytrace, &jobs.raytrace_message, Command::CancelRaytrace, commands);
-    });
-}
-
-pub fn record_ui(ui: &mut egui::Ui, state: &ViewerState, jobs: &JobView, commands: &mut Vec<Command>) {
-    egui::CollapsingHeader::new("Record timeline").default_open(false).show(ui, |ui| {
-        let mut form: RecordForm = state.record_form.clone();
-        ui.horizontal(|ui| {
-            ui.add(egui::DragValue::new(&mut form.width).range(16..=4096).prefix("w "));
-            ui.add(egui::DragValue::new(&mut form.height).range(16..=4096).prefix("h "));
-            ui.add(egui::DragValue::new(&mut form.fps).range(1.0..=240.0).prefix("fps "));
-        });
-        ui.add(
-            egui::DragValue::new(&mut form.points_per_frame)
-                .range(1000..=100_000_000)
-                .speed(1000.0)
-                .prefix("points / frame "),
-        );
-        ui.horizontal(|ui| {
-            ui.label("directory");
-            ui.text_edit_singleline(&mut form.dir_text);
-        });
-        if form != state.record_form {
-            commands.push(Command::SetRecordForm(form));
-        }
-        ui.small("CPU, deterministic; the viewer's camera and splat settings.");
-        if ui.add_enabled(jobs.record.is_none(), egui::Button::new("Record timeline")).clicked() {
-            commands.push(Command::StartRecord);
-        }
-        progress_ui(ui, jobs.record, &jobs.record_message, Command::CancelRecord, commands);
-    });
-}
-
-/// The last ray-traced image, in its own window.
-pub fn raytrace_window_ui(ctx: &egui::Context, jobs: &JobView, commands: &mut Vec<Command>) {
-    let Some((texture, [w, h])) = jobs.raytrace_image else { return };
-    let mut open = true;
-    egui::Window::new("Ray-traced view").open(&mut open).default_width(520.0).show(ctx, |ui| {
-        let width = ui.available_width().min(w as f32).max(64.0);
-        let size = egui::vec2(width, width * h as f32 / w as f32);
-        ui.image((texture, size));
-        if let Some(m) = &jobs.raytrace_message {
-            ui.label(RichText::new(m).small().color(Color32::LIGHT_GRAY));
-        }
-    });
-    if !open {
-        commands.push(Command::CloseRaytraceImage);
     }
 }

@@ -1,14 +1,14 @@
-//! The live view: the GPU chaos game kept running across frames. Points persist on the GPU;
-//! a change of the scene clears only the accumulation (after a few settling steps that are not
-//! splatted), a change of the view or of the splat settings clears it too, and while nothing
-//! changes frames accumulate until `max_splats` points were splatted (then the image is
-//! converged and the GPU idles). The same object serves the viewer, `render --backend gpu` and
-//! the benchmarks.
+//! Progressive GPU rendering: the GPU chaos game kept running across frames with its resolve.
+//! Points persist on the GPU; a change of the scene clears only the accumulation (after a few
+//! settling steps that are not splatted), a change of the view or of the splat settings clears
+//! it too, and while nothing changes frames accumulate until `max_splats` points were splatted
+//! (then the image is converged and the GPU idles).
 //!
-//! With [`LiveSettings::chaos_backend`] taking the CPU route (`cpu`, or `auto` on a software
-//! adapter) the chaos game runs on the CPU instead ([`super::cpu_route`]): fresh orbits every
-//! frame into CPU framebuffers, uploaded into the same accumulation buffer and resolved by the
-//! same pass; clears happen at the same moments.
+//! This is the GPU half of the live view (`src/live/`, the layer above, which adds the CPU
+//! point source and the viewer's settings) and, on its own, the engine of `render --backend gpu` and
+//! of the GPU benchmarks. A point source outside the GPU writes its frames into the same
+//! accumulation ([`Progressive::begin_uploaded_frame`], [`Progressive::finish_uploaded_frame`]),
+//! so both are resolved by the same pass and cleared at the same moments.
 
 use glam::DVec3;
 
@@ -17,14 +17,13 @@ use crate::chaos_game::CompiledIfs;
 use crate::splat::{SplatMode, SplatView};
 
 use super::chaos_game::{FrameArgs, GpuChaosGame};
-use super::cpu_route::{ChaosBackend, ChaosRoute, CpuChaosGame};
 use super::resolve::GpuResolve;
 use super::{GpuContext, GpuError};
 use crate::resolve::ResolveArgs;
 
-/// Settings of the live view (the viewer's render panel edits them).
+/// Settings of a progressive render.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct LiveSettings {
+pub struct ProgressiveSettings {
     /// Persistent points on the GPU.
     pub point_count: u32,
     /// Steps every point advances (and splats) per frame.
@@ -42,12 +41,9 @@ pub struct LiveSettings {
     pub max_splats: u64,
     /// Steps not splatted after a scene edit while the kept points settle on the new attractor.
     pub settle_steps: u32,
-    /// Where the chaos game runs (the GPU only resolves on the CPU route). The default, `gpu`,
-    /// serves `render --backend gpu` and the benchmarks; the viewer starts on `auto`.
-    pub chaos_backend: ChaosBackend,
 }
 
-impl Default for LiveSettings {
+impl Default for ProgressiveSettings {
     fn default() -> Self {
         Self {
             point_count: 1 << 20,
@@ -60,15 +56,23 @@ impl Default for LiveSettings {
             point_radius_px: 0,
             max_splats: 1 << 30,
             settle_steps: 8,
-            chaos_backend: ChaosBackend::Gpu,
         }
     }
 }
 
-pub struct LiveView {
+/// A frame that a point source outside the GPU fills: the view to splat with, whether the
+/// accumulation starts empty, and the frame's index (its random streams).
+#[derive(Clone, Copy, Debug)]
+pub struct UploadedFrame {
+    pub view: SplatView,
+    pub clear: bool,
+    pub frame: u32,
+}
+
+pub struct Progressive {
     game: GpuChaosGame,
     resolve: GpuResolve,
-    pub settings: LiveSettings,
+    pub settings: ProgressiveSettings,
     bounds: (DVec3, DVec3),
     transient: u32,
     camera: Option<OrbitCamera>,
@@ -81,9 +85,6 @@ pub struct LiveView {
     pub frames_since_clear: u32,
     pub splats_since_clear: u64,
     has_ifs: bool,
-    route: ChaosRoute,
-    device_type: wgpu::DeviceType,
-    cpu: CpuChaosGame,
 }
 
 fn same_view(a: &SplatView, b: &SplatView) -> bool {
@@ -97,16 +98,12 @@ fn same_view(a: &SplatView, b: &SplatView) -> bool {
         && a.background == b.background
 }
 
-impl LiveView {
-    pub fn new(ctx: &GpuContext, settings: LiveSettings, width: u32, height: u32) -> Result<Self, GpuError> {
+impl Progressive {
+    pub fn new(ctx: &GpuContext, settings: ProgressiveSettings, width: u32, height: u32) -> Result<Self, GpuError> {
         if settings.point_count as u64 > ctx.max_points() {
             return Err(GpuError::TooManyPoints(settings.point_count as u64));
         }
-        let device_type = ctx.adapter.get_info().device_type;
         Ok(Self {
-            route: settings.chaos_backend.route(device_type),
-            device_type,
-            cpu: CpuChaosGame::default(),
             game: GpuChaosGame::new(&ctx.device, settings.point_count, width.max(1), height.max(1)),
             resolve: GpuResolve::new(&ctx.device),
             settings,
@@ -133,7 +130,6 @@ impl LiveView {
     /// kept and skip `settle_steps`).
     pub fn set_ifs(&mut self, ctx: &GpuContext, ifs: &CompiledIfs, bounds: (DVec3, DVec3), restart: bool) {
         self.game.set_ifs(&ctx.device, &ctx.queue, ifs);
-        self.cpu.set_ifs(ifs);
         self.bounds = bounds;
         self.transient = ifs.transient;
         self.has_ifs = true;
@@ -162,42 +158,30 @@ impl LiveView {
         }
     }
 
-    pub fn set_settings(&mut self, ctx: &GpuContext, settings: LiveSettings) -> Result<(), GpuError> {
+    pub fn set_settings(&mut self, ctx: &GpuContext, settings: ProgressiveSettings) -> Result<(), GpuError> {
         if settings.point_count != self.settings.point_count {
             if settings.point_count as u64 > ctx.max_points() {
                 return Err(GpuError::TooManyPoints(settings.point_count as u64));
             }
             self.game.set_point_count(&ctx.device, settings.point_count);
-            self.restart = true;
-            self.skip_steps = self.transient;
-            self.clear = true;
+            self.restart_points();
         }
-        let route = settings.chaos_backend.route(self.device_type);
-        if route.cpu != self.route.cpu {
-            // The GPU points did not move while the CPU ran: restart them.
-            self.restart = true;
-            self.skip_steps = self.transient;
-            self.clear = true;
-        }
-        self.route = route;
         self.settings = settings;
         self.update_view();
         Ok(())
     }
 
+    /// Restarts the persistent points in the domain (they skip the full transient again) and
+    /// clears the accumulation.
+    pub fn restart_points(&mut self) {
+        self.restart = true;
+        self.skip_steps = self.transient;
+        self.clear = true;
+    }
+
     pub fn resize(&mut self, ctx: &GpuContext, width: u32, height: u32) {
         self.game.resize(&ctx.device, width.max(1), height.max(1));
         self.update_view();
-    }
-
-    /// Where the chaos game runs, and why.
-    pub fn route(&self) -> ChaosRoute {
-        self.route
-    }
-
-    /// The CPU route's merged accumulation as last uploaded (GPU layout), if it runs.
-    pub fn cpu_accum(&self) -> Option<&[u32]> {
-        self.route.cpu.then(|| self.cpu.merged())
     }
 
     /// True when accumulation has stopped (nothing changed for `max_splats` splats).
@@ -211,9 +195,6 @@ impl LiveView {
         let Some(view) = self.view else { return 0 };
         if !self.has_ifs || self.converged() {
             return 0;
-        }
-        if self.route.cpu {
-            return self.advance_cpu(ctx, &view);
         }
         let steps = self.skip_steps + self.settings.steps_per_frame;
         let args = FrameArgs {
@@ -240,22 +221,33 @@ impl LiveView {
         splats
     }
 
-    /// The CPU route's frame: splat on the CPU, upload (through the queue, ordered before the
-    /// encoder's resolve once both are submitted).
-    fn advance_cpu(&mut self, ctx: &GpuContext, view: &SplatView) -> u64 {
+    /// Starts a frame whose points come from elsewhere (the live view's CPU route) unless
+    /// converged or nothing is set up yet; the persistent GPU points do not move. Fill the
+    /// frame and hand it to [`Self::finish_uploaded_frame`].
+    pub fn begin_uploaded_frame(&mut self) -> Option<UploadedFrame> {
+        let view = self.view?;
+        if !self.has_ifs || self.converged() {
+            return None;
+        }
         if self.clear {
-            self.cpu.clear(view);
             self.frames_since_clear = 0;
             self.splats_since_clear = 0;
         }
-        let points = self.settings.point_count as u64 * self.settings.steps_per_frame as u64;
-        let splats = self.cpu.advance(self.settings.seed, self.frame, points);
-        self.cpu.upload(&ctx.queue, &self.game.accum);
+        Some(UploadedFrame { view, clear: self.clear, frame: self.frame })
+    }
+
+    /// Ends a frame begun by [`Self::begin_uploaded_frame`]: writes `accum` (the whole
+    /// accumulation since the last clear, in the GPU layout of `shaders/chaos_game.wgsl`) to the
+    /// start of the accumulation buffer through the queue (ordered before an encoder's resolve
+    /// once both are submitted), and counts `splats`.
+    pub fn finish_uploaded_frame(&mut self, ctx: &GpuContext, accum: &[u32], splats: u64) {
+        if !accum.is_empty() {
+            ctx.queue.write_buffer(&self.game.accum, 0, bytemuck::cast_slice(accum));
+        }
         self.frames_since_clear += 1;
         self.splats_since_clear += splats;
         self.frame = self.frame.wrapping_add(1);
         self.clear = false;
-        splats
     }
 
     /// Records only an emptying of the accumulation buffer (benchmarks time it alone).
@@ -311,10 +303,18 @@ impl LiveView {
         self.resolve.draw(ctx, encoder, &self.game, &args, target, format);
     }
 
+    /// Resolves into an offscreen texture of [`Self::size`] and reads it back.
+    pub fn snapshot(&mut self, ctx: &GpuContext) -> Result<image::RgbImage, GpuError> {
+        let (width, height) = self.size();
+        super::readback::draw_offscreen(ctx, width, height, |encoder, target, format| {
+            self.draw(ctx, encoder, target, format, [0, 0])
+        })
+    }
+
     /// Reads the accumulation buffer back (four u32 per pixel, as `Framebuffer` after a
     /// fashion: closest keys in slot 0, or r, g, b sums and the count). Tests and benchmarks.
     pub fn read_accum(&self, ctx: &GpuContext) -> Result<Vec<u32>, GpuError> {
-        let bytes = super::render::read_buffer(ctx, &self.game.accum)?;
+        let bytes = super::readback::read_buffer(ctx, &self.game.accum)?;
         Ok(bytemuck::pod_collect_to_vec(&bytes))
     }
 }

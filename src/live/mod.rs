@@ -1,0 +1,176 @@
+//! The live view: the chaos game kept running across frames and resolved on the GPU, as the
+//! viewer shows it. Its GPU half is [`crate::gpu::progressive::Progressive`] (persistent points,
+//! accumulation, clears, convergence, the resolve); this layer adds where the points come from
+//! and the viewer's settings:
+//!
+//! - `settings.rs`: [`LiveSettings`], plain data the viewer's state holds, and the choice of
+//!   backend ([`ChaosBackend`]) with the route it takes ([`ChaosRoute`]);
+//! - `cpu_source.rs`: the CPU point source ([`cpu_source::CpuChaosGame`]);
+//! - here, [`LiveView`], which converts the settings at the GPU boundary and runs each frame on
+//!   the route the backend takes on the adapter at hand.
+//!
+//! With [`LiveSettings::chaos_backend`] taking the CPU route (`cpu`, or `auto` on a software
+//! adapter) the chaos game runs on the CPU: fresh orbits every frame into CPU framebuffers,
+//! uploaded into the same accumulation buffer and resolved by the same pass; clears happen at
+//! the same moments.
+
+pub mod cpu_source;
+pub mod settings;
+
+use glam::DVec3;
+
+use crate::camera::OrbitCamera;
+use crate::chaos_game::CompiledIfs;
+use crate::gpu::progressive::{Progressive, ProgressiveSettings};
+use crate::gpu::{GpuContext, GpuError};
+
+use self::cpu_source::CpuChaosGame;
+pub use self::settings::{ChaosBackend, ChaosRoute, LiveSettings};
+
+impl From<&LiveSettings> for ProgressiveSettings {
+    fn from(s: &LiveSettings) -> Self {
+        Self {
+            point_count: s.point_count,
+            steps_per_frame: s.steps_per_frame,
+            seed: s.seed,
+            mode: s.mode,
+            depth_cue: s.depth_cue,
+            background: s.background,
+            shading: s.shading,
+            point_radius_px: s.point_radius_px,
+            max_splats: s.max_splats,
+            settle_steps: s.settle_steps,
+        }
+    }
+}
+
+pub struct LiveView {
+    gpu: Progressive,
+    settings: LiveSettings,
+    route: ChaosRoute,
+    /// The adapter rasterizes on the CPU (lavapipe, llvmpipe): `auto` takes the CPU route.
+    software_adapter: bool,
+    cpu: CpuChaosGame,
+}
+
+impl LiveView {
+    pub fn new(ctx: &GpuContext, settings: LiveSettings, width: u32, height: u32) -> Result<Self, GpuError> {
+        let software_adapter = ctx.adapter.get_info().device_type == wgpu::DeviceType::Cpu;
+        Ok(Self {
+            gpu: Progressive::new(ctx, (&settings).into(), width, height)?,
+            route: settings.chaos_backend.route(software_adapter),
+            settings,
+            software_adapter,
+            cpu: CpuChaosGame::default(),
+        })
+    }
+
+    pub fn settings(&self) -> &LiveSettings {
+        &self.settings
+    }
+
+    pub fn size(&self) -> (u32, u32) {
+        self.gpu.size()
+    }
+
+    /// Splats since the accumulation was last cleared.
+    pub fn splats_since_clear(&self) -> u64 {
+        self.gpu.splats_since_clear
+    }
+
+    /// Uploads a new IFS with its attractor `bounds`. `restart`: a different scene (the points
+    /// restart in the domain and skip the full transient); otherwise an edit (the points are
+    /// kept and skip `settle_steps`).
+    pub fn set_ifs(&mut self, ctx: &GpuContext, ifs: &CompiledIfs, bounds: (DVec3, DVec3), restart: bool) {
+        self.gpu.set_ifs(ctx, ifs, bounds, restart);
+        self.cpu.set_ifs(ifs);
+    }
+
+    pub fn set_camera(&mut self, camera: &OrbitCamera) {
+        self.gpu.set_camera(camera);
+    }
+
+    pub fn set_settings(&mut self, ctx: &GpuContext, settings: LiveSettings) -> Result<(), GpuError> {
+        self.gpu.set_settings(ctx, (&settings).into())?;
+        let route = settings.chaos_backend.route(self.software_adapter);
+        if route.cpu != self.route.cpu {
+            // The GPU points did not move while the CPU ran: restart them.
+            self.gpu.restart_points();
+        }
+        self.route = route;
+        self.settings = settings;
+        Ok(())
+    }
+
+    pub fn resize(&mut self, ctx: &GpuContext, width: u32, height: u32) {
+        self.gpu.resize(ctx, width, height);
+    }
+
+    /// Where the chaos game runs, and why.
+    pub fn route(&self) -> ChaosRoute {
+        self.route
+    }
+
+    /// The CPU route's merged accumulation as last uploaded (GPU layout), if it runs.
+    pub fn cpu_accum(&self) -> Option<&[u32]> {
+        self.route.cpu.then(|| self.cpu.merged())
+    }
+
+    /// True when accumulation has stopped (nothing changed for `max_splats` splats).
+    pub fn converged(&self) -> bool {
+        self.gpu.converged()
+    }
+
+    /// Records one chaos-game frame into `encoder` (GPU route) or splats and uploads one on
+    /// the CPU, unless converged; returns the number of point steps splatted. Submit `encoder`
+    /// before the next call.
+    pub fn advance(&mut self, ctx: &GpuContext, encoder: &mut wgpu::CommandEncoder) -> u64 {
+        if !self.route.cpu {
+            return self.gpu.advance(ctx, encoder);
+        }
+        let Some(frame) = self.gpu.begin_uploaded_frame() else { return 0 };
+        if frame.clear {
+            self.cpu.clear(&frame.view);
+        }
+        let points = self.settings.point_count as u64 * self.settings.steps_per_frame as u64;
+        let splats = self.cpu.advance(self.settings.seed, frame.frame, points);
+        self.gpu.finish_uploaded_frame(ctx, self.cpu.merged(), splats);
+        splats
+    }
+
+    /// Records the resolve onto `target` (the window's surface or an offscreen texture) with
+    /// the accumulation's pixel (0, 0) at `origin_px` of the target; the target must hold the
+    /// rectangle of [`Self::size`] there.
+    pub fn draw(
+        &mut self,
+        ctx: &GpuContext,
+        encoder: &mut wgpu::CommandEncoder,
+        target: &wgpu::TextureView,
+        format: wgpu::TextureFormat,
+        origin_px: [u32; 2],
+    ) {
+        self.gpu.draw(ctx, encoder, target, format, origin_px);
+    }
+
+    /// Resolves into an offscreen texture of [`Self::size`] and reads it back (screenshots).
+    pub fn snapshot(&mut self, ctx: &GpuContext) -> Result<image::RgbImage, GpuError> {
+        self.gpu.snapshot(ctx)
+    }
+
+    /// Reads the accumulation buffer back (see [`Progressive::read_accum`]). Tests.
+    pub fn read_accum(&self, ctx: &GpuContext) -> Result<Vec<u32>, GpuError> {
+        self.gpu.read_accum(ctx)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn default_settings_agree_with_the_gpu_defaults() {
+        let live = LiveSettings::default();
+        assert_eq!(ProgressiveSettings::from(&live), ProgressiveSettings::default());
+        assert_eq!(live.chaos_backend, ChaosBackend::Gpu);
+    }
+}

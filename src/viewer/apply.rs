@@ -1,0 +1,504 @@
+//! Applying commands to the viewer's state: [`ViewerState::apply`] runs a frame's commands in
+//! order and reports what the renderer must refresh ([`Changes`]); it is the only place the
+//! state changes after it is made. Playback advances by [`Command::Tick`], whose `dt_secs` the
+//! event loop measures, so everything here is a function of the commands.
+//!
+//! Scene edits (grid points, builder steps, keys) go through `nlifs::edit`: while a gesture
+//! (one drag in the view, one slider or number drag) runs, each change is applied at once so
+//! the view follows, and its [`Edit`]s are collected; [`Command::EndGesture`] hands them to
+//! [`History::record_applied`] as one undo step. With a timeline, edits go to the key at the
+//! playhead (created there if needed).
+
+use std::path::{Path, PathBuf};
+
+use glam::DVec3;
+
+use crate::camera::OrbitCamera;
+use crate::chaos_game;
+use crate::edit::{Edit, History};
+use crate::scene::{FunctionDef, Scene};
+use crate::timeline::{Key, LoopMode};
+
+use super::command::{Command, JobRequest};
+use super::picking;
+use super::state::{Gesture, PointDrag, ViewerState, mtime};
+
+/// What the renderer must refresh after a batch of commands.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Changes {
+    /// A different scene: restart the points.
+    pub scene_replaced: bool,
+    /// The same scene edited: keep the points, clear the accumulation.
+    pub scene_edited: bool,
+    pub camera: bool,
+    pub live_settings: bool,
+    pub screenshot: Option<PathBuf>,
+    /// Jobs to start or cancel.
+    pub jobs: Vec<JobRequest>,
+}
+
+impl ViewerState {
+    /// Applies commands in order; returns what the renderer must refresh.
+    pub fn apply(&mut self, commands: impl IntoIterator<Item = Command>) -> Changes {
+        let mut changes = Changes::default();
+        let mut edited = false;
+        let mut time_moved = false;
+        for command in commands {
+            match command {
+                Command::OpenScene(path) => {
+                    if self.load(&path) {
+                        let s = &self.scene.render;
+                        self.live.seed = s.seed;
+                        self.live.mode = s.mode;
+                        self.live.depth_cue = s.depth_cue;
+                        self.live.background = s.background;
+                        self.camera = self.framed_camera();
+                        changes.scene_replaced = true;
+                        changes.camera = true;
+                        changes.live_settings = true;
+                        self.message = Some(format!("opened {}", path.display()));
+                    }
+                }
+                Command::ReloadScene => {
+                    if let Some(path) = self.scene_path.clone()
+                        && self.load(&path)
+                    {
+                        changes.scene_edited = true;
+                        self.message = Some(format!("reloaded {}", path.display()));
+                    }
+                }
+                Command::SetFunctionEnabled { function, enabled } => {
+                    if let Some(f) = self.scene.functions.get_mut(function) {
+                        f.enabled = enabled;
+                        edited = true;
+                    }
+                }
+                Command::SetFunctionProbability { function, probability } => {
+                    if let Some(f) = self.scene.functions.get_mut(function) {
+                        f.probability = probability.map(|p| p.max(0.0));
+                        edited = true;
+                    }
+                }
+                Command::SetFunctionColor { function, color } => {
+                    if let Some(f) = self.scene.functions.get_mut(function) {
+                        f.color = color;
+                        edited = true;
+                    }
+                }
+                Command::SetBuilderStep { function, step, value } => {
+                    edited |= self.set_builder_step(function, step, value);
+                }
+                Command::SetLiveSettings(live) => {
+                    self.live = live;
+                    changes.live_settings = true;
+                }
+                Command::SetProjection(projection) => {
+                    self.camera.projection = projection;
+                    changes.camera = true;
+                }
+                Command::Orbit { dx_px, dy_px } => {
+                    self.camera.orbit(dx_px, dy_px);
+                    changes.camera = true;
+                }
+                Command::Pan { dx_px, dy_px } => {
+                    self.camera.pan(dx_px, dy_px, self.height_px);
+                    changes.camera = true;
+                }
+                Command::Zoom { steps } => {
+                    self.camera.zoom(steps);
+                    changes.camera = true;
+                }
+                Command::FrameAttractor => {
+                    // Keep the user's angles and projection; fit target and distance.
+                    let sample = self
+                        .compiled
+                        .as_ref()
+                        .map(|c| chaos_game::attractor_sample(c, self.live.seed))
+                        .unwrap_or_default();
+                    if sample.is_empty() {
+                        let dim = self.scene.domain.dimension();
+                        self.camera.target = OrbitCamera::framing(self.bounds, dim).target;
+                        self.camera.distance = self.camera.framing_distance(self.bounds);
+                    } else {
+                        self.camera.fit_points(&sample, self.view_aspect());
+                    }
+                    changes.camera = true;
+                }
+                Command::SaveScreenshot(path) => changes.screenshot = Some(path),
+                Command::SetViewRect { origin_px, size_px } => {
+                    let size_px = size_px.map(|v| v.max(1.0));
+                    self.view_origin_px = origin_px;
+                    if size_px != [self.width_px, self.height_px] || !self.view_rect_known {
+                        [self.width_px, self.height_px] = size_px;
+                        changes.camera = true;
+                        if !self.view_rect_known {
+                            self.camera = self.framed_camera();
+                        }
+                    }
+                    self.view_rect_known = true;
+                }
+                Command::SetPathText(text) => self.path_text = text,
+                Command::SetScreenshotText(text) => self.screenshot_text = text,
+
+                Command::SetGridOverlay(on) => self.edit.grid_overlay = on,
+                Command::SelectFunction(function) => {
+                    let function = function.filter(|&f| f < self.scene.functions.len());
+                    if function != self.edit.selected_function {
+                        self.edit.selected_point = None;
+                    }
+                    self.edit.selected_function = function;
+                }
+                Command::SelectPoint(point) => {
+                    let count =
+                        self.edit.selected_function.and_then(|f| self.function_grid(f)).map_or(0, |g| g.points.len());
+                    self.edit.selected_point = point.filter(|&p| p < count);
+                }
+                Command::SetAxisLock(axis) => self.edit.axis_lock = axis.filter(|&a| a < self.scene.domain.dimension()),
+                Command::BeginPointDrag { function, point } => {
+                    self.end_gesture();
+                    if let Some(start) =
+                        self.function_grid(function).filter(|g| g.editable).and_then(|g| g.points.get(point).copied())
+                    {
+                        self.edit.selected_function = Some(function);
+                        self.edit.selected_point = Some(point);
+                        self.edit.gesture =
+                            Some(Gesture { edits: Vec::new(), drag: Some(PointDrag { function, point, start }) });
+                    }
+                }
+                Command::DragPoint { delta_px } => {
+                    if let Some(drag) = self.edit.gesture.as_ref().and_then(|g| g.drag.clone()) {
+                        let p = picking::dragged_position(
+                            &self.splat_view(),
+                            &self.camera,
+                            &self.scene.domain,
+                            self.edit.axis_lock,
+                            drag.start,
+                            delta_px,
+                        );
+                        edited |= self.move_point(drag.function, drag.point, p);
+                    }
+                }
+                Command::SetPoint { function, point, p } => {
+                    if p.is_finite() {
+                        edited |= self.move_point(function, point, p);
+                    }
+                }
+                Command::EndGesture => self.end_gesture(),
+                Command::Undo | Command::Redo => {
+                    self.end_gesture();
+                    let result = if command == Command::Undo {
+                        self.history.undo(&mut self.scene)
+                    } else {
+                        self.history.redo(&mut self.scene)
+                    };
+                    match result {
+                        Ok(true) => edited = true,
+                        Ok(false) => {}
+                        Err(e) => {
+                            self.error =
+                                Some(format!("cannot {}: {e}", if command == Command::Undo { "undo" } else { "redo" }))
+                        }
+                    }
+                }
+                Command::SetSaveText(text) => self.edit.save_text = text,
+                Command::SaveScene(path) => {
+                    self.end_gesture();
+                    match self.scene.save(&path) {
+                        Ok(()) => {
+                            self.scene.path = Some(path.clone());
+                            self.scene_path = Some(path.clone());
+                            // Our own write is not a change to reload.
+                            self.scene_mtime = mtime(&path);
+                            self.path_text = path.display().to_string();
+                            self.message = Some(format!("saved {}", path.display()));
+                        }
+                        Err(e) => self.error = Some(format!("cannot save {}: {e}", path.display())),
+                    }
+                }
+
+                Command::SetPlaying(playing) => {
+                    self.end_gesture();
+                    let tl = self.scene.timeline.as_ref().filter(|tl| tl.duration_secs > 0.0);
+                    self.playback.playing = playing && tl.is_some();
+                    // Once: play from the start again when at the end.
+                    if let Some(tl) = tl
+                        && playing
+                        && tl.loop_mode == LoopMode::Once
+                        && self.t_secs >= tl.duration_secs
+                    {
+                        self.t_secs = 0.0;
+                        edited = true;
+                    }
+                }
+                Command::Tick { dt_secs } => {
+                    let moved = self.tick(dt_secs);
+                    edited |= moved;
+                    time_moved |= moved;
+                }
+                Command::SetTime(t_secs) => {
+                    if t_secs.is_finite() && t_secs != self.t_secs {
+                        self.end_gesture();
+                        self.t_secs = t_secs.max(0.0);
+                        edited = true;
+                        time_moved = true;
+                    }
+                }
+                Command::SetFollowCamera(follow) => {
+                    self.playback.follow_camera = follow;
+                    time_moved = follow;
+                }
+                Command::SetSpeed(speed) => {
+                    if speed.is_finite() {
+                        self.playback.speed = speed.clamp(-8.0, 8.0);
+                    }
+                }
+                Command::SetLoopMode(mode) => {
+                    if let Some(tl) = &self.scene.timeline
+                        && tl.loop_mode != mode
+                    {
+                        let mut after = tl.clone();
+                        after.loop_mode = mode;
+                        edited |= self.apply_edit(Edit::SetTimeline { before: Some(tl.clone()), after: Some(after) });
+                    }
+                }
+                Command::SetDuration(d) => {
+                    // Keys stay inside the timeline: once / ping-pong end at or after the last
+                    // key; a loop's period ends after it (its end is the first key again).
+                    let last = self.scene.timeline.as_ref().and_then(|tl| tl.keys.last()).map_or(0.0, |k| k.t_secs);
+                    let looped = self.scene.timeline.as_ref().is_some_and(|tl| tl.loop_mode == LoopMode::Loop);
+                    let d = if looped { d.max(last + 1e-3) } else { d.max(last) };
+                    if let Some(tl) = &self.scene.timeline
+                        && d.is_finite()
+                        && d > 0.0
+                        && d != tl.duration_secs
+                    {
+                        edited |= self.apply_edit(Edit::SetDuration { before: tl.duration_secs, after: d });
+                    }
+                }
+                Command::AddOrUpdateKey => edited |= self.add_or_update_key(),
+                Command::DeleteKeyAtPlayhead => {
+                    if let Some(index) = self.key_at_playhead() {
+                        match Edit::delete_key(&self.scene, index) {
+                            Ok(e) => edited |= self.apply_edit(e),
+                            Err(e) => self.error = Some(e.to_string()),
+                        }
+                    }
+                }
+                Command::SetKeyShape { key, interpolation, ease } => {
+                    if let Some(before) = self.scene.timeline.as_ref().and_then(|tl| tl.keys.get(key)).cloned() {
+                        let after = Key { interpolation, ease, ..before.clone() };
+                        if after != before {
+                            edited |= self.apply_edit(Edit::ReplaceKey { index: key, before, after });
+                        }
+                    }
+                }
+
+                Command::SetRaytraceForm(form) => self.raytrace_form = form,
+                Command::StartRaytrace => changes.jobs.push(JobRequest::Raytrace {
+                    scene: Box::new(self.scene.clone()),
+                    t_secs: self.t_secs,
+                    camera: self.camera,
+                    form: self.raytrace_form.clone(),
+                }),
+                Command::CancelRaytrace => changes.jobs.push(JobRequest::CancelRaytrace),
+                Command::SetRecordForm(form) => self.record_form = form,
+                Command::StartRecord => {
+                    // The current view: the viewer's camera (where keys leave it open) and splat settings.
+                    let mut scene = self.scene.clone();
+                    let c = &self.camera;
+                    scene.camera = crate::scene::CameraSpec {
+                        target: Some(c.target.as_dvec3()),
+                        yaw_deg: Some(c.yaw_deg as f64),
+                        pitch_deg: Some(c.pitch_deg as f64),
+                        distance: Some(c.distance as f64),
+                        fov_y_deg: Some(c.fov_y_deg as f64),
+                        projection: Some(c.projection),
+                    };
+                    scene.render.mode = self.live.mode;
+                    scene.render.depth_cue = self.live.depth_cue;
+                    scene.render.background = self.live.background;
+                    changes.jobs.push(JobRequest::Record { scene: Box::new(scene), form: self.record_form.clone() });
+                }
+                Command::CancelRecord => changes.jobs.push(JobRequest::CancelRecord),
+                Command::CloseRaytraceImage => changes.jobs.push(JobRequest::CloseImage),
+            }
+        }
+        if edited {
+            self.recompile();
+            changes.scene_edited = true;
+        }
+        if time_moved && self.playback.follow_camera && self.scene.timeline.is_some() {
+            self.camera = self.framed_camera();
+            changes.camera = true;
+        }
+        changes
+    }
+
+    /// Loads `path`; on failure keeps the current scene and records the error.
+    fn load(&mut self, path: &Path) -> bool {
+        match Scene::load(path) {
+            Ok(scene) => {
+                self.scene = scene;
+                self.scene_path = Some(path.to_path_buf());
+                self.scene_mtime = mtime(path);
+                self.path_text = path.display().to_string();
+                // Edits made for the old file no longer apply.
+                self.history = History::default();
+                self.edit.gesture = None;
+                self.edit.selected_function = self.edit.selected_function.filter(|&f| f < self.scene.functions.len());
+                self.edit.selected_point = None;
+                self.edit.save_text = self.default_save_text();
+                self.playback.playing &= self.scene.timeline.is_some();
+                self.recompile();
+                true
+            }
+            Err(e) => {
+                // Do not retry the same broken file every frame.
+                self.scene_mtime = mtime(path).or(self.scene_mtime);
+                self.error = Some(e.to_string());
+                false
+            }
+        }
+    }
+
+    /// Applies `edit` as a gesture of its own (one undo step).
+    fn apply_edit(&mut self, edit: Edit) -> bool {
+        self.end_gesture();
+        match self.history.apply(&mut self.scene, edit) {
+            Ok(()) => true,
+            Err(e) => {
+                self.error = Some(format!("edit refused: {e}"));
+                false
+            }
+        }
+    }
+
+    /// Applies `edit` now as part of the running gesture (opening one if none runs).
+    fn preview(&mut self, edit: Edit) -> bool {
+        if let Err(e) = edit.apply(&mut self.scene) {
+            self.error = Some(format!("edit refused: {e}"));
+            return false;
+        }
+        let edits = &mut self.edit.gesture.get_or_insert_with(Gesture::default).edits;
+        // A drag's many small moves of one definition fold into one edit (before of the first,
+        // after of the last), so a long drag stays one small undo step.
+        if let (
+            Some(Edit::SetFunction { function: f0, key: k0, after: a0, .. }),
+            Edit::SetFunction { function, key, after, .. },
+        ) = (edits.last_mut(), &edit)
+            && f0 == function
+            && k0 == key
+        {
+            *a0 = after.clone();
+        } else {
+            edits.push(edit);
+        }
+        true
+    }
+
+    /// Ends the running gesture: its edits become one undo step.
+    fn end_gesture(&mut self) {
+        if let Some(mut gesture) = self.edit.gesture.take()
+            && !gesture.edits.is_empty()
+        {
+            self.history.record_applied(if gesture.edits.len() == 1 {
+                gesture.edits.remove(0)
+            } else {
+                Edit::Batch(gesture.edits)
+            });
+        }
+    }
+
+    /// Sets function `function`'s definition: at the playhead if the scene has a timeline (in the
+    /// key there, created if needed), else in the base scene. Part of the running gesture.
+    fn set_definition(&mut self, function: usize, def: FunctionDef) -> bool {
+        // Editing pauses playback: the edit belongs to one playhead.
+        self.playback.playing = false;
+        let edit = if self.scene.timeline.is_some() {
+            Edit::set_function_at_playhead(&self.scene, self.playhead_secs(), function, def)
+        } else {
+            Edit::set_function(&self.scene, function, None, def)
+        };
+        match edit {
+            Ok(e) => self.preview(e),
+            Err(e) => {
+                self.error = Some(format!("edit refused: {e}"));
+                false
+            }
+        }
+    }
+
+    /// Moves grid point `point` of grid function `function` to `p` (at the playhead).
+    fn move_point(&mut self, function: usize, point: usize, p: DVec3) -> bool {
+        if function >= self.scene.functions.len() {
+            return false;
+        }
+        let mut def = self.scene.function_def_at(function, self.t_secs);
+        let FunctionDef::Grid { points } = &mut def else { return false };
+        let Some(q) = points.get_mut(point) else { return false };
+        if *q == p {
+            return false;
+        }
+        *q = p;
+        self.set_definition(function, def)
+    }
+
+    fn set_builder_step(&mut self, function: usize, step: usize, value: crate::model::builder::Step) -> bool {
+        if function >= self.scene.functions.len() {
+            return false;
+        }
+        let mut def = self.scene.function_def_at(function, self.t_secs);
+        let FunctionDef::Builder { builder, .. } = &mut def else { return false };
+        let Some(s) = builder.steps.get_mut(step) else { return false };
+        *s = value;
+        self.set_definition(function, def)
+    }
+
+    /// Adds a key at the playhead holding every grid and builder function's current value, or
+    /// pins them all in the key that is there (one undo step).
+    fn add_or_update_key(&mut self) -> bool {
+        let t = self.playhead_secs();
+        let mut key = self
+            .key_at_playhead()
+            .and_then(|k| self.scene.timeline.as_ref().map(|tl| tl.keys[k].clone()))
+            .unwrap_or_else(|| Key::new(t));
+        for (i, f) in self.scene.functions.iter().enumerate() {
+            if matches!(f.def, FunctionDef::Grid { .. } | FunctionDef::Builder { .. }) {
+                key.set_function(i, Some(self.scene.function_def_at(i, self.t_secs)));
+            }
+        }
+        match Edit::add_key(&self.scene, key) {
+            Ok(e) => self.apply_edit(e),
+            Err(e) => {
+                self.error = Some(e.to_string());
+                false
+            }
+        }
+    }
+
+    /// Advances scene time while playing; true if it moved. Once: stops at either end; loop:
+    /// wraps modulo the duration; ping-pong: wraps modulo twice the duration (the timeline
+    /// maps the second half backwards).
+    fn tick(&mut self, dt_secs: f64) -> bool {
+        let Some(tl) = &self.scene.timeline else {
+            self.playback.playing = false;
+            return false;
+        };
+        let d = tl.duration_secs;
+        if !self.playback.playing || !(d > 0.0) || !dt_secs.is_finite() || dt_secs <= 0.0 {
+            return false;
+        }
+        let t = self.t_secs + dt_secs * self.playback.speed;
+        self.t_secs = match tl.loop_mode {
+            LoopMode::Once => {
+                if !(0.0..d).contains(&t) {
+                    self.playback.playing = false;
+                }
+                t.clamp(0.0, d)
+            }
+            LoopMode::Loop => t.rem_euclid(d),
+            LoopMode::PingPong => t.rem_euclid(2.0 * d),
+        };
+        true
+    }
+}
