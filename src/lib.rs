@@ -6,6 +6,7 @@
 pub mod bench;
 pub mod camera;
 pub mod chaos_game;
+pub mod color;
 pub mod edit;
 pub mod export;
 pub mod gpu;

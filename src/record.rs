@@ -19,7 +19,8 @@ use std::path::{Path, PathBuf};
 use glam::DVec3;
 
 use crate::chaos_game::{self, CompiledIfs};
-use crate::scene::{Scene, linear_to_srgb, srgb_to_linear};
+use crate::color;
+use crate::scene::Scene;
 use crate::splat::{Framebuffer, SplatView};
 use crate::timeline::LoopMode;
 
@@ -197,12 +198,12 @@ pub struct FrameSample {
 /// The mean of equally sized sRGB images, taken in linear light.
 pub fn average_linear(images: &[image::RgbImage]) -> image::RgbImage {
     let (w, h) = images[0].dimensions();
-    let to_linear: Vec<f32> = (0..256).map(|v| srgb_to_linear([v as f32 / 255.0; 3])[0]).collect();
+    let to_linear: Vec<f32> = (0..=255).map(color::srgb8_to_linear).collect();
     let mut out = image::RgbImage::new(w, h);
     let n = images.len() as f32;
     for (i, px) in out.as_mut().iter_mut().enumerate() {
         let sum: f32 = images.iter().map(|img| to_linear[img.as_raw()[i] as usize]).sum();
-        *px = (linear_to_srgb(sum / n) * 255.0 + 0.5) as u8;
+        *px = color::linear_to_srgb8(sum / n);
     }
     out
 }

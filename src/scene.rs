@@ -14,6 +14,7 @@ use serde::Deserialize;
 use toml::Spanned;
 
 use crate::camera::{OrbitCamera, Projection};
+use crate::color;
 use crate::model::builder::{Axis, Builder, Step};
 use crate::model::{AffineMap, Function, GridMap, Ifs, JuliaMap, Map, ProbabilityMode, RectGrid};
 use crate::splat::SplatMode;
@@ -241,7 +242,7 @@ impl Default for RenderSettings {
             points: 4_000_000,
             seed: 1,
             mode: SplatMode::Closest,
-            background: srgb_to_linear([0x0b as f32 / 255.0, 0x0d as f32 / 255.0, 0x14 as f32 / 255.0]),
+            background: [0x0b, 0x0d, 0x14].map(color::srgb8_to_linear),
             depth_cue: 0.75,
         }
     }
@@ -259,27 +260,6 @@ pub struct Scene {
     pub render: RenderSettings,
     /// Keys animating the functions, camera and render settings; None for a still scene.
     pub timeline: Option<Timeline>,
-}
-
-/// Default per-function colours (sRGB), chosen to stay distinct when depth-cued.
-pub const PALETTE: [[u8; 3]; 8] = [
-    [0xf2, 0x6d, 0x4f],
-    [0x4f, 0xb3, 0xf2],
-    [0x8c, 0xe0, 0x5a],
-    [0xf2, 0xc9, 0x4c],
-    [0xc0, 0x7c, 0xf2],
-    [0x4c, 0xe0, 0xc4],
-    [0xf2, 0x8c, 0xc6],
-    [0xd9, 0xd9, 0xd9],
-];
-
-pub fn srgb_to_linear(c: [f32; 3]) -> [f32; 3] {
-    c.map(|v| if v <= 0.04045 { v / 12.92 } else { ((v + 0.055) / 1.055).powf(2.4) })
-}
-
-pub fn linear_to_srgb(v: f32) -> f32 {
-    let v = v.clamp(0.0, 1.0);
-    if v <= 0.003_130_8 { v * 12.92 } else { 1.055 * v.powf(1.0 / 2.4) - 0.055 }
 }
 
 impl Scene {
@@ -473,28 +453,17 @@ impl Checker<'_> {
     }
 
     fn color(&self, c: &Spanned<ColorToml>, field: &str) -> Res<[f32; 3]> {
-        let srgb = match c.get_ref() {
-            ColorToml::Hex(s) => {
-                let hex = s.strip_prefix('#').unwrap_or(s);
-                let ok = hex.len() == 6 && hex.chars().all(|ch| ch.is_ascii_hexdigit());
-                if !ok {
-                    return Err(self.err(
-                        c.span(),
-                        field,
-                        format!("`{s}` is not a colour; write \"#rrggbb\" or [r, g, b] in 0..1"),
-                    ));
-                }
-                let byte = |i: usize| u8::from_str_radix(&hex[i..i + 2], 16).unwrap_or(0) as f32 / 255.0;
-                [byte(0), byte(2), byte(4)]
-            }
+        match c.get_ref() {
+            ColorToml::Hex(s) => color::parse_hex(s).map(|srgb| srgb.map(color::srgb8_to_linear)).ok_or_else(|| {
+                self.err(c.span(), field, format!("`{s}` is not a colour; write \"#rrggbb\" or [r, g, b] in 0..1"))
+            }),
             ColorToml::Rgb(v) => {
                 if v.len() != 3 || v.iter().any(|x| !(0.0..=1.0).contains(x)) {
                     return Err(self.err(c.span(), field, "an [r, g, b] colour needs 3 numbers in 0..1"));
                 }
-                [v[0] as f32, v[1] as f32, v[2] as f32]
+                Ok(color::srgb_to_linear([v[0] as f32, v[1] as f32, v[2] as f32]))
             }
-        };
-        Ok(srgb_to_linear(srgb))
+        }
     }
 
     fn axis(&self, s: &Spanned<String>, field: &str) -> Res<Axis> {
@@ -740,7 +709,7 @@ impl Checker<'_> {
             }
         };
         let color = match &f.color {
-            None => srgb_to_linear(PALETTE[i % PALETTE.len()].map(|v| v as f32 / 255.0)),
+            None => color::palette_color(i),
             Some(c) => self.color(c, &field("color"))?,
         };
         let probability = match &f.probability {
@@ -1257,10 +1226,11 @@ fn toml_string(s: &str) -> String {
 
 /// A linear colour as "#rrggbb" when that reads back exactly, else as sRGB [r, g, b].
 fn color_text(c: [f32; 3]) -> String {
-    let srgb = c.map(linear_to_srgb);
+    let srgb = c.map(color::linear_to_srgb);
+    // The nearest byte; hex is written only when it decodes back to `c` exactly.
     let bytes = srgb.map(|v| (v * 255.0).round().clamp(0.0, 255.0) as u8);
-    if srgb_to_linear(bytes.map(|b| b as f32 / 255.0)) == c {
-        format!("\"#{:02x}{:02x}{:02x}\"", bytes[0], bytes[1], bytes[2])
+    if bytes.map(color::srgb8_to_linear) == c {
+        format!("\"{}\"", color::hex_text(bytes))
     } else {
         format!("[{}]", srgb.iter().map(|v| format!("{v:?}")).collect::<Vec<_>>().join(", "))
     }

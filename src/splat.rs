@@ -15,7 +15,7 @@ use glam::{Mat4, Vec3, Vec4};
 
 use crate::camera::OrbitCamera;
 use crate::chaos_game::{PointBatch, PointSink};
-use crate::scene::linear_to_srgb;
+use crate::color;
 
 #[cfg(target_arch = "x86_64")]
 mod x86;
@@ -175,7 +175,6 @@ impl Framebuffer {
     pub fn resolve(&self) -> image::RgbImage {
         let v = &self.view;
         let bg = v.background;
-        let to_srgb8 = |c: [f32; 3]| -> [u8; 3] { c.map(|x| (linear_to_srgb(x) * 255.0 + 0.5) as u8) };
         let mut img = image::RgbImage::new(v.width, v.height);
         let max_count = self.accum.iter().map(|a| a[3]).max().unwrap_or(0).max(1);
         let log_max = (1.0 + max_count as f32).ln();
@@ -207,7 +206,7 @@ impl Framebuffer {
                     }
                 }
             };
-            *px = image::Rgb(to_srgb8(c));
+            *px = image::Rgb(c.map(color::linear_to_srgb8));
         }
         img
     }

@@ -139,7 +139,7 @@ fn parse_hex(text: &str) -> anyhow::Result<[f32; 3]> {
     }
     let v = u32::from_str_radix(h, 16).map_err(|_| bad())?;
     let srgb = [(v >> 16) & 255, (v >> 8) & 255, v & 255].map(|c| c as f32 / 255.0);
-    Ok(nlifs::scene::srgb_to_linear(srgb))
+    Ok(nlifs::color::srgb_to_linear(srgb))
 }
 
 pub fn snapshot(args: SnapshotArgs) -> anyhow::Result<()> {

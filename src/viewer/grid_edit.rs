@@ -133,7 +133,7 @@ pub fn grid_lines(dims: [usize; 3]) -> Vec<(usize, usize)> {
 }
 
 fn srgb(color: [f32; 3], alpha: f32) -> egui::Color32 {
-    let c = color.map(|v| (crate::scene::linear_to_srgb(v).clamp(0.0, 1.0) * 255.0).round() as u8);
+    let c = color.map(|v| (crate::color::linear_to_srgb(v).clamp(0.0, 1.0) * 255.0).round() as u8);
     egui::Color32::from_rgba_unmultiplied(c[0], c[1], c[2], (alpha * 255.0).round() as u8)
 }
 
