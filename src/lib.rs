@@ -18,5 +18,4 @@ pub mod render;
 pub mod rng;
 pub mod scene;
 pub mod splat;
-pub mod timeline;
 pub mod viewer;

@@ -14,7 +14,7 @@ use nlifs::io::{save_png, write_atomic};
 use nlifs::model::IfsReport;
 use nlifs::render::render_cpu;
 use nlifs::scene::Scene;
-use nlifs::splat::SplatMode;
+use nlifs::scene::spec::SplatMode;
 
 #[derive(Parser)]
 #[command(
@@ -436,7 +436,7 @@ fn info(path: &Path, json: bool, time: f64) -> anyhow::Result<()> {
     let ifs = scene.at(time);
     let report: IfsReport = ifs.report();
     // Sampled along the whole timeline, for animated scenes.
-    let timeline = nlifs::timeline::check_timeline(&scene, TIMELINE_SAMPLES_PER_INTERVAL);
+    let timeline = nlifs::scene::timeline_check::check_timeline(&scene, TIMELINE_SAMPLES_PER_INTERVAL);
     if json {
         let mut value = serde_json::to_value(&report)?;
         if let (Some(check), Some(obj)) = (&timeline, value.as_object_mut()) {

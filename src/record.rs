@@ -21,8 +21,8 @@ use glam::DVec3;
 use crate::chaos_game::{self, CompiledIfs};
 use crate::color;
 use crate::scene::Scene;
+use crate::scene::timeline::LoopMode;
 use crate::splat::{Framebuffer, SplatView};
-use crate::timeline::LoopMode;
 
 #[derive(Debug, thiserror::Error)]
 pub enum RecordError {
@@ -192,7 +192,7 @@ pub struct FrameSample {
     pub bounds: (DVec3, DVec3),
     pub points: u64,
     pub stream: u32,
-    pub render: crate::scene::RenderSettings,
+    pub render: crate::scene::spec::RenderSettings,
 }
 
 /// The mean of equally sized sRGB images, taken in linear light.

@@ -17,7 +17,8 @@ use nlifs::gpu::live::{LiveSettings, LiveView};
 use nlifs::gpu::render::{read_buffer, snapshot};
 use nlifs::rng::Pcg32;
 use nlifs::scene::Scene;
-use nlifs::splat::{Framebuffer, SplatMode, SplatView};
+use nlifs::scene::spec::SplatMode;
+use nlifs::splat::{Framebuffer, SplatView};
 
 fn gpu() -> Option<GpuContext> {
     match GpuContext::headless() {

@@ -3,8 +3,9 @@
 
 use glam::DVec3;
 use nlifs::gpu::live::LiveSettings;
-use nlifs::scene::{FunctionDef, Scene};
-use nlifs::timeline::{Ease, Interpolation, LoopMode};
+use nlifs::scene::Scene;
+use nlifs::scene::spec::FunctionDef;
+use nlifs::scene::timeline::{Ease, Interpolation, LoopMode};
 use nlifs::viewer::grid_edit;
 use nlifs::viewer::state::{Command, ViewerState};
 

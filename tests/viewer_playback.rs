@@ -11,7 +11,7 @@ use nlifs::chaos_game::CompiledIfs;
 use nlifs::gpu::GpuContext;
 use nlifs::gpu::live::{LiveSettings, LiveView};
 use nlifs::scene::Scene;
-use nlifs::splat::SplatMode;
+use nlifs::scene::spec::SplatMode;
 
 const W: u32 = 320;
 const H: u32 = 180;

@@ -17,7 +17,8 @@ use std::sync::Arc;
 use rayon::prelude::*;
 
 use crate::chaos_game::{CompiledIfs, ORBITS_PER_CHUNK, STEPS_PER_ORBIT, run_chunk};
-use crate::splat::{EMPTY, Framebuffer, SplatMode, SplatView};
+use crate::scene::spec::SplatMode;
+use crate::splat::{EMPTY, Framebuffer, SplatView};
 
 /// Which chaos game the live view runs.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]

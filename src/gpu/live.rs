@@ -14,7 +14,8 @@ use glam::DVec3;
 
 use crate::camera::{OrbitCamera, Projection};
 use crate::chaos_game::CompiledIfs;
-use crate::splat::{SplatMode, SplatView};
+use crate::scene::spec::SplatMode;
+use crate::splat::SplatView;
 
 use super::chaos_game::{FrameArgs, GpuChaosGame};
 use super::cpu_route::{ChaosBackend, ChaosRoute, CpuChaosGame};
@@ -54,7 +55,7 @@ impl Default for LiveSettings {
             seed: 1,
             mode: SplatMode::Closest,
             depth_cue: 0.75,
-            background: crate::scene::RenderSettings::default().background,
+            background: crate::scene::spec::RenderSettings::default().background,
             shading: 0.0,
             point_radius_px: 0,
             max_splats: 1 << 30,

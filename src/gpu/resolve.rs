@@ -2,7 +2,7 @@
 //! full-screen draw that turns the accumulation buffer into colours on any render target, the
 //! window's surface or an offscreen texture alike (`draw(&TextureView)`).
 
-use crate::splat::SplatMode;
+use crate::scene::spec::SplatMode;
 
 use super::chaos_game::{GpuChaosGame, mode_index};
 

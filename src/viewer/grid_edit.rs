@@ -183,7 +183,7 @@ pub fn grid_overlay_ui(ctx: &egui::Context, clip: egui::Rect, state: &ViewerStat
     let selected = state.edit.selected_function;
     if let (Some(f), Some(tl)) = (selected, &state.scene.timeline) {
         let t = state.playhead_secs();
-        let tol = crate::timeline::KEY_TIME_TOL_SECS;
+        let tol = crate::scene::timeline::KEY_TIME_TOL_SECS;
         let with_f: Vec<_> = tl.keys.iter().filter(|k| k.function(f).is_some()).collect();
         let before = with_f.iter().rev().find(|k| k.t_secs < t - tol);
         let after = with_f.iter().find(|k| k.t_secs > t + tol);

@@ -21,8 +21,9 @@ use crate::edit::{Edit, History};
 use crate::gpu::live::LiveSettings;
 use crate::model::IfsReport;
 use crate::model::builder::Step;
-use crate::scene::{FunctionDef, Scene};
-use crate::timeline::{Ease, Interpolation, Key, LoopMode};
+use crate::scene::Scene;
+use crate::scene::spec::FunctionDef;
+use crate::scene::timeline::{Ease, Interpolation, Key, LoopMode};
 
 /// The scene shown when the viewer starts without one (the paper's plant, table 4).
 pub const DEFAULT_SCENE: &str = include_str!("../../scenes/plant2.toml");
@@ -649,7 +650,7 @@ impl ViewerState {
                     // The current view: the viewer's camera (where keys leave it open) and splat settings.
                     let mut scene = self.scene.clone();
                     let c = &self.camera;
-                    scene.camera = crate::scene::CameraSpec {
+                    scene.camera = crate::scene::spec::CameraSpec {
                         target: Some(c.target.as_dvec3()),
                         yaw_deg: Some(c.yaw_deg as f64),
                         pitch_deg: Some(c.pitch_deg as f64),
