@@ -7,7 +7,8 @@ use glam::Vec3;
 
 use crate::chaos_game::{self, CompiledIfs, PointBatch, PointSink};
 use crate::scene::Scene;
-use crate::splat::{Framebuffer, SplatMode, SplatView};
+use crate::scene::spec::SplatMode;
+use crate::splat::{Framebuffer, SplatView};
 
 /// A sink that only keeps the points alive (so mapping is not optimized away).
 struct MapOnly {

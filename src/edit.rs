@@ -12,8 +12,9 @@
 use glam::DVec3;
 
 use crate::model::builder::Step;
-use crate::scene::{FunctionDef, Scene};
-use crate::timeline::{self, Key, Timeline};
+use crate::scene::Scene;
+use crate::scene::spec::{self, FunctionDef};
+use crate::scene::timeline::{self, Key, Timeline};
 
 #[derive(Debug, thiserror::Error, PartialEq)]
 pub enum EditError {
@@ -265,7 +266,7 @@ impl Edit {
                 }
                 if let Some(after) = after {
                     for other in others {
-                        timeline::same_structure(other, after)
+                        spec::same_structure(other, after)
                             .map_err(|message| EditError::Structure { function: *function, message })?;
                     }
                 } else if key.is_none() {

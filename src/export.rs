@@ -6,7 +6,7 @@ use std::io::Write;
 
 use glam::Vec3;
 
-use crate::scene::linear_to_srgb;
+use crate::color;
 
 pub fn write_ply(w: &mut dyn Write, points: &[Vec3], colors: &[[f32; 3]]) -> std::io::Result<()> {
     write!(
@@ -22,7 +22,7 @@ pub fn write_ply(w: &mut dyn Write, points: &[Vec3], colors: &[[f32; 3]]) -> std
             buf.extend_from_slice(&v.to_le_bytes());
         }
         for v in c {
-            buf.push((linear_to_srgb(*v) * 255.0 + 0.5) as u8);
+            buf.push(color::linear_to_srgb8(*v));
         }
     }
     w.write_all(&buf)
@@ -49,7 +49,7 @@ pub fn write_glb_points(w: &mut dyn Write, points: &[Vec3], colors: &[[f32; 3]])
     let color_offset = bin.len();
     for c in colors {
         for v in c {
-            bin.push((v.clamp(0.0, 1.0) * 255.0 + 0.5) as u8);
+            bin.push(color::linear_to_unorm8(*v));
         }
         bin.push(255);
     }

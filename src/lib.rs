@@ -6,6 +6,7 @@
 pub mod bench;
 pub mod camera;
 pub mod chaos_game;
+pub mod color;
 pub mod edit;
 pub mod export;
 pub mod gpu;
@@ -19,5 +20,4 @@ pub mod resolve;
 pub mod rng;
 pub mod scene;
 pub mod splat;
-pub mod timeline;
 pub mod viewer;

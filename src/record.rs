@@ -19,10 +19,11 @@ use std::path::{Path, PathBuf};
 use glam::DVec3;
 
 use crate::chaos_game::{self, CompiledIfs};
+use crate::color;
 use crate::resolve::{ResolveStyle, resolve_image};
-use crate::scene::{Scene, linear_to_srgb, srgb_to_linear};
+use crate::scene::Scene;
+use crate::scene::timeline::LoopMode;
 use crate::splat::{Framebuffer, SplatView};
-use crate::timeline::LoopMode;
 
 #[derive(Debug, thiserror::Error)]
 pub enum RecordError {
@@ -192,18 +193,18 @@ pub struct FrameSample {
     pub bounds: (DVec3, DVec3),
     pub points: u64,
     pub stream: u32,
-    pub render: crate::scene::RenderSettings,
+    pub render: crate::scene::spec::RenderSettings,
 }
 
 /// The mean of equally sized sRGB images, taken in linear light.
 pub fn average_linear(images: &[image::RgbImage]) -> image::RgbImage {
     let (w, h) = images[0].dimensions();
-    let to_linear: Vec<f32> = (0..256).map(|v| srgb_to_linear([v as f32 / 255.0; 3])[0]).collect();
+    let to_linear: Vec<f32> = (0..=255).map(color::srgb8_to_linear).collect();
     let mut out = image::RgbImage::new(w, h);
     let n = images.len() as f32;
     for (i, px) in out.as_mut().iter_mut().enumerate() {
         let sum: f32 = images.iter().map(|img| to_linear[img.as_raw()[i] as usize]).sum();
-        *px = (linear_to_srgb(sum / n) * 255.0 + 0.5) as u8;
+        *px = color::linear_to_srgb8(sum / n);
     }
     out
 }

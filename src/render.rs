@@ -7,7 +7,8 @@ use glam::DVec3;
 use crate::camera::OrbitCamera;
 use crate::chaos_game::{self, CompiledIfs};
 use crate::resolve::{ResolveStyle, resolve_image};
-use crate::scene::{RenderSettings, Scene};
+use crate::scene::Scene;
+use crate::scene::spec::RenderSettings;
 use crate::splat::{Framebuffer, SplatView};
 
 #[derive(Debug, thiserror::Error)]

@@ -15,8 +15,9 @@
 use glam::Vec3;
 
 use crate::camera::{OrbitCamera, Projection};
-use crate::scene::linear_to_srgb;
-use crate::splat::{Framebuffer, SplatMode, SplatView};
+use crate::color::linear_to_srgb;
+use crate::scene::spec::SplatMode;
+use crate::splat::{Framebuffer, SplatView};
 
 /// The closest mode's number in `ResolveParams::mode` ([`SplatMode::index`]).
 pub const MODE_CLOSEST: u32 = 0;

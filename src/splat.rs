@@ -16,48 +16,10 @@ use glam::{Mat4, Vec3, Vec4};
 
 use crate::camera::OrbitCamera;
 use crate::chaos_game::{PointBatch, PointSink};
+use crate::scene::spec::SplatMode;
 
 #[cfg(target_arch = "x86_64")]
 mod x86;
-
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
-pub enum SplatMode {
-    #[default]
-    Closest,
-    Average,
-    Density,
-}
-
-impl SplatMode {
-    pub const ALL: [SplatMode; 3] = [SplatMode::Closest, SplatMode::Average, SplatMode::Density];
-
-    pub fn parse(s: &str) -> Option<Self> {
-        match s {
-            "closest" => Some(SplatMode::Closest),
-            "average" => Some(SplatMode::Average),
-            "density" => Some(SplatMode::Density),
-            _ => None,
-        }
-    }
-
-    /// The mode's number in the shaders (`params.mode`, the `SPLAT_MODE` and `RESOLVE_MODE`
-    /// pipeline constants of `chaos_game.wgsl` and `resolve.wgsl`).
-    pub fn index(self) -> u32 {
-        match self {
-            SplatMode::Closest => 0,
-            SplatMode::Average => 1,
-            SplatMode::Density => 2,
-        }
-    }
-
-    pub fn name(self) -> &'static str {
-        match self {
-            SplatMode::Closest => "closest",
-            SplatMode::Average => "average",
-            SplatMode::Density => "density",
-        }
-    }
-}
 
 /// Depth is quantized to this many bits in the closest-point key.
 pub const DEPTH_BITS: u32 = 24;

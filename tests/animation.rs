@@ -6,7 +6,7 @@ mod common;
 use glam::DVec3;
 use nlifs::model::Map;
 use nlifs::scene::Scene;
-use nlifs::timeline::{self, ChannelKey, Ease, Interpolation};
+use nlifs::scene::timeline::{self, ChannelKey, Ease, Interpolation};
 
 /// A 3D scene on the grid [-1, 0, 1]³ with one builder function `f1` (a twist about y over
 /// the full height) and one grid function `f2` whose keys hold the same twist resolved to
@@ -97,7 +97,7 @@ fn keys_are_hit_exactly_through_scene_at() {
         let tl = scene.timeline.as_ref().unwrap();
         for key in &tl.keys {
             let def = key.function(1).unwrap();
-            let nlifs::scene::FunctionDef::Grid { points } = def else { panic!() };
+            let nlifs::scene::spec::FunctionDef::Grid { points } = def else { panic!() };
             assert_eq!(&grid_points(&scene, 1, key.t_secs), points, "{interp} at key t={}", key.t_secs);
         }
         assert_eq!(scene.camera_at(0.0).yaw_deg, Some(10.0));
@@ -525,7 +525,7 @@ fn killing_a_recording_leaves_only_whole_frames() {
 
 #[test]
 fn timeline_check_reports_the_key_and_interval_that_break_contractivity() {
-    use nlifs::timeline::{TimelineProblemKind as K, TimelineSpan as S, check_timeline};
+    use nlifs::scene::timeline_check::{TimelineProblemKind as K, TimelineSpan as S, check_timeline};
     let text = r#"
 version = 1
 [grid]

@@ -20,7 +20,8 @@ use nlifs::live::{ChaosBackend, LiveSettings, LiveView};
 use nlifs::resolve::{ResolveStyle, resolve_image};
 use nlifs::rng::Pcg32;
 use nlifs::scene::Scene;
-use nlifs::splat::{Framebuffer, SplatMode, SplatView};
+use nlifs::scene::spec::SplatMode;
+use nlifs::splat::{Framebuffer, SplatView};
 
 fn scene(name: &str, adaptive: bool) -> Scene {
     let path = common::scene_path(name);

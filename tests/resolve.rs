@@ -13,7 +13,8 @@ use nlifs::resolve::{
     DEPTH_SCALE, EMPTY, ResolveArgs, ResolveInputs, ResolveParams, ResolveStyle, max_count, resolve_fragment,
 };
 use nlifs::scene::Scene;
-use nlifs::splat::{Framebuffer, SplatMode, SplatView};
+use nlifs::scene::spec::SplatMode;
+use nlifs::splat::{Framebuffer, SplatView};
 
 fn gpu() -> Option<GpuContext> {
     match GpuContext::headless() {

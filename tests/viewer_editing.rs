@@ -5,8 +5,9 @@ mod common;
 
 use glam::DVec3;
 use nlifs::live::LiveSettings;
-use nlifs::scene::{FunctionDef, Scene};
-use nlifs::timeline::{Ease, Interpolation, LoopMode};
+use nlifs::scene::Scene;
+use nlifs::scene::spec::FunctionDef;
+use nlifs::scene::timeline::{Ease, Interpolation, LoopMode};
 use nlifs::viewer::command::Command;
 use nlifs::viewer::picking;
 use nlifs::viewer::state::ViewerState;

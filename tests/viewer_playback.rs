@@ -12,7 +12,7 @@ mod common;
 use nlifs::chaos_game::CompiledIfs;
 use nlifs::gpu::GpuContext;
 use nlifs::live::{LiveSettings, LiveView};
-use nlifs::splat::SplatMode;
+use nlifs::scene::spec::SplatMode;
 
 const W: u32 = 320;
 const H: u32 = 180;

@@ -32,7 +32,7 @@ pub fn info(args: InfoArgs) -> anyhow::Result<()> {
     let ifs = scene.at(args.time);
     let report: IfsReport = ifs.report();
     // Sampled along the whole timeline, for animated scenes.
-    let timeline = nlifs::timeline::check_timeline(&scene, TIMELINE_SAMPLES_PER_INTERVAL);
+    let timeline = nlifs::scene::timeline_check::check_timeline(&scene, TIMELINE_SAMPLES_PER_INTERVAL);
     if args.json {
         let mut value = serde_json::to_value(&report)?;
         if let (Some(check), Some(obj)) = (&timeline, value.as_object_mut()) {

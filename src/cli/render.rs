@@ -8,7 +8,7 @@ use clap::{Args, ValueEnum};
 use nlifs::chaos_game;
 use nlifs::io::save_png;
 use nlifs::render::render_cpu;
-use nlifs::splat::SplatMode;
+use nlifs::scene::spec::SplatMode;
 
 use super::args::check_png;
 use super::{BadInput, load, progress_bar};

@@ -64,15 +64,11 @@ pub struct SnapshotArgs {
     background: Option<String>,
 }
 
+/// `--background`: the one hex colour parser (the scene format's), as linear RGB.
 fn parse_hex(text: &str) -> anyhow::Result<[f32; 3]> {
-    let h = text.trim_start_matches('#');
-    let bad = || BadInput(format!("--background {text}: expected #rrggbb"));
-    if h.len() != 6 {
-        return Err(bad().into());
-    }
-    let v = u32::from_str_radix(h, 16).map_err(|_| bad())?;
-    let srgb = [(v >> 16) & 255, (v >> 8) & 255, v & 255].map(|c| c as f32 / 255.0);
-    Ok(nlifs::scene::srgb_to_linear(srgb))
+    let srgb =
+        nlifs::color::parse_hex(text).ok_or_else(|| BadInput(format!("--background {text}: expected #rrggbb")))?;
+    Ok(srgb.map(nlifs::color::srgb8_to_linear))
 }
 
 pub fn snapshot(args: SnapshotArgs) -> anyhow::Result<()> {

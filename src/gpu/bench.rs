@@ -9,8 +9,8 @@ use glam::DVec3;
 
 use crate::chaos_game::{self, CompiledIfs};
 use crate::model::builder::Step;
-use crate::scene::{FunctionDef, Scene};
-use crate::splat::SplatMode;
+use crate::scene::Scene;
+use crate::scene::spec::{FunctionDef, SplatMode};
 
 use super::progressive::{Progressive, ProgressiveSettings};
 use super::{GpuContext, GpuError};

@@ -10,7 +10,8 @@
 use wgpu::util::DeviceExt;
 
 use crate::chaos_game::{Cell, CompiledIfs, KIND_MULTILINEAR, KernelFunction};
-use crate::splat::{SplatMode, SplatView};
+use crate::scene::spec::SplatMode;
+use crate::splat::SplatView;
 
 /// Workgroups per dispatch row; rows extend the dispatch past the 65535-workgroup limit.
 pub const GROUPS_PER_ROW: u32 = 4096;

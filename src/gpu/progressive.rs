@@ -14,7 +14,8 @@ use glam::DVec3;
 
 use crate::camera::{OrbitCamera, Projection};
 use crate::chaos_game::CompiledIfs;
-use crate::splat::{SplatMode, SplatView};
+use crate::scene::spec::SplatMode;
+use crate::splat::SplatView;
 
 use super::chaos_game::{FrameArgs, GpuChaosGame};
 use super::resolve::GpuResolve;
@@ -51,7 +52,7 @@ impl Default for ProgressiveSettings {
             seed: 1,
             mode: SplatMode::Closest,
             depth_cue: 0.75,
-            background: crate::scene::RenderSettings::default().background,
+            background: crate::scene::spec::RenderSettings::default().background,
             shading: 0.0,
             point_radius_px: 0,
             max_splats: 1 << 30,

@@ -5,7 +5,8 @@ use glam::DVec3;
 
 use crate::camera::OrbitCamera;
 use crate::chaos_game::{self, CompiledIfs};
-use crate::scene::{RenderSettings, Scene};
+use crate::scene::Scene;
+use crate::scene::spec::RenderSettings;
 
 use super::progressive::{Progressive, ProgressiveSettings};
 use super::{GpuContext, GpuError};

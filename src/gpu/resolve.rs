@@ -5,7 +5,7 @@
 //! three in sync.
 
 use crate::resolve::{ResolveArgs, ResolveParams};
-use crate::splat::SplatMode;
+use crate::scene::spec::SplatMode;
 
 use super::GpuContext;
 use super::chaos_game::GpuChaosGame;

@@ -18,7 +18,8 @@ use std::sync::Arc;
 use rayon::prelude::*;
 
 use crate::chaos_game::{CompiledIfs, ORBITS_PER_CHUNK, STEPS_PER_ORBIT, run_chunk};
-use crate::splat::{EMPTY, Framebuffer, SplatMode, SplatView};
+use crate::scene::spec::SplatMode;
+use crate::splat::{EMPTY, Framebuffer, SplatView};
 
 /// How a frame of `points` splats splits over `workers`: (chunks, steps per orbit). The chunk
 /// count is a multiple of `workers` (each runs the same number) and chunks hold at most

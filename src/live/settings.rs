@@ -3,7 +3,7 @@
 //! boundary), with the choice of where the chaos game runs ([`ChaosBackend`]) and the route it
 //! took on the adapter at hand ([`ChaosRoute`]).
 
-use crate::splat::SplatMode;
+use crate::scene::spec::SplatMode;
 
 /// Settings of the live view (the viewer's render panel edits them).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -40,7 +40,7 @@ impl Default for LiveSettings {
             seed: 1,
             mode: SplatMode::Closest,
             depth_cue: 0.75,
-            background: crate::scene::RenderSettings::default().background,
+            background: crate::scene::spec::RenderSettings::default().background,
             shading: 0.0,
             point_radius_px: 0,
             max_splats: 1 << 30,

@@ -13,8 +13,8 @@ use super::geometry::{Hit, Ray};
 use super::hierarchy::Hierarchy;
 use super::search::Scratch;
 use crate::camera::{OrbitCamera, Projection};
+use crate::color::Srgb8Table;
 use crate::rng::Pcg32;
-use crate::scene::linear_to_srgb;
 
 /// How surfaces are coloured.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
@@ -287,39 +287,6 @@ impl Tracer<'_> {
     }
 }
 
-/// The byte `(linear_to_srgb(v) * 255 + 0.5) as u8` without a `powf` per channel: the
-/// smallest linear value at which each byte 1…255 starts, found once by bisection over the f32
-/// order, and the byte of v is the number of those at or below v. Exact because the formula is
-/// monotonic in v (the test checks both sides of every step and a sweep of [0, 1]).
-struct SrgbBytes {
-    starts: [f32; 255],
-}
-
-impl SrgbBytes {
-    fn by_formula(v: f32) -> u8 {
-        (linear_to_srgb(v) * 255.0 + 0.5) as u8
-    }
-
-    fn new() -> Self {
-        let mut starts = [0.0f32; 255];
-        for (k, start) in starts.iter_mut().enumerate() {
-            // Bit patterns of non-negative floats are ordered like the floats; 1.0 gives 255.
-            let (mut lo, mut hi) = (0u32, 1.0f32.to_bits());
-            while hi - lo > 1 {
-                let mid = lo + (hi - lo) / 2;
-                if Self::by_formula(f32::from_bits(mid)) as usize > k { hi = mid } else { lo = mid }
-            }
-            *start = f32::from_bits(hi);
-        }
-        Self { starts }
-    }
-
-    #[inline]
-    fn byte(&self, v: f32) -> u8 {
-        self.starts.partition_point(|&s| s <= v) as u8
-    }
-}
-
 /// Traces the image row by row on rayon's pool. `progress(rows_done, rows)`; `cancel` is
 /// checked before each row.
 pub fn trace(
@@ -340,7 +307,7 @@ pub fn trace(
     let done = AtomicU64::new(0);
     let primary = AtomicU64::new(0);
     let shadow = AtomicU64::new(0);
-    let srgb = SrgbBytes::new();
+    let srgb = Srgb8Table::new();
     let mut pixels = vec![0u8; w as usize * h as usize * 3];
     pixels.par_chunks_mut(w as usize * 3).enumerate().try_for_each(|(y, row)| {
         if cancel.load(Ordering::Relaxed) {
@@ -374,7 +341,7 @@ pub fn trace(
                 sum += tracer.samples(&batch[..count as usize], &mut stats, &mut scratch);
             }
             let c = sum / spp as f32;
-            row[3 * x..3 * x + 3].copy_from_slice(&c.to_array().map(|v| srgb.byte(v)));
+            row[3 * x..3 * x + 3].copy_from_slice(&c.to_array().map(|v| srgb.encode(v)));
         }
         primary.fetch_add(stats.primary_rays, Ordering::Relaxed);
         shadow.fetch_add(stats.shadow_rays, Ordering::Relaxed);
@@ -383,29 +350,4 @@ pub fn trace(
     })?;
     let image = image::RgbImage::from_raw(w, h, pixels).ok_or(RaytraceError::TooLarge("image buffer".into()))?;
     Ok((image, TraceStats { primary_rays: primary.into_inner(), shadow_rays: shadow.into_inner() }))
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// The table against the formula on both sides of every step, at the ends and on a sweep
-    /// of every 101st float in [0, 1] (about 10 million values).
-    #[test]
-    fn srgb_bytes_match_the_formula() {
-        let srgb = SrgbBytes::new();
-        for (k, &start) in srgb.starts.iter().enumerate() {
-            let below = f32::from_bits(start.to_bits() - 1);
-            assert_eq!(srgb.byte(start), SrgbBytes::by_formula(start), "step {k} at {start}");
-            assert_eq!(srgb.byte(below), SrgbBytes::by_formula(below), "below step {k} at {below}");
-            assert_eq!(srgb.byte(start) as usize, k + 1, "step {k} starts byte {}", k + 1);
-        }
-        for v in [-1.0, -0.0, 0.0, 1.0, 2.0, f32::INFINITY, f32::NEG_INFINITY, f32::NAN] {
-            assert_eq!(srgb.byte(v), SrgbBytes::by_formula(v), "at {v}");
-        }
-        for bits in (0..=1.0f32.to_bits()).step_by(101) {
-            let v = f32::from_bits(bits);
-            assert_eq!(srgb.byte(v), SrgbBytes::by_formula(v), "at {v}");
-        }
-    }
 }

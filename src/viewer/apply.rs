@@ -16,8 +16,9 @@ use glam::DVec3;
 use crate::camera::OrbitCamera;
 use crate::chaos_game;
 use crate::edit::{Edit, History};
-use crate::scene::{FunctionDef, Scene};
-use crate::timeline::{Key, LoopMode};
+use crate::scene::Scene;
+use crate::scene::spec::FunctionDef;
+use crate::scene::timeline::{Key, LoopMode};
 
 use super::command::{Command, JobRequest};
 use super::picking;
@@ -306,7 +307,7 @@ impl ViewerState {
                     // The current view: the viewer's camera (where keys leave it open) and splat settings.
                     let mut scene = self.scene.clone();
                     let c = &self.camera;
-                    scene.camera = crate::scene::CameraSpec {
+                    scene.camera = crate::scene::spec::CameraSpec {
                         target: Some(c.target.as_dvec3()),
                         yaw_deg: Some(c.yaw_deg as f64),
                         pitch_deg: Some(c.pitch_deg as f64),

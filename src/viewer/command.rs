@@ -10,7 +10,7 @@ use crate::camera::{OrbitCamera, Projection};
 use crate::live::LiveSettings;
 use crate::model::builder::Step;
 use crate::scene::Scene;
-use crate::timeline::{Ease, Interpolation, LoopMode};
+use crate::scene::timeline::{Ease, Interpolation, LoopMode};
 
 /// Everything one change to the viewer can be.
 #[derive(Clone, Debug, PartialEq)]

@@ -128,7 +128,7 @@ pub fn grid_edit_ui(ui: &mut egui::Ui, state: &ViewerState, commands: &mut Vec<C
 }
 
 fn srgb(color: [f32; 3], alpha: f32) -> egui::Color32 {
-    let c = color.map(|v| (crate::scene::linear_to_srgb(v).clamp(0.0, 1.0) * 255.0).round() as u8);
+    let c = color.map(|v| (crate::color::linear_to_srgb(v).clamp(0.0, 1.0) * 255.0).round() as u8);
     egui::Color32::from_rgba_unmultiplied(c[0], c[1], c[2], (alpha * 255.0).round() as u8)
 }
 
@@ -178,7 +178,7 @@ pub fn grid_overlay_ui(ctx: &egui::Context, clip: egui::Rect, state: &ViewerStat
     let selected = state.edit.selected_function;
     if let (Some(f), Some(tl)) = (selected, &state.scene.timeline) {
         let t = state.playhead_secs();
-        let tol = crate::timeline::KEY_TIME_TOL_SECS;
+        let tol = crate::scene::timeline::KEY_TIME_TOL_SECS;
         let with_f: Vec<_> = tl.keys.iter().filter(|k| k.function(f).is_some()).collect();
         let before = with_f.iter().rev().find(|k| k.t_secs < t - tol);
         let after = with_f.iter().find(|k| k.t_secs > t + tol);

@@ -13,7 +13,8 @@ use glam::{DVec3, Vec2};
 
 use crate::camera::OrbitCamera;
 use crate::model::grid::RectGrid;
-use crate::scene::{FunctionDef, Scene};
+use crate::scene::Scene;
+use crate::scene::spec::FunctionDef;
 use crate::splat::SplatView;
 
 /// How near (window pixels) the cursor must be to a grid point to pick it.

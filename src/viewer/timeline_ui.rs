@@ -5,7 +5,7 @@
 
 use egui::{Color32, Sense, Stroke};
 
-use crate::timeline::{Ease, Interpolation, LoopMode};
+use crate::scene::timeline::{Ease, Interpolation, LoopMode};
 
 use super::command::Command;
 use super::state::ViewerState;
@@ -110,7 +110,7 @@ fn keys_strip_ui(ui: &mut egui::Ui, state: &ViewerState, d: f64, playhead: f64, 
     for key in &tl.keys {
         let c = egui::pos2(x_of(key.t_secs), rect.center().y);
         let r = 5.0;
-        let at = (key.t_secs - playhead).abs() <= crate::timeline::KEY_TIME_TOL_SECS;
+        let at = (key.t_secs - playhead).abs() <= crate::scene::timeline::KEY_TIME_TOL_SECS;
         let fill = if at { Color32::from_rgb(255, 200, 80) } else { Color32::from_rgb(170, 170, 190) };
         painter.add(egui::Shape::convex_polygon(
             vec![c + egui::vec2(0.0, -r), c + egui::vec2(r, 0.0), c + egui::vec2(0.0, r), c + egui::vec2(-r, 0.0)],

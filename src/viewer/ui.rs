@@ -6,8 +6,7 @@ use egui::{Color32, RichText};
 use crate::camera::Projection;
 use crate::live::ChaosBackend;
 use crate::model::builder::Step;
-use crate::scene::FunctionDef;
-use crate::splat::SplatMode;
+use crate::scene::spec::{FunctionDef, SplatMode};
 
 use super::command::Command;
 use super::jobs::JobView;

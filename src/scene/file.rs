@@ -1,0 +1,146 @@
+//! The scene file as written: the versioned TOML format (documented in README.md) read by serde
+//! into `*Toml` structs that keep the span of every field (`toml::Spanned`) and reject unknown
+//! fields. This is the first of the two reading passes; the second (`check.rs`) gives the
+//! structs their meaning. The type names show in serde's messages (e.g. "data did not match
+//! any variant of untagged enum ColorToml"), so renaming one changes an error message.
+
+use serde::Deserialize;
+use toml::Spanned;
+
+/// The scene format version this build reads and writes.
+pub const FORMAT_VERSION: i64 = 1;
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct SceneToml {
+    pub(super) version: Spanned<i64>,
+    pub(super) name: Option<String>,
+    pub(super) description: Option<String>,
+    pub(super) grid: Spanned<GridToml>,
+    #[serde(default, rename = "function")]
+    pub(super) functions: Vec<Spanned<FunctionToml>>,
+    pub(super) probabilities: Option<Spanned<String>>,
+    pub(super) camera: Option<CameraToml>,
+    pub(super) render: Option<RenderToml>,
+    pub(super) timeline: Option<Spanned<TimelineToml>>,
+    #[serde(default, rename = "key")]
+    pub(super) keys: Vec<Spanned<KeyToml>>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct TimelineToml {
+    #[serde(rename = "loop")]
+    pub(super) loop_mode: Option<Spanned<String>>,
+    pub(super) duration_secs: Option<Spanned<f64>>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct KeyToml {
+    pub(super) t_secs: Spanned<f64>,
+    pub(super) interpolation: Option<Spanned<String>>,
+    pub(super) ease: Option<Spanned<String>>,
+    #[serde(default, rename = "function")]
+    pub(super) functions: Vec<Spanned<KeyFunctionToml>>,
+    pub(super) camera: Option<CameraToml>,
+    pub(super) render: Option<KeyRenderToml>,
+}
+
+/// A key's override of one function: the fields of its kind that hold numbers.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct KeyFunctionToml {
+    pub(super) name: Spanned<String>,
+    pub(super) points: Option<Spanned<Vec<Spanned<Vec<f64>>>>>,
+    pub(super) steps: Option<Spanned<Vec<Spanned<StepToml>>>>,
+    pub(super) matrix: Option<Spanned<Vec<Vec<f64>>>>,
+    pub(super) offset: Option<Spanned<Vec<f64>>>,
+    pub(super) c: Option<Spanned<Vec<f64>>>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct KeyRenderToml {
+    pub(super) points: Option<Spanned<i64>>,
+    pub(super) background: Option<Spanned<ColorToml>>,
+    pub(super) depth_cue: Option<Spanned<f64>>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct GridToml {
+    pub(super) x: Spanned<Vec<f64>>,
+    pub(super) y: Spanned<Vec<f64>>,
+    pub(super) z: Option<Spanned<Vec<f64>>>,
+}
+
+#[derive(Deserialize)]
+#[serde(untagged)]
+pub(super) enum ColorToml {
+    Hex(String),
+    Rgb(Vec<f64>),
+}
+
+#[derive(Deserialize)]
+#[serde(untagged)]
+pub(super) enum VectorToml {
+    Scalar(f64),
+    Vector(Vec<f64>),
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct FunctionToml {
+    pub(super) name: Option<String>,
+    pub(super) kind: Spanned<String>,
+    pub(super) color: Option<Spanned<ColorToml>>,
+    pub(super) probability: Option<Spanned<f64>>,
+    pub(super) enabled: Option<bool>,
+    pub(super) points: Option<Spanned<Vec<Spanned<Vec<f64>>>>>,
+    pub(super) resolution: Option<Spanned<Vec<i64>>>,
+    pub(super) steps: Option<Spanned<Vec<Spanned<StepToml>>>>,
+    pub(super) matrix: Option<Spanned<Vec<Vec<f64>>>>,
+    pub(super) offset: Option<Spanned<Vec<f64>>>,
+    pub(super) c: Option<Spanned<Vec<f64>>>,
+    pub(super) sign: Option<Spanned<f64>>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct StepToml {
+    pub(super) op: Spanned<String>,
+    pub(super) by: Option<Spanned<VectorToml>>,
+    pub(super) axis: Option<Spanned<String>>,
+    pub(super) toward: Option<Spanned<String>>,
+    pub(super) along: Option<Spanned<String>>,
+    pub(super) degrees: Option<Spanned<f64>>,
+    pub(super) amount: Option<Spanned<f64>>,
+    pub(super) range: Option<Spanned<Vec<f64>>>,
+    pub(super) center: Option<Spanned<Vec<f64>>>,
+    pub(super) matrix: Option<Spanned<Vec<Vec<f64>>>>,
+    pub(super) offset: Option<Spanned<Vec<f64>>>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct CameraToml {
+    pub(super) target: Option<Spanned<Vec<f64>>>,
+    pub(super) yaw_deg: Option<f64>,
+    pub(super) pitch_deg: Option<Spanned<f64>>,
+    pub(super) distance: Option<Spanned<f64>>,
+    pub(super) fov_y_deg: Option<Spanned<f64>>,
+    pub(super) projection: Option<Spanned<String>>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct RenderToml {
+    pub(super) width: Option<Spanned<i64>>,
+    pub(super) height: Option<Spanned<i64>>,
+    pub(super) points: Option<Spanned<i64>>,
+    pub(super) seed: Option<Spanned<i64>>,
+    pub(super) mode: Option<Spanned<String>>,
+    pub(super) background: Option<Spanned<ColorToml>>,
+    pub(super) depth_cue: Option<Spanned<f64>>,
+}

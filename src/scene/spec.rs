@@ -1,0 +1,275 @@
+//! The plain data of a scene, shared by the file format, the timeline and the renderers: how a
+//! function is defined ([`FunctionDef`], with its name and colour in [`FunctionSpec`]), the
+//! camera settings ([`CameraSpec`]), the render settings ([`RenderSettings`], with the splat
+//! mode) and the flat parameter vectors the timeline interpolates ([`flatten`], [`unflatten`]).
+//! These types sit below both the scene format and the timeline so that neither needs the
+//! other: a key holds a `FunctionDef`, the format reads one, and neither knows about `Scene`.
+
+use glam::DVec3;
+
+use crate::camera::Projection;
+use crate::color;
+use crate::model::builder::{Builder, Step};
+use crate::model::{AffineMap, JuliaMap};
+
+/// How points become pixels; the splat (`src/splat.rs` and its GPU twin) explains each mode.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum SplatMode {
+    #[default]
+    Closest,
+    Average,
+    Density,
+}
+
+impl SplatMode {
+    pub const ALL: [SplatMode; 3] = [SplatMode::Closest, SplatMode::Average, SplatMode::Density];
+
+    pub fn parse(s: &str) -> Option<Self> {
+        match s {
+            "closest" => Some(SplatMode::Closest),
+            "average" => Some(SplatMode::Average),
+            "density" => Some(SplatMode::Density),
+            _ => None,
+        }
+    }
+
+    /// The mode's number in the shaders (`params.mode`, the `SPLAT_MODE` and `RESOLVE_MODE`
+    /// pipeline constants of `chaos_game.wgsl` and `resolve.wgsl`).
+    pub fn index(self) -> u32 {
+        match self {
+            SplatMode::Closest => 0,
+            SplatMode::Average => 1,
+            SplatMode::Density => 2,
+        }
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            SplatMode::Closest => "closest",
+            SplatMode::Average => "average",
+            SplatMode::Density => "density",
+        }
+    }
+}
+
+/// How a function is defined in the scene.
+#[derive(Clone, Debug, PartialEq)]
+pub enum FunctionDef {
+    /// Explicit transformed points of the scene grid.
+    Grid {
+        points: Vec<DVec3>,
+    },
+    /// Builder steps sampled on a uniform grid of `resolution` points over the scene grid's box.
+    Builder {
+        resolution: [usize; 3],
+        builder: Builder,
+    },
+    Affine(AffineMap),
+    Julia(JuliaMap),
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct FunctionSpec {
+    pub name: String,
+    /// Linear RGB.
+    pub color: [f32; 3],
+    pub probability: Option<f64>,
+    pub enabled: bool,
+    pub def: FunctionDef,
+}
+
+/// Camera settings from the scene; unset fields are derived from the attractor's bounds.
+#[derive(Clone, Debug, PartialEq, Default)]
+pub struct CameraSpec {
+    pub target: Option<DVec3>,
+    pub yaw_deg: Option<f64>,
+    pub pitch_deg: Option<f64>,
+    pub distance: Option<f64>,
+    pub fov_y_deg: Option<f64>,
+    pub projection: Option<Projection>,
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct RenderSettings {
+    pub width: u32,
+    pub height: u32,
+    pub points: u64,
+    pub seed: u32,
+    pub mode: SplatMode,
+    /// Linear RGB.
+    pub background: [f32; 3],
+    /// 0: no depth cueing; 1: the farthest points fade to the background.
+    pub depth_cue: f32,
+}
+
+impl Default for RenderSettings {
+    fn default() -> Self {
+        Self {
+            width: 960,
+            height: 720,
+            points: 4_000_000,
+            seed: 1,
+            mode: SplatMode::Closest,
+            background: [0x0b, 0x0d, 0x14].map(color::srgb8_to_linear),
+            depth_cue: 0.75,
+        }
+    }
+}
+
+fn push3(out: &mut Vec<f64>, v: DVec3) {
+    out.extend_from_slice(&v.to_array());
+}
+
+fn step_params(step: &Step, out: &mut Vec<f64>) {
+    match step {
+        Step::Scale { by, center } => {
+            push3(out, *by);
+            push3(out, *center);
+        }
+        Step::Rotate { degrees, center, .. } => {
+            out.push(*degrees);
+            push3(out, *center);
+        }
+        Step::Translate { by } => push3(out, *by),
+        Step::Taper { amount: x, range, center, .. }
+        | Step::Twist { degrees: x, range, center, .. }
+        | Step::Bend { degrees: x, range, center, .. } => {
+            out.push(*x);
+            out.extend_from_slice(range);
+            push3(out, *center);
+        }
+        Step::Affine { matrix, offset } => {
+            out.extend_from_slice(&matrix.to_cols_array());
+            push3(out, *offset);
+        }
+    }
+}
+
+/// The animatable numbers of a definition, in a fixed order.
+pub fn flatten(def: &FunctionDef) -> Vec<f64> {
+    let mut out = Vec::new();
+    match def {
+        FunctionDef::Grid { points } => points.iter().for_each(|p| push3(&mut out, *p)),
+        FunctionDef::Builder { builder, .. } => builder.steps.iter().for_each(|s| step_params(s, &mut out)),
+        FunctionDef::Affine(a) => {
+            out.extend_from_slice(&a.matrix.to_cols_array());
+            push3(&mut out, a.offset);
+        }
+        FunctionDef::Julia(j) => out.extend_from_slice(&j.c),
+    }
+    out
+}
+
+/// A definition of `template`'s structure with the numbers `values` (as made by [`flatten`]).
+/// None if the count does not match.
+pub fn unflatten(template: &FunctionDef, values: &[f64]) -> Option<FunctionDef> {
+    if values.len() != flatten(template).len() {
+        return None;
+    }
+    let mut it = values.iter().copied();
+    let mut next = || it.next().unwrap_or(0.0);
+    let v3 = |next: &mut dyn FnMut() -> f64| DVec3::new(next(), next(), next());
+    let mut def = template.clone();
+    match &mut def {
+        FunctionDef::Grid { points } => points.iter_mut().for_each(|p| *p = v3(&mut next)),
+        FunctionDef::Builder { builder, .. } => {
+            for s in builder.steps.iter_mut() {
+                match s {
+                    Step::Scale { by, center } => {
+                        *by = v3(&mut next);
+                        *center = v3(&mut next);
+                    }
+                    Step::Rotate { degrees, center, .. } => {
+                        *degrees = next();
+                        *center = v3(&mut next);
+                    }
+                    Step::Translate { by } => *by = v3(&mut next),
+                    Step::Taper { amount: x, range, center, .. }
+                    | Step::Twist { degrees: x, range, center, .. }
+                    | Step::Bend { degrees: x, range, center, .. } => {
+                        *x = next();
+                        *range = [next(), next()];
+                        *center = v3(&mut next);
+                    }
+                    Step::Affine { matrix, offset } => {
+                        let cols: [f64; 9] = std::array::from_fn(|_| next());
+                        *matrix = glam::DMat3::from_cols_array(&cols);
+                        *offset = v3(&mut next);
+                    }
+                }
+            }
+        }
+        FunctionDef::Affine(a) => {
+            let cols: [f64; 9] = std::array::from_fn(|_| next());
+            a.matrix = glam::DMat3::from_cols_array(&cols);
+            a.offset = v3(&mut next);
+        }
+        FunctionDef::Julia(j) => j.c = [next(), next()],
+    }
+    Some(def)
+}
+
+/// Whether `a` and `b` can be interpolated: same kind, same point count, same steps with the
+/// same axes. Returns what differs.
+pub fn same_structure(a: &FunctionDef, b: &FunctionDef) -> Result<(), String> {
+    use std::mem::discriminant;
+    match (a, b) {
+        (FunctionDef::Grid { points: pa }, FunctionDef::Grid { points: pb }) if pa.len() != pb.len() => {
+            Err(format!("has {} points, the function has {}", pb.len(), pa.len()))
+        }
+        (FunctionDef::Builder { builder: ba, .. }, FunctionDef::Builder { builder: bb, .. }) => {
+            if ba.steps.len() != bb.steps.len() {
+                return Err(format!(
+                    "has {} steps, the function has {} (a key lists every step of the builder)",
+                    bb.steps.len(),
+                    ba.steps.len()
+                ));
+            }
+            for (k, (sa, sb)) in ba.steps.iter().zip(&bb.steps).enumerate() {
+                let axes = |s: &Step| match s {
+                    Step::Rotate { axis, .. } | Step::Taper { axis, .. } => Some((*axis, None)),
+                    Step::Twist { axis, along, .. } => Some((*axis, Some(*along))),
+                    Step::Bend { axis, toward, .. } => Some((*axis, Some(*toward))),
+                    _ => None,
+                };
+                if discriminant(sa) != discriminant(sb) || axes(sa) != axes(sb) {
+                    return Err(format!(
+                        "step {k} differs in kind or axis from the function's step {k}; keys may change only numbers"
+                    ));
+                }
+            }
+            Ok(())
+        }
+        _ if discriminant(a) != discriminant(b) => Err("is not of the function's kind".into()),
+        _ => Ok(()),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn unflatten_inverts_flatten() {
+        use crate::model::builder::{Axis, Builder};
+        let def = FunctionDef::Builder {
+            resolution: [3, 3, 3],
+            builder: Builder {
+                steps: vec![
+                    Step::Twist {
+                        axis: Axis::Y,
+                        along: Axis::Y,
+                        degrees: 30.0,
+                        range: [0.0, 1.0],
+                        center: DVec3::new(0.5, 0.5, 0.5),
+                    },
+                    Step::Affine {
+                        matrix: glam::DMat3::from_cols_array(&[1., 2., 3., 4., 5., 6., 7., 8., 9.]),
+                        offset: DVec3::X,
+                    },
+                ],
+            },
+        };
+        assert_eq!(unflatten(&def, &flatten(&def)), Some(def));
+    }
+}
