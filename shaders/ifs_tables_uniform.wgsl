@@ -3,7 +3,7 @@
 // Same bytes as the storage layout: coordinates are packed two per vec4, thresholds four per
 // vec4<u32>. Why uniform: on Mesa's lavapipe a storage-buffer load runs a scalar loop over the
 // SIMD lanes with a branch per lane and component, while a uniform load with a per-lane index
-// is one branch-free gather, which made the chaos game 20-30% faster there (docs/live-view.md).
+// is one branch-free gather, which made the chaos game 20-30% faster there (docs/performance.md).
 // GPUs serve small tables indexed by a few distinct values from the constant cache as well.
 
 // Capacities (each binding at most 64 KiB, the WebGPU default limit). Keep in sync with

@@ -4,7 +4,7 @@
 //! grid as `nlifs bench gpu` does, (1) how far each playback frame is from the converged image
 //! of its time, against a fresh fully settled run with as many splats, and (2) after pausing
 //! just past the key, how many frames until the accumulation is within noise of converged.
-//! A measurement for docs/viewer-editing.md: `cargo test --release --test viewer_playback --
+//! A measurement for docs/performance.md (playback re-convergence): `cargo test --release --test viewer_playback --
 //! --ignored --nocapture` (needs a GPU adapter; lavapipe will do).
 
 mod common;
@@ -36,7 +36,7 @@ fn frame(ctx: &GpuContext, live: &mut LiveView) -> Vec<f64> {
 }
 
 #[test]
-#[ignore = "measurement for docs/viewer-editing.md; run with --ignored --nocapture"]
+#[ignore = "measurement for docs/performance.md (playback re-convergence); run with --ignored --nocapture"]
 fn playback_through_a_key_reconverges() {
     let Some(ctx) = common::gpu() else { return };
     let scene = common::load_scene("twist-anim");

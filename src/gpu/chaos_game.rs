@@ -62,7 +62,7 @@ pub fn mode_index(mode: SplatMode) -> u32 {
 /// pipeline constants `SHARED_CELLS_*`, `FUNCTION_COUNT`, `SINGLE_SELECTION_CELL`). Known to the
 /// compiler, table reads at indices that depend only on it become scalar loads instead of
 /// per-lane gathers on a SIMD software rasterizer, and the cell search on one-cell axes vanishes
-/// (chaos game about −30% process CPU on lavapipe, docs/live-view.md). Edits that move grid
+/// (chaos game about −30% process CPU on lavapipe, docs/performance.md). Edits that move grid
 /// points keep the shape (and the pipeline); enabling a function or changing the grid makes a
 /// new pipeline on first use.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]

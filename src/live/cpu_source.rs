@@ -3,7 +3,7 @@
 //! uploads the merged accumulation into the GPU accumulation buffer, which the unchanged resolve
 //! pass then draws. Nothing here touches the GPU. On a software adapter
 //! (lavapipe) the GPU chaos game costs the same CPU cores several times more than the CPU
-//! kernel, so the viewer's `auto` backend takes this route there (docs/live-view.md).
+//! kernel, so the viewer's `auto` backend takes this route there (docs/performance.md).
 //!
 //! Every frame runs fresh orbits: chunk c of frame f draws from the streams (seed, f, chain) as
 //! [`crate::chaos_game::run_parallel`] does, starts in the domain and discards the IFS's

@@ -5,7 +5,7 @@
 //! scissored to the union of the clip rectangles egui drew in.
 //!
 //! Why: on a software rasterizer (lavapipe) rendering the panels cost about as much CPU as the
-//! resolve and present together (≈ 35 ms a frame at 1280×720, docs/live-view.md), while the
+//! resolve and present together (≈ 35 ms a frame at 1280×720, docs/performance.md), while the
 //! panels change a few times a second at most (the statistics text is refreshed twice a
 //! second). The composite is one unfiltered texture load per covered pixel. The result is the
 //! same image: egui's blending (colour One/OneMinusSrcAlpha, alpha OneMinusDstAlpha/One) into a
