@@ -1,4 +1,5 @@
 //! The lane kernel with explicit AVX2 or AVX-512F (`std::arch`, detected at run time): eight
+//! This file is longer than 700 lines because the AVX2 and AVX-512 lane kernels are twins that read best side by side.
 //! orbits per 256-bit vector or sixteen per 512-bit vector, as structure of arrays. The portable lane kernel in `chaos_game.rs` stays the
 //! fallback; both are bit-identical to [`CompiledIfs::map`](super::CompiledIfs::map) with the
 //! same random streams, so the CPU chooses the speed and never the points.
