@@ -128,48 +128,11 @@ impl Gpu {
         self.draws += 1;
         game.generation = self.draws;
         let (width, height) = (acc.width + args.origin_px[0], acc.height + args.origin_px[1]);
-        let format = wgpu::TextureFormat::Rgba8Unorm;
-        let texture = ctx.device.create_texture(&wgpu::TextureDescriptor {
-            label: Some("resolve_test"),
-            size: wgpu::Extent3d { width, height, depth_or_array_layers: 1 },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format,
-            usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
-            view_formats: &[],
-        });
-        let bytes_per_row = (4 * width).next_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT);
-        let staging = ctx.device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("resolve_test_readback"),
-            size: bytes_per_row as u64 * height as u64,
-            usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
-            mapped_at_creation: false,
-        });
-        let mut encoder = ctx.device.create_command_encoder(&Default::default());
-        self.resolve.draw(ctx, &mut encoder, &game, args, &texture.create_view(&Default::default()), format);
-        encoder.copy_texture_to_buffer(
-            texture.as_image_copy(),
-            wgpu::TexelCopyBufferInfo {
-                buffer: &staging,
-                layout: wgpu::TexelCopyBufferLayout {
-                    offset: 0,
-                    bytes_per_row: Some(bytes_per_row),
-                    rows_per_image: Some(height),
-                },
-            },
-            wgpu::Extent3d { width, height, depth_or_array_layers: 1 },
-        );
-        ctx.queue.submit([encoder.finish()]);
-        let (tx, rx) = std::sync::mpsc::channel();
-        staging.slice(..).map_async(wgpu::MapMode::Read, move |r| tx.send(r).unwrap());
-        ctx.device.poll(wgpu::PollType::Wait { submission_index: None, timeout: None }).unwrap();
-        rx.recv().unwrap().unwrap();
-        let bytes = staging.get_mapped_range(..).unwrap().to_vec();
-        image::RgbImage::from_fn(width, height, |x, y| {
-            let i = (y * bytes_per_row + 4 * x) as usize;
-            image::Rgb([bytes[i], bytes[i + 1], bytes[i + 2]])
+        // The library's offscreen target and readback (RGBA8, rows padded), as the live view uses.
+        nlifs::gpu::readback::draw_offscreen(ctx, width, height, |encoder, target, format| {
+            self.resolve.draw(ctx, encoder, &game, args, target, format)
         })
+        .unwrap()
     }
 }
 
