@@ -12,7 +12,7 @@
 //! orbits give the CPU instruction-level parallelism); orbit `k` of chunk `c` is chain
 //! `c · ORBITS_PER_CHUNK + k` and draws from the random stream (seed, frame, chain), as chain i
 //! of the GPU does, so the points are a pure function of (IFS, seed, frame, count) whatever the
-//! number of threads. Each orbit starts at a random point of the domain and its first
+//! number of threads (the split is a [`ChunkPlan`]). Each orbit starts at a random point of the domain and its first
 //! `transient` points are discarded.
 //!
 //! Three implementations of one step, bit-identical per point: [`CompiledIfs::map`] (the
@@ -29,8 +29,11 @@ use rayon::prelude::*;
 use crate::model::{Ifs, Map, ProbabilityMode};
 use crate::rng::Pcg32;
 
+pub mod plan;
 #[cfg(target_arch = "x86_64")]
 mod x86;
+
+pub use plan::{ChunkPlan, PlanError};
 
 /// Orbits advanced together in one chunk.
 pub const ORBITS_PER_CHUNK: usize = 64;
@@ -952,34 +955,22 @@ impl Orbits<'_> {
     }
 }
 
-/// How `points` split into chunks: (chunk count, steps per orbit in all but the last chunk,
-/// steps in the last). The total is `points` rounded up to a multiple of [`ORBITS_PER_CHUNK`].
-pub fn chunking(points: u64) -> (u32, usize, usize) {
-    let per_chunk = (ORBITS_PER_CHUNK * STEPS_PER_ORBIT) as u64;
-    let chunks = points.div_ceil(per_chunk).max(1);
-    let last_points = points - (chunks - 1) * per_chunk;
-    let last_steps = (last_points as usize).div_ceil(ORBITS_PER_CHUNK).max(1);
-    (chunks as u32, STEPS_PER_ORBIT, last_steps)
-}
-
-/// Runs the whole chaos game in parallel: every chunk into its own sink made by `make_sink`,
+/// Runs the chaos game of `plan` in parallel: every chunk into its own sink made by `make_sink`,
 /// the sinks merged with `merge` (which must be order-independent for determinism). `progress`
 /// is called once per finished chunk.
 pub fn run_parallel<S: PointSink + Send>(
     ifs: &CompiledIfs,
     seed: u32,
     frame: u32,
-    points: u64,
+    plan: &ChunkPlan,
     make_sink: impl Fn() -> S + Sync,
     merge: impl Fn(S, S) -> S + Sync + Send,
     progress: impl Fn() + Sync,
 ) -> S {
-    let (chunks, steps, last_steps) = chunking(points);
-    (0..chunks)
+    (0..plan.chunks())
         .into_par_iter()
         .fold(&make_sink, |mut sink, c| {
-            let n = if c + 1 == chunks { last_steps } else { steps };
-            run_chunk(ifs, seed, frame, c, n, &mut sink);
+            run_chunk(ifs, seed, frame, c, plan.steps(c), &mut sink);
             progress();
             sink
         })
@@ -1307,7 +1298,7 @@ mod tests {
                 &c,
                 7,
                 0,
-                600_000,
+                &ChunkPlan::new(600_000).unwrap(),
                 CollectSink::default,
                 |mut a, b| {
                     a.points.extend(b.points);

@@ -18,7 +18,7 @@ use std::path::{Path, PathBuf};
 
 use glam::DVec3;
 
-use crate::chaos_game::{self, CompiledIfs};
+use crate::chaos_game::{self, ChunkPlan, CompiledIfs, PlanError};
 use crate::color;
 use crate::resolve::{ResolveStyle, resolve_image};
 use crate::scene::Scene;
@@ -29,6 +29,8 @@ use crate::splat::{Framebuffer, SplatView};
 pub enum RecordError {
     #[error("the scene has no enabled function at t = {t_secs} s")]
     NoFunctions { t_secs: f64 },
+    #[error(transparent)]
+    Points(#[from] PlanError),
     #[error("frames {start}..{end} are not within the animation's {count} frames (0..{count})")]
     FrameRange { start: u32, end: u32, count: u32 },
     #[error("cannot write frame {path}: {source}")]
@@ -172,7 +174,7 @@ impl<'a> Recorder<'a> {
                 &compiled,
                 render.seed,
                 stream,
-                points,
+                &ChunkPlan::new(points)?,
                 || Framebuffer::new(view, compiled.colors.clone()),
                 Framebuffer::merge,
                 || {},

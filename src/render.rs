@@ -5,7 +5,7 @@
 use glam::DVec3;
 
 use crate::camera::OrbitCamera;
-use crate::chaos_game::{self, CompiledIfs};
+use crate::chaos_game::{self, ChunkPlan, CompiledIfs, PlanError};
 use crate::resolve::{ResolveStyle, resolve_image};
 use crate::scene::Scene;
 use crate::scene::spec::RenderSettings;
@@ -15,6 +15,8 @@ use crate::splat::{Framebuffer, SplatView};
 pub enum RenderError {
     #[error("the scene has no enabled function")]
     NoFunctions,
+    #[error(transparent)]
+    Points(#[from] PlanError),
 }
 
 /// What a render produced besides the image.
@@ -36,6 +38,7 @@ pub fn render_cpu(
 ) -> Result<Rendered, RenderError> {
     let ifs = scene.at(t_secs);
     let compiled = CompiledIfs::new(&ifs).ok_or(RenderError::NoFunctions)?;
+    let plan = ChunkPlan::new(settings.points)?;
     let bounds = chaos_game::attractor_bounds(&compiled, settings.seed);
     let camera = camera.unwrap_or_else(|| {
         let sample = chaos_game::attractor_sample(&compiled, settings.seed);
@@ -50,18 +53,17 @@ pub fn render_cpu(
         settings.depth_cue,
         settings.background,
     );
-    let (chunks, _, _) = chaos_game::chunking(settings.points);
     let done = std::sync::atomic::AtomicU64::new(0);
     let framebuffer = chaos_game::run_parallel(
         &compiled,
         settings.seed,
         0,
-        settings.points,
+        &plan,
         || Framebuffer::new(view, compiled.colors.clone()),
         Framebuffer::merge,
         || {
             let d = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
-            progress(d, chunks as u64);
+            progress(d, plan.chunks() as u64);
         },
     );
     let image = resolve_image(&framebuffer, &camera, &ResolveStyle::default());

@@ -6,17 +6,16 @@ mod common;
 
 use common::{load_scene as load, run_nlifs as nlifs, scene_path};
 use glam::{DMat3, DVec3, Vec3};
-use nlifs::chaos_game::{self, CollectSink, CompiledIfs};
+use nlifs::chaos_game::{self, ChunkPlan, CollectSink, CompiledIfs};
 use nlifs::model::Map;
 use nlifs::render::render_cpu;
 use nlifs::scene::Scene;
 
 fn points_of(scene: &Scene, n: u64, seed: u32) -> Vec<Vec3> {
     let compiled = CompiledIfs::new(&scene.at(0.0)).unwrap();
-    let (chunks, steps, last) = chaos_game::chunking(n);
     let mut sink = CollectSink::default();
-    for c in 0..chunks {
-        chaos_game::run_chunk(&compiled, seed, 0, c, if c + 1 == chunks { last } else { steps }, &mut sink);
+    for chunk in ChunkPlan::new(n).unwrap().iter() {
+        chaos_game::run_chunk(&compiled, seed, 0, chunk.index, chunk.steps, &mut sink);
     }
     sink.points
 }

@@ -5,7 +5,7 @@ use std::path::PathBuf;
 use anyhow::Context;
 use clap::{Args, ValueEnum};
 
-use nlifs::chaos_game;
+use nlifs::chaos_game::ChunkPlan;
 use nlifs::io::save_png;
 use nlifs::render::render_cpu;
 use nlifs::scene::spec::SplatMode;
@@ -85,8 +85,8 @@ pub fn render(args: RenderArgs) -> anyhow::Result<()> {
         settings.mode = m.into();
     }
     check_png(&args.output)?;
-    let (chunks, _, _) = chaos_game::chunking(settings.points);
-    let bar = progress_bar(chunks as u64, "render");
+    let plan = ChunkPlan::new(settings.points).map_err(|e| BadInput(e.to_string()))?;
+    let bar = progress_bar(plan.chunks() as u64, "render");
     let start = std::time::Instant::now();
     // GPU: explicit `gpu` fails without an adapter; `auto` falls back to the CPU.
     let gpu = match args.backend {
