@@ -7,7 +7,8 @@ use glam::Vec3;
 
 use crate::chaos_game::{self, ChunkPlan, CompiledIfs, PlanError, PointBatch, PointSink};
 use crate::scene::Scene;
-use crate::scene::spec::SplatMode;
+use crate::scene::spec::{RenderSettings, SplatMode};
+use crate::shot::{Framing, Shot, ShotError};
 use crate::splat::{Framebuffer, SplatView};
 
 /// A sink that only keeps the points alive (so mapping is not optimized away).
@@ -32,12 +33,18 @@ pub struct CpuBench {
 /// splat into a `width`×`height` framebuffer in each mode; the best of `repeats` runs each.
 /// For profiling one of them alone (e.g. under callgrind), env `NLIFS_BENCH_ONLY` = `map`,
 /// `closest`, `average` or `density` skips the others (their rate is reported as 0).
-pub fn cpu(scene: &Scene, points: u64, width: u32, height: u32, repeats: usize) -> Result<CpuBench, PlanError> {
-    let ifs = scene.at(0.0);
-    let compiled = CompiledIfs::new(&ifs).expect("scene has functions");
-    let bounds = chaos_game::attractor_bounds(&compiled, 1);
-    let camera = scene.camera_for(bounds);
-    let plan = ChunkPlan::new(points)?;
+pub fn cpu(scene: &Scene, points: u64, width: u32, height: u32, repeats: usize) -> Result<CpuBench, ShotError> {
+    let settings = RenderSettings {
+        width,
+        height,
+        points,
+        seed: 1,
+        depth_cue: 0.75,
+        background: [0.0; 3],
+        ..scene.render.clone()
+    };
+    let shot = Shot::prepare(scene, 0.0, &settings, Framing::Scene, None)?;
+    let (compiled, plan) = (&shot.compiled, &shot.plan);
     let time = |sink: &mut dyn FnMut(u32, usize)| -> f64 {
         let mut best = f64::INFINITY;
         for _ in 0..repeats {
@@ -52,11 +59,8 @@ pub fn cpu(scene: &Scene, points: u64, width: u32, height: u32, repeats: usize) 
     let only = std::env::var("NLIFS_BENCH_ONLY").ok();
     let wanted = |name: &str| only.as_deref().is_none_or(|o| o == name);
     let mut map_only = MapOnly { acc: Vec3::ZERO };
-    let map_points_per_sec = if !wanted("map") {
-        0.0
-    } else {
-        time(&mut |c, n| chaos_game::run_chunk(&compiled, 1, 0, c, n, &mut map_only))
-    };
+    let map_points_per_sec =
+        if !wanted("map") { 0.0 } else { time(&mut |c, n| chaos_game::run_chunk(compiled, 1, 0, c, n, &mut map_only)) };
     std::hint::black_box(map_only.acc);
     let mut splat_points_per_sec = Vec::new();
     for mode in SplatMode::ALL {
@@ -64,9 +68,8 @@ pub fn cpu(scene: &Scene, points: u64, width: u32, height: u32, repeats: usize) 
             splat_points_per_sec.push((mode, 0.0));
             continue;
         }
-        let view = SplatView::new(&camera, width, height, bounds, mode, 0.75, [0.0; 3]);
-        let mut fb = Framebuffer::new(view, compiled.colors.clone());
-        let rate = time(&mut |c, n| chaos_game::run_chunk(&compiled, 1, 0, c, n, &mut fb));
+        let mut fb = Framebuffer::new(SplatView { mode, ..shot.view }, compiled.colors.clone());
+        let rate = time(&mut |c, n| chaos_game::run_chunk(compiled, 1, 0, c, n, &mut fb));
         std::hint::black_box(fb.covered_pixels());
         splat_points_per_sec.push((mode, rate));
     }

@@ -19,5 +19,6 @@ pub mod render;
 pub mod resolve;
 pub mod rng;
 pub mod scene;
+pub mod shot;
 pub mod splat;
 pub mod viewer;

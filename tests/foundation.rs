@@ -10,6 +10,7 @@ use nlifs::chaos_game::{self, ChunkPlan, CollectSink, CompiledIfs};
 use nlifs::model::Map;
 use nlifs::render::render_cpu;
 use nlifs::scene::Scene;
+use nlifs::shot::{Framing, Shot};
 
 fn points_of(scene: &Scene, n: u64, seed: u32) -> Vec<Vec3> {
     let compiled = CompiledIfs::new(&scene.at(0.0)).unwrap();
@@ -172,7 +173,10 @@ fn render_bytes_are_deterministic() {
     settings.points = 300_000;
     let render_with = |threads: usize| {
         let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
-        pool.install(|| render_cpu(&scene, 0.0, &settings, None, &|_, _| {}).unwrap().image.into_raw())
+        pool.install(|| {
+            let shot = Shot::prepare(&scene, 0.0, &settings, Framing::Fit, None).unwrap();
+            render_cpu(&shot, &|_, _| {}).image.into_raw()
+        })
     };
     let one = render_with(1);
     let two = render_with(2);

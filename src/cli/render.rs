@@ -5,10 +5,10 @@ use std::path::PathBuf;
 use anyhow::Context;
 use clap::{Args, ValueEnum};
 
-use nlifs::chaos_game::ChunkPlan;
 use nlifs::io::save_png;
 use nlifs::render::render_cpu;
 use nlifs::scene::spec::SplatMode;
+use nlifs::shot::{Framing, Shot};
 
 use super::args::check_png;
 use super::{BadInput, load, progress_bar};
@@ -85,9 +85,9 @@ pub fn render(args: RenderArgs) -> anyhow::Result<()> {
         settings.mode = m.into();
     }
     check_png(&args.output)?;
-    let plan = ChunkPlan::new(settings.points).map_err(|e| BadInput(e.to_string()))?;
-    let bar = progress_bar(plan.chunks() as u64, "render");
     let start = std::time::Instant::now();
+    let shot = Shot::prepare(&scene, args.time, &settings, Framing::Fit, None).map_err(|e| BadInput(e.to_string()))?;
+    let bar = progress_bar(shot.plan.chunks() as u64, "render");
     // GPU: explicit `gpu` fails without an adapter; `auto` falls back to the CPU.
     let gpu = match args.backend {
         RenderBackend::Cpu => None,
@@ -98,18 +98,9 @@ pub fn render(args: RenderArgs) -> anyhow::Result<()> {
         Some(ctx) => {
             bar.finish_and_clear();
             eprintln!("rendering on {}", ctx.describe());
-            nlifs::gpu::render::render_gpu(ctx, &scene, args.time, &settings, None)
-                .map_err(|e| match e {
-                    nlifs::gpu::GpuError::NoFunctions => anyhow::Error::new(BadInput(e.to_string())),
-                    e => e.into(),
-                })?
-                .image
+            nlifs::gpu::render::render_gpu(ctx, &shot)?.image
         }
-        None => {
-            render_cpu(&scene, args.time, &settings, None, &|d, _| bar.set_position(d))
-                .map_err(|e| BadInput(e.to_string()))?
-                .image
-        }
+        None => render_cpu(&shot, &|d, _| bar.set_position(d)).image,
     };
     bar.finish_and_clear();
     save_png(&args.output, &image).with_context(|| format!("cannot write {}", args.output.display()))?;
