@@ -20,5 +20,6 @@ pub mod resolve;
 pub mod rng;
 pub mod scene;
 pub mod shot;
+pub mod simd;
 pub mod splat;
 pub mod viewer;

@@ -151,7 +151,7 @@ fn check_lane_map(ifs: &Ifs, multi: [bool; 3]) {
     // The vector kernel, a vector of points at a time with mixed functions, every lookup.
     let paths = simd_paths(&c);
     #[cfg(target_arch = "x86_64")]
-    if is_x86_feature_detected!("avx2") {
+    if crate::simd::SimdLevel::detect().avx2() {
         assert!(paths.contains(&Path::Simd(x86::Lookup::Gather)), "{paths:?}");
     }
     for path in paths {

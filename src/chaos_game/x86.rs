@@ -35,6 +35,7 @@
 use super::fast::{FastFunction, FastKernel};
 use super::lanes::LANE_FUNCTIONS;
 use super::{ORBITS_PER_CHUNK, PointSink, SELECT_BITS, SelectionTable};
+use crate::simd::SimdLevel;
 
 mod kernel;
 
@@ -75,10 +76,10 @@ const GATHER: u8 = 2;
 impl Lookup {
     /// Whether this CPU can run the kernel with this lookup.
     pub(super) fn supported(self) -> bool {
-        let avx2 = is_x86_feature_detected!("avx2");
+        let level = SimdLevel::detect();
         match self {
-            Lookup::Wide16 | Lookup::WideGather => avx2 && is_x86_feature_detected!("avx512f"),
-            _ => avx2,
+            Lookup::Wide16 | Lookup::WideGather => level.avx512(),
+            _ => level.avx2(),
         }
     }
 }
