@@ -322,6 +322,18 @@ fn cli_bad_input_exits_2_with_a_message() {
     assert_eq!(out.status.code(), Some(2));
     let out = nlifs(&["export", "points", sierpinski.to_str().unwrap(), "-o", dir.join("x.obj").to_str().unwrap()]);
     assert_eq!(out.status.code(), Some(2));
+    // Out-of-range resolve style, and more points than the chaos game has random streams for.
+    let png = dir.join("x.png");
+    for (flag, value, says) in [
+        ("--shading", "1.5", "--shading"),
+        ("--point-radius", "9", "--point-radius"),
+        ("--points", "20000000000000", "random streams"),
+    ] {
+        let out = nlifs(&["render", sierpinski.to_str().unwrap(), "-o", png.to_str().unwrap(), flag, value]);
+        assert_eq!(out.status.code(), Some(2), "{flag} {value}");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.contains(says), "{flag} {value}: {err}");
+    }
     // No output, not even a temporary file, was left behind.
     let left: Vec<_> = std::fs::read_dir(&dir).unwrap().map(|e| e.unwrap().file_name()).collect();
     assert_eq!(left.len(), 1, "{left:?}");
