@@ -5,9 +5,10 @@ use std::time::Instant;
 
 use glam::Vec3;
 
-use crate::chaos_game::{self, CompiledIfs, PointBatch, PointSink};
+use crate::chaos_game::{self, ChunkPlan, CompiledIfs, PlanError, PointBatch, PointSink};
 use crate::scene::Scene;
-use crate::scene::spec::SplatMode;
+use crate::scene::spec::{RenderSettings, SplatMode};
+use crate::shot::{Framing, Shot, ShotError};
 use crate::splat::{Framebuffer, SplatView};
 
 /// A sink that only keeps the points alive (so mapping is not optimized away).
@@ -32,18 +33,24 @@ pub struct CpuBench {
 /// splat into a `width`×`height` framebuffer in each mode; the best of `repeats` runs each.
 /// For profiling one of them alone (e.g. under callgrind), env `NLIFS_BENCH_ONLY` = `map`,
 /// `closest`, `average` or `density` skips the others (their rate is reported as 0).
-pub fn cpu(scene: &Scene, points: u64, width: u32, height: u32, repeats: usize) -> CpuBench {
-    let ifs = scene.at(0.0);
-    let compiled = CompiledIfs::new(&ifs).expect("scene has functions");
-    let bounds = chaos_game::attractor_bounds(&compiled, 1);
-    let camera = scene.camera_for(bounds);
-    let (chunks, steps, last) = chaos_game::chunking(points);
+pub fn cpu(scene: &Scene, points: u64, width: u32, height: u32, repeats: usize) -> Result<CpuBench, ShotError> {
+    let settings = RenderSettings {
+        width,
+        height,
+        points,
+        seed: 1,
+        depth_cue: 0.75,
+        background: [0.0; 3],
+        ..scene.render.clone()
+    };
+    let shot = Shot::prepare(scene, 0.0, &settings, Framing::Scene, None)?;
+    let (compiled, plan) = (&shot.compiled, &shot.plan);
     let time = |sink: &mut dyn FnMut(u32, usize)| -> f64 {
         let mut best = f64::INFINITY;
         for _ in 0..repeats {
             let start = Instant::now();
-            for c in 0..chunks {
-                sink(c, if c + 1 == chunks { last } else { steps });
+            for chunk in plan.iter() {
+                sink(chunk.index, chunk.steps);
             }
             best = best.min(start.elapsed().as_secs_f64());
         }
@@ -52,11 +59,8 @@ pub fn cpu(scene: &Scene, points: u64, width: u32, height: u32, repeats: usize) 
     let only = std::env::var("NLIFS_BENCH_ONLY").ok();
     let wanted = |name: &str| only.as_deref().is_none_or(|o| o == name);
     let mut map_only = MapOnly { acc: Vec3::ZERO };
-    let map_points_per_sec = if !wanted("map") {
-        0.0
-    } else {
-        time(&mut |c, n| chaos_game::run_chunk(&compiled, 1, 0, c, n, &mut map_only))
-    };
+    let map_points_per_sec =
+        if !wanted("map") { 0.0 } else { time(&mut |c, n| chaos_game::run_chunk(compiled, 1, 0, c, n, &mut map_only)) };
     std::hint::black_box(map_only.acc);
     let mut splat_points_per_sec = Vec::new();
     for mode in SplatMode::ALL {
@@ -64,19 +68,23 @@ pub fn cpu(scene: &Scene, points: u64, width: u32, height: u32, repeats: usize) 
             splat_points_per_sec.push((mode, 0.0));
             continue;
         }
-        let view = SplatView::new(&camera, width, height, bounds, mode, 0.75, [0.0; 3]);
-        let mut fb = Framebuffer::new(view, compiled.colors.clone());
-        let rate = time(&mut |c, n| chaos_game::run_chunk(&compiled, 1, 0, c, n, &mut fb));
+        let mut fb = Framebuffer::new(SplatView { mode, ..shot.view }, compiled.colors.clone());
+        let rate = time(&mut |c, n| chaos_game::run_chunk(compiled, 1, 0, c, n, &mut fb));
         std::hint::black_box(fb.covered_pixels());
         splat_points_per_sec.push((mode, rate));
     }
-    CpuBench { map_points_per_sec, splat_points_per_sec }
+    Ok(CpuBench { map_points_per_sec, splat_points_per_sec })
 }
 
 /// Coverage of the attractor by a fixed budget of points under each way of choosing
 /// probabilities: the fraction of the reference image's lit pixels (from `reference_points`
 /// points under both the contractivity and the adaptive rule) that `budget` points light.
-pub fn coverage(scene: &Scene, budget: u64, reference_points: u64, size: u32) -> Vec<(&'static str, f64)> {
+pub fn coverage(
+    scene: &Scene,
+    budget: u64,
+    reference_points: u64,
+    size: u32,
+) -> Result<Vec<(&'static str, f64)>, PlanError> {
     use crate::model::ProbabilityMode;
     let base = scene.at(0.0);
     let variants: Vec<(&'static str, crate::model::Ifs)> = vec![
@@ -102,27 +110,28 @@ pub fn coverage(scene: &Scene, budget: u64, reference_points: u64, size: u32) ->
     let bounds = chaos_game::attractor_bounds(&compiled[1], 1);
     let camera = scene.camera_for(bounds);
     let view = SplatView::new(&camera, size, size, bounds, SplatMode::Closest, 0.0, [0.0; 3]);
-    let run = |c: &CompiledIfs, points: u64, seed: u32| -> Framebuffer {
+    let (budget, reference_points) = (ChunkPlan::new(budget)?, ChunkPlan::new(reference_points)?);
+    let run = |c: &CompiledIfs, plan: &ChunkPlan, seed: u32| -> Framebuffer {
         chaos_game::run_parallel(
             c,
             seed,
             0,
-            points,
+            plan,
             || Framebuffer::new(view, c.colors.clone()),
             Framebuffer::merge,
             || {},
         )
     };
-    let reference = run(&compiled[1], reference_points, 101).merge(run(&compiled[2], reference_points, 202));
+    let reference = run(&compiled[1], &reference_points, 101).merge(run(&compiled[2], &reference_points, 202));
     let lit: Vec<bool> = reference.closest.iter().map(|&k| k != crate::splat::EMPTY).collect();
     let total = lit.iter().filter(|&&l| l).count().max(1);
-    variants
+    Ok(variants
         .iter()
         .zip(&compiled)
         .map(|((name, _), c)| {
-            let fb = run(c, budget, 7);
+            let fb = run(c, &budget, 7);
             let hit = fb.closest.iter().zip(&lit).filter(|(k, l)| **l && **k != crate::splat::EMPTY).count();
             (*name, hit as f64 / total as f64)
         })
-        .collect()
+        .collect())
 }

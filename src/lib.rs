@@ -19,5 +19,7 @@ pub mod render;
 pub mod resolve;
 pub mod rng;
 pub mod scene;
+pub mod shot;
+pub mod simd;
 pub mod splat;
 pub mod viewer;

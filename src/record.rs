@@ -5,10 +5,9 @@
 //! k·S + s, chain)` for temporal sample s of S), and the camera is framed on bounds that depend
 //! only on the scene (the union of the attractor's bounds sampled over the whole timeline). So
 //! a frame has the same bytes whether it is rendered in one run, in a chunk `--frames 50..100`
-//! on another machine, or again after `--resume`. The CPU path renders with the chaos game and
-//! splat of `render_cpu`, but with these fixed bounds: `render_cpu` frames each image on its own
-//! attractor, which would make the depth cue (and an automatic camera distance) breathe from
-//! frame to frame.
+//! on another machine, or again after `--resume`. Each temporal sample is a [`Shot`] as a still's,
+//! but with these fixed bounds: a still frames each image on its own attractor, which would make
+//! the depth cue (and an automatic camera distance) breathe from frame to frame.
 //!
 //! Every frame is written to a temporary file and renamed (`io::save_png`), so a killed run
 //! leaves whole frames or none; `--resume` re-renders any frame that does not decode fully.
@@ -18,17 +17,17 @@ use std::path::{Path, PathBuf};
 
 use glam::DVec3;
 
-use crate::chaos_game::{self, CompiledIfs};
 use crate::color;
-use crate::resolve::{ResolveStyle, resolve_image};
+use crate::resolve::resolve_image;
 use crate::scene::Scene;
+use crate::scene::spec::RenderSettings;
 use crate::scene::timeline::LoopMode;
-use crate::splat::{Framebuffer, SplatView};
+use crate::shot::{Framing, Shot, ShotError};
 
 #[derive(Debug, thiserror::Error)]
 pub enum RecordError {
-    #[error("the scene has no enabled function at t = {t_secs} s")]
-    NoFunctions { t_secs: f64 },
+    #[error(transparent)]
+    Shot(#[from] ShotError),
     #[error("frames {start}..{end} are not within the animation's {count} frames (0..{count})")]
     FrameRange { start: u32, end: u32, count: u32 },
     #[error("cannot write frame {path}: {source}")]
@@ -94,8 +93,7 @@ pub fn timeline_bounds(scene: &Scene) -> Result<(DVec3, DVec3), RecordError> {
     let mut lo = DVec3::splat(f64::INFINITY);
     let mut hi = DVec3::splat(f64::NEG_INFINITY);
     for t_secs in times {
-        let compiled = CompiledIfs::new(&scene.at(t_secs)).ok_or(RecordError::NoFunctions { t_secs })?;
-        let (a, b) = chaos_game::attractor_bounds(&compiled, scene.render.seed);
+        let (a, b) = Shot::prepare(scene, t_secs, &scene.render, Framing::Scene, None)?.bounds;
         lo = lo.min(a);
         hi = hi.max(b);
     }
@@ -166,18 +164,11 @@ impl<'a> Recorder<'a> {
         let mut images = Vec::new();
         for sample in self.samples(frame) {
             let FrameSample { t_secs, camera, bounds, points, stream, render } = sample;
-            let compiled = CompiledIfs::new(&self.scene.at(t_secs)).ok_or(RecordError::NoFunctions { t_secs })?;
-            let view = SplatView::new(&camera, width, height, bounds, render.mode, render.depth_cue, render.background);
-            let fb = chaos_game::run_parallel(
-                &compiled,
-                render.seed,
-                stream,
-                points,
-                || Framebuffer::new(view, compiled.colors.clone()),
-                Framebuffer::merge,
-                || {},
-            );
-            images.push(resolve_image(&fb, &camera, &ResolveStyle::default()));
+            let settings = RenderSettings { width, height, points, ..render };
+            let shot =
+                Shot::prepare(self.scene, t_secs, &settings, Framing::Given(camera), Some(bounds))?.with_stream(stream);
+            let fb = shot.splat(|| {});
+            images.push(resolve_image(&fb, &shot.camera, &shot.style));
         }
         Ok(if images.len() == 1 { images.remove(0) } else { average_linear(&images) })
     }

@@ -6,17 +6,17 @@ mod common;
 
 use common::{load_scene as load, run_nlifs as nlifs, scene_path};
 use glam::{DMat3, DVec3, Vec3};
-use nlifs::chaos_game::{self, CollectSink, CompiledIfs};
+use nlifs::chaos_game::{self, ChunkPlan, CollectSink, CompiledIfs};
 use nlifs::model::Map;
 use nlifs::render::render_cpu;
 use nlifs::scene::Scene;
+use nlifs::shot::{Framing, Shot};
 
 fn points_of(scene: &Scene, n: u64, seed: u32) -> Vec<Vec3> {
     let compiled = CompiledIfs::new(&scene.at(0.0)).unwrap();
-    let (chunks, steps, last) = chaos_game::chunking(n);
     let mut sink = CollectSink::default();
-    for c in 0..chunks {
-        chaos_game::run_chunk(&compiled, seed, 0, c, if c + 1 == chunks { last } else { steps }, &mut sink);
+    for chunk in ChunkPlan::new(n).unwrap().iter() {
+        chaos_game::run_chunk(&compiled, seed, 0, chunk.index, chunk.steps, &mut sink);
     }
     sink.points
 }
@@ -173,7 +173,10 @@ fn render_bytes_are_deterministic() {
     settings.points = 300_000;
     let render_with = |threads: usize| {
         let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
-        pool.install(|| render_cpu(&scene, 0.0, &settings, None, &|_, _| {}).unwrap().image.into_raw())
+        pool.install(|| {
+            let shot = Shot::prepare(&scene, 0.0, &settings, Framing::Fit, None).unwrap();
+            render_cpu(&shot, &|_, _| {}).image.into_raw()
+        })
     };
     let one = render_with(1);
     let two = render_with(2);
@@ -319,6 +322,18 @@ fn cli_bad_input_exits_2_with_a_message() {
     assert_eq!(out.status.code(), Some(2));
     let out = nlifs(&["export", "points", sierpinski.to_str().unwrap(), "-o", dir.join("x.obj").to_str().unwrap()]);
     assert_eq!(out.status.code(), Some(2));
+    // Out-of-range resolve style, and more points than the chaos game has random streams for.
+    let png = dir.join("x.png");
+    for (flag, value, says) in [
+        ("--shading", "1.5", "--shading"),
+        ("--point-radius", "9", "--point-radius"),
+        ("--points", "20000000000000", "random streams"),
+    ] {
+        let out = nlifs(&["render", sierpinski.to_str().unwrap(), "-o", png.to_str().unwrap(), flag, value]);
+        assert_eq!(out.status.code(), Some(2), "{flag} {value}");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.contains(says), "{flag} {value}: {err}");
+    }
     // No output, not even a temporary file, was left behind.
     let left: Vec<_> = std::fs::read_dir(&dir).unwrap().map(|e| e.unwrap().file_name()).collect();
     assert_eq!(left.len(), 1, "{left:?}");

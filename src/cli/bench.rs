@@ -13,7 +13,7 @@ use nlifs::io::save_png;
 use nlifs::raytrace::{self, RaytraceSettings};
 
 use super::export::write_pov;
-use super::load;
+use super::{BadInput, load};
 
 #[derive(Subcommand)]
 pub enum BenchCommand {
@@ -90,7 +90,8 @@ pub fn run(command: BenchCommand) -> anyhow::Result<()> {
         BenchCommand::Coverage { scene, budget, reference, size } => {
             let s = load(&scene)?;
             println!("{}: share of the attractor's {size}x{size} pixels lit by {budget} points", s.name);
-            for (name, share) in nlifs::bench::coverage(&s, budget, reference, size) {
+            let shares = nlifs::bench::coverage(&s, budget, reference, size).map_err(|e| BadInput(e.to_string()))?;
+            for (name, share) in shares {
                 println!("  {name:<14} {:6.2} %", 100.0 * share);
             }
             Ok(())
@@ -101,7 +102,7 @@ pub fn run(command: BenchCommand) -> anyhow::Result<()> {
 fn cpu(path: &Path, points: u64, repeats: usize) -> anyhow::Result<()> {
     let scene = load(path)?;
     eprintln!("CPU chaos game, one thread, {} ({points} points, best of {repeats})", scene.name);
-    let r = nlifs::bench::cpu(&scene, points, 1920, 1080, repeats.max(1));
+    let r = nlifs::bench::cpu(&scene, points, 1920, 1080, repeats.max(1)).map_err(|e| BadInput(e.to_string()))?;
     println!("map only:                 {:8.1} M points/s", r.map_points_per_sec / 1e6);
     for (mode, rate) in r.splat_points_per_sec {
         println!("map + splat 1920x1080 {:<8} {:8.1} M points/s", mode.name(), rate / 1e6);

@@ -7,11 +7,13 @@ use std::path::{Path, PathBuf};
 use anyhow::Context;
 use clap::{Args, Subcommand};
 
-use nlifs::chaos_game::{self, CollectSink, CompiledIfs};
+use nlifs::chaos_game::{self, CollectSink};
 use nlifs::export::{write_glb_points, write_ply};
 use nlifs::io::write_atomic;
 use nlifs::raytrace::{self, Initial, RaytraceSettings};
 use nlifs::scene::Scene;
+use nlifs::scene::spec::RenderSettings;
+use nlifs::shot::{Framing, Shot};
 
 use super::args::GeometryArgs;
 use super::{BadInput, load, progress_bar};
@@ -83,21 +85,19 @@ fn export_points(path: &Path, output: &Path, points: u64, seed: Option<u32>, tim
         Some("ply") => false,
         _ => return Err(BadInput(format!("output {} must end in .ply or .glb", output.display())).into()),
     };
-    let ifs = scene.at(time);
-    let compiled = CompiledIfs::new(&ifs).ok_or_else(|| BadInput("the scene has no enabled function".into()))?;
-    let seed = seed.unwrap_or(scene.render.seed);
-    let (chunks, _, _) = chaos_game::chunking(points);
-    let bar = progress_bar(chunks as u64, "points");
+    let settings = RenderSettings { points, seed: seed.unwrap_or(scene.render.seed), ..scene.render_at(time) };
+    let shot = Shot::prepare(&scene, time, &settings, Framing::Scene, None).map_err(|e| BadInput(e.to_string()))?;
+    let (compiled, plan, seed) = (&shot.compiled, &shot.plan, settings.seed);
+    let bar = progress_bar(plan.chunks() as u64, "points");
     let done = std::sync::atomic::AtomicU64::new(0);
     // Chunks are collected in index order so the file is deterministic.
     let sinks: Vec<CollectSink> = {
         use rayon::prelude::*;
-        let (_, steps, last) = chaos_game::chunking(points);
-        (0..chunks)
+        (0..plan.chunks())
             .into_par_iter()
             .map(|c| {
                 let mut s = CollectSink::default();
-                chaos_game::run_chunk(&compiled, seed, 0, c, if c + 1 == chunks { last } else { steps }, &mut s);
+                chaos_game::run_chunk(compiled, seed, shot.stream, c, plan.steps(c), &mut s);
                 bar.set_position(done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1);
                 s
             })

@@ -7,6 +7,7 @@ use anyhow::Context;
 use clap::{Args, ValueEnum};
 use indicatif::{ProgressBar, ProgressStyle};
 
+use nlifs::chaos_game::ChunkPlan;
 use nlifs::record::{self, RecordSettings, Recorder};
 
 use super::{BadInput, load};
@@ -74,6 +75,9 @@ pub fn record(args: RecordArgs) -> anyhow::Result<()> {
     settings.fps = args.fps;
     settings.width = args.width.unwrap_or(settings.width);
     settings.height = args.height.unwrap_or(settings.height);
+    if let Some(points) = args.points_per_frame {
+        ChunkPlan::new(points).map_err(|e| BadInput(format!("--points-per-frame: {e}")))?;
+    }
     settings.points_per_frame = args.points_per_frame;
     settings.motion_blur_samples = args.motion_blur;
     settings.shutter = args.shutter;

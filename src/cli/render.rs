@@ -5,10 +5,11 @@ use std::path::PathBuf;
 use anyhow::Context;
 use clap::{Args, ValueEnum};
 
-use nlifs::chaos_game;
 use nlifs::io::save_png;
 use nlifs::render::render_cpu;
+use nlifs::resolve::{MAX_POINT_RADIUS_PX, ResolveStyle};
 use nlifs::scene::spec::SplatMode;
+use nlifs::shot::{Framing, Shot};
 
 use super::args::check_png;
 use super::{BadInput, load, progress_bar};
@@ -37,6 +38,14 @@ pub struct RenderArgs {
     /// Splat mode (default: the scene's).
     #[arg(long, value_enum)]
     mode: Option<ModeArg>,
+    /// Screen-space shading strength, 0 (flat colours) to 1 (fully shaded from the depth of
+    /// neighbouring points, as the viewer's shading slider); closest mode.
+    #[arg(long, default_value_t = 0.0, value_parser = parse_shading)]
+    shading: f32,
+    /// Drawn point radius in pixels: each pixel shows the nearest point within it (closest mode).
+    #[arg(long, value_name = "PX", default_value_t = 0,
+          value_parser = clap::value_parser!(u32).range(0..=MAX_POINT_RADIUS_PX as i64))]
+    point_radius: u32,
     /// Where the chaos game runs: gpu, cpu, or auto (gpu when an adapter exists).
     #[arg(long, value_enum, default_value_t = RenderBackend::Cpu)]
     backend: RenderBackend,
@@ -85,9 +94,12 @@ pub fn render(args: RenderArgs) -> anyhow::Result<()> {
         settings.mode = m.into();
     }
     check_png(&args.output)?;
-    let (chunks, _, _) = chaos_game::chunking(settings.points);
-    let bar = progress_bar(chunks as u64, "render");
     let start = std::time::Instant::now();
+    let style = ResolveStyle { shading: args.shading, point_radius_px: args.point_radius };
+    let shot = Shot::prepare(&scene, args.time, &settings, Framing::Fit, None)
+        .map_err(|e| BadInput(e.to_string()))?
+        .with_style(style);
+    let bar = progress_bar(shot.plan.chunks() as u64, "render");
     // GPU: explicit `gpu` fails without an adapter; `auto` falls back to the CPU.
     let gpu = match args.backend {
         RenderBackend::Cpu => None,
@@ -98,18 +110,9 @@ pub fn render(args: RenderArgs) -> anyhow::Result<()> {
         Some(ctx) => {
             bar.finish_and_clear();
             eprintln!("rendering on {}", ctx.describe());
-            nlifs::gpu::render::render_gpu(ctx, &scene, args.time, &settings, None)
-                .map_err(|e| match e {
-                    nlifs::gpu::GpuError::NoFunctions => anyhow::Error::new(BadInput(e.to_string())),
-                    e => e.into(),
-                })?
-                .image
+            nlifs::gpu::render::render_gpu(ctx, &shot)?.image
         }
-        None => {
-            render_cpu(&scene, args.time, &settings, None, &|d, _| bar.set_position(d))
-                .map_err(|e| BadInput(e.to_string()))?
-                .image
-        }
+        None => render_cpu(&shot, &|d, _| bar.set_position(d)).image,
     };
     bar.finish_and_clear();
     save_png(&args.output, &image).with_context(|| format!("cannot write {}", args.output.display()))?;
@@ -122,4 +125,13 @@ pub fn render(args: RenderArgs) -> anyhow::Result<()> {
         start.elapsed().as_secs_f64()
     );
     Ok(())
+}
+
+/// `--shading`: a number in 0..=1.
+fn parse_shading(s: &str) -> Result<f32, String> {
+    let v: f32 = s.trim().parse().map_err(|_| format!("`{s}` is not a number"))?;
+    if !(0.0..=1.0).contains(&v) {
+        return Err(format!("{v} is not in 0..=1"));
+    }
+    Ok(v)
 }

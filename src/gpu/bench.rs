@@ -7,10 +7,11 @@ use std::time::Instant;
 
 use glam::DVec3;
 
-use crate::chaos_game::{self, CompiledIfs};
+use crate::chaos_game::{CompiledIfs, PlanError};
 use crate::model::builder::Step;
 use crate::scene::Scene;
 use crate::scene::spec::{FunctionDef, SplatMode};
+use crate::shot::{Framing, Shot, ShotError};
 
 use super::progressive::{Progressive, ProgressiveSettings};
 use super::{GpuContext, GpuError};
@@ -143,9 +144,11 @@ fn l1(a: &[f64], b: &[f64]) -> f64 {
 
 pub fn run(scene: &Scene, points: u32, steps: u32, frames: u32) -> Result<BenchReport, GpuError> {
     let ctx = GpuContext::headless()?;
-    let ifs = CompiledIfs::new(&scene.at(0.0)).ok_or(GpuError::NoFunctions)?;
-    let bounds = chaos_game::attractor_bounds(&ifs, scene.render.seed);
-    let camera = scene.camera_for(bounds);
+    let shot = Shot::prepare(scene, 0.0, &scene.render, Framing::Scene, None).map_err(|e| match e {
+        ShotError::NoFunctions { .. } => GpuError::NoFunctions,
+        ShotError::Points(PlanError::TooManyPoints { points }) => GpuError::TooManyPoints(points),
+    })?;
+    let (ifs, bounds, camera) = (&shot.compiled, shot.bounds, shot.camera);
     let (width, height) = (1280, 720);
     let settings = ProgressiveSettings {
         point_count: points,
@@ -156,7 +159,7 @@ pub fn run(scene: &Scene, points: u32, steps: u32, frames: u32) -> Result<BenchR
 
     // Throughput: frames into an offscreen target of the window's size.
     let mut live = Progressive::new(&ctx, settings, width, height)?;
-    live.set_ifs(&ctx, &ifs, bounds, true);
+    live.set_ifs(&ctx, ifs, bounds, true);
     live.set_camera(&camera);
     let format = wgpu::TextureFormat::Rgba8UnormSrgb;
     let texture =
@@ -212,7 +215,7 @@ pub fn run(scene: &Scene, points: u32, steps: u32, frames: u32) -> Result<BenchR
         coarse_density(&r.read_accum(&ctx)?, w, h, cells)
     };
     let mut live = Progressive::new(&ctx, density, w, h)?;
-    live.set_ifs(&ctx, &ifs, bounds, true);
+    live.set_ifs(&ctx, ifs, bounds, true);
     live.set_camera(&camera);
     for _ in 0..4 {
         submit_frame(&ctx, &mut live, None);

@@ -1,12 +1,7 @@
-//! Headless GPU rendering: a scene at a time into an offscreen texture through the same
+//! Headless GPU rendering: a prepared [`Shot`] into an offscreen texture through the same
 //! [`Progressive`] render the viewer's live view draws with, read back as an image (`render --backend gpu`).
 
-use glam::DVec3;
-
-use crate::camera::OrbitCamera;
-use crate::chaos_game::{self, CompiledIfs};
-use crate::scene::Scene;
-use crate::scene::spec::RenderSettings;
+use crate::shot::Shot;
 
 use super::progressive::{Progressive, ProgressiveSettings};
 use super::{GpuContext, GpuError};
@@ -18,8 +13,6 @@ pub const MAX_HEADLESS_STEPS: u32 = 64;
 
 pub struct GpuRendered {
     pub image: image::RgbImage,
-    pub camera: OrbitCamera,
-    pub bounds: (DVec3, DVec3),
     /// Points splatted (`settings.points` rounded up to whole frames).
     pub splats: u64,
 }
@@ -43,8 +36,9 @@ pub fn accumulate(ctx: &GpuContext, live: &mut Progressive, points: u64) -> u64 
     splats
 }
 
-/// The live-view settings for a headless render of `settings`.
-pub fn headless_settings(settings: &RenderSettings) -> ProgressiveSettings {
+/// The live-view settings for a headless render of `shot`.
+pub fn headless_settings(shot: &Shot) -> ProgressiveSettings {
+    let settings = &shot.settings;
     ProgressiveSettings {
         point_count: settings.points.clamp(1, MAX_HEADLESS_POINTS as u64) as u32,
         steps_per_frame: 1,
@@ -52,34 +46,22 @@ pub fn headless_settings(settings: &RenderSettings) -> ProgressiveSettings {
         mode: settings.mode,
         depth_cue: settings.depth_cue,
         background: settings.background,
-        shading: 0.0,
-        point_radius_px: 0,
+        shading: shot.style.shading,
+        point_radius_px: shot.style.point_radius_px,
         max_splats: u64::MAX,
         settle_steps: 0,
     }
 }
 
-/// Renders `scene` at `t_secs` on the GPU: the twin of `render::render_cpu` (same bounds,
-/// camera and splat; the points come from GPU streams, so the image agrees in distribution,
-/// not bit for bit).
-pub fn render_gpu(
-    ctx: &GpuContext,
-    scene: &Scene,
-    t_secs: f64,
-    settings: &RenderSettings,
-    camera: Option<OrbitCamera>,
-) -> Result<GpuRendered, GpuError> {
-    let ifs = scene.at(t_secs);
-    let compiled = CompiledIfs::new(&ifs).ok_or(GpuError::NoFunctions)?;
-    let bounds = chaos_game::attractor_bounds(&compiled, settings.seed);
-    let camera = camera.unwrap_or_else(|| {
-        let sample = chaos_game::attractor_sample(&compiled, settings.seed);
-        crate::render::frame_camera(scene, t_secs, bounds, &sample, settings.width as f32 / settings.height as f32)
-    });
-    let mut live = Progressive::new(ctx, headless_settings(settings), settings.width, settings.height)?;
-    live.set_ifs(ctx, &compiled, bounds, true);
-    live.set_camera(&camera);
+/// Renders `shot` on the GPU: the twin of `render::render_cpu` (same bounds, camera, splat and
+/// resolve style; the points come from GPU streams, so the image agrees in distribution, not
+/// bit for bit).
+pub fn render_gpu(ctx: &GpuContext, shot: &Shot) -> Result<GpuRendered, GpuError> {
+    let settings = &shot.settings;
+    let mut live = Progressive::new(ctx, headless_settings(shot), settings.width, settings.height)?;
+    live.set_ifs(ctx, &shot.compiled, shot.bounds, true);
+    live.set_camera(&shot.camera);
     let splats = accumulate(ctx, &mut live, settings.points);
     let image = live.snapshot(ctx)?;
-    Ok(GpuRendered { image, camera, bounds, splats })
+    Ok(GpuRendered { image, splats })
 }

@@ -20,6 +20,7 @@
 //! time ([`Simd::detect`]): AVX-512F, AVX2 with the portable pass, or the baseline target.
 
 use super::geometry::{Node, NodeKind};
+use crate::simd::SimdLevel;
 
 /// f32 lanes of one AVX-512 register.
 const CHUNK: usize = 16;
@@ -357,15 +358,10 @@ pub enum Simd {
 impl Simd {
     /// The widest form this CPU runs.
     pub fn detect() -> Self {
-        #[cfg(target_arch = "x86_64")]
-        {
-            if std::arch::is_x86_feature_detected!("avx512f") {
-                return Simd::Avx512;
-            }
-            if std::arch::is_x86_feature_detected!("avx2") {
-                return Simd::Avx2;
-            }
+        match SimdLevel::detect() {
+            SimdLevel::Avx512 => Simd::Avx512,
+            SimdLevel::Avx2 => Simd::Avx2,
+            SimdLevel::Scalar => Simd::Baseline,
         }
-        Simd::Baseline
     }
 }

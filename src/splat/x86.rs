@@ -17,6 +17,7 @@ use std::arch::x86_64::*;
 
 use super::{COLOR_SCALE, DEPTH_BITS, EMPTY, Framebuffer, SplatMode, SplatView};
 use crate::chaos_game::PointBatch;
+use crate::simd::SimdLevel;
 
 const LANES: usize = 8;
 
@@ -26,22 +27,17 @@ pub(super) fn supported(fb: &Framebuffer) -> bool {
     let (w, h) = (view.width as usize, view.height as usize);
     let len = if view.mode == SplatMode::Closest { fb.closest.len() } else { fb.accum.len() };
     // Pixel indices are computed in i32; sizes up to 2^24 keep `width as f32` exact.
-    is_x86_feature_detected!("avx2")
-        && len == w * h
-        && len > 0
-        && len <= i32::MAX as usize
-        && w <= 1 << 24
-        && h <= 1 << 24
+    SimdLevel::detect().avx2() && len == w * h && len > 0 && len <= i32::MAX as usize && w <= 1 << 24 && h <= 1 << 24
 }
 
 /// Splats `batch` into `fb`, exactly as the portable splat does.
 pub(super) fn splat(fb: &mut Framebuffer, batch: PointBatch<'_>) {
-    splat_with(fb, batch, is_x86_feature_detected!("avx512f"));
+    splat_with(fb, batch, SimdLevel::detect().avx512());
 }
 
 /// [`splat`], with the closest mode's 16-wide AVX-512F projection if `wide` (for tests).
 pub(super) fn splat_with(fb: &mut Framebuffer, batch: PointBatch<'_>, wide: bool) {
-    assert!(supported(fb) && (!wide || is_x86_feature_detected!("avx512f")));
+    assert!(supported(fb) && (!wide || SimdLevel::detect().avx512()));
     assert!(batch.x.len() == batch.len() && batch.y.len() == batch.len() && batch.z.len() == batch.len());
     // SAFETY: the CPU has AVX2 (and AVX-512F if wide), and the mode's buffer has
     // width · height > 0 pixels (asserted); the batch's slices have equal lengths (asserted).

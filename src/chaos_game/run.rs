@@ -1,0 +1,200 @@
+//! Running the chaos game: one chunk of orbits ([`run_chunk`], on the fastest path the IFS and
+//! the CPU allow), a whole [`ChunkPlan`] in parallel ([`run_parallel`]), and the short
+//! deterministic runs that estimate the attractor's extent for framing.
+
+use glam::{DVec3, Vec3, Vec3A};
+use rayon::prelude::*;
+
+use super::lanes::LaneKernel;
+use super::plan::ChunkPlan;
+use super::sink::{CollectSink, PointBatch, PointSink};
+#[cfg(all(test, target_arch = "x86_64"))]
+use super::x86;
+use super::{CompiledIfs, ORBITS_PER_CHUNK, STEPS_PER_BATCH};
+use crate::rng::Pcg32;
+
+/// Runs chunk `chunk` of a chaos game: [`ORBITS_PER_CHUNK`] orbits, `steps` points each after
+/// the transient, into `sink`. Orbit (lane) `k` of chunk `c` is chain `c · ORBITS_PER_CHUNK + k`
+/// and draws from the random stream (seed, frame, chain), as chain i of the GPU does.
+pub fn run_chunk(ifs: &CompiledIfs, seed: u32, frame: u32, chunk: u32, steps: usize, sink: &mut impl PointSink) {
+    run_chunk_on(ifs, Path::Fastest, seed, frame, chunk, steps, sink)
+}
+
+/// Which implementation [`run_chunk_on`] takes; all give the same points.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) enum Path {
+    /// The fastest the IFS and the CPU allow.
+    Fastest,
+    /// Not the vector kernel (for tests).
+    #[cfg(test)]
+    Portable,
+    /// The vector kernel with this coefficient lookup (for tests).
+    #[cfg(all(test, target_arch = "x86_64"))]
+    Simd(x86::Lookup),
+}
+
+pub(super) fn run_chunk_on(
+    ifs: &CompiledIfs,
+    path: Path,
+    seed: u32,
+    frame: u32,
+    chunk: u32,
+    steps: usize,
+    sink: &mut impl PointSink,
+) {
+    let first_chain = chunk.wrapping_mul(ORBITS_PER_CHUNK as u32);
+    let mut rngs: [Pcg32; ORBITS_PER_CHUNK] =
+        std::array::from_fn(|k| Pcg32::for_stream(seed, frame, first_chain.wrapping_add(k as u32)));
+    let mut pos: [Vec3A; ORBITS_PER_CHUNK] = std::array::from_fn(|k| ifs.start_point(&mut rngs[k]).into());
+    #[cfg(target_arch = "x86_64")]
+    if let Some(simd) = &ifs.simd {
+        let lookup = match path {
+            Path::Fastest => Some(simd.lookup),
+            #[cfg(test)]
+            Path::Portable => None,
+            #[cfg(test)]
+            Path::Simd(lookup) => Some(lookup),
+        };
+        if let Some(lookup) = lookup {
+            let rngs = rngs.map(Pcg32::state);
+            simd.run(lookup, &rngs, &pos.map(|p| p.to_array()), ifs.transient, steps, sink);
+            return;
+        }
+    }
+    #[cfg(all(test, target_arch = "x86_64"))]
+    assert!(!matches!(path, Path::Simd(_)), "no vector kernel for this IFS");
+    let _ = path;
+    let orbits = Orbits { rngs: &mut rngs, pos: &mut pos, transient: ifs.transient, steps };
+    match &ifs.lanes {
+        Some(lanes) => run_lanes(lanes, orbits, sink),
+        None => {
+            let sel = &ifs.selection;
+            let adaptive = sel.cells != [1, 1, 1];
+            orbits.run(sink, |rng, p| {
+                let cell = if adaptive { sel.cell_of(p.into()) } else { 0 };
+                let fi = sel.select(cell, rng.next_u32());
+                (ifs.map_fast(fi, p.into()).into(), fi)
+            })
+        }
+    }
+}
+
+/// The orbits of one chunk, advanced one step at a time across all lanes (independent lanes
+/// give the CPU instruction-level parallelism).
+pub(super) struct Orbits<'a> {
+    rngs: &'a mut [Pcg32; ORBITS_PER_CHUNK],
+    pos: &'a mut [Vec3A; ORBITS_PER_CHUNK],
+    transient: u32,
+    steps: usize,
+}
+
+impl Orbits<'_> {
+    #[inline(always)]
+    pub(super) fn run(self, sink: &mut impl PointSink, step: impl Fn(&mut Pcg32, Vec3A) -> (Vec3A, usize)) {
+        const K: usize = ORBITS_PER_CHUNK;
+        for _ in 0..self.transient {
+            for (rng, p) in self.rngs.iter_mut().zip(self.pos.iter_mut()) {
+                *p = step(rng, *p).0;
+            }
+        }
+        let mut out_x = vec![0f32; K * STEPS_PER_BATCH];
+        let mut out_y = vec![0f32; K * STEPS_PER_BATCH];
+        let mut out_z = vec![0f32; K * STEPS_PER_BATCH];
+        let mut out_fn = vec![0u8; K * STEPS_PER_BATCH];
+        let mut done = 0;
+        while done < self.steps {
+            let batch = STEPS_PER_BATCH.min(self.steps - done);
+            for s in 0..batch {
+                let row = s * K..s * K + K;
+                let (xs, ys, zs, fs) =
+                    (&mut out_x[row.clone()], &mut out_y[row.clone()], &mut out_z[row.clone()], &mut out_fn[row]);
+                for (k, (rng, p)) in self.rngs.iter_mut().zip(self.pos.iter_mut()).enumerate() {
+                    let (q, fi) = step(rng, *p);
+                    *p = q;
+                    (xs[k], ys[k], zs[k]) = (q.x, q.y, q.z);
+                    fs[k] = fi as u8;
+                }
+            }
+            let n = batch * K;
+            sink.consume(PointBatch { x: &out_x[..n], y: &out_y[..n], z: &out_z[..n], functions: &out_fn[..n] });
+            done += batch;
+        }
+    }
+}
+
+/// Runs the chaos game of `plan` in parallel: every chunk into its own sink made by `make_sink`,
+/// the sinks merged with `merge` (which must be order-independent for determinism). `progress`
+/// is called once per finished chunk.
+pub fn run_parallel<S: PointSink + Send>(
+    ifs: &CompiledIfs,
+    seed: u32,
+    frame: u32,
+    plan: &ChunkPlan,
+    make_sink: impl Fn() -> S + Sync,
+    merge: impl Fn(S, S) -> S + Sync + Send,
+    progress: impl Fn() + Sync,
+) -> S {
+    (0..plan.chunks())
+        .into_par_iter()
+        .fold(&make_sink, |mut sink, c| {
+            run_chunk(ifs, seed, frame, c, plan.steps(c), &mut sink);
+            progress();
+            sink
+        })
+        .reduce(&make_sink, &merge)
+}
+
+/// A short deterministic sample of the attractor (16,384 points), for framing and bounds.
+pub fn attractor_sample(ifs: &CompiledIfs, seed: u32) -> Vec<Vec3> {
+    let mut sink = CollectSink::default();
+    for c in 0..4 {
+        run_chunk(ifs, seed ^ 0x5eed_b0d5, 0, c, 64, &mut sink);
+    }
+    sink.points
+}
+
+/// Axis-aligned bounds of the attractor from a short deterministic run, or the domain's box if
+/// the run gives nothing finite.
+pub fn attractor_bounds(ifs: &CompiledIfs, seed: u32) -> (DVec3, DVec3) {
+    let mut sink = CollectSink::default();
+    for c in 0..4 {
+        run_chunk(ifs, seed ^ 0x5eed_b0d5, 0, c, 256, &mut sink);
+    }
+    let mut lo = Vec3::splat(f32::INFINITY);
+    let mut hi = Vec3::splat(f32::NEG_INFINITY);
+    for p in sink.points.iter().filter(|p| p.is_finite()) {
+        lo = lo.min(*p);
+        hi = hi.max(*p);
+    }
+    if !(lo.is_finite() && hi.is_finite()) {
+        return (ifs.domain_lo.as_dvec3(), ifs.domain_hi.as_dvec3());
+    }
+    // A short run can miss thin extremities: pad by 2% of the extent.
+    let pad = 0.02 * (hi - lo);
+    ((lo - pad).as_dvec3(), (hi + pad).as_dvec3())
+}
+
+/// Runs the orbits with the lane kernel, specialized for its multi-cell axes.
+fn run_lanes(lanes: &LaneKernel, orbits: Orbits, sink: &mut impl PointSink) {
+    match lanes.multi {
+        [false, false, false] => run_lanes_for::<false, false, false>(lanes, orbits, sink),
+        [false, false, true] => run_lanes_for::<false, false, true>(lanes, orbits, sink),
+        [false, true, false] => run_lanes_for::<false, true, false>(lanes, orbits, sink),
+        [false, true, true] => run_lanes_for::<false, true, true>(lanes, orbits, sink),
+        [true, false, false] => run_lanes_for::<true, false, false>(lanes, orbits, sink),
+        [true, false, true] => run_lanes_for::<true, false, true>(lanes, orbits, sink),
+        [true, true, false] => run_lanes_for::<true, true, false>(lanes, orbits, sink),
+        [true, true, true] => run_lanes_for::<true, true, true>(lanes, orbits, sink),
+    }
+}
+
+fn run_lanes_for<const MX: bool, const MY: bool, const MZ: bool>(
+    lanes: &LaneKernel,
+    orbits: Orbits,
+    sink: &mut impl PointSink,
+) {
+    orbits.run(sink, |rng, p| {
+        let fi = lanes.select(rng.next_u32());
+        (lanes.map::<MX, MY, MZ>(fi, p), fi)
+    })
+}

@@ -1,0 +1,201 @@
+//! One shot: everything a render of a scene at one time needs before the chaos game runs,
+//! prepared in one place. Scene at t → IFS → compiled tables → attractor bounds → camera →
+//! splat view → chunk plan and random streams. The CPU render, the GPU render, the recorder,
+//! the benches and `export points` all start from a [`Shot`], so a still, a frame of an
+//! animation and an exported point set of the same scene, time and seed agree by construction.
+//!
+//! Two choices differ between outputs and are arguments: the bounds (a still takes the
+//! attractor's own; a recording takes bounds fixed over the whole timeline, so the depth cue
+//! does not breathe) and the [`Framing`] of the camera.
+
+use glam::{DVec3, Vec3};
+
+use crate::camera::OrbitCamera;
+use crate::chaos_game::{self, ChunkPlan, CompiledIfs, PlanError, PointSink};
+use crate::model::Ifs;
+use crate::resolve::ResolveStyle;
+use crate::scene::Scene;
+use crate::scene::spec::RenderSettings;
+use crate::splat::{Framebuffer, SplatView};
+
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum ShotError {
+    #[error("the scene has no enabled function at t = {t_secs} s")]
+    NoFunctions { t_secs: f64 },
+    #[error(transparent)]
+    Points(#[from] PlanError),
+}
+
+/// How a shot's camera is chosen.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Framing {
+    /// The scene's camera at t, its open fields filled from the bounds, and where the scene
+    /// leaves both target and distance open, fitted to a sample of the attractor ([`frame_camera`]):
+    /// what a still render does.
+    Fit,
+    /// The scene's camera at t, its open fields filled from the bounds (no fit to points): what
+    /// the recorder and the benches do.
+    Scene,
+    /// This camera.
+    Given(OrbitCamera),
+}
+
+/// A scene at one time, ready for the chaos game: see the module comment.
+#[derive(Clone, Debug)]
+pub struct Shot {
+    pub t_secs: f64,
+    /// Image size, point count, seed and splat settings.
+    pub settings: RenderSettings,
+    pub ifs: Ifs,
+    pub compiled: CompiledIfs,
+    /// The box the camera is framed on and the depth cue spans.
+    pub bounds: (DVec3, DVec3),
+    pub camera: OrbitCamera,
+    pub view: SplatView,
+    /// The chunks of `settings.points`.
+    pub plan: ChunkPlan,
+    /// The random streams' frame (the chaos game's `frame` argument): 0 for a still; a recording
+    /// gives every temporal sample of every frame its own.
+    pub stream: u32,
+    /// How the accumulation is drawn (shading, point radius).
+    pub style: ResolveStyle,
+}
+
+impl Shot {
+    /// Prepares `scene` at `t_secs` with `settings`: `bounds` overrides the attractor's bounds
+    /// (estimated from a short run with `settings.seed` when None); the stream is 0 and the
+    /// style the plain resolve (see [`Self::with_stream`], [`Self::style`]).
+    pub fn prepare(
+        scene: &Scene,
+        t_secs: f64,
+        settings: &RenderSettings,
+        framing: Framing,
+        bounds: Option<(DVec3, DVec3)>,
+    ) -> Result<Self, ShotError> {
+        let ifs = scene.at(t_secs);
+        let compiled = CompiledIfs::new(&ifs).ok_or(ShotError::NoFunctions { t_secs })?;
+        let plan = ChunkPlan::new(settings.points)?;
+        let bounds = bounds.unwrap_or_else(|| chaos_game::attractor_bounds(&compiled, settings.seed));
+        let camera = match framing {
+            Framing::Given(camera) => camera,
+            Framing::Scene => scene.camera_for_at(t_secs, bounds),
+            Framing::Fit => {
+                let sample = chaos_game::attractor_sample(&compiled, settings.seed);
+                frame_camera(scene, t_secs, bounds, &sample, settings.width as f32 / settings.height as f32)
+            }
+        };
+        let view = SplatView::new(
+            &camera,
+            settings.width,
+            settings.height,
+            bounds,
+            settings.mode,
+            settings.depth_cue,
+            settings.background,
+        );
+        Ok(Self {
+            t_secs,
+            settings: settings.clone(),
+            ifs,
+            compiled,
+            bounds,
+            camera,
+            view,
+            plan,
+            stream: 0,
+            style: ResolveStyle::default(),
+        })
+    }
+
+    /// The shot drawing from the random streams of frame `stream`.
+    pub fn with_stream(self, stream: u32) -> Self {
+        Self { stream, ..self }
+    }
+
+    /// The shot drawn with `style`.
+    pub fn with_style(self, style: ResolveStyle) -> Self {
+        Self { style, ..self }
+    }
+
+    /// Runs the shot's chaos game in parallel (see [`chaos_game::run_parallel`]); `progress`
+    /// is called once per finished chunk.
+    pub fn run<S: PointSink + Send>(
+        &self,
+        make_sink: impl Fn() -> S + Sync,
+        merge: impl Fn(S, S) -> S + Sync + Send,
+        progress: impl Fn() + Sync,
+    ) -> S {
+        chaos_game::run_parallel(
+            &self.compiled,
+            self.settings.seed,
+            self.stream,
+            &self.plan,
+            make_sink,
+            merge,
+            progress,
+        )
+    }
+
+    /// Runs the shot's chaos game into its splat view.
+    pub fn splat(&self, progress: impl Fn() + Sync) -> Framebuffer {
+        self.run(|| Framebuffer::new(self.view, self.compiled.colors.clone()), Framebuffer::merge, progress)
+    }
+}
+
+/// The scene's camera at `t_secs`, its open fields filled from `bounds`; where the scene leaves
+/// both target and distance open, fitted to `sample`, points of the attractor (tighter than
+/// fitting its bounding box), for an image of aspect `aspect` (width / height).
+pub fn frame_camera(scene: &Scene, t_secs: f64, bounds: (DVec3, DVec3), sample: &[Vec3], aspect: f32) -> OrbitCamera {
+    let mut camera = scene.camera_for_at(t_secs, bounds);
+    let spec = scene.camera_at(t_secs);
+    if spec.target.is_none() && spec.distance.is_none() {
+        camera.fit_points(sample, aspect);
+    }
+    camera
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn scene() -> Scene {
+        let text = "version = 1\n[grid]\nx = [0, 1]\ny = [0, 1]\n\
+            [[function]]\nkind = \"affine\"\nmatrix = [[0.5, 0], [0, 0.5]]\n\
+            [[function]]\nkind = \"affine\"\nmatrix = [[0.5, 0], [0, 0.5]]\noffset = [0.5, 0]\n\
+            [[function]]\nkind = \"affine\"\nmatrix = [[0.5, 0], [0, 0.5]]\noffset = [0, 0.5]\n";
+        Scene::parse(text, "sierpinski").unwrap()
+    }
+
+    /// The shot holds what its parts would give when prepared one by one.
+    #[test]
+    fn prepare_composes_the_steps() {
+        let scene = scene();
+        let settings = RenderSettings { width: 64, height: 48, points: 1000, ..scene.render.clone() };
+        let shot = Shot::prepare(&scene, 0.0, &settings, Framing::Scene, None).unwrap();
+        let compiled = CompiledIfs::new(&scene.at(0.0)).unwrap();
+        assert_eq!(shot.compiled, compiled);
+        assert_eq!(shot.bounds, chaos_game::attractor_bounds(&compiled, settings.seed));
+        assert_eq!(shot.camera, scene.camera_for_at(0.0, shot.bounds));
+        assert_eq!(shot.plan, ChunkPlan::new(1000).unwrap());
+        assert_eq!((shot.view.width, shot.view.height), (64, 48));
+        assert_eq!(shot.stream, 0);
+
+        let bounds = (DVec3::splat(-2.0), DVec3::splat(2.0));
+        let given = OrbitCamera::framing(bounds, 2);
+        let shot = Shot::prepare(&scene, 0.0, &settings, Framing::Given(given), Some(bounds)).unwrap();
+        assert_eq!((shot.bounds, shot.camera), (bounds, given));
+    }
+
+    #[test]
+    fn bad_shots_are_errors() {
+        let mut scene = scene();
+        scene.functions.iter_mut().for_each(|f| f.enabled = false);
+        let settings = scene.render.clone();
+        let err = Shot::prepare(&scene, 1.5, &settings, Framing::Fit, None).unwrap_err();
+        assert_eq!(err, ShotError::NoFunctions { t_secs: 1.5 });
+        let scene = self::tests::scene();
+        let settings = RenderSettings { points: u64::MAX, ..settings };
+        let err = Shot::prepare(&scene, 0.0, &settings, Framing::Fit, None).unwrap_err();
+        assert!(matches!(err, ShotError::Points(_)), "{err}");
+    }
+}

@@ -1,0 +1,61 @@
+//! The CPU's vector instructions, detected once for the whole program: the chaos game's lane
+//! kernel (`chaos_game/x86.rs`), the splat (`splat/x86.rs`) and the ray tracer's wide traversal
+//! (`raytrace/wide.rs`) all ask [`SimdLevel::detect`] instead of probing the CPU themselves, so
+//! they agree on what the CPU runs and the probe (a `cpuid` each time) runs once.
+
+use std::sync::OnceLock;
+
+/// The widest vector instructions this CPU runs that nlifs has kernels for. Ordered: a level
+/// includes every lower one.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Default)]
+pub enum SimdLevel {
+    /// Only the baseline target (SSE2 on x86-64), or another architecture.
+    #[default]
+    Scalar,
+    /// x86-64 with AVX2.
+    Avx2,
+    /// x86-64 with AVX2 and AVX-512F.
+    Avx512,
+}
+
+impl SimdLevel {
+    /// This CPU's level, detected on the first call.
+    pub fn detect() -> Self {
+        static LEVEL: OnceLock<SimdLevel> = OnceLock::new();
+        *LEVEL.get_or_init(Self::probe)
+    }
+
+    /// Whether AVX2 code may run at this level.
+    pub fn avx2(self) -> bool {
+        self >= Self::Avx2
+    }
+
+    /// Whether AVX-512F (and AVX2) code may run at this level.
+    pub fn avx512(self) -> bool {
+        self >= Self::Avx512
+    }
+
+    fn probe() -> Self {
+        #[cfg(target_arch = "x86_64")]
+        {
+            if std::arch::is_x86_feature_detected!("avx2") {
+                return if std::arch::is_x86_feature_detected!("avx512f") { Self::Avx512 } else { Self::Avx2 };
+            }
+        }
+        Self::Scalar
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn detection_is_stable_and_ordered() {
+        let level = SimdLevel::detect();
+        assert_eq!(level, SimdLevel::detect());
+        assert!(!level.avx512() || level.avx2());
+        #[cfg(target_arch = "x86_64")]
+        assert_eq!(level.avx2(), std::arch::is_x86_feature_detected!("avx2"));
+    }
+}
