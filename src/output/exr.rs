@@ -4,7 +4,6 @@
 //! `id` (the nearest point's function, -1 where empty) in closest mode, `count` (points on the
 //! pixel) in average and density modes. ZIP-compressed scan lines, which every reader knows.
 
-use std::io::Write;
 use std::path::Path;
 
 use exr::prelude::{

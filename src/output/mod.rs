@@ -121,6 +121,16 @@ impl Provenance {
         Self { scene_toml: scene.to_toml(), t_secs, settings }
     }
 
+    /// Any other image of `scene` at `t_secs` made by `command` (e.g. `snapshot`, the viewer's
+    /// screenshot) with `settings` (a JSON object; `command` and `t_secs` are added).
+    pub fn for_command(scene: &Scene, t_secs: f64, command: &str, mut settings: serde_json::Value) -> Self {
+        if let Some(obj) = settings.as_object_mut() {
+            obj.insert("command".into(), command.into());
+            obj.insert("t_secs".into(), t_secs.into());
+        }
+        Self { scene_toml: scene.to_toml(), t_secs, settings }
+    }
+
     /// Frame `frame` of a recording at time `t_secs`; `settings` describes the recorder.
     pub fn for_frame(scene: &Scene, frame: u32, t_secs: f64, mut settings: serde_json::Value) -> Self {
         if let Some(obj) = settings.as_object_mut() {

@@ -10,7 +10,6 @@
 //! view and embed the scene), the payload (one u32 key per pixel, or four u32 sums per pixel),
 //! and an FNV-1a checksum of everything before it. Merging checks all of it before writing.
 
-use std::io::Write;
 use std::ops::Range;
 use std::path::Path;
 
@@ -208,7 +207,7 @@ fn read_part(path: &Path) -> Result<PartFile, OutputError> {
     }
     let truncated = || invalid(format!("truncated part file ({} bytes)", bytes.len()));
     let mut at = 8;
-    let mut u32_at = |at: &mut usize| -> Result<u32, OutputError> {
+    let u32_at = |at: &mut usize| -> Result<u32, OutputError> {
         let v = bytes.get(*at..*at + 4).ok_or_else(truncated)?;
         *at += 4;
         Ok(u32::from_le_bytes(v.try_into().expect("4 bytes")))

@@ -7,7 +7,6 @@
 //! spliced in after the header, so a PNG's bytes differ from one without provenance only by
 //! those chunks.
 
-use std::io::Write;
 use std::path::Path;
 
 use crate::color::linear_to_srgb;
