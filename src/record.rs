@@ -166,7 +166,9 @@ impl<'a> Recorder<'a> {
     /// Renders frame `frame` on the CPU.
     pub fn frame(&self, frame: u32) -> Result<image::RgbImage, RecordError> {
         let mut images = Vec::new();
-        self.for_each_sample(frame, &mut |fb, camera| images.push(resolve_image(fb, camera, &ResolveStyle::default())))?;
+        self.for_each_sample(frame, &mut |fb, camera| {
+            images.push(resolve_image(fb, camera, &ResolveStyle::default()))
+        })?;
         Ok(if images.len() == 1 { images.remove(0) } else { average_linear(&images) })
     }
 
@@ -174,7 +176,9 @@ impl<'a> Recorder<'a> {
     /// the temporal samples averaged in linear light ([`ImageLayers::average`]).
     pub fn frame_layers(&self, frame: u32) -> Result<ImageLayers, RecordError> {
         let mut samples = Vec::new();
-        self.for_each_sample(frame, &mut |fb, camera| samples.push(ImageLayers::of(fb, camera, &ResolveStyle::default())))?;
+        self.for_each_sample(frame, &mut |fb, camera| {
+            samples.push(ImageLayers::of(fb, camera, &ResolveStyle::default()))
+        })?;
         Ok(ImageLayers::average(samples))
     }
 

@@ -112,11 +112,10 @@ pub fn record(args: RecordArgs) -> anyhow::Result<()> {
         .progress_chars("=> "),
     );
     let start = std::time::Instant::now();
-    let report =
-        record::record_as(&rec, &args.output, frames.clone(), args.resume, &options, &mut |done, _| {
-            bar.set_position(done as u64)
-        })
-        .with_context(|| format!("recording {}", args.scene.display()))?;
+    let report = record::record_as(&rec, &args.output, frames.clone(), args.resume, &options, &mut |done, _| {
+        bar.set_position(done as u64)
+    })
+    .with_context(|| format!("recording {}", args.scene.display()))?;
     bar.finish_and_clear();
     let secs = start.elapsed().as_secs_f64();
     eprintln!(

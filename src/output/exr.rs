@@ -6,9 +6,7 @@
 
 use std::path::Path;
 
-use exr::prelude::{
-    AnyChannel, AnyChannels, Encoding, FlatSamples, Image, Layer, LayerAttributes, WritableImage, f16,
-};
+use exr::prelude::{AnyChannel, AnyChannels, Encoding, FlatSamples, Image, Layer, LayerAttributes, WritableImage, f16};
 
 use crate::output::{ImageLayers, OutputError, OutputOptions};
 
@@ -23,11 +21,8 @@ pub fn write(path: &Path, layers: &ImageLayers, options: &OutputOptions) -> Resu
             FlatSamples::F32(rgba.iter().map(|p| p[c]).collect())
         }
     };
-    let mut channels: Vec<AnyChannel<FlatSamples>> = ["R", "G", "B", "A"]
-        .into_iter()
-        .enumerate()
-        .map(|(c, name)| AnyChannel::new(name, color(c)))
-        .collect();
+    let mut channels: Vec<AnyChannel<FlatSamples>> =
+        ["R", "G", "B", "A"].into_iter().enumerate().map(|(c, name)| AnyChannel::new(name, color(c))).collect();
     for (name, values) in [("Z", &layers.depth), ("id", &layers.function_id), ("count", &layers.count)] {
         if let Some(v) = values {
             channels.push(AnyChannel::new(name, FlatSamples::F32(v.clone())));
@@ -54,10 +49,10 @@ pub fn write(path: &Path, layers: &ImageLayers, options: &OutputOptions) -> Resu
 pub fn channels(path: &Path) -> Result<(Vec<String>, (usize, usize)), OutputError> {
     let meta = exr::meta::MetaData::read_from_file(path, false)
         .map_err(|e| OutputError::Invalid { path: path.display().to_string(), message: e.to_string() })?;
-    let header = meta.headers.first().ok_or_else(|| OutputError::Invalid {
-        path: path.display().to_string(),
-        message: "no image part".into(),
-    })?;
+    let header = meta
+        .headers
+        .first()
+        .ok_or_else(|| OutputError::Invalid { path: path.display().to_string(), message: "no image part".into() })?;
     let names = header.channels.list.iter().map(|c| c.name.to_string()).collect();
     Ok((names, (header.layer_size.0, header.layer_size.1)))
 }
@@ -65,7 +60,9 @@ pub fn channels(path: &Path) -> Result<(Vec<String>, (usize, usize)), OutputErro
 /// Whether `path` is an EXR of `width`×`height` whose pixels all decode.
 pub fn is_complete(path: &Path, width: u32, height: u32) -> bool {
     match exr::prelude::read_all_flat_layers_from_file(path) {
-        Ok(img) => img.layer_data.first().is_some_and(|l| l.size == exr::prelude::Vec2(width as usize, height as usize)),
+        Ok(img) => {
+            img.layer_data.first().is_some_and(|l| l.size == exr::prelude::Vec2(width as usize, height as usize))
+        }
         Err(_) => false,
     }
 }

@@ -187,12 +187,17 @@ impl ImageLayers {
                         .closest
                         .iter()
                         .map(|&k| {
-                            if k == EMPTY { f32::INFINITY } else { view.near + (k >> 8) as f32 / resolve::DEPTH_SCALE * range }
+                            if k == EMPTY {
+                                f32::INFINITY
+                            } else {
+                                view.near + (k >> 8) as f32 / resolve::DEPTH_SCALE * range
+                            }
                         })
                         .collect(),
                 );
-                function_id =
-                    Some(framebuffer.closest.iter().map(|&k| if k == EMPTY { -1.0 } else { (k & 0xff) as f32 }).collect());
+                function_id = Some(
+                    framebuffer.closest.iter().map(|&k| if k == EMPTY { -1.0 } else { (k & 0xff) as f32 }).collect(),
+                );
             }
             SplatMode::Average | SplatMode::Density => {
                 count = Some(framebuffer.accum.iter().map(|a| a[3] as f32).collect());

@@ -87,8 +87,10 @@ struct Setup {
 }
 
 fn setup(scene: &Scene, t_secs: f64, settings: &RenderSettings, origin: &str) -> Result<Setup, OutputError> {
-    let compiled = CompiledIfs::new(&scene.at(t_secs))
-        .ok_or_else(|| OutputError::Invalid { path: origin.into(), message: "the scene has no enabled function".into() })?;
+    let compiled = CompiledIfs::new(&scene.at(t_secs)).ok_or_else(|| OutputError::Invalid {
+        path: origin.into(),
+        message: "the scene has no enabled function".into(),
+    })?;
     let bounds = chaos_game::attractor_bounds(&compiled, settings.seed);
     let sample = chaos_game::attractor_sample(&compiled, settings.seed);
     let camera = frame_camera(scene, t_secs, bounds, &sample, settings.width as f32 / settings.height as f32);
@@ -253,7 +255,17 @@ fn read_part(path: &Path) -> Result<PartFile, OutputError> {
         .chunks_exact(4)
         .map(|b| u32::from_le_bytes(b.try_into().expect("4 bytes")))
         .collect();
-    Ok(PartFile { spec: PartSpec { k, n }, fingerprint, mode, width, height, chunks, total_chunks, provenance, payload })
+    Ok(PartFile {
+        spec: PartSpec { k, n },
+        fingerprint,
+        mode,
+        width,
+        height,
+        chunks,
+        total_chunks,
+        provenance,
+        payload,
+    })
 }
 
 /// What merging parts gives: the whole still's framebuffer, its camera and provenance.
@@ -266,10 +278,9 @@ pub struct Merged {
 /// Reads, checks and merges the part files `paths`: all parts of one still (same fingerprint,
 /// the same N, each K exactly once, all N present).
 pub fn merge_parts(paths: &[std::path::PathBuf]) -> Result<Merged, OutputError> {
-    let first_path = paths.first().ok_or_else(|| OutputError::Invalid {
-        path: "merge".into(),
-        message: "no part files given".into(),
-    })?;
+    let first_path = paths
+        .first()
+        .ok_or_else(|| OutputError::Invalid { path: "merge".into(), message: "no part files given".into() })?;
     let mut merged: Option<(PartFile, Setup, Framebuffer)> = None;
     let mut seen: Vec<(u32, String)> = Vec::new();
     for path in paths {
@@ -282,7 +293,10 @@ pub fn merge_parts(paths: &[std::path::PathBuf]) -> Result<Merged, OutputError> 
             if (s.view.width, s.view.height, s.view.mode.index()) != (part.width, part.height, part.mode)
                 || part.payload.len() != payload_len(&s.view)
             {
-                return Err(OutputError::Invalid { path: name, message: "size or mode differs from its settings".into() });
+                return Err(OutputError::Invalid {
+                    path: name,
+                    message: "size or mode differs from its settings".into(),
+                });
             }
             let mut fb = Framebuffer::new(s.view, s.compiled.colors.clone());
             absorb(&mut fb, &part.payload);
@@ -292,7 +306,10 @@ pub fn merge_parts(paths: &[std::path::PathBuf]) -> Result<Merged, OutputError> 
         };
         let mismatch = |what: &str| OutputError::Invalid {
             path: name.clone(),
-            message: format!("{what} differs from {}'s: parts of different stills cannot be merged", first_path.display()),
+            message: format!(
+                "{what} differs from {}'s: parts of different stills cannot be merged",
+                first_path.display()
+            ),
         };
         if part.fingerprint != first.fingerprint || part.provenance != first.provenance {
             return Err(mismatch("the scene, time or settings"));
@@ -318,8 +335,10 @@ pub fn merge_parts(paths: &[std::path::PathBuf]) -> Result<Merged, OutputError> 
         seen.push((part.spec.k, name));
     }
     let (first, s, framebuffer) = merged.expect("at least one part");
-    let missing: Vec<String> =
-        (1..=first.spec.n).filter(|k| !seen.iter().any(|(s, _)| s == k)).map(|k| format!("{k}/{}", first.spec.n)).collect();
+    let missing: Vec<String> = (1..=first.spec.n)
+        .filter(|k| !seen.iter().any(|(s, _)| s == k))
+        .map(|k| format!("{k}/{}", first.spec.n))
+        .collect();
     if !missing.is_empty() {
         return Err(OutputError::Invalid {
             path: first_path.display().to_string(),

@@ -191,8 +191,7 @@ pub fn text_chunks(png: &[u8], path: &Path) -> Result<Vec<(String, String)>, Out
 
 /// The provenance nlifs wrote into the PNG at `path`: its scene's TOML, time and settings.
 pub fn scene_from_png(path: &Path) -> Result<Provenance, OutputError> {
-    let bytes =
-        std::fs::read(path).map_err(|source| OutputError::Read { path: path.display().to_string(), source })?;
+    let bytes = std::fs::read(path).map_err(|source| OutputError::Read { path: path.display().to_string(), source })?;
     let chunks = text_chunks(&bytes, path)?;
     let find = |kw: &str| chunks.iter().find(|(k, _)| k == kw).map(|(_, t)| t.clone());
     let scene_toml = find(SCENE_KEYWORD).ok_or_else(|| OutputError::Invalid {
