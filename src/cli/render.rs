@@ -94,6 +94,12 @@ pub fn render(args: RenderArgs) -> anyhow::Result<()> {
         settings.mode = m.into();
     }
     if let (Some(spec), Some(raw)) = (args.part, &args.raw) {
+        if args.backend == RenderBackend::Gpu {
+            return Err(BadInput(
+                "--part renders on the CPU (its chunks are the CPU chaos game's); leave out --backend gpu".into(),
+            )
+            .into());
+        }
         return render_part(&scene, args.time, &settings, spec, raw);
     }
     let output = args.output.clone().expect("clap requires --output without --raw");
