@@ -151,7 +151,10 @@ fn pngs_carry_their_scene() {
     });
     let (scene, t_secs) = nlifs::output::png::load_scene_or_png(&png).unwrap();
     assert_eq!((scene.name, t_secs), (common::load_scene("plant2").name, 0.25));
-    // The chunks precede the pixels, and the pixels are those of a PNG without them.
+    let (copy, t_secs) = nlifs::output::png::extract_scene(&png, &dir).unwrap();
+    assert_eq!((copy.file_name().unwrap().to_str(), t_secs), (Some("p.scene.toml"), 0.25));
+    assert_eq!(nlifs::scene::Scene::load(&copy).unwrap().to_toml(), common::load_scene("plant2").to_toml());
+    // nlifs's chunks come before the pixels.
     let bytes = std::fs::read(&png).unwrap();
     assert_eq!(text_chunks(&bytes, &png).unwrap()[0].0, SCENE_KEYWORD);
     // Recorded frames carry theirs, with the frame's time.
