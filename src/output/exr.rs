@@ -13,12 +13,13 @@ use crate::output::{ImageLayers, OutputError, OutputOptions};
 /// Writes `layers` to `path` as OpenEXR, atomically.
 pub fn write(path: &Path, layers: &ImageLayers, options: &OutputOptions) -> Result<(), OutputError> {
     let (w, h) = (layers.width() as usize, layers.height() as usize);
-    let rgba = layers.rgba_premultiplied(options.transparent);
+    // One channel at a time, so that a large image holds one float copy of its colour at most.
     let color = |c: usize| -> FlatSamples {
+        let values = layers.premultiplied_channel(c, options.transparent);
         if options.half {
-            FlatSamples::F16(rgba.iter().map(|p| f16::from_f32(p[c])).collect())
+            FlatSamples::F16(values.map(f16::from_f32).collect())
         } else {
-            FlatSamples::F32(rgba.iter().map(|p| p[c]).collect())
+            FlatSamples::F32(values.collect())
         }
     };
     let mut channels: Vec<AnyChannel<FlatSamples>> =

@@ -254,24 +254,23 @@ impl ImageLayers {
         out
     }
 
+    /// Channel `c` (0..4: R, G, B, A) of [`Self::rgba_premultiplied`], pixel by pixel.
+    pub fn premultiplied_channel(&self, c: usize, transparent: bool) -> impl Iterator<Item = f32> + '_ {
+        let bg = self.color.background;
+        self.color.rgb.iter().zip(&self.color.alpha).map(move |(rgb, &a)| match (c, transparent) {
+            (3, true) => a,
+            (3, false) => 1.0,
+            // rgb = premultiplied + bg · (1 − a): the resolve lays the colour over the background.
+            (c, true) => (rgb[c] - bg[c] * (1.0 - a)).max(0.0),
+            (c, false) => rgb[c],
+        })
+    }
+
     /// Linear RGBA per pixel: opaque (the colour over the background, alpha 1), or with
     /// `transparent` premultiplied by the coverage (the background taken out).
     pub fn rgba_premultiplied(&self, transparent: bool) -> Vec<[f32; 4]> {
-        let bg = self.color.background;
-        self.color
-            .rgb
-            .iter()
-            .zip(&self.color.alpha)
-            .map(|(c, &a)| {
-                if transparent {
-                    // c = premultiplied + bg · (1 − a) (the resolve lays colour over the background).
-                    let p = [0, 1, 2].map(|k| (c[k] - bg[k] * (1.0 - a)).max(0.0));
-                    [p[0], p[1], p[2], a]
-                } else {
-                    [c[0], c[1], c[2], 1.0]
-                }
-            })
-            .collect()
+        let mut channels = [0, 1, 2, 3].map(|c| self.premultiplied_channel(c, transparent));
+        (0..self.color.rgb.len()).map(|_| channels.each_mut().map(|ch| ch.next().unwrap_or(0.0))).collect()
     }
 
     /// Linear RGBA per pixel with straight (not premultiplied) colour, as PNG stores it.
