@@ -13,6 +13,7 @@ pub mod gpu;
 pub mod io;
 pub mod live;
 pub mod model;
+pub mod output;
 pub mod raytrace;
 pub mod record;
 pub mod render;

@@ -18,11 +18,13 @@ use std::path::{Path, PathBuf};
 use glam::DVec3;
 
 use crate::color;
+use crate::output::{Format, ImageLayers, OutputOptions, Provenance};
 use crate::resolve::resolve_image;
 use crate::scene::Scene;
 use crate::scene::spec::RenderSettings;
 use crate::scene::timeline::LoopMode;
 use crate::shot::{Framing, Shot, ShotError};
+use crate::splat::Framebuffer;
 
 #[derive(Debug, thiserror::Error)]
 pub enum RecordError {
@@ -32,6 +34,8 @@ pub enum RecordError {
     FrameRange { start: u32, end: u32, count: u32 },
     #[error("cannot write frame {path}: {source}")]
     Write { path: String, source: std::io::Error },
+    #[error(transparent)]
+    Output(#[from] crate::output::OutputError),
     #[error(
         "ffmpeg was not found on PATH, so no video was made; the frames are in {dir} (install ffmpeg, or encode them with another tool)"
     )]
@@ -160,17 +164,46 @@ impl<'a> Recorder<'a> {
 
     /// Renders frame `frame` on the CPU.
     pub fn frame(&self, frame: u32) -> Result<image::RgbImage, RecordError> {
-        let (width, height) = (self.settings.width, self.settings.height);
         let mut images = Vec::new();
+        self.for_each_sample(frame, &mut |fb, shot| images.push(resolve_image(fb, &shot.camera, &shot.style)))?;
+        Ok(if images.len() == 1 { images.remove(0) } else { average_linear(&images) })
+    }
+
+    /// Renders frame `frame` on the CPU as linear layers (for the float and alpha outputs):
+    /// the temporal samples averaged in linear light ([`ImageLayers::average`]).
+    pub fn frame_layers(&self, frame: u32) -> Result<ImageLayers, RecordError> {
+        let mut samples = Vec::new();
+        self.for_each_sample(frame, &mut |fb, shot| samples.push(ImageLayers::of(fb, &shot.camera, &shot.style)))?;
+        Ok(ImageLayers::average(samples))
+    }
+
+    /// What frame `frame` of this recording was made of, for the PNG's text chunks.
+    pub fn provenance(&self, frame: u32) -> Provenance {
+        let s = &self.settings;
+        let settings = serde_json::json!({
+            "fps": s.fps,
+            "width": s.width,
+            "height": s.height,
+            "points_per_frame": s.points_per_frame,
+            "motion_blur_samples": s.motion_blur_samples,
+            "shutter": s.shutter,
+        });
+        Provenance::for_frame(self.scene, frame, self.time_of(frame), settings)
+    }
+
+    /// Runs the chaos game of each temporal sample of frame `frame` and hands its framebuffer
+    /// and camera to `each`.
+    fn for_each_sample(&self, frame: u32, each: &mut dyn FnMut(&Framebuffer, &Shot)) -> Result<(), RecordError> {
+        let (width, height) = (self.settings.width, self.settings.height);
         for sample in self.samples(frame) {
             let FrameSample { t_secs, camera, bounds, points, stream, render } = sample;
             let settings = RenderSettings { width, height, points, ..render };
             let shot =
                 Shot::prepare(self.scene, t_secs, &settings, Framing::Given(camera), Some(bounds))?.with_stream(stream);
             let fb = shot.splat(|| {});
-            images.push(resolve_image(&fb, &shot.camera, &shot.style));
+            each(&fb, &shot);
         }
-        Ok(if images.len() == 1 { images.remove(0) } else { average_linear(&images) })
+        Ok(())
     }
 }
 
@@ -202,11 +235,20 @@ pub fn average_linear(images: &[image::RgbImage]) -> image::RgbImage {
 
 /// `dir/frame_00042.png`.
 pub fn frame_path(dir: &Path, frame: u32) -> PathBuf {
-    dir.join(format!("frame_{frame:05}.png"))
+    frame_path_as(dir, frame, Format::Png)
 }
 
-/// Whether `path` is a PNG of `width`×`height` that decodes completely.
+/// `dir/frame_00042.png` or `.exr`, by `format`.
+pub fn frame_path_as(dir: &Path, frame: u32, format: Format) -> PathBuf {
+    dir.join(format!("frame_{frame:05}.{}", format.extension()))
+}
+
+/// Whether `path` is a PNG (or by its extension an EXR) of `width`×`height` that decodes
+/// completely.
 pub fn is_complete_frame(path: &Path, width: u32, height: u32) -> bool {
+    if Format::for_path(path) == Some(Format::Exr) {
+        return crate::output::exr::is_complete(path, width, height);
+    }
     match image::open(path) {
         Ok(img) => img.width() == width && img.height() == height,
         Err(_) => false,
@@ -223,8 +265,13 @@ pub struct RecordReport {
 
 /// The frames of `frames` that still need rendering (all of them unless `resume`).
 pub fn frames_to_render(rec: &Recorder, dir: &Path, frames: Range<u32>, resume: bool) -> Vec<u32> {
+    frames_to_render_as(rec, dir, frames, resume, Format::Png)
+}
+
+/// [`frames_to_render`] for frames in `format`.
+pub fn frames_to_render_as(rec: &Recorder, dir: &Path, frames: Range<u32>, resume: bool, format: Format) -> Vec<u32> {
     let s = rec.settings();
-    frames.filter(|&k| !(resume && is_complete_frame(&frame_path(dir, k), s.width, s.height))).collect()
+    frames.filter(|&k| !(resume && is_complete_frame(&frame_path_as(dir, k, format), s.width, s.height))).collect()
 }
 
 /// Renders frames `frames` into `dir`. With `resume`, frames already complete are kept; any
@@ -236,20 +283,35 @@ pub fn record(
     resume: bool,
     progress: &mut dyn FnMut(usize, usize),
 ) -> Result<RecordReport, RecordError> {
+    record_as(rec, dir, frames, resume, &OutputOptions::default(), progress)
+}
+
+/// [`record`] with frames written as `options` say (PNG frames carry the scene).
+pub fn record_as(
+    rec: &Recorder,
+    dir: &Path,
+    frames: Range<u32>,
+    resume: bool,
+    options: &OutputOptions,
+    progress: &mut dyn FnMut(usize, usize),
+) -> Result<RecordReport, RecordError> {
     let count = rec.frame_count();
     if frames.start >= frames.end || frames.end > count {
         return Err(RecordError::FrameRange { start: frames.start, end: frames.end, count });
     }
-    let todo = frames_to_render(rec, dir, frames.clone(), resume);
+    let todo = frames_to_render_as(rec, dir, frames.clone(), resume, options.format);
     if resume {
-        remove_stale_temp_files(dir, frames.clone());
+        remove_stale_temp_files(dir, frames.clone(), options.format.extension());
     }
     let skipped = frames.filter(|k| !todo.contains(k)).collect();
     for (n, &k) in todo.iter().enumerate() {
-        let img = rec.frame(k)?;
-        let path = frame_path(dir, k);
-        crate::io::save_png(&path, &img)
-            .map_err(|source| RecordError::Write { path: path.display().to_string(), source })?;
+        let path = frame_path_as(dir, k, options.format);
+        let provenance = rec.provenance(k);
+        if options.is_plain_png() {
+            crate::output::png::save_rgb8(&path, &rec.frame(k)?, Some(&provenance))?;
+        } else {
+            crate::output::write_image(&path, &rec.frame_layers(k)?, options, Some(&provenance))?;
+        }
         progress(n + 1, todo.len());
     }
     Ok(RecordReport { rendered: todo, skipped })
@@ -258,14 +320,14 @@ pub fn record(
 /// Removes temporary frame files (`.frame_00042.png.<pid>.tmp`) that a killed run left for
 /// frames in `frames`. Chunks of a job array own disjoint frame ranges, so this never touches
 /// a file another running chunk is writing.
-fn remove_stale_temp_files(dir: &Path, frames: Range<u32>) {
+fn remove_stale_temp_files(dir: &Path, frames: Range<u32>, extension: &str) {
     let Ok(entries) = std::fs::read_dir(dir) else { return };
     for entry in entries.filter_map(|e| e.ok()) {
         let name = entry.file_name().to_string_lossy().into_owned();
         let frame = name
             .strip_prefix(".frame_")
             .filter(|_| name.ends_with(".tmp"))
-            .and_then(|rest| rest.split_once(".png."))
+            .and_then(|rest| rest.split_once(&format!(".{extension}.")))
             .and_then(|(digits, _)| digits.parse::<u32>().ok());
         if frame.is_some_and(|k| frames.contains(&k)) {
             let _ = std::fs::remove_file(entry.path());

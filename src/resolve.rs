@@ -311,6 +311,63 @@ pub fn resolve_image(framebuffer: &Framebuffer, camera: &OrbitCamera, style: &Re
     })
 }
 
+/// A resolve in linear light with its coverage: what the float and alpha outputs write
+/// (`crate::output`). `rgb` holds the fragment values before the sRGB encode of
+/// [`resolve_image`], i.e. the attractor drawn over the background.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LinearImage {
+    pub width: u32,
+    pub height: u32,
+    /// Linear RGB over the background, row-major.
+    pub rgb: Vec<[f32; 3]>,
+    /// How much of each pixel the attractor covers: 1 where a point lies (closest mode: within
+    /// the point radius), 0 where none does; in density mode the brightness
+    /// log(1 + count) / log(1 + max count) with which the average colour is laid over the
+    /// background.
+    pub alpha: Vec<f32>,
+    /// The background the colours were drawn over (linear RGB).
+    pub background: [f32; 3],
+}
+
+/// Resolves `framebuffer` like [`resolve_image`] but keeps linear floats (no 8-bit
+/// quantisation) and the coverage of every pixel.
+pub fn resolve_linear(framebuffer: &Framebuffer, camera: &OrbitCamera, style: &ResolveStyle) -> LinearImage {
+    let view = &framebuffer.view;
+    let params = ResolveArgs::new(view, camera, style).params(view.width, view.height, false);
+    let inputs = ResolveInputs::of(framebuffer);
+    let pixels = view.width as usize * view.height as usize;
+    let mut rgb = Vec::with_capacity(pixels);
+    let mut alpha = Vec::with_capacity(pixels);
+    for y in 0..view.height {
+        for x in 0..view.width {
+            rgb.push(resolve_fragment(&params, &inputs, x, y));
+            alpha.push(coverage(&params, &inputs, x, y));
+        }
+    }
+    LinearImage { width: view.width, height: view.height, rgb, alpha, background: view.background }
+}
+
+/// The coverage of pixel (x, y) that [`resolve_fragment`] draws over the background.
+fn coverage(p: &ResolveParams, inputs: &ResolveInputs<'_>, x: u32, y: u32) -> f32 {
+    let accum = inputs.accum;
+    let pixel = (y * p.width + x) as usize;
+    if p.mode == MODE_CLOSEST {
+        let r = p.point_radius_px as i32;
+        let hit = (-r..=r).any(|dy| {
+            (-r..=r).any(|dx| dx * dx + dy * dy <= r * r && key_at(p, accum, x as i32 + dx, y as i32 + dy) != EMPTY)
+        });
+        return if hit { 1.0 } else { 0.0 };
+    }
+    let count = accum[4 * pixel + 3];
+    if count == 0 {
+        0.0
+    } else if p.mode == MODE_AVERAGE {
+        1.0
+    } else {
+        (1.0 + count as f32).ln() / (1.0 + inputs.max_count.max(1) as f32).ln()
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -61,6 +61,7 @@ const LAYERS: &[(&str, Layer)] = &[
     ("gpu", Layer::Outputs),
     ("bench", Layer::Outputs),
     ("export", Layer::Outputs),
+    ("output", Layer::Outputs),
     // The interactive view that the viewer drives.
     ("live", Layer::Live),
     ("viewer", Layer::Viewer),

@@ -9,7 +9,9 @@
 mod args;
 mod bench;
 mod export;
+mod image_args;
 mod info;
+mod merge;
 mod record;
 mod render;
 mod snapshot;
@@ -47,6 +49,8 @@ enum Command {
     /// Export geometry.
     #[command(subcommand)]
     Export(export::ExportCommand),
+    /// Merge the part files of one still (`render --part K/N --raw`) into its image.
+    Merge(merge::MergeArgs),
     /// Render an animated scene to DIR/frame_00000.png, ... (optionally a video).
     Record(record::RecordArgs),
     /// Ray-trace a still of the deterministic approximation W^n(A) (spheres or meshes).
@@ -98,6 +102,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         Some(Command::Render(args)) => render::render(args),
         Some(Command::Export(command)) => export::run(command),
         Some(Command::Record(args)) => record::record(args),
+        Some(Command::Merge(args)) => merge::merge(args),
         Some(Command::Snapshot(args)) => snapshot::snapshot(args),
         Some(Command::Bench(command)) => bench::run(command),
     }

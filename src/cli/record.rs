@@ -8,8 +8,10 @@ use clap::{Args, ValueEnum};
 use indicatif::{ProgressBar, ProgressStyle};
 
 use nlifs::chaos_game::ChunkPlan;
+use nlifs::output::Format;
 use nlifs::record::{self, RecordSettings, Recorder};
 
+use super::image_args::ImageArgs;
 use super::{BadInput, load};
 
 #[derive(Args)]
@@ -50,6 +52,8 @@ pub struct RecordArgs {
     /// Print the animation's frame count at --fps and exit (for splitting over a job array).
     #[arg(long)]
     print_frame_count: bool,
+    #[command(flatten)]
+    image: ImageArgs,
 }
 
 /// The recorders that exist. A GPU recorder would add a variant here.
@@ -62,6 +66,10 @@ pub fn record(args: RecordArgs) -> anyhow::Result<()> {
     // The only recorder there is; a GPU one would be chosen here.
     let RecordBackend::Cpu = args.backend;
     let scene = load(&args.scene)?;
+    let options = args.image.for_frames()?;
+    if args.video.is_some() && options.format == Format::Exr {
+        return Err(BadInput("--video encodes PNG frames; leave out --video with --format exr".into()).into());
+    }
     if !(args.fps > 0.0 && args.fps.is_finite()) {
         return Err(BadInput(format!("--fps must be a positive number, found {}", args.fps)).into());
     }
@@ -95,7 +103,7 @@ pub fn record(args: RecordArgs) -> anyhow::Result<()> {
         ))
         .into());
     }
-    let todo = record::frames_to_render(&rec, &args.output, frames.clone(), args.resume).len();
+    let todo = record::frames_to_render_as(&rec, &args.output, frames.clone(), args.resume, options.format).len();
     if args.resume && todo < frames.len() {
         eprintln!("resume: {} of {} frames already complete", frames.len() - todo, frames.len());
     }
@@ -108,9 +116,10 @@ pub fn record(args: RecordArgs) -> anyhow::Result<()> {
         .progress_chars("=> "),
     );
     let start = std::time::Instant::now();
-    let report =
-        record::record(&rec, &args.output, frames.clone(), args.resume, &mut |done, _| bar.set_position(done as u64))
-            .with_context(|| format!("recording {}", args.scene.display()))?;
+    let report = record::record_as(&rec, &args.output, frames.clone(), args.resume, &options, &mut |done, _| {
+        bar.set_position(done as u64)
+    })
+    .with_context(|| format!("recording {}", args.scene.display()))?;
     bar.finish_and_clear();
     let secs = start.elapsed().as_secs_f64();
     eprintln!(

@@ -2,24 +2,33 @@
 
 use std::path::PathBuf;
 
-use anyhow::Context;
 use clap::{Args, ValueEnum};
 
-use nlifs::io::save_png;
+use nlifs::output::Provenance;
+use nlifs::output::part::PartSpec;
+use nlifs::output::png::save_rgb8;
 use nlifs::render::render_cpu;
 use nlifs::resolve::{MAX_POINT_RADIUS_PX, ResolveStyle};
 use nlifs::scene::spec::SplatMode;
 use nlifs::shot::{Framing, Shot};
 
-use super::args::check_png;
+use super::image_args::{ImageArgs, bad, render_part, write_still};
 use super::{BadInput, load, progress_bar};
 
 #[derive(Args)]
 pub struct RenderArgs {
     scene: PathBuf,
-    /// Output PNG.
-    #[arg(short, long)]
-    output: PathBuf,
+    /// Output image (.png or .exr).
+    #[arg(short, long, required_unless_present = "raw", conflicts_with = "raw")]
+    output: Option<PathBuf>,
+    #[command(flatten)]
+    image: ImageArgs,
+    /// Render part K of N of the points (chunks of the chaos game) into --raw, for `nlifs merge`.
+    #[arg(long, requires = "raw", value_parser = PartSpec::parse)]
+    part: Option<PartSpec>,
+    /// The part file to write (with --part).
+    #[arg(long, requires = "part")]
+    raw: Option<PathBuf>,
     /// Image width in pixels (default: the scene's).
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..=16384))]
     width: Option<u32>,
@@ -93,7 +102,18 @@ pub fn render(args: RenderArgs) -> anyhow::Result<()> {
     if let Some(m) = args.mode {
         settings.mode = m.into();
     }
-    check_png(&args.output)?;
+    if let (Some(spec), Some(raw)) = (args.part, &args.raw) {
+        if args.backend == RenderBackend::Gpu {
+            return Err(BadInput(
+                "--part renders on the CPU (its chunks are the CPU chaos game's); leave out --backend gpu".into(),
+            )
+            .into());
+        }
+        return render_part(&scene, args.time, &settings, spec, raw);
+    }
+    let output = args.output.clone().expect("clap requires --output without --raw");
+    let options = args.image.for_file(&output)?;
+    let provenance = Provenance::for_render(&scene, args.time, &settings);
     let start = std::time::Instant::now();
     let style = ResolveStyle { shading: args.shading, point_radius_px: args.point_radius };
     let shot = Shot::prepare(&scene, args.time, &settings, Framing::Fit, None)
@@ -104,21 +124,29 @@ pub fn render(args: RenderArgs) -> anyhow::Result<()> {
     let gpu = match args.backend {
         RenderBackend::Cpu => None,
         RenderBackend::Gpu => Some(nlifs::gpu::GpuContext::headless()?),
-        RenderBackend::Auto => nlifs::gpu::GpuContext::headless().ok(),
+        // The GPU writes the plain PNG only; other outputs need the framebuffer's layers.
+        RenderBackend::Auto if options.is_plain_png() => nlifs::gpu::GpuContext::headless().ok(),
+        RenderBackend::Auto => None,
     };
-    let image = match &gpu {
+    if gpu.is_some() && !options.is_plain_png() {
+        return Err(BadInput("--format png16/exr and --transparent need --backend cpu".into()).into());
+    }
+    match &gpu {
         Some(ctx) => {
             bar.finish_and_clear();
             eprintln!("rendering on {}", ctx.describe());
-            nlifs::gpu::render::render_gpu(ctx, &shot)?.image
+            let image = nlifs::gpu::render::render_gpu(ctx, &shot)?.image;
+            save_rgb8(&output, &image, Some(&provenance)).map_err(bad)?;
         }
-        None => render_cpu(&shot, &|d, _| bar.set_position(d)).image,
-    };
-    bar.finish_and_clear();
-    save_png(&args.output, &image).with_context(|| format!("cannot write {}", args.output.display()))?;
+        None => {
+            let r = render_cpu(&shot, &|d, _| bar.set_position(d));
+            bar.finish_and_clear();
+            write_still(&output, &options, &r.framebuffer, &shot.camera, Some(&r.image), &provenance)?;
+        }
+    }
     eprintln!(
         "wrote {} ({}×{}, {} points, {:.2} s)",
-        args.output.display(),
+        output.display(),
         settings.width,
         settings.height,
         settings.points,
