@@ -82,6 +82,10 @@ pub const INV_LENGTH_6_3: f32 = 0.14907120;
 /// Elevation (tangent) past which a sample stops occluding: something that far in front is
 /// another object, not the wall of a crease.
 pub const OCCLUSION_FALLOFF: f32 = 3.0;
+/// Elevation (tangent, about 6°) that a sample must exceed to occlude: the fitted plane is
+/// flattened a little by the ridge and depths are quantized, so a plane's own samples may sit
+/// slightly above it.
+pub const OCCLUSION_BIAS: f32 = 0.1;
 /// The mean occlusion of the samples times this, at most 1, is what `occlusion` 1 takes away.
 pub const OCCLUSION_GAIN: f32 = 2.0;
 /// Occlusion strength of the solid look.
@@ -418,7 +422,7 @@ pub fn occlusion(p: &ResolveParams, accum: &[u32], x: i32, y: i32, key: u32, slo
                 if k != EMPTY {
                     let z = ((k >> 8) as i32 - depth0) as f32 * z_per_unit;
                     let above = slope_x * (ox * step) as f32 + slope_y * (oy * step) as f32 - z;
-                    let e = (above * inv_length / step as f32).max(0.0);
+                    let e = (above * inv_length / step as f32 - OCCLUSION_BIAS).max(0.0);
                     let f = e / OCCLUSION_FALLOFF;
                     occluded += e / (1.0 + e) / (1.0 + f * f);
                     samples += 1.0;
@@ -429,9 +433,10 @@ pub fn occlusion(p: &ResolveParams, accum: &[u32], x: i32, y: i32, key: u32, slo
 }
 
 /// The solid look's colour of the key `key` with colour `albedo` at accumulation pixel (x, y),
-/// before the depth cue.
-fn light(p: &ResolveParams, accum: &[u32], x: i32, y: i32, key: u32, albedo: Vec3) -> Vec3 {
-    let slopes = fitted_slopes(p, accum, x, y, key);
+/// before the depth cue, with `slope_offset` added to the fitted slopes (0 but in error bounds).
+fn light(p: &ResolveParams, accum: &[u32], x: i32, y: i32, key: u32, albedo: Vec3, slope_offset: (f32, f32)) -> Vec3 {
+    let fitted = fitted_slopes(p, accum, x, y, key);
+    let slopes = (fitted.0 + slope_offset.0, fitted.1 + slope_offset.1);
     let (normal, to_eye) = normal_and_eye(p, x, y, slopes);
     let (diffuse, specular) = lit(normal, to_eye);
     let mut visible = 1.0f32;
@@ -448,6 +453,18 @@ fn light(p: &ResolveParams, accum: &[u32], x: i32, y: i32, key: u32, albedo: Vec
 /// The mode and the lighting switch on the uniforms, which [`ResolveArgs::params`] makes equal
 /// to the GPU pipeline's constants `RESOLVE_MODE` and `SHADED` (shading or occlusion on).
 pub fn resolve_fragment(p: &ResolveParams, inputs: &ResolveInputs<'_>, x: u32, y: u32) -> [f32; 3] {
+    resolve_fragment_perturbed(p, inputs, x, y, (0.0, 0.0))
+}
+
+/// [`resolve_fragment`] with `slope_offset` added to the solid look's fitted slopes: how much
+/// the colour moves with an error in the slopes, for error bounds (`tests/resolve.rs`).
+pub fn resolve_fragment_perturbed(
+    p: &ResolveParams,
+    inputs: &ResolveInputs<'_>,
+    x: u32,
+    y: u32,
+    slope_offset: (f32, f32),
+) -> [f32; 3] {
     let accum = inputs.accum;
     let mut c = [p.background[0], p.background[1], p.background[2]];
     if x < p.width && y < p.height {
@@ -476,7 +493,7 @@ pub fn resolve_fragment(p: &ResolveParams, inputs: &ResolveInputs<'_>, x: u32, y
                 // The GPU's table has 256 entries; keys only hold indices of compiled functions.
                 let mut base = inputs.colors[fi.min(inputs.colors.len() - 1)];
                 if p.shading > 0.0 || p.occlusion > 0.0 {
-                    base = light(p, accum, at.0, at.1, key, Vec3::from_array(base)).to_array();
+                    base = light(p, accum, at.0, at.1, key, Vec3::from_array(base), slope_offset).to_array();
                 }
                 c = cue(p, base, t);
             }
@@ -653,8 +670,9 @@ mod tests {
         let size = 41;
         let p = params(size, ResolveStyle { shading: 0.0, occlusion: 1.0, point_radius_px: 0 });
         let footprint = p.pixel_size;
-        let valley = field(size, &p, |x, _| Some(2.0 + (x - 20.0).abs() * footprint));
-        let ridge = field(size, &p, |x, _| Some(2.0 - (x - 20.0).abs() * footprint));
+        // Depth grows away from the ridge's crest (nearest the viewer) and towards the valley's.
+        let ridge = field(size, &p, |x, _| Some(2.0 + (x - 20.0).abs() * footprint));
+        let valley = field(size, &p, |x, _| Some(2.0 - (x - 20.0).abs() * footprint));
         let occlusion_at = |accum: &[u32], x: i32| {
             let k = accum[(20 * size as i32 + x) as usize];
             occlusion(&p, accum, x, 20, k, fitted_slopes(&p, accum, x, 20, k))
