@@ -57,10 +57,10 @@ const COLOR_SCALE: f32 = 255.0;
 // The solid look: see the constants of the same names in src/resolve.rs.
 const KEY_LIGHT: vec3<f32> = vec3<f32>(-0.4511292, 0.5513802, 0.7017566);
 const FILL_LIGHT: vec3<f32> = vec3<f32>(0.6115766, -0.2038589, 0.7644708);
-const AMBIENT: f32 = 0.22;
-const KEY: f32 = 0.8;
+const AMBIENT: f32 = 0.15;
+const KEY: f32 = 0.9;
 const FILL: f32 = 0.25;
-const SPECULAR: f32 = 0.18;
+const SPECULAR: f32 = 0.2;
 const NORMAL_RADIUS_PX: i32 = 2;
 const SLOPE_SCALE: f32 = 2.0;
 const RIDGE: f32 = 1.0;

@@ -56,13 +56,13 @@ pub const KEY_LIGHT: [f32; 3] = [-0.4511292, 0.5513802, 0.7017566];
 /// Direction towards the fill light (unit).
 pub const FILL_LIGHT: [f32; 3] = [0.6115766, -0.2038589, 0.7644708];
 /// Light that reaches every normal.
-pub const AMBIENT: f32 = 0.22;
+pub const AMBIENT: f32 = 0.15;
 /// The key light's diffuse strength.
-pub const KEY: f32 = 0.8;
+pub const KEY: f32 = 0.9;
 /// The fill light's diffuse strength.
 pub const FILL: f32 = 0.25;
 /// The key light's Blinn-Phong highlight strength (white, exponent 32).
-pub const SPECULAR: f32 = 0.18;
+pub const SPECULAR: f32 = 0.2;
 /// The normal's plane fit reads the (2r + 1)² window of this radius.
 pub const NORMAL_RADIUS_PX: i32 = 2;
 /// The plane fit weighs a neighbour half at this slope from the centre (tan 63°).
@@ -414,21 +414,21 @@ pub fn occlusion(p: &ResolveParams, accum: &[u32], x: i32, y: i32, key: u32, slo
     // front (a foreground object, not a crease: falloff past OCCLUSION_FALLOFF). Empty samples
     // do not count, so a sparse cloud is not darker than a dense one.
     let step = p.occlusion_step_px as i32;
-        let (mut occluded, mut samples) = (0.0f32, 0.0f32);
-        for ring in 0..OCCLUSION_RINGS {
-            for i in 0..OCCLUSION_DIRECTIONS {
-                let (ox, oy, inv_length) = occlusion_offset(ring, i);
-                let k = key_at(p, accum, x + ox * step, y + oy * step);
-                if k != EMPTY {
-                    let z = ((k >> 8) as i32 - depth0) as f32 * z_per_unit;
-                    let above = slope_x * (ox * step) as f32 + slope_y * (oy * step) as f32 - z;
-                    let e = (above * inv_length / step as f32 - OCCLUSION_BIAS).max(0.0);
-                    let f = e / OCCLUSION_FALLOFF;
-                    occluded += e / (1.0 + e) / (1.0 + f * f);
-                    samples += 1.0;
-                }
+    let (mut occluded, mut samples) = (0.0f32, 0.0f32);
+    for ring in 0..OCCLUSION_RINGS {
+        for i in 0..OCCLUSION_DIRECTIONS {
+            let (ox, oy, inv_length) = occlusion_offset(ring, i);
+            let k = key_at(p, accum, x + ox * step, y + oy * step);
+            if k != EMPTY {
+                let z = ((k >> 8) as i32 - depth0) as f32 * z_per_unit;
+                let above = slope_x * (ox * step) as f32 + slope_y * (oy * step) as f32 - z;
+                let e = (above * inv_length / step as f32 - OCCLUSION_BIAS).max(0.0);
+                let f = e / OCCLUSION_FALLOFF;
+                occluded += e / (1.0 + e) / (1.0 + f * f);
+                samples += 1.0;
             }
         }
+    }
     if samples > 0.0 { (OCCLUSION_GAIN * occluded / samples).min(1.0) } else { 0.0 }
 }
 

@@ -285,7 +285,8 @@ fn resolve_matches_cpu() {
     for acc in &accumulations {
         for style in styles {
             for point_radius_px in [0, 1, 2] {
-                let args = ResolveArgs { shading: style.shading, occlusion: style.occlusion, point_radius_px, ..acc.args };
+                let args =
+                    ResolveArgs { shading: style.shading, occlusion: style.occlusion, point_radius_px, ..acc.args };
                 compare(&mut gpu, acc, &args);
             }
         }

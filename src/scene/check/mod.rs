@@ -610,7 +610,11 @@ impl Checker<'_> {
         }
         if let Some(l) = &r.look {
             out.look = Some(Look::parse(l.get_ref()).ok_or_else(|| {
-                self.err(l.span(), "render.look", format!("`{}` is not a look; use \"solid\" or \"paper\"", l.get_ref()))
+                self.err(
+                    l.span(),
+                    "render.look",
+                    format!("`{}` is not a look; use \"solid\" or \"paper\"", l.get_ref()),
+                )
             })?);
         }
         for (value, field, slot) in
