@@ -80,7 +80,7 @@ pub const OCCLUSION_DIRECTIONS: i32 = 8;
 /// One over the lengths of the base offsets (3, 0), (2, 2) and (6, 3).
 pub const INV_LENGTH_3_0: f32 = 0.33333334;
 pub const INV_LENGTH_2_2: f32 = 0.35355338;
-pub const INV_LENGTH_6_3: f32 = 0.14907120;
+pub const INV_LENGTH_6_3: f32 = 0.1490712;
 /// Elevation (tangent) past which a sample stops occluding: something that far in front is
 /// another object, not the wall of a crease.
 pub const OCCLUSION_FALLOFF: f32 = 3.0;
@@ -593,7 +593,7 @@ mod tests {
                 let p = params(size, ResolveStyle { shading: 1.0, occlusion: 1.0, point_radius_px: 0 });
                 let footprint = p.pixel_size;
                 let accum = field(size, &p, |x, y| {
-                    let hole = holes && (x as u32 * 7 + y as u32 * 3) % 5 == 0;
+                    let hole = holes && (x as u32 * 7 + y as u32 * 3).is_multiple_of(5);
                     (!hole).then_some(2.0 + (slope_x * (x - 10.0) + slope_y * (y - 10.0)) * footprint)
                 });
                 let inputs = ResolveInputs { accum: &accum, colors: &[[1.0; 3]], max_count: 0 };
