@@ -4,8 +4,9 @@
 // become average colours, and density mode scales the average by log(1 + count) / log(1 + max
 // count). The max count comes from `max_count`, a workgroup reduction run before the draw.
 //
-// Optional screen-space shading (closest mode): normals from the depth of the neighbouring
-// pixels' keys, lit by a head light, so that 3D point sets read as solids.
+// The solid look (closest mode; `src/resolve.rs` explains it): normals from a weighted plane
+// fit to the depths around each key, ambient + key light (Lambert and a Blinn-Phong highlight)
+// + fill light fixed to the camera, and ambient occlusion from 16 samples in a fixed pattern.
 
 // Mirrors `ResolveParams` in src/resolve.rs (one mirror, used by both resolves): keep in sync.
 struct ResolveParams {
@@ -16,7 +17,7 @@ struct ResolveParams {
     mode: u32,
     // 1: write sRGB-encoded values (unorm target); 0: linear (sRGB target encodes).
     encode_srgb: u32,
-    // 0: flat colours; 1: full screen-space shading.
+    // 0: flat colours; 1: fully lit.
     shading: f32,
     // View-space depth range of the keys (near, far), for normals from depth.
     near: f32,
@@ -30,10 +31,16 @@ struct ResolveParams {
     // right of the viewer's side panel), so fragment positions map back to accumulation pixels.
     origin_x: u32,
     origin_y: u32,
+    // Ambient occlusion strength: 0 none.
+    occlusion: f32,
+    // Pixels per unit of the occlusion samples' offsets.
+    occlusion_step_px: u32,
+    _pad0: u32,
+    _pad1: u32,
 }
 
 // Pipeline constants (src/gpu/resolve.rs makes one pipeline per target format, mode and
-// shading on/off). The mode, the shading and the sRGB encoding as constants rather than
+// lighting on/off, SHADED being shading or occlusion on). The mode, the shading and the sRGB encoding as constants rather than
 // uniforms let the compiler drop the branches not taken: a SIMD software rasterizer runs both
 // sides of a branch it cannot prove uniform, storage loads and all (the dead branches were most
 // of the resolve's cost on lavapipe). The uniforms of the same names stay for the values.
@@ -46,6 +53,26 @@ const MODE_AVERAGE: u32 = 1u;
 const EMPTY: u32 = 0xffffffffu;
 const DEPTH_SCALE: f32 = 16777215.0;
 const COLOR_SCALE: f32 = 255.0;
+
+// The solid look: see the constants of the same names in src/resolve.rs.
+const KEY_LIGHT: vec3<f32> = vec3<f32>(-0.4511292, 0.5513802, 0.7017566);
+const FILL_LIGHT: vec3<f32> = vec3<f32>(0.6115766, -0.2038589, 0.7644708);
+const AMBIENT: f32 = 0.15;
+const KEY: f32 = 0.9;
+const FILL: f32 = 0.25;
+const SPECULAR: f32 = 0.2;
+const NORMAL_RADIUS_PX: i32 = 2;
+const SLOPE_SCALE: f32 = 2.0;
+const RIDGE: f32 = 1.0;
+const SLOPE_MAX: f32 = 8.0;
+const OCCLUSION_RINGS: i32 = 2;
+const OCCLUSION_DIRECTIONS: i32 = 8;
+const INV_LENGTH_3_0: f32 = 0.33333334;
+const INV_LENGTH_2_2: f32 = 0.35355338;
+const INV_LENGTH_6_3: f32 = 0.1490712;
+const OCCLUSION_FALLOFF: f32 = 3.0;
+const OCCLUSION_BIAS: f32 = 0.1;
+const OCCLUSION_GAIN: f32 = 2.0;
 
 @group(0) @binding(0) var<uniform> params: ResolveParams;
 // The accumulation buffer of `chaos_game.wgsl`, read-only here: one key per pixel (closest) or
@@ -91,17 +118,6 @@ fn cue(color: vec3<f32>, t: f32) -> vec3<f32> {
     return color + (params.background.rgb - color) * k;
 }
 
-// View-space position of pixel (x, y) with key depth fraction t (for normals).
-fn view_position(x: f32, y: f32, t: f32) -> vec3<f32> {
-    let d = params.near + t * (params.far - params.near);
-    let sx = (x - 0.5 * f32(params.width)) * params.pixel_size;
-    let sy = (0.5 * f32(params.height) - y) * params.pixel_size;
-    if params.perspective != 0u {
-        return vec3<f32>(sx * d, sy * d, -d);
-    }
-    return vec3<f32>(sx, sy, -d);
-}
-
 fn key_at(x: i32, y: i32) -> u32 {
     if x < 0 || y < 0 || x >= i32(params.width) || y >= i32(params.height) {
         return EMPTY;
@@ -113,38 +129,141 @@ fn depth_of(key: u32) -> f32 {
     return f32(key >> 8u) / DEPTH_SCALE;
 }
 
-// Lambert head-light factor from the depths of the 4-neighbourhood (1 where undefined).
-fn shade(x: i32, y: i32, t: f32) -> f32 {
-    let p = view_position(f32(x) + 0.5, f32(y) + 0.5, t);
-    var dx = vec3<f32>(0.0);
-    var dy = vec3<f32>(0.0);
-    let kr = key_at(x + 1, y);
-    let kl = key_at(x - 1, y);
-    let kd = key_at(x, y + 1);
-    let ku = key_at(x, y - 1);
-    // One-sided differences from the nearer neighbour avoid smearing across silhouettes.
-    let tr = select(t, depth_of(kr), kr != EMPTY);
-    let tl = select(t, depth_of(kl), kl != EMPTY);
-    let td = select(t, depth_of(kd), kd != EMPTY);
-    let tu = select(t, depth_of(ku), ku != EMPTY);
-    if abs(tr - t) < abs(tl - t) {
-        dx = view_position(f32(x) + 1.5, f32(y) + 0.5, tr) - p;
-    } else {
-        dx = p - view_position(f32(x) - 0.5, f32(y) + 0.5, tl);
+// Offset i (0..8) of ring `ring` (0..2) of the occlusion samples in steps (xy) and one over its
+// length (z): the ring's two base offsets turned by i / 2 quarter turns.
+fn occlusion_offset(ring: i32, i: i32) -> vec3<f32> {
+    let odd = i % 2 == 1;
+    var o = vec2<i32>(6, 3);
+    var inv_length = INV_LENGTH_6_3;
+    if ring == 0 {
+        if odd {
+            o = vec2<i32>(2, 2);
+            inv_length = INV_LENGTH_2_2;
+        } else {
+            o = vec2<i32>(3, 0);
+            inv_length = INV_LENGTH_3_0;
+        }
+    } else if odd {
+        o = vec2<i32>(3, 6);
     }
-    if abs(td - t) < abs(tu - t) {
-        dy = view_position(f32(x) + 0.5, f32(y) + 1.5, td) - p;
-    } else {
-        dy = p - view_position(f32(x) + 0.5, f32(y) - 0.5, tu);
+    for (var turn = 0; turn < i / 2; turn += 1) {
+        o = vec2<i32>(-o.y, o.x);
     }
-    let n = cross(dy, dx);
-    let len = length(n);
-    if !(len > 0.0) {
-        return 1.0;
+    return vec3<f32>(f32(o.x), f32(o.y), inv_length);
+}
+
+// View depth per key depth unit, in footprints (the view-space size of a pixel at the key's
+// depth).
+fn footprints_per_unit(key: u32) -> f32 {
+    let d = params.near + depth_of(key) * (params.far - params.near);
+    var footprint = params.pixel_size;
+    if params.perspective != 0u {
+        footprint = params.pixel_size * d;
     }
-    let to_eye = normalize(-p);
-    let lambert = abs(dot(n / len, to_eye));
-    return 0.25 + 0.75 * lambert;
+    return (params.far - params.near) / DEPTH_SCALE / footprint;
+}
+
+// Slopes (depth change per pixel step right and down, in footprints) of the weighted
+// least-squares plane through the keys of the window around (x, y).
+fn fitted_slopes(x: i32, y: i32, key: u32) -> vec2<f32> {
+    let z_per_unit = footprints_per_unit(key);
+    let depth0 = i32(key >> 8u);
+    var sw = 1.0;
+    var sx = 0.0;
+    var sy = 0.0;
+    var sz = 0.0;
+    var sxx = 0.0;
+    var sxy = 0.0;
+    var syy = 0.0;
+    var sxz = 0.0;
+    var syz = 0.0;
+    for (var dy = -NORMAL_RADIUS_PX; dy <= NORMAL_RADIUS_PX; dy += 1) {
+        for (var dx = -NORMAL_RADIUS_PX; dx <= NORMAL_RADIUS_PX; dx += 1) {
+            let k = key_at(x + dx, y + dy);
+            if k != EMPTY && (dx != 0 || dy != 0) {
+                let z = f32(i32(k >> 8u) - depth0) * z_per_unit;
+                let fx = f32(dx);
+                let fy = f32(dy);
+                let q = z / SLOPE_SCALE;
+                let w = 1.0 / (1.0 + q * q / (fx * fx + fy * fy));
+                sw += w;
+                sx += w * fx;
+                sy += w * fy;
+                sz += w * z;
+                sxx += w * fx * fx;
+                sxy += w * fx * fy;
+                syy += w * fy * fy;
+                sxz += w * fx * z;
+                syz += w * fy * z;
+            }
+        }
+    }
+    let cxx = sxx - sx * sx / sw + RIDGE;
+    let cyy = syy - sy * sy / sw + RIDGE;
+    let cxy = sxy - sx * sy / sw;
+    let cxz = sxz - sx * sz / sw;
+    let cyz = syz - sy * sz / sw;
+    let det = cxx * cyy - cxy * cxy;
+    let slope_x = clamp((cyy * cxz - cxy * cyz) / det, -SLOPE_MAX, SLOPE_MAX);
+    let slope_y = clamp((cxx * cyz - cxy * cxz) / det, -SLOPE_MAX, SLOPE_MAX);
+    return vec2<f32>(slope_x, slope_y);
+}
+
+// The fraction of the light the occlusion takes away at strength 1.
+fn occlusion_at(x: i32, y: i32, key: u32, slopes: vec2<f32>) -> f32 {
+    let z_per_unit = footprints_per_unit(key);
+    let depth0 = i32(key >> 8u);
+    let step = i32(params.occlusion_step_px);
+    var occluded = 0.0;
+    var samples = 0.0;
+    for (var ring = 0; ring < OCCLUSION_RINGS; ring += 1) {
+        for (var i = 0; i < OCCLUSION_DIRECTIONS; i += 1) {
+            let o = occlusion_offset(ring, i);
+            let ox = i32(o.x) * step;
+            let oy = i32(o.y) * step;
+            let k = key_at(x + ox, y + oy);
+            if k != EMPTY {
+                let z = f32(i32(k >> 8u) - depth0) * z_per_unit;
+                let above = slopes.x * f32(ox) + slopes.y * f32(oy) - z;
+                let e = max(above * o.z / f32(step) - OCCLUSION_BIAS, 0.0);
+                let f = e / OCCLUSION_FALLOFF;
+                occluded += e / (1.0 + e) / (1.0 + f * f);
+                samples += 1.0;
+            }
+        }
+    }
+    if samples > 0.0 {
+        return min(OCCLUSION_GAIN * occluded / samples, 1.0);
+    }
+    return 0.0;
+}
+
+// The solid look's colour of `key` with colour `albedo` at (x, y), before the depth cue.
+fn light(x: i32, y: i32, key: u32, albedo: vec3<f32>) -> vec3<f32> {
+    let slopes = fitted_slopes(x, y, key);
+    let sx_screen = (f32(x) + 0.5 - 0.5 * f32(params.width)) * params.pixel_size;
+    let sy_screen = (0.5 * f32(params.height) - (f32(y) + 0.5)) * params.pixel_size;
+    var ray = vec3<f32>(0.0, 0.0, -1.0);
+    if params.perspective != 0u {
+        ray = vec3<f32>(sx_screen, sy_screen, -1.0);
+    }
+    let tangent_x = ray * slopes.x + vec3<f32>(1.0, 0.0, 0.0);
+    let tangent_y = ray * slopes.y - vec3<f32>(0.0, 1.0, 0.0);
+    let normal = normalize(cross(tangent_y, tangent_x));
+    let to_eye = normalize(-ray);
+    let diffuse = AMBIENT + KEY * max(dot(normal, KEY_LIGHT), 0.0) + FILL * max(dot(normal, FILL_LIGHT), 0.0);
+    let s1 = max(dot(normal, normalize(KEY_LIGHT + to_eye)), 0.0);
+    let s2 = s1 * s1;
+    let s4 = s2 * s2;
+    let s8 = s4 * s4;
+    let s16 = s8 * s8;
+    let specular = SPECULAR * (s16 * s16);
+    var visible = 1.0;
+    if params.occlusion > 0.0 {
+        visible = 1.0 - params.occlusion * occlusion_at(x, y, key, slopes);
+    }
+    let factor = (1.0 - params.shading) + diffuse * params.shading;
+    return albedo * (factor * visible) + vec3<f32>(specular * params.shading * visible);
 }
 
 @fragment
@@ -176,8 +295,8 @@ fn resolve(in: VertexOutput) -> @location(0) vec4<f32> {
                 let fi = key & 0xffu;
                 let t = depth_of(key);
                 var base = colors[fi].rgb;
-                if SHADED && params.shading > 0.0 {
-                    base *= mix(1.0, shade(at.x, at.y, t), params.shading);
+                if SHADED && (params.shading > 0.0 || params.occlusion > 0.0) {
+                    base = light(at.x, at.y, key, base);
                 }
                 c = cue(base, t);
             }

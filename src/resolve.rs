@@ -4,19 +4,37 @@
 //! loop shape: [`resolve_fragment`] is the fragment stage `resolve` for one pixel, [`max_count`]
 //! the density mode's reduction, and [`resolve_image`] runs the fragment over every pixel and
 //! writes what an 8-bit unorm target stores. Keep in sync with `shaders/resolve.wgsl`.
+//! This file is longer than 700 lines because the solid look's unit tests (planes, a sphere, a
+//! corner, the scene's keys) sit next to the terms they check; the code itself is under 550.
 //!
-//! Closest keys become depth-cued function colours, optionally shaded from the depth of the
-//! neighbouring keys (normals from depth, lit by a head light, so that 3D point sets read as
-//! solids) and widened to a point radius (each pixel shows the nearest key within it); sums
-//! become average colours, which density mode scales by log(1 + count) / log(1 + max count).
-//! With [`ResolveStyle::default`] (no shading, radius 0) the image is the plain resolve that
-//! `nlifs render` has always written.
+//! Closest keys become depth-cued function colours, widened to a point radius (each pixel shows
+//! the nearest key within it); sums become average colours, which density mode scales by
+//! log(1 + count) / log(1 + max count). With [`ResolveStyle::PAPER`] (the default: no shading,
+//! no occlusion, radius 0) the image is the plain resolve that `nlifs render` has always
+//! written.
+//!
+//! The solid look ([`ResolveStyle::SOLID`], closest mode) makes 3D point sets read as solids,
+//! from the depth buffer alone:
+//! - Normals: a plane fitted by weighted least squares to the depths of the 5×5 window around
+//!   the key ([`fitted_slopes`]). Empty pixels do not count and a neighbour's weight falls with
+//!   its slope from the centre, so holes in a sparse cloud and the far side of a silhouette
+//!   neither tilt nor flip the normal; a small ridge term pulls what the window cannot
+//!   determine (a lone pixel) towards the view-facing normal. Neighbouring pixels share most of
+//!   their window, so the normal changes smoothly and a converging cloud does not sparkle.
+//! - Lights fixed to the camera ([`lit`]): ambient, a key light up-left-front (Lambert plus a
+//!   Blinn-Phong highlight) and a weaker fill light low right. `shading` blends the flat colour
+//!   (0) into the lit one (1).
+//! - Ambient occlusion: 16 samples in a fixed pattern (2 rings × 8 directions, no noise, so no
+//!   blur is needed) measure how far the neighbourhood rises above the fitted plane; a crease
+//!   darkens, a plane or a convex bump does not. `occlusion` scales how much light it takes.
+//!
+//! The depth cue applies after the light, as in the paper's look.
 
 use glam::Vec3;
 
 use crate::camera::{OrbitCamera, Projection};
 use crate::color::linear_to_srgb;
-use crate::scene::spec::SplatMode;
+use crate::scene::spec::{Look, RenderSettings, SplatMode};
 use crate::splat::{Framebuffer, SplatView};
 
 /// The closest mode's number in `ResolveParams::mode` ([`SplatMode::index`]).
@@ -33,6 +51,51 @@ pub const COLOR_SCALE: f32 = 255.0;
 /// reads per pixel, which a software rasterizer pays in full.
 pub const MAX_POINT_RADIUS_PX: u32 = 8;
 
+// The solid look (`light`). Lights are in view space (x right, y up, z towards the viewer), so
+// they move with the camera: the key light up, left and in front, the fill light low right.
+/// Direction towards the key light (unit).
+pub const KEY_LIGHT: [f32; 3] = [-0.4511292, 0.5513802, 0.7017566];
+/// Direction towards the fill light (unit).
+pub const FILL_LIGHT: [f32; 3] = [0.6115766, -0.2038589, 0.7644708];
+/// Light that reaches every normal.
+pub const AMBIENT: f32 = 0.15;
+/// The key light's diffuse strength.
+pub const KEY: f32 = 0.9;
+/// The fill light's diffuse strength.
+pub const FILL: f32 = 0.25;
+/// The key light's Blinn-Phong highlight strength (white, exponent 32).
+pub const SPECULAR: f32 = 0.2;
+/// The normal's plane fit reads the (2r + 1)² window of this radius.
+pub const NORMAL_RADIUS_PX: i32 = 2;
+/// The plane fit weighs a neighbour half at this slope from the centre (tan 63°).
+pub const SLOPE_SCALE: f32 = 2.0;
+/// Ridge of the plane fit, in the units of one full-weight neighbour one pixel away.
+pub const RIDGE: f32 = 1.0;
+/// Slopes beyond this (tan 83°) are clamped: the normal barely turns past it.
+pub const SLOPE_MAX: f32 = 8.0;
+/// Occlusion samples: rings of directions, radii 3 and 6.7 steps (the second ring turned by
+/// half a direction, so that the 16 samples point in 16 directions).
+pub const OCCLUSION_RINGS: i32 = 2;
+pub const OCCLUSION_DIRECTIONS: i32 = 8;
+/// One over the lengths of the base offsets (3, 0), (2, 2) and (6, 3).
+pub const INV_LENGTH_3_0: f32 = 0.33333334;
+pub const INV_LENGTH_2_2: f32 = 0.35355338;
+pub const INV_LENGTH_6_3: f32 = 0.1490712;
+/// Elevation (tangent) past which a sample stops occluding: something that far in front is
+/// another object, not the wall of a crease.
+pub const OCCLUSION_FALLOFF: f32 = 3.0;
+/// Elevation (tangent, about 6°) that a sample must exceed to occlude: the fitted plane is
+/// flattened a little by the ridge and depths are quantized, so a plane's own samples may sit
+/// slightly above it.
+pub const OCCLUSION_BIAS: f32 = 0.1;
+/// The mean occlusion of the samples times this, at most 1, is what `occlusion` 1 takes away.
+pub const OCCLUSION_GAIN: f32 = 2.0;
+/// Occlusion strength of the solid look.
+pub const SOLID_OCCLUSION: f32 = 0.6;
+/// The look of 3D scenes that do not name one: switch to [`Look::Solid`] to make the solid
+/// look the default of `render`, `record` and the viewer (2D scenes stay paper).
+pub const DEFAULT_LOOK_3D: Look = Look::Paper;
+
 const _: () = assert!(EMPTY == crate::splat::EMPTY);
 const _: () = assert!(DEPTH_SCALE == ((1u32 << crate::splat::DEPTH_BITS) - 1) as f32);
 const _: () = assert!(COLOR_SCALE == crate::splat::COLOR_SCALE);
@@ -48,7 +111,7 @@ pub struct ResolveParams {
     pub mode: u32,
     /// 1: the fragment writes sRGB-encoded values (unorm target); 0: linear (sRGB target).
     pub encode_srgb: u32,
-    /// 0: flat colours; 1: full screen-space shading (closest mode).
+    /// 0: flat colours; 1: fully lit (closest mode).
     pub shading: f32,
     /// View-space depth range of the keys, for normals from depth.
     pub near: f32,
@@ -61,18 +124,53 @@ pub struct ResolveParams {
     /// Target pixel of the accumulation's pixel (0, 0) (the GPU draw's viewport origin).
     pub origin_x: u32,
     pub origin_y: u32,
+    /// Ambient occlusion strength (closest mode): 0 none.
+    pub occlusion: f32,
+    /// Pixels per unit of the occlusion samples' offsets.
+    pub occlusion_step_px: u32,
+    pub _pad: [u32; 2],
 }
-const _: () = assert!(std::mem::size_of::<ResolveParams>() == 64);
+const _: () = assert!(std::mem::size_of::<ResolveParams>() == 80);
 
 /// How the resolve draws, beyond the splat's own settings (mode, background, depth cue). The
-/// default is the plain resolve: flat colours, one pixel per key.
+/// default is the paper look: flat colours, one pixel per key, the bytes `nlifs render` has
+/// always written.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct ResolveStyle {
-    /// Screen-space shading strength in [0, 1] (closest mode): 0 flat, 1 fully shaded.
+    /// Lighting strength in [0, 1] (closest mode): 0 flat, 1 fully lit.
     pub shading: f32,
+    /// Ambient occlusion strength in [0, 1] (closest mode): 0 none.
+    pub occlusion: f32,
     /// Closest mode: each pixel shows the nearest key within this radius (at most
     /// [`MAX_POINT_RADIUS_PX`]).
     pub point_radius_px: u32,
+}
+
+impl ResolveStyle {
+    /// The paper's look: depth-cued flat colour.
+    pub const PAPER: Self = Self { shading: 0.0, occlusion: 0.0, point_radius_px: 0 };
+    /// The solid look: lit, with ambient occlusion.
+    pub const SOLID: Self = Self { shading: 1.0, occlusion: SOLID_OCCLUSION, point_radius_px: 0 };
+
+    pub fn of_look(look: Look) -> Self {
+        match look {
+            Look::Paper => Self::PAPER,
+            Look::Solid => Self::SOLID,
+        }
+    }
+
+    /// The style a scene's render settings ask for, for a scene of `dimension` (2 or 3): its
+    /// look (unnamed: [`DEFAULT_LOOK_3D`] in 3D, paper in 2D, where depth is flat), with the
+    /// scene's `shading` and `occlusion` over the look's.
+    pub fn of(settings: &RenderSettings, dimension: usize) -> Self {
+        let default_look = if dimension >= 3 { DEFAULT_LOOK_3D } else { Look::Paper };
+        let look = Self::of_look(settings.look.unwrap_or(default_look));
+        Self {
+            shading: settings.shading.unwrap_or(look.shading),
+            occlusion: settings.occlusion.unwrap_or(look.occlusion),
+            point_radius_px: look.point_radius_px,
+        }
+    }
 }
 
 /// What the resolve needs besides the accumulation: the splat's colour settings, the style and
@@ -82,8 +180,10 @@ pub struct ResolveArgs {
     pub mode: SplatMode,
     pub background: [f32; 3],
     pub depth_cue: f32,
-    /// 0: flat colours; 1: full screen-space shading (closest mode only).
+    /// 0: flat colours; 1: fully lit (closest mode only).
     pub shading: f32,
+    /// Ambient occlusion strength in [0, 1] (closest mode only).
+    pub occlusion: f32,
     /// Closest mode: each pixel shows the nearest key within this radius.
     pub point_radius_px: u32,
     pub near: f32,
@@ -115,6 +215,7 @@ impl ResolveArgs {
             background: view.background,
             depth_cue: view.depth_cue,
             shading: style.shading,
+            occlusion: style.occlusion,
             point_radius_px: style.point_radius_px,
             near: view.near,
             far: view.far,
@@ -124,9 +225,10 @@ impl ResolveArgs {
         }
     }
 
-    /// The shader's parameters for an accumulation of `width`×`height` pixels. Shading and
-    /// point radius apply to closest mode only (zero otherwise, so that the GPU picks the
-    /// unshaded pipeline); the radius is clamped to [`MAX_POINT_RADIUS_PX`].
+    /// The shader's parameters for an accumulation of `width`×`height` pixels. Shading,
+    /// occlusion and point radius apply to closest mode only (zero otherwise, so that the GPU
+    /// picks the unshaded pipeline); the radius is clamped to [`MAX_POINT_RADIUS_PX`], the
+    /// strengths to [0, 1]. The occlusion samples reach 3 and 6.7 pixels per 480 rows.
     pub fn params(&self, width: u32, height: u32, encode_srgb: bool) -> ResolveParams {
         let closest = self.mode == SplatMode::Closest;
         ResolveParams {
@@ -135,7 +237,7 @@ impl ResolveArgs {
             height,
             mode: self.mode.index(),
             encode_srgb: encode_srgb as u32,
-            shading: if closest { self.shading } else { 0.0 },
+            shading: if closest { self.shading.clamp(0.0, 1.0) } else { 0.0 },
             near: self.near,
             far: self.far,
             pixel_size: self.pixel_size,
@@ -143,6 +245,9 @@ impl ResolveArgs {
             point_radius_px: if closest { self.point_radius_px.min(MAX_POINT_RADIUS_PX) } else { 0 },
             origin_x: self.origin_px[0],
             origin_y: self.origin_px[1],
+            occlusion: if closest { self.occlusion.clamp(0.0, 1.0) } else { 0.0 },
+            occlusion_step_px: ((height + 240) / 480).max(1),
+            _pad: [0; 2],
         }
     }
 }
@@ -189,14 +294,6 @@ fn cue(p: &ResolveParams, color: [f32; 3], t: f32) -> [f32; 3] {
     [0, 1, 2].map(|c| color[c] + (p.background[c] - color[c]) * k)
 }
 
-/// View-space position of pixel (x, y) with key depth fraction t (for normals).
-fn view_position(p: &ResolveParams, x: f32, y: f32, t: f32) -> Vec3 {
-    let d = p.near + t * (p.far - p.near);
-    let sx = (x - 0.5 * p.width as f32) * p.pixel_size;
-    let sy = (0.5 * p.height as f32 - y) * p.pixel_size;
-    if p.perspective != 0 { Vec3::new(sx * d, sy * d, -d) } else { Vec3::new(sx, sy, -d) }
-}
-
 fn key_at(p: &ResolveParams, accum: &[u32], x: i32, y: i32) -> u32 {
     if x < 0 || y < 0 || x >= p.width as i32 || y >= p.height as i32 {
         return EMPTY;
@@ -208,41 +305,168 @@ fn depth_of(key: u32) -> f32 {
     (key >> 8) as f32 / DEPTH_SCALE
 }
 
-/// Lambert head-light factor from the depths of the 4-neighbourhood (1 where undefined).
-fn shade(p: &ResolveParams, accum: &[u32], x: i32, y: i32, t: f32) -> f32 {
-    let at = view_position(p, x as f32 + 0.5, y as f32 + 0.5, t);
-    let kr = key_at(p, accum, x + 1, y);
-    let kl = key_at(p, accum, x - 1, y);
-    let kd = key_at(p, accum, x, y + 1);
-    let ku = key_at(p, accum, x, y - 1);
-    let or_t = |k: u32| if k != EMPTY { depth_of(k) } else { t };
-    let (tr, tl, td, tu) = (or_t(kr), or_t(kl), or_t(kd), or_t(ku));
-    // One-sided differences from the nearer neighbour avoid smearing across silhouettes.
-    let dx = if (tr - t).abs() < (tl - t).abs() {
-        view_position(p, x as f32 + 1.5, y as f32 + 0.5, tr) - at
+/// Offset `i` (0..8) of ring `ring` (0..2) of the occlusion samples, in units of
+/// `occlusion_step_px`: the ring's two base offsets (along an axis and off it) turned by
+/// (i / 2) quarter turns, and one over its length.
+fn occlusion_offset(ring: i32, i: i32) -> (i32, i32, f32) {
+    let odd = i % 2 == 1;
+    let (mut ox, mut oy, inv_length) = if ring == 0 {
+        if odd { (2, 2, INV_LENGTH_2_2) } else { (3, 0, INV_LENGTH_3_0) }
+    } else if odd {
+        (3, 6, INV_LENGTH_6_3)
     } else {
-        at - view_position(p, x as f32 - 0.5, y as f32 + 0.5, tl)
+        (6, 3, INV_LENGTH_6_3)
     };
-    let dy = if (td - t).abs() < (tu - t).abs() {
-        view_position(p, x as f32 + 0.5, y as f32 + 1.5, td) - at
-    } else {
-        at - view_position(p, x as f32 + 0.5, y as f32 - 0.5, tu)
-    };
-    let n = dy.cross(dx);
-    let len = n.length();
-    if !(len > 0.0) {
-        return 1.0;
+    for _ in 0..i / 2 {
+        (ox, oy) = (-oy, ox);
     }
-    let to_eye = (-at).normalize();
-    let lambert = (n / len).dot(to_eye).abs();
-    0.25 + 0.75 * lambert
+    (ox, oy, inv_length)
+}
+
+/// View depth per key depth unit, in footprints (the view-space size of a pixel at the key's
+/// depth), so that slopes are dimensionless (1: 45°) in both projections.
+fn footprints_per_unit(p: &ResolveParams, key: u32) -> f32 {
+    let d = p.near + depth_of(key) * (p.far - p.near);
+    let footprint = if p.perspective != 0 { p.pixel_size * d } else { p.pixel_size };
+    (p.far - p.near) / DEPTH_SCALE / footprint
+}
+
+/// The slopes (depth change per pixel step right and down, in footprints) of a plane fitted to
+/// the keys around accumulation pixel (x, y), whose key is `key`.
+pub fn fitted_slopes(p: &ResolveParams, accum: &[u32], x: i32, y: i32, key: u32) -> (f32, f32) {
+    let z_per_unit = footprints_per_unit(p, key);
+    let depth0 = (key >> 8) as i32;
+    // Weighted least-squares plane z = z̄ + slope · (offset − offset̄) through the keys of the
+    // (2 NORMAL_RADIUS_PX + 1)² window: empty pixels do not count, and a neighbour's weight
+    // falls with its slope from the centre (half at SLOPE_SCALE), so that a silhouette's far
+    // side does not tilt the near side's normal. The centre counts with weight 1 at z = 0.
+    let (mut sw, mut sx, mut sy, mut sz) = (1.0f32, 0.0f32, 0.0f32, 0.0f32);
+    let (mut sxx, mut sxy, mut syy, mut sxz, mut syz) = (0.0f32, 0.0f32, 0.0f32, 0.0f32, 0.0f32);
+    for dy in -NORMAL_RADIUS_PX..=NORMAL_RADIUS_PX {
+        for dx in -NORMAL_RADIUS_PX..=NORMAL_RADIUS_PX {
+            let k = key_at(p, accum, x + dx, y + dy);
+            if k != EMPTY && (dx != 0 || dy != 0) {
+                let z = ((k >> 8) as i32 - depth0) as f32 * z_per_unit;
+                let (fx, fy) = (dx as f32, dy as f32);
+                let q = z / SLOPE_SCALE;
+                let w = 1.0 / (1.0 + q * q / (fx * fx + fy * fy));
+                sw += w;
+                sx += w * fx;
+                sy += w * fy;
+                sz += w * z;
+                sxx += w * fx * fx;
+                sxy += w * fx * fy;
+                syy += w * fy * fy;
+                sxz += w * fx * z;
+                syz += w * fy * z;
+            }
+        }
+    }
+    // The ridge term pulls an underdetermined fit (a lone pixel, a line of them) towards the
+    // view-facing plane, and bounds the solve's condition number.
+    let cxx = sxx - sx * sx / sw + RIDGE;
+    let cyy = syy - sy * sy / sw + RIDGE;
+    let cxy = sxy - sx * sy / sw;
+    let cxz = sxz - sx * sz / sw;
+    let cyz = syz - sy * sz / sw;
+    let det = cxx * cyy - cxy * cxy;
+    let slope_x = ((cyy * cxz - cxy * cyz) / det).clamp(-SLOPE_MAX, SLOPE_MAX);
+    let slope_y = ((cxx * cyz - cxy * cxz) / det).clamp(-SLOPE_MAX, SLOPE_MAX);
+    (slope_x, slope_y)
+}
+
+/// The unit normal of a surface with `slopes` ([`fitted_slopes`]) seen at accumulation pixel
+/// (x, y), and the unit direction from there to the eye, in view space.
+pub fn normal_and_eye(p: &ResolveParams, x: i32, y: i32, slopes: (f32, f32)) -> (Vec3, Vec3) {
+    let (slope_x, slope_y) = slopes;
+    // Tangents per pixel step, in footprints: one pixel across plus the slope along the ray
+    // (image y grows downwards, view y upwards).
+    let sx_screen = (x as f32 + 0.5 - 0.5 * p.width as f32) * p.pixel_size;
+    let sy_screen = (0.5 * p.height as f32 - (y as f32 + 0.5)) * p.pixel_size;
+    let ray = if p.perspective != 0 { Vec3::new(sx_screen, sy_screen, -1.0) } else { Vec3::new(0.0, 0.0, -1.0) };
+    let tangent_x = ray * slope_x + Vec3::X;
+    let tangent_y = ray * slope_y - Vec3::Y;
+    (tangent_y.cross(tangent_x).normalize(), (-ray).normalize())
+}
+
+/// The lights on a surface of unit `normal` seen from the unit direction `to_eye`: the diffuse
+/// factor (ambient, key and fill) and the white highlight.
+pub fn lit(normal: Vec3, to_eye: Vec3) -> (f32, f32) {
+    let key_light = Vec3::from_array(KEY_LIGHT);
+    let fill_light = Vec3::from_array(FILL_LIGHT);
+    let diffuse = AMBIENT + KEY * normal.dot(key_light).max(0.0) + FILL * normal.dot(fill_light).max(0.0);
+    // Blinn-Phong with exponent 32 by five squarings (exact, and defined at 0, unlike pow).
+    let s1 = normal.dot((key_light + to_eye).normalize()).max(0.0);
+    let s2 = s1 * s1;
+    let s4 = s2 * s2;
+    let s8 = s4 * s4;
+    let s16 = s8 * s8;
+    (diffuse, SPECULAR * (s16 * s16))
+}
+
+/// Occlusion of the key `key` at accumulation pixel (x, y) with `slopes` ([`fitted_slopes`]):
+/// the fraction in [0, 1] of the light that [`OCCLUSION_GAIN`] and `occlusion` 1 take away.
+pub fn occlusion(p: &ResolveParams, accum: &[u32], x: i32, y: i32, key: u32, slopes: (f32, f32)) -> f32 {
+    let z_per_unit = footprints_per_unit(p, key);
+    let depth0 = (key >> 8) as i32;
+    let (slope_x, slope_y) = slopes;
+
+    // Ambient occlusion: each sample's elevation above the fitted plane, seen from the centre
+    // (tangent e, in footprints over pixels), occludes e / (1 + e), less for samples far in
+    // front (a foreground object, not a crease: falloff past OCCLUSION_FALLOFF). Empty samples
+    // do not count, so a sparse cloud is not darker than a dense one.
+    let step = p.occlusion_step_px as i32;
+    let (mut occluded, mut samples) = (0.0f32, 0.0f32);
+    for ring in 0..OCCLUSION_RINGS {
+        for i in 0..OCCLUSION_DIRECTIONS {
+            let (ox, oy, inv_length) = occlusion_offset(ring, i);
+            let k = key_at(p, accum, x + ox * step, y + oy * step);
+            if k != EMPTY {
+                let z = ((k >> 8) as i32 - depth0) as f32 * z_per_unit;
+                let above = slope_x * (ox * step) as f32 + slope_y * (oy * step) as f32 - z;
+                let e = (above * inv_length / step as f32 - OCCLUSION_BIAS).max(0.0);
+                let f = e / OCCLUSION_FALLOFF;
+                occluded += e / (1.0 + e) / (1.0 + f * f);
+                samples += 1.0;
+            }
+        }
+    }
+    if samples > 0.0 { (OCCLUSION_GAIN * occluded / samples).min(1.0) } else { 0.0 }
+}
+
+/// The solid look's colour of the key `key` with colour `albedo` at accumulation pixel (x, y),
+/// before the depth cue, with `slope_offset` added to the fitted slopes (0 but in error bounds).
+fn light(p: &ResolveParams, accum: &[u32], x: i32, y: i32, key: u32, albedo: Vec3, slope_offset: (f32, f32)) -> Vec3 {
+    let fitted = fitted_slopes(p, accum, x, y, key);
+    let slopes = (fitted.0 + slope_offset.0, fitted.1 + slope_offset.1);
+    let (normal, to_eye) = normal_and_eye(p, x, y, slopes);
+    let (diffuse, specular) = lit(normal, to_eye);
+    let mut visible = 1.0f32;
+    if p.occlusion > 0.0 {
+        visible = 1.0 - p.occlusion * occlusion(p, accum, x, y, key, slopes);
+    }
+    // WGSL's mix(1, diffuse, shading), written out so that both sides round alike.
+    let factor = (1.0 - p.shading) + diffuse * p.shading;
+    albedo * (factor * visible) + Vec3::splat(specular * p.shading * visible)
 }
 
 /// The fragment stage `resolve` at accumulation pixel (x, y) (the shader's fragment position
 /// less the origin): the colour the shader returns, sRGB-encoded when `p.encode_srgb` is set.
-/// The mode and the shading switch on the uniforms, which [`ResolveArgs::params`] makes equal
-/// to the GPU pipeline's constants `RESOLVE_MODE` and `SHADED`.
+/// The mode and the lighting switch on the uniforms, which [`ResolveArgs::params`] makes equal
+/// to the GPU pipeline's constants `RESOLVE_MODE` and `SHADED` (shading or occlusion on).
 pub fn resolve_fragment(p: &ResolveParams, inputs: &ResolveInputs<'_>, x: u32, y: u32) -> [f32; 3] {
+    resolve_fragment_perturbed(p, inputs, x, y, (0.0, 0.0))
+}
+
+/// [`resolve_fragment`] with `slope_offset` added to the solid look's fitted slopes: how much
+/// the colour moves with an error in the slopes, for error bounds (`tests/resolve.rs`).
+pub fn resolve_fragment_perturbed(
+    p: &ResolveParams,
+    inputs: &ResolveInputs<'_>,
+    x: u32,
+    y: u32,
+    slope_offset: (f32, f32),
+) -> [f32; 3] {
     let accum = inputs.accum;
     let mut c = [p.background[0], p.background[1], p.background[2]];
     if x < p.width && y < p.height {
@@ -270,10 +494,8 @@ pub fn resolve_fragment(p: &ResolveParams, inputs: &ResolveInputs<'_>, x: u32, y
                 let t = depth_of(key);
                 // The GPU's table has 256 entries; keys only hold indices of compiled functions.
                 let mut base = inputs.colors[fi.min(inputs.colors.len() - 1)];
-                if p.shading > 0.0 {
-                    // WGSL's mix(1, s, shading) = 1 · (1 − shading) + s · shading.
-                    let factor = 1.0 * (1.0 - p.shading) + shade(p, accum, at.0, at.1, t) * p.shading;
-                    base = base.map(|b| b * factor);
+                if p.shading > 0.0 || p.occlusion > 0.0 {
+                    base = light(p, accum, at.0, at.1, key, Vec3::from_array(base), slope_offset).to_array();
                 }
                 c = cue(p, base, t);
             }
@@ -373,14 +595,15 @@ mod tests {
     use super::*;
 
     /// Parameters of a closest-mode resolve of `size`×`size` pixels in parallel projection,
-    /// white functions, no depth cue, linear output: a fragment's value is its shade factor.
-    fn params(size: u32, shading: f32, point_radius_px: u32) -> ResolveParams {
+    /// no depth cue, linear output: with white functions a fragment's value is its light factor.
+    fn params(size: u32, style: ResolveStyle) -> ResolveParams {
         let args = ResolveArgs {
             mode: SplatMode::Closest,
             background: [0.0; 3],
             depth_cue: 0.0,
-            shading,
-            point_radius_px,
+            shading: style.shading,
+            occlusion: style.occlusion,
+            point_radius_px: style.point_radius_px,
             near: 1.0,
             far: 3.0,
             pixel_size: 0.01,
@@ -395,12 +618,17 @@ mod tests {
         ((t * DEPTH_SCALE) as u32) << 8
     }
 
+    /// The accumulation of a `size`×`size` field with view depth `depth(x, y)` (None: empty).
+    fn field(size: u32, p: &ResolveParams, depth: impl Fn(f32, f32) -> Option<f32>) -> Vec<u32> {
+        (0..size * size).map(|i| depth((i % size) as f32, (i / size) as f32).map_or(EMPTY, |d| key(d, p))).collect()
+    }
+
     /// A key alone in an empty accumulation covers the pixels within the point radius: the
     /// lattice points of a disc, 1, 5 and 13 of them for radius 0, 1 and 2.
     #[test]
     fn radius_fills_a_disc() {
         for (radius, covered) in [(0, 1), (1, 5), (2, 13), (3, 29)] {
-            let p = params(9, 0.0, radius);
+            let p = params(9, ResolveStyle { point_radius_px: radius, ..ResolveStyle::PAPER });
             let mut accum = vec![EMPTY; 81];
             accum[4 * 9 + 4] = key(2.0, &p);
             let inputs = ResolveInputs { accum: &accum, colors: &[[1.0; 3]], max_count: 0 };
@@ -411,44 +639,181 @@ mod tests {
         }
     }
 
-    /// Shading from known slopes, seen from the image centre (where the direction to the eye is
-    /// the view axis): a plane facing the camera keeps its colour (Lambert 1), a plane tilted by
-    /// 60° about the vertical gets 0.25 + 0.75 cos 60° = 0.625, and at a silhouette the normal
-    /// comes from the nearer neighbour (the facing plane, not the step to the far one).
+    /// A plane, dense or with holes, tilted or facing the camera, is lit evenly and exactly as
+    /// its normal says (parallel projection: the same light everywhere), and a plane is not
+    /// occluded: occlusion 1 leaves its colour. Also a lone key faces the viewer.
     #[test]
-    fn shading_of_known_slopes() {
-        let size = 15;
-        let p = params(size, 1.0, 0);
-        let slope_per_px = p.pixel_size * 60f32.to_radians().tan();
-        let field = |depth: &dyn Fn(i32) -> f32| -> Vec<u32> {
-            (0..size * size).map(|i| key(depth((i % size) as i32 - 7), &p)).collect()
+    fn planes_are_lit_evenly_and_not_occluded() {
+        let size = 21;
+        for (slope_x, slope_y) in [(0.0f32, 0.0f32), (0.5, 0.0), (-1.0, 0.7), (1.7, 1.2)] {
+            for holes in [false, true] {
+                let p = params(size, ResolveStyle { shading: 1.0, occlusion: 1.0, point_radius_px: 0 });
+                let footprint = p.pixel_size;
+                let accum = field(size, &p, |x, y| {
+                    let hole = holes && (x as u32 * 7 + y as u32 * 3).is_multiple_of(5);
+                    (!hole).then_some(2.0 + (slope_x * (x - 10.0) + slope_y * (y - 10.0)) * footprint)
+                });
+                let inputs = ResolveInputs { accum: &accum, colors: &[[1.0; 3]], max_count: 0 };
+                // The plane's normal: tangents (1, 0, −slope_x) and (0, −1, −slope_y) (image y down).
+                let normal = Vec3::new(0.0, -1.0, -slope_y).cross(Vec3::new(1.0, 0.0, -slope_x)).normalize();
+                let (diffuse, specular) = lit(normal, Vec3::Z);
+                let expected = diffuse + specular;
+                // The fit's ridge flattens the slope by RIDGE / (c + RIDGE), c the weighted
+                // variance of the offsets: ≥ 40 · 0.48 with a fifth of the window in holes and
+                // weights ≥ 1 / (1 + |slope|² / 4) ≥ 0.48 for |slope| ≤ 2.1, so by ≤ 1 / 20. That
+                // turns the normal by ≤ 0.05 · |slope| / (1 + |slope|²) ≤ 0.025 rad, and the light
+                // by ≤ 0.025 · (KEY + FILL) plus the highlight's 32 · SPECULAR · s^31 · 0.025,
+                // s = n · h within 0.025 of the exact normal's. Depth quantization (2^-24 of the
+                // depth range over a footprint) adds < 1e-4.
+                let tilt = 0.025f32;
+                let half = (Vec3::from_array(KEY_LIGHT) + Vec3::Z).normalize();
+                let s_max = (normal.dot(half) + tilt).min(1.0);
+                let tolerance = tilt * (KEY + FILL) + 32.0 * SPECULAR * s_max.powi(31) * tilt + 1e-4;
+                let (mut lowest, mut highest) = (f32::MAX, f32::MIN);
+                for y in 5..16 {
+                    for x in 5..16 {
+                        if accum[(y * size + x) as usize] == EMPTY {
+                            continue;
+                        }
+                        let c = resolve_fragment(&p, &inputs, x, y)[0];
+                        (lowest, highest) = (lowest.min(c), highest.max(c));
+                        assert!(
+                            (c - expected).abs() < tolerance,
+                            "slopes ({slope_x}, {slope_y}), holes {holes}, pixel ({x}, {y}): {c} vs {expected} \
+                             (tolerance {tolerance})"
+                        );
+                    }
+                }
+                // Densely splatted, every window is the same plane: the same light up to the depth
+                // keys' quantization (2^-24 of the depth range, ≪ 1e-3 of a footprint's slope).
+                if !holes {
+                    assert!(highest - lowest < 1e-3, "slopes ({slope_x}, {slope_y}): light {lowest}..{highest}");
+                }
+            }
+        }
+        let p = params(5, ResolveStyle::SOLID);
+        let mut accum = vec![EMPTY; 25];
+        accum[12] = key(2.0, &p);
+        let inputs = ResolveInputs { accum: &accum, colors: &[[1.0; 3]], max_count: 0 };
+        let (diffuse, specular) = lit(Vec3::Z, Vec3::Z);
+        assert!((resolve_fragment(&p, &inputs, 2, 2)[0] - (diffuse + specular)).abs() < 1e-6);
+    }
+
+    /// The fitted normals of a sphere's depth field (parallel projection, every pixel covered)
+    /// follow the sphere's within 5° where the sphere is no steeper than 63° (slope 2; the
+    /// ridge flattens the fitted slope by a few percent, the window's curvature by less), so
+    /// Lambert's cosine under any light is within sin 5° ≈ 0.09 of the exact one.
+    #[test]
+    fn sphere_normals_follow_the_sphere() {
+        let size = 81;
+        let p = params(size, ResolveStyle::SOLID);
+        let radius_px = 36.0;
+        let centre = 40.5;
+        let footprint = p.pixel_size;
+        let accum = field(size, &p, |x, y| {
+            let (u, v) = (x + 0.5 - centre, y + 0.5 - centre);
+            let h2 = radius_px * radius_px - u * u - v * v;
+            (h2 > 0.0).then(|| 2.0 - h2.sqrt() * footprint)
+        });
+        let mut worst_deg = 0.0f32;
+        for y in 0..size as i32 {
+            for x in 0..size as i32 {
+                let (u, v) = (x as f32 + 0.5 - centre, y as f32 + 0.5 - centre);
+                let r = (u * u + v * v).sqrt();
+                // Slope 2 at r = R · 2 / √5.
+                if r > radius_px * 2.0 / 5f32.sqrt() {
+                    continue;
+                }
+                let k = accum[(y * size as i32 + x) as usize];
+                let slopes = fitted_slopes(&p, &accum, x, y, k);
+                let (normal, _) = normal_and_eye(&p, x, y, slopes);
+                let exact = Vec3::new(u, -v, (radius_px * radius_px - r * r).sqrt()) / radius_px;
+                let deg = normal.dot(exact).clamp(-1.0, 1.0).acos().to_degrees();
+                worst_deg = worst_deg.max(deg);
+            }
+        }
+        assert!(worst_deg < 5.0, "worst normal error {worst_deg}°");
+    }
+
+    /// Occlusion: none on a plane (above) or on a convex ridge; some, below 1, in the inside of
+    /// a corner (a valley of two planes at right angles, seen edge-on to the crease), most at
+    /// its crease.
+    #[test]
+    fn a_corner_is_occluded_a_ridge_is_not() {
+        let size = 41;
+        let p = params(size, ResolveStyle { shading: 0.0, occlusion: 1.0, point_radius_px: 0 });
+        let footprint = p.pixel_size;
+        // Depth grows away from the ridge's crest (nearest the viewer) and towards the valley's.
+        let ridge = field(size, &p, |x, _| Some(2.0 + (x - 20.0).abs() * footprint));
+        let valley = field(size, &p, |x, _| Some(2.0 - (x - 20.0).abs() * footprint));
+        let occlusion_at = |accum: &[u32], x: i32| {
+            let k = accum[(20 * size as i32 + x) as usize];
+            occlusion(&p, accum, x, 20, k, fitted_slopes(&p, accum, x, 20, k))
         };
-        let cases: [(&str, Vec<u32>, f32); 3] = [
-            ("facing", field(&|_| 2.0), 1.0),
-            ("tilted 60°", field(&|dx| 2.0 + dx as f32 * slope_per_px), 0.625),
-            ("silhouette", field(&|dx| if dx < 0 { 2.8 } else { 2.0 }), 1.0),
-        ];
-        for (name, accum, expected) in cases {
-            let inputs = ResolveInputs { accum: &accum, colors: &[[1.0; 3]], max_count: 0 };
-            let c = resolve_fragment(&p, &inputs, 7, 7);
-            // Truncating depths to 24 bits moves a depth difference by < 2 · 2^-24 · (far − near),
-            // about 1e-5 of the tilted plane's 0.017 per pixel.
-            assert!((c[0] - expected).abs() < 1e-4, "{name}: shade {} (expected {expected})", c[0]);
+        for x in 5..36 {
+            assert_eq!(occlusion_at(&ridge, x), 0.0, "ridge at x = {x}");
+        }
+        let crease = occlusion_at(&valley, 20);
+        assert!(crease > 0.3 && crease < 1.0, "valley's crease: {crease}");
+        for x in 5..36 {
+            let o = occlusion_at(&valley, x);
+            assert!(o <= crease && o < 1.0, "valley at x = {x}: {o} (crease {crease})");
+        }
+        assert_eq!(occlusion_at(&valley, 5), 0.0, "the valley's walls far from the crease");
+    }
+
+    /// The paper look draws today's flat colour; a scene's look, shading and occlusion choose the
+    /// style, and 2D scenes stay paper.
+    #[test]
+    fn looks_and_scene_settings() {
+        assert_eq!(ResolveStyle::default(), ResolveStyle::PAPER);
+        let mut settings = RenderSettings::default();
+        assert_eq!(ResolveStyle::of(&settings, 3), ResolveStyle::of_look(DEFAULT_LOOK_3D));
+        settings.look = Some(Look::Solid);
+        assert_eq!(ResolveStyle::of(&settings, 3), ResolveStyle::SOLID);
+        settings.occlusion = Some(0.25);
+        assert_eq!(ResolveStyle::of(&settings, 3), ResolveStyle { occlusion: 0.25, ..ResolveStyle::SOLID });
+        settings.look = None;
+        assert_eq!(ResolveStyle::of(&settings, 2), ResolveStyle { occlusion: 0.25, ..ResolveStyle::PAPER });
+    }
+
+    /// `[render] look`, `shading` and `occlusion` parse, write back and reach the style; bad
+    /// values are errors naming the field, and a scene without them writes none of them.
+    #[test]
+    fn scene_render_keys() {
+        let path = format!("{}/scenes/plant2.toml", env!("CARGO_MANIFEST_DIR"));
+        let text = std::fs::read_to_string(&path).unwrap();
+        let with = |keys: &str| text.replace("[render]\n", &format!("[render]\n{keys}\n"));
+        let plain = crate::scene::Scene::parse(&text, &path).unwrap();
+        assert_eq!((plain.render.look, plain.render.shading, plain.render.occlusion), (None, None, None));
+        assert!(!plain.to_toml().contains("look ="), "a scene without a look writes none");
+        let scene = crate::scene::Scene::parse(&with("look = \"solid\"\nocclusion = 0.3"), &path).unwrap();
+        assert_eq!(ResolveStyle::of(&scene.render, 3), ResolveStyle { occlusion: 0.3, ..ResolveStyle::SOLID });
+        let again = crate::scene::Scene::parse(&scene.to_toml(), &path).unwrap();
+        assert_eq!(again.render, scene.render);
+        for (keys, field) in [
+            ("look = \"glossy\"", "render.look"),
+            ("shading = 1.5", "render.shading"),
+            ("occlusion = -0.1", "render.occlusion"),
+        ] {
+            let e = crate::scene::Scene::parse(&with(keys), &path).unwrap_err();
+            assert_eq!(e.field.as_deref(), Some(field), "{keys}: {e}");
         }
     }
 
-    /// Shading and point radius apply to closest mode only; the radius is clamped.
+    /// Shading, occlusion and point radius apply to closest mode only; the radius is clamped.
     #[test]
     fn params_gate_the_closest_only_settings() {
         let bounds = (glam::DVec3::ZERO, glam::DVec3::ONE);
         let camera = OrbitCamera::framing(bounds, 3);
         let view = SplatView::new(&camera, 4, 4, bounds, SplatMode::Closest, 0.5, [0.0; 3]);
-        let style = ResolveArgs::new(&view, &camera, &ResolveStyle { shading: 0.5, point_radius_px: 20 });
-        let closest = style.params(4, 4, true);
-        assert_eq!((closest.shading, closest.point_radius_px), (0.5, MAX_POINT_RADIUS_PX));
+        let style = ResolveStyle { shading: 0.5, occlusion: 0.25, point_radius_px: 20 };
+        let args = ResolveArgs::new(&view, &camera, &style);
+        let closest = args.params(4, 4, true);
+        assert_eq!((closest.shading, closest.occlusion, closest.point_radius_px), (0.5, 0.25, MAX_POINT_RADIUS_PX));
         for mode in [SplatMode::Average, SplatMode::Density] {
-            let p = ResolveArgs { mode, ..style }.params(4, 4, true);
-            assert_eq!((p.mode, p.shading, p.point_radius_px), (mode.index(), 0.0, 0));
+            let p = ResolveArgs { mode, ..args }.params(4, 4, true);
+            assert_eq!((p.mode, p.shading, p.occlusion, p.point_radius_px), (mode.index(), 0.0, 0.0, 0));
         }
     }
 }

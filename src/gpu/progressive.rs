@@ -294,6 +294,7 @@ impl Progressive {
             background: s.background,
             depth_cue: s.depth_cue,
             shading: s.shading,
+            occlusion: 0.0,
             point_radius_px: s.point_radius_px,
             near,
             far,

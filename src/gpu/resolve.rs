@@ -17,7 +17,8 @@ fn entry(binding: u32, buffer: &wgpu::Buffer) -> wgpu::BindGroupEntry<'_> {
 /// Bytes of the colour table bound as a uniform (`colors` in `shaders/resolve.wgsl`).
 const COLORS_BYTES: u64 = 256 * 16;
 
-/// What a draw pipeline is specialized for: target format, splat mode, shading on.
+/// What a draw pipeline is specialized for: target format, splat mode, lighting (shading or
+/// occlusion) on.
 type DrawKey = (wgpu::TextureFormat, SplatMode, bool);
 /// A bind group with the generation of the chaos game's buffers it binds.
 type Bound = Option<(u64, wgpu::BindGroup)>;
@@ -25,7 +26,7 @@ type Bound = Option<(u64, wgpu::BindGroup)>;
 pub struct GpuResolve {
     module: wgpu::ShaderModule,
     max_pipeline: wgpu::ComputePipeline,
-    /// One draw pipeline per target format, mode and shading on/off (the shader's pipeline
+    /// One draw pipeline per target format, mode and lighting on/off (the shader's pipeline
     /// constants), made on first use, with its bind group and the generation of the chaos
     /// game's buffers it binds.
     draw_pipelines: Vec<(DrawKey, wgpu::RenderPipeline, Bound)>,
@@ -109,7 +110,8 @@ impl GpuResolve {
         let (device, queue) = (&ctx.device, &ctx.queue);
         let params = args.params(game.width, game.height, !format.is_srgb());
         queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
-        let pipeline_index = self.draw_pipeline(device, (format, args.mode, params.shading > 0.0));
+        let pipeline_index =
+            self.draw_pipeline(device, (format, args.mode, params.shading > 0.0 || params.occlusion > 0.0));
         if self.bound.as_ref().is_none_or(|b| b.0 != game.generation) {
             let max_layout = self.max_pipeline.get_bind_group_layout(0);
             let max_input = device.create_bind_group(&wgpu::BindGroupDescriptor {

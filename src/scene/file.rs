@@ -143,4 +143,7 @@ pub(super) struct RenderToml {
     pub(super) mode: Option<Spanned<String>>,
     pub(super) background: Option<Spanned<ColorToml>>,
     pub(super) depth_cue: Option<Spanned<f64>>,
+    pub(super) look: Option<Spanned<String>>,
+    pub(super) shading: Option<Spanned<f64>>,
+    pub(super) occlusion: Option<Spanned<f64>>,
 }

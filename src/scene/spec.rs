@@ -89,6 +89,33 @@ pub struct CameraSpec {
     pub projection: Option<Projection>,
 }
 
+/// How a closest-mode picture is lit (`[render] look`): `Paper` is the paper's depth-cued flat
+/// colour, `Solid` lights normals from the depth buffer and darkens creases by ambient occlusion
+/// (`src/resolve.rs` explains both). A preset for the `shading` and `occlusion` strengths, which
+/// the scene may also set one by one.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Look {
+    Paper,
+    Solid,
+}
+
+impl Look {
+    pub fn parse(s: &str) -> Option<Self> {
+        match s {
+            "paper" => Some(Look::Paper),
+            "solid" => Some(Look::Solid),
+            _ => None,
+        }
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Look::Paper => "paper",
+            Look::Solid => "solid",
+        }
+    }
+}
+
 #[derive(Clone, Debug, PartialEq)]
 pub struct RenderSettings {
     pub width: u32,
@@ -100,6 +127,13 @@ pub struct RenderSettings {
     pub background: [f32; 3],
     /// 0: no depth cueing; 1: the farthest points fade to the background.
     pub depth_cue: f32,
+    /// The scene's look; None: the default for the scene's dimension
+    /// (`crate::resolve::ResolveStyle::of`).
+    pub look: Option<Look>,
+    /// Lighting strength in [0, 1] (closest mode); None: the look's.
+    pub shading: Option<f32>,
+    /// Ambient occlusion strength in [0, 1] (closest mode); None: the look's.
+    pub occlusion: Option<f32>,
 }
 
 impl Default for RenderSettings {
@@ -112,6 +146,9 @@ impl Default for RenderSettings {
             mode: SplatMode::Closest,
             background: [0x0b, 0x0d, 0x14].map(color::srgb8_to_linear),
             depth_cue: 0.75,
+            look: None,
+            shading: None,
+            occlusion: None,
         }
     }
 }

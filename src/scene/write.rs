@@ -212,6 +212,16 @@ impl Scene {
             color_text(r.background),
             r.depth_cue
         );
+        // Written only when set, so that a scene without them reads back unchanged.
+        if let Some(look) = r.look {
+            let _ = writeln!(out, "look = \"{}\"", look.name());
+        }
+        if let Some(v) = r.shading {
+            let _ = writeln!(out, "shading = {v:?}");
+        }
+        if let Some(v) = r.occlusion {
+            let _ = writeln!(out, "occlusion = {v:?}");
+        }
         if let Some(tl) = &self.timeline {
             out += "\n[timeline]\n";
             let _ = writeln!(out, "loop = \"{}\"\nduration_secs = {}", tl.loop_mode.name(), num(tl.duration_secs));

@@ -17,7 +17,7 @@ use crate::model::{AffineMap, JuliaMap, ProbabilityMode, RectGrid};
 use crate::scene::file::{
     CameraToml, ColorToml, FORMAT_VERSION, FunctionToml, RenderToml, SceneToml, StepToml, VectorToml,
 };
-use crate::scene::spec::{CameraSpec, FunctionDef, FunctionSpec, RenderSettings, SplatMode};
+use crate::scene::spec::{CameraSpec, FunctionDef, FunctionSpec, Look, RenderSettings, SplatMode};
 use crate::scene::{LoadError, Scene, SceneError};
 
 mod keys;
@@ -607,6 +607,26 @@ impl Checker<'_> {
                 return Err(self.err(d.span(), "render.depth_cue", "must lie in 0..1"));
             }
             out.depth_cue = v as f32;
+        }
+        if let Some(l) = &r.look {
+            out.look = Some(Look::parse(l.get_ref()).ok_or_else(|| {
+                self.err(
+                    l.span(),
+                    "render.look",
+                    format!("`{}` is not a look; use \"solid\" or \"paper\"", l.get_ref()),
+                )
+            })?);
+        }
+        for (value, field, slot) in
+            [(&r.shading, "render.shading", &mut out.shading), (&r.occlusion, "render.occlusion", &mut out.occlusion)]
+        {
+            if let Some(s) = value {
+                let v = self.finite(s, field)?;
+                if !(0.0..=1.0).contains(&v) {
+                    return Err(self.err(s.span(), field, "must lie in 0..1"));
+                }
+                *slot = Some(v as f32);
+            }
         }
         Ok(out)
     }
