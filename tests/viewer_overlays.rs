@@ -70,13 +70,17 @@ fn the_banner_names_the_function_its_factor_and_the_points_outside() {
 }
 
 #[test]
-fn the_warning_sign_is_drawn_by_the_bundled_fonts() {
+fn the_warnings_and_the_keys_use_only_glyphs_the_bundled_font_draws() {
     let ctx = egui::Context::default();
     let s = ViewerState::new(Scene::parse(BAD, "bad.toml").unwrap(), None, LiveSettings::default());
     run_ui(&ctx, &s);
-    for size in [11.0, 14.0] {
-        let font = egui::FontId::proportional(size);
-        assert!(ctx.fonts_mut(|f| f.has_glyph(&font, WARNING_SIGN)), "no glyph for {WARNING_SIGN:?} at {size}");
+    let font = egui::FontId::proportional(14.0);
+    let mut texts: Vec<String> = s.warnings();
+    texts.push(WARNING_SIGN.to_string());
+    texts.extend(SHORTCUTS.iter().flat_map(|(k, a)| [k.to_string(), a.to_string()]));
+    for text in texts {
+        let missing: String = text.chars().filter(|&c| !ctx.fonts_mut(|f| f.has_glyph(&font, c))).collect();
+        assert!(missing.is_empty(), "{text:?}: no glyph for {missing:?} (it would draw as an empty box)");
     }
     // The banner is on screen (its area exists).
     assert!(ctx.memory(|m| m.area_rect(egui::Id::unique("nlifs_banner")).is_some()));

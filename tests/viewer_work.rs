@@ -28,9 +28,10 @@ fn open(path: &Path, recovery_dir: &Path) -> ViewerState {
     s
 }
 
-/// An edit: the first function disabled.
+/// An edit: the first function switched on or off.
 fn edit(s: &mut ViewerState) {
-    s.apply([Command::SetFunctionEnabled { function: 0, enabled: false }]);
+    let enabled = !s.scene.functions[0].enabled;
+    s.apply([Command::SetFunctionEnabled { function: 0, enabled }]);
 }
 
 #[test]
@@ -112,13 +113,18 @@ fn closing_with_unsaved_edits_asks_save_discard_or_cancel() {
     s.apply([Command::RequestClose, Command::CloseDialog(CloseChoice::Save)]);
     assert!(s.ui.quit, "{:?}", s.error);
     assert!(!Scene::load(&path).unwrap().functions[0].enabled);
+    assert!(!s.modified());
 
     // A save that fails keeps the window open with the dialog and the error.
     let mut s = open(&path, &rec);
     edit(&mut s);
-    s.apply([Command::SetSaveText("/nonexistent-dir/x/scene.toml".into()), Command::RequestClose]);
+    // Under a plain file: no folder can be made there, even by root.
+    let blocked = path.with_extension("txt");
+    std::fs::write(&blocked, "a file").unwrap();
+    let target = blocked.join("scene.toml");
+    s.apply([Command::SetSaveText(target.display().to_string()), Command::RequestClose]);
     s.apply([Command::CloseDialog(CloseChoice::Save)]);
-    assert!(!s.ui.quit && s.ui.close_dialog && s.error.is_some());
+    assert!(!s.ui.quit && s.ui.close_dialog && s.error.is_some(), "{:?} {:?}", s.ui, s.error);
 }
 
 #[test]

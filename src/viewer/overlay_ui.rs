@@ -10,10 +10,11 @@ use egui::{Align2, Color32, RichText};
 use super::command::{CloseChoice, Command};
 use super::state::ViewerState;
 
-/// The banner's sign: a glyph the bundled fonts draw (egui's emoji font has no U+26A0 ⚠ in
-/// the proportional family at every size it is used, and a missing glyph draws as an empty
-/// box); `tests/viewer_overlays.rs` checks it is there.
-pub const WARNING_SIGN: char = '⚠';
+/// The mark in text that warns (the Statistics table): a glyph the bundled font draws. The
+/// viewer's egui has no emoji font, so U+26A0 ⚠ drew as an empty box; the banner paints its
+/// sign instead ([`warning_icon`]). `tests/viewer_overlays.rs` checks every text here for
+/// glyphs the font lacks.
+pub const WARNING_SIGN: char = '!';
 
 /// The keys, as the shortcuts overlay and the README list them.
 pub const SHORTCUTS: &[(&str, &str)] = &[
@@ -22,7 +23,7 @@ pub const SHORTCUTS: &[(&str, &str)] = &[
     ("wheel", "zoom towards the cursor"),
     ("F / Shift+F", "frame the attractor / the attractor and the grid box"),
     ("1 3 7 (numpad or row)", "front, side, top view; with Ctrl the opposite side"),
-    ("5, P", "perspective ↔ parallel"),
+    ("5, P", "perspective / parallel"),
     ("X, Y, Z", "lock point drags to that axis (toggle)"),
     ("Space", "play / pause the timeline"),
     ("Ctrl+Z / Ctrl+Shift+Z, Ctrl+Y", "undo / redo"),
@@ -67,15 +68,17 @@ fn banner_ui(ctx: &egui::Context, view_rect: egui::Rect, state: &ViewerState, co
             ui.set_max_width((view_rect.width() - 16.0).max(100.0));
             egui::Frame::new().fill(WARNING_FILL).corner_radius(4.0).inner_margin(6.0).show(ui, |ui| {
                 for line in &warnings {
-                    ui.label(RichText::new(format!("{WARNING_SIGN} {line}")).color(Color32::from_rgb(255, 200, 170)));
+                    ui.horizontal(|ui| {
+                        warning_icon(ui);
+                        ui.label(RichText::new(line).color(Color32::from_rgb(255, 200, 170)));
+                    });
                 }
                 if changed {
                     ui.horizontal(|ui| {
+                        warning_icon(ui);
                         ui.label(
-                            RichText::new(format!(
-                                "{WARNING_SIGN} the scene file changed on disk; your unsaved edits are kept"
-                            ))
-                            .color(Color32::from_rgb(255, 200, 170)),
+                            RichText::new("the scene file changed on disk; your unsaved edits are kept")
+                                .color(Color32::from_rgb(255, 200, 170)),
                         );
                         if ui.button("Reload (discard edits)").clicked() {
                             commands.push(Command::ReloadScene);
@@ -84,6 +87,26 @@ fn banner_ui(ctx: &egui::Context, view_rect: egui::Rect, state: &ViewerState, co
                 }
             });
         });
+}
+
+/// A warning sign painted as shapes (an amber triangle with a dark `!`), so that it never
+/// depends on a font having U+26A0.
+pub fn warning_icon(ui: &mut egui::Ui) {
+    let size = ui.text_style_height(&egui::TextStyle::Body);
+    let (rect, _) = ui.allocate_exact_size(egui::vec2(size * 1.1, size), egui::Sense::hover());
+    let p = ui.painter();
+    p.add(egui::Shape::convex_polygon(
+        vec![rect.center_top(), rect.right_bottom(), rect.left_bottom()],
+        Color32::from_rgb(255, 190, 60),
+        egui::Stroke::NONE,
+    ));
+    p.text(
+        rect.center_bottom() - egui::vec2(0.0, 0.5),
+        Align2::CENTER_BOTTOM,
+        "!",
+        egui::FontId::proportional(size * 0.75),
+        Color32::from_rgb(40, 20, 0),
+    );
 }
 
 /// A short notice at the bottom of the view.

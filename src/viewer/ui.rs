@@ -182,12 +182,12 @@ fn functions_ui(ui: &mut egui::Ui, state: &ViewerState, commands: &mut Vec<Comma
                 if explicit && ui.add(slider(&mut p, 0.0..=1.0).max_decimals(3)).changed() {
                     commands.push(Command::SetFunctionProbability { function: i, probability: Some(p) });
                 }
-                if ui.small_button("⧉").on_hover_text("duplicate (Shift+D with it selected)").clicked() {
+                if ui.small_button("copy").on_hover_text("duplicate (Shift+D with it selected)").clicked() {
                     commands.push(Command::DuplicateFunction(i));
                 }
                 let deletable = state.scene.functions.len() > 1;
                 if ui
-                    .add_enabled(deletable, egui::Button::new("🗑").small())
+                    .add_enabled(deletable, egui::Button::new("×").small())
                     .on_hover_text("delete (Delete with it selected)")
                     .clicked()
                 {
@@ -262,29 +262,36 @@ fn builder_ui(ui: &mut egui::Ui, state: &ViewerState, commands: &mut Vec<Command
 
 fn render_ui(ui: &mut egui::Ui, state: &ViewerState, commands: &mut Vec<Command>) {
     egui::CollapsingHeader::new("Render").default_open(true).show(ui, |ui| {
+        // Only a widget the user changed sends the settings: comparing them with the state
+        // sent them every frame where a widget cannot show the value exactly (a point count
+        // that is no power of two, a background colour that does not survive the colour
+        // button's 8-bit round trip), and that cleared the accumulation every frame.
         let mut live = state.live;
+        let mut changed = false;
         let mut log2_points = (live.point_count as f32).log2().round() as u32;
-        ui.add(slider(&mut log2_points, 12..=24).text("points (log2)"));
-        live.point_count = 1 << log2_points;
-        ui.add(slider(&mut live.steps_per_frame, 1..=64).text("steps / frame"));
+        if ui.add(slider(&mut log2_points, 12..=24).text("points (log2)")).changed() {
+            live.point_count = 1 << log2_points;
+            changed = true;
+        }
+        changed |= ui.add(slider(&mut live.steps_per_frame, 1..=64).text("steps / frame")).changed();
         egui::ComboBox::from_label("splat").selected_text(live.mode.name()).show_ui(ui, |ui| {
             for mode in SplatMode::ALL {
-                ui.selectable_value(&mut live.mode, mode, mode.name());
+                changed |= ui.selectable_value(&mut live.mode, mode, mode.name()).changed();
             }
         });
         egui::ComboBox::from_label("chaos game backend").selected_text(live.chaos_backend.name()).show_ui(ui, |ui| {
             for backend in ChaosBackend::ALL {
-                ui.selectable_value(&mut live.chaos_backend, backend, backend.name());
+                changed |= ui.selectable_value(&mut live.chaos_backend, backend, backend.name()).changed();
             }
         });
-        ui.add(slider(&mut live.depth_cue, 0.0..=1.0).text("depth cue"));
-        ui.add(slider(&mut live.point_radius_px, 0..=3).text("point size (radius px)"));
-        ui.add(slider(&mut live.shading, 0.0..=1.0).text("shading (closest)"));
+        changed |= ui.add(slider(&mut live.depth_cue, 0.0..=1.0).text("depth cue")).changed();
+        changed |= ui.add(slider(&mut live.point_radius_px, 0..=3).text("point size (radius px)")).changed();
+        changed |= ui.add(slider(&mut live.shading, 0.0..=1.0).text("shading (closest)")).changed();
         ui.horizontal(|ui| {
-            ui.color_edit_button_rgb(&mut live.background);
+            changed |= ui.color_edit_button_rgb(&mut live.background).changed();
             ui.label("background");
         });
-        if live != state.live {
+        if changed && live != state.live {
             commands.push(Command::SetLiveSettings(live));
         }
         let mut perspective = state.camera.projection == Projection::Perspective;
