@@ -61,6 +61,20 @@ impl App {
                 self.commands.push(Command::SetFullscreen(on));
             }
             Key::Named(NamedKey::F12) => self.commands.push(Command::ScreenshotNextToScene),
+            // Blender's add (Shift+A) and duplicate (Shift+D); Delete deletes.
+            Key::Character(c) if c.eq_ignore_ascii_case("a") && shift && !ctrl => {
+                self.commands.push(Command::AddFunction)
+            }
+            Key::Character(c) if c.eq_ignore_ascii_case("d") && shift && !ctrl => {
+                if let Some(f) = self.state.edit.selected_function {
+                    self.commands.push(Command::DuplicateFunction(f));
+                }
+            }
+            Key::Named(NamedKey::Delete) => {
+                if let Some(f) = self.state.edit.selected_function {
+                    self.commands.push(Command::DeleteFunction(f));
+                }
+            }
             Key::Named(NamedKey::Escape) => {
                 // An orbit or pan in progress goes back to where it started; else the state
                 // decides (close a dialog or an overlay, cancel a point drag). Never quits.

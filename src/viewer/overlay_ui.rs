@@ -138,10 +138,13 @@ fn status_ui(ctx: &egui::Context, view_rect: egui::Rect, state: &ViewerState) {
         .pivot(Align2::LEFT_BOTTOM)
         .fixed_pos(view_rect.left_bottom() + egui::vec2(8.0, -6.0))
         .show(ctx, |ui| {
-            ui.label(
-                RichText::new(format!("{} points accumulated   {per_pixel}", group_thousands(s.accumulated)))
-                    .small()
-                    .color(Color32::from_gray(190)),
+            ui.add(
+                egui::Label::new(
+                    RichText::new(format!("{} points accumulated   {per_pixel}", group_thousands(s.accumulated)))
+                        .small()
+                        .color(Color32::from_gray(190)),
+                )
+                .extend(),
             );
         });
 }

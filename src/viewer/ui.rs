@@ -70,8 +70,8 @@ pub fn slider<'a, Num: egui::emath::Numeric>(
 }
 
 /// Undo (Ctrl+Z), redo (Ctrl+Shift+Z, Ctrl+Y), save (Ctrl+S), axis lock (X, Y, Z), play/pause
-/// (Space), add (Shift+A), duplicate (Shift+D) and delete (Delete) a function; not while a text
-/// field has the keyboard (it has its own undo). The window's keys are in `mod.rs`.
+/// (Space); not while a text field has the keyboard (it has its own undo). The window's keys
+/// are in `input.rs`.
 fn shortcuts_ui(ctx: &egui::Context, state: &ViewerState, commands: &mut Vec<Command>) {
     if ctx.egui_wants_keyboard_input() {
         return;
@@ -98,22 +98,6 @@ fn shortcuts_ui(ctx: &egui::Context, state: &ViewerState, commands: &mut Vec<Com
             }
             if i.key_pressed(Key::Space) && state.scene.timeline.is_some() {
                 commands.push(Command::SetPlaying(!state.playback.playing));
-            }
-            if let Some(f) = state.edit.selected_function
-                && i.key_pressed(Key::Delete)
-            {
-                commands.push(Command::DeleteFunction(f));
-            }
-        }
-        // Blender's add (Shift+A) and duplicate (Shift+D).
-        if i.modifiers.shift_only() {
-            if i.key_pressed(Key::A) {
-                commands.push(Command::AddFunction);
-            }
-            if let Some(f) = state.edit.selected_function
-                && i.key_pressed(Key::D)
-            {
-                commands.push(Command::DuplicateFunction(f));
             }
         }
     });
