@@ -118,6 +118,11 @@ fn xdotool(display: &str, args: &[&str]) -> String {
     String::from_utf8_lossy(&out.stdout).trim().to_string()
 }
 
+/// Gives the viewer window the keyboard (a virtual display has no window manager to do it).
+fn focus(display: &str) {
+    xdotool(display, &["search", "--name", "nlifs", "windowfocus"]);
+}
+
 /// The viewer window's title.
 fn title(display: &str) -> String {
     let ids = xdotool(display, &["search", "--name", "nlifs"]);
@@ -253,6 +258,7 @@ fn viewer_keeps_unsaved_work_and_gives_the_camera_only_unused_input() {
     assert!(orbit_change > 0.01, "a drag right after a panel click changed only {orbit_change:.4} of the view");
 
     // 3. Esc does not quit, with or without unsaved edits.
+    focus(&display);
     xdotool(&display, &["mousemove", "850", "360", "key", "Escape"]);
     std::thread::sleep(Duration::from_secs(2));
     assert!(viewer.0.try_wait().unwrap().is_none(), "Esc quit the viewer");
@@ -287,6 +293,7 @@ fn viewer_keeps_unsaved_work_and_gives_the_camera_only_unused_input() {
     wait_for_attractor(&mut viewer, &display, &shot("restart"));
     screenshot(&display, &shot("recovery-offer"));
     // Esc answers nothing: the offer closes, the file stays.
+    focus(&display);
     xdotool(&display, &["key", "Escape"]);
     std::thread::sleep(Duration::from_secs(1));
     assert!(recovery_file().is_some());
