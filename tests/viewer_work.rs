@@ -219,3 +219,25 @@ fn view_of_a_missing_scene_exits_2_with_the_located_error() {
     assert_eq!(out.status.code(), Some(2), "{err}");
     assert!(err.contains("bad.toml:4"), "{err}");
 }
+
+#[test]
+fn opening_another_scene_over_unsaved_edits_asks_first() {
+    let (path, rec) = scratch("open-over", "plant1");
+    let other = common::scene_path("plant2");
+    let mut s = open(&path, &rec);
+    edit(&mut s);
+    let edited = s.scene.clone();
+    // Asked, not opened; Cancel (or Esc) keeps the edits.
+    let changes = s.apply([Command::OpenScene(other.clone())]);
+    assert!(!changes.scene_replaced && s.ui.close_dialog && s.scene == edited);
+    s.apply([Command::CloseDialog(CloseChoice::Cancel)]);
+    assert!(s.scene == edited && !s.ui.quit && s.ui.pending_open.is_none());
+    // Discard opens the other scene, and does not quit.
+    s.apply([Command::OpenScene(other.clone())]);
+    let changes = s.apply([Command::CloseDialog(CloseChoice::Discard)]);
+    assert!(changes.scene_replaced && !s.ui.quit);
+    assert_eq!(s.scene_path.as_deref(), Some(other.as_path()));
+    // Without edits it opens at once.
+    let changes = s.apply([Command::OpenScene(path.clone())]);
+    assert!(changes.scene_replaced && !s.ui.close_dialog);
+}

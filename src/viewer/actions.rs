@@ -93,6 +93,7 @@ impl ViewerState {
     pub(super) fn escape(&mut self) -> bool {
         if self.ui.close_dialog {
             self.ui.close_dialog = false;
+            self.ui.pending_open = None;
         } else if self.recovery_offer.is_some() {
             self.recovery_offer = None;
         } else if self.ui.shortcuts_shown {

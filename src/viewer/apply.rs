@@ -46,19 +46,13 @@ impl ViewerState {
         for command in commands {
             match command {
                 Command::OpenScene(path) => {
-                    if self.load(&path) {
-                        let s = &self.scene.render;
-                        self.live.seed = s.seed;
-                        self.live.mode = s.mode;
-                        self.live.depth_cue = s.depth_cue;
-                        self.live.background = s.background;
-                        self.camera = self.framed_camera();
-                        self.camera_moved = false;
-                        changes.scene_replaced = true;
-                        changes.camera = true;
-                        changes.live_settings = true;
-                        self.message = Some(format!("opened {}", path.display()));
-                        self.check_recovery();
+                    // Opening over unsaved edits asks first, as closing does.
+                    if self.modified() {
+                        self.end_gesture();
+                        self.ui.close_dialog = true;
+                        self.ui.pending_open = Some(path);
+                    } else {
+                        self.open_scene(&path, &mut changes);
                     }
                 }
                 Command::ReloadScene => {
@@ -311,24 +305,31 @@ impl ViewerState {
                 }
                 Command::CloseDialog(choice) => {
                     self.ui.close_dialog = false;
-                    match choice {
+                    let proceed = match choice {
                         CloseChoice::Save => {
                             let path = PathBuf::from(self.edit.save_text.trim());
                             self.save_scene(&path);
-                            // A failed save keeps the window open with the error shown.
-                            if !self.modified() {
-                                self.ui.quit = true;
-                            } else {
-                                self.ui.close_dialog = true;
-                            }
+                            // A failed save keeps the dialog up with the error shown.
+                            self.ui.close_dialog = self.modified();
+                            !self.modified()
                         }
                         CloseChoice::Discard => {
                             if let Some(file) = &self.recovery_file {
                                 recovery::remove(file);
                             }
-                            self.ui.quit = true;
+                            true
                         }
-                        CloseChoice::Cancel => {}
+                        CloseChoice::Cancel => {
+                            self.ui.pending_open = None;
+                            false
+                        }
+                    };
+                    if proceed {
+                        // Then what the dialog interrupted: opening another scene, or quitting.
+                        match self.ui.pending_open.take() {
+                            Some(path) => self.open_scene(&path, &mut changes),
+                            None => self.ui.quit = true,
+                        }
                     }
                 }
                 Command::SetRecoveryDir(dir) => {
@@ -398,6 +399,24 @@ impl ViewerState {
             changes.camera = true;
         }
         changes
+    }
+
+    /// Opens the scene at `path` in place of this one (its unsaved edits are gone).
+    fn open_scene(&mut self, path: &Path, changes: &mut Changes) {
+        if self.load(path) {
+            let s = &self.scene.render;
+            self.live.seed = s.seed;
+            self.live.mode = s.mode;
+            self.live.depth_cue = s.depth_cue;
+            self.live.background = s.background;
+            self.camera = self.framed_camera();
+            self.camera_moved = false;
+            changes.scene_replaced = true;
+            changes.camera = true;
+            changes.live_settings = true;
+            self.message = Some(format!("opened {}", path.display()));
+            self.check_recovery();
+        }
     }
 
     /// Loads `path`; on failure keeps the current scene and records the error.

@@ -187,7 +187,11 @@ fn shortcuts_overlay_ui(ctx: &egui::Context, commands: &mut Vec<Command>) {
 fn close_dialog_ui(ctx: &egui::Context, state: &ViewerState, commands: &mut Vec<Command>) {
     egui::Modal::new(egui::Id::unique("nlifs_close_dialog")).show(ctx, |ui| {
         ui.heading("Unsaved changes");
-        ui.label(format!("{} has unsaved edits. Save them before closing?", state.scene.name));
+        let before = match &state.ui.pending_open {
+            Some(path) => format!("opening {}", path.display()),
+            None => "closing".into(),
+        };
+        ui.label(format!("{} has unsaved edits. Save them before {before}?", state.scene.name));
         ui.small(format!("Save writes {}", state.edit.save_text.trim()));
         if let Some(e) = &state.error {
             ui.colored_label(Color32::from_rgb(255, 110, 90), e);

@@ -79,6 +79,8 @@ pub struct UiState {
     pub shortcuts_shown: bool,
     /// Asking Save / Discard / Cancel before closing with unsaved edits.
     pub close_dialog: bool,
+    /// The scene to open once the dialog is answered (None: the dialog is about closing).
+    pub pending_open: Option<PathBuf>,
     /// The window should close now (set once the user has decided).
     pub quit: bool,
     /// Full screen (`F11`).
@@ -207,6 +209,7 @@ impl ViewerState {
                 panel_shown: true,
                 shortcuts_shown: false,
                 close_dialog: false,
+                pending_open: None,
                 quit: false,
                 fullscreen: false,
                 toast: None,
