@@ -37,6 +37,7 @@ pub mod state;
 pub mod timeline_ui;
 pub mod ui;
 pub mod ui_layer;
+pub mod widgets;
 
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -271,7 +272,7 @@ impl ApplicationHandler for App {
         // has it): egui does not see it.
         let tab = matches!(&event, WindowEvent::KeyboardInput { event: k, .. }
             if k.logical_key == Key::Named(NamedKey::Tab));
-        if !(tab && !text_focus) {
+        if !tab || text_focus {
             let response = gfx.egui_state.on_window_event(&gfx.window, &event);
             if response.repaint {
                 gfx.window.request_redraw();
@@ -476,10 +477,10 @@ impl App {
         for request in changes.jobs.drain(..) {
             self.jobs.handle(request);
         }
-        if changes.scene_replaced || changes.scene_edited {
-            if let Some(c) = &self.state.compiled {
-                gfx.live.set_ifs(&gfx.ctx, c, self.state.bounds, changes.scene_replaced);
-            }
+        if (changes.scene_replaced || changes.scene_edited)
+            && let Some(c) = &self.state.compiled
+        {
+            gfx.live.set_ifs(&gfx.ctx, c, self.state.bounds, changes.scene_replaced);
         }
         let title = self.state.window_title();
         if title != self.title {

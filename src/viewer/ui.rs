@@ -11,6 +11,7 @@ use crate::scene::spec::{FunctionDef, SplatMode};
 use super::command::Command;
 use super::jobs::JobView;
 use super::state::ViewerState;
+use super::widgets::slider;
 
 /// The left side panel with every section, the timeline at the bottom, the grid overlay, the
 /// ray-traced image window and the keyboard shortcuts. `ppp`: pixels per egui point. Returns
@@ -56,17 +57,6 @@ pub fn panels_ui(
     super::jobs_ui::raytrace_window_ui(ui.ctx(), jobs, commands);
     super::overlay_ui::overlays_ui(ui.ctx(), view_rect, state, commands);
     view_rect
-}
-
-/// A slider that never writes the state's value back: with egui's default clamping
-/// (`SliderClamping::Always`) a slider re-clamps and re-rounds the value it shows every frame
-/// and reports that as a change, which turned a value outside the range (or with more decimals
-/// than shown) into an edit every frame.
-pub fn slider<'a, Num: egui::emath::Numeric>(
-    value: &'a mut Num,
-    range: std::ops::RangeInclusive<Num>,
-) -> egui::Slider<'a> {
-    egui::Slider::new(value, range).clamping(egui::SliderClamping::Edits)
 }
 
 /// Undo (Ctrl+Z), redo (Ctrl+Shift+Z, Ctrl+Y), save (Ctrl+S), axis lock (X, Y, Z), play/pause
