@@ -17,6 +17,11 @@ impl App {
     pub(super) fn key(&mut self, event: &winit::event::KeyEvent) {
         use winit::keyboard::{KeyCode, PhysicalKey};
         let Some(gfx) = &self.gfx else { return };
+        // Every key here is an action or a toggle: a held key (or a slow machine, where the
+        // X server's auto-repeat starts before the release arrives) must not repeat it.
+        if event.repeat {
+            return;
+        }
         let (ctrl, shift) = (self.modifiers.control_key(), self.modifiers.shift_key());
         let toggle_projection = |state: &ViewerState| {
             Command::SetProjection(match state.camera.projection {
