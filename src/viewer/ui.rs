@@ -281,7 +281,7 @@ fn render_ui(ui: &mut egui::Ui, state: &ViewerState, commands: &mut Vec<Command>
                 commands.push(Command::FrameAttractor);
             }
         });
-        ui.small("left-drag: orbit · right/middle-drag: pan · wheel: zoom");
+        ui.small("left-drag: orbit · right/middle-drag: pan · wheel: zoom · F1: every key");
     });
 }
 
