@@ -70,6 +70,12 @@ pub enum Edit {
         before: Option<Timeline>,
         after: Option<Timeline>,
     },
+    /// The whole scene (adding, duplicating or deleting a function, which renumbers the
+    /// functions that keys refer to).
+    ReplaceScene {
+        before: Box<Scene>,
+        after: Box<Scene>,
+    },
     /// Several edits as one gesture, applied in order and undone in reverse.
     Batch(Vec<Edit>),
 }
@@ -204,6 +210,7 @@ impl Edit {
             Edit::ReplaceKey { index, before, after } => Edit::ReplaceKey { index, before: after, after: before },
             Edit::SetTimeline { before, after } => Edit::SetTimeline { before: after, after: before },
             Edit::SetDuration { before, after } => Edit::SetDuration { before: after, after: before },
+            Edit::ReplaceScene { before, after } => Edit::ReplaceScene { before: after, after: before },
             Edit::Batch(edits) => Edit::Batch(edits.iter().rev().map(Edit::inverse).collect()),
         }
     }
@@ -244,6 +251,7 @@ impl Edit {
             Edit::SetDuration { after, .. } => {
                 scene.timeline.as_mut().ok_or(EditError::NoTimeline)?.duration_secs = after
             }
+            Edit::ReplaceScene { after, .. } => *scene = *after,
             Edit::Batch(_) => unreachable!("handled above"),
         }
         Ok(())
@@ -298,6 +306,7 @@ impl Edit {
                 let tl = scene.timeline.as_ref().ok_or(EditError::NoTimeline)?;
                 (tl.duration_secs == *before).then_some(()).ok_or(EditError::Stale)
             }
+            Edit::ReplaceScene { before, .. } => (scene == before.as_ref()).then_some(()).ok_or(EditError::Stale),
             Edit::Batch(_) => Ok(()),
         }
     }

@@ -67,7 +67,9 @@ fn the_first_view_rect_frames_the_attractor_in_it_and_later_ones_keep_the_camera
     // `fit_points` leaves a 5% margin and fills the view along one axis.
     assert!(lo.x >= 0.0 && lo.y >= 0.0 && hi.x <= w && hi.y <= h, "sample spans {lo}..{hi} in a {w}×{h} view");
     assert!((hi.x - lo.x) / w > 0.8 || (hi.y - lo.y) / h > 0.8, "sample spans only {lo}..{hi} in a {w}×{h} view");
-    // A later size change (panel resized) keeps the user's camera; the same rect changes nothing.
+    // Once the user moved the camera, a later size change (panel resized) keeps it; the same
+    // rect changes nothing.
+    s.apply([Command::Orbit { dx_px: 5.0, dy_px: 0.0 }]);
     let camera = s.camera;
     let changes = s.apply([Command::SetViewRect { origin_px: [300.0, 0.0], size_px: [600.0, h] }]);
     assert!(changes.camera);

@@ -2,6 +2,11 @@
 //! screenshot of the screen (`import -window root`) shows the attractor (not a blank or
 //! uniform image), and a mouse drag (xdotool) on the view changes what is shown. Twice: with the
 //! default chaos-game backend (auto, the CPU route on lavapipe) and with the GPU route forced.
+//! A third run checks that work is not lost and input goes where the hand means it: the wheel
+//! over the side panel leaves the view alone, a press in the view right after a panel click
+//! orbits, Esc never quits, an added function marks the title, is written to the recovery file
+//! and survives Ctrl+S (the file has it and `nlifs info` reads it), quitting with unsaved edits
+//! asks instead of quitting, and quitting without them quits.
 //!
 //! Needs Xvfb, xdotool, imagemagick and a GPU adapter (lavapipe will do); without them it skips
 //! loudly, unless NLIFS_REQUIRE_GPU=1, in which case it fails. Failing screenshots are kept in
@@ -84,6 +89,241 @@ fn viewer_shows_the_attractor_and_drag_orbits() {
 #[test]
 fn viewer_on_the_gpu_route_shows_the_attractor_and_drag_orbits() {
     check_viewer(Some("gpu"));
+}
+
+/// A virtual X display on a free number, its runtime folder, and its guard.
+fn start_xvfb(dir: &Path) -> (String, PathBuf, Guard) {
+    let runtime = dir.join("xdg");
+    std::fs::create_dir_all(&runtime).unwrap();
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt;
+        std::fs::set_permissions(&runtime, std::fs::Permissions::from_mode(0o700)).unwrap();
+    }
+    // Xvfb picks a free display and writes its number to stdout (-displayfd 1).
+    let mut xvfb = Command::new("Xvfb")
+        .args(["-displayfd", "1", "-screen", "0", "1280x720x24", "-nolisten", "tcp"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::null())
+        .spawn()
+        .expect("start Xvfb");
+    let mut line = String::new();
+    BufReader::new(xvfb.stdout.take().unwrap()).read_line(&mut line).unwrap();
+    (format!(":{}", line.trim()), runtime, Guard(xvfb))
+}
+
+fn xdotool(display: &str, args: &[&str]) -> String {
+    let out = Command::new("xdotool").args(args).env("DISPLAY", display).output().expect("run xdotool");
+    assert!(out.status.success(), "xdotool {args:?}: {}", String::from_utf8_lossy(&out.stderr));
+    String::from_utf8_lossy(&out.stdout).trim().to_string()
+}
+
+/// Gives the viewer window the keyboard (a virtual display has no window manager to do it).
+fn focus(display: &str) {
+    xdotool(display, &["search", "--name", "nlifs", "windowfocus"]);
+}
+
+/// The viewer window's title.
+fn title(display: &str) -> String {
+    let ids = xdotool(display, &["search", "--name", "nlifs"]);
+    let id = ids.lines().last().expect("a viewer window");
+    xdotool(display, &["getwindowname", id])
+}
+
+/// Waits until `cond` holds (polling every half second) or `secs` pass.
+fn wait_for(secs: u64, mut cond: impl FnMut() -> bool) -> bool {
+    let deadline = Instant::now() + Duration::from_secs(secs);
+    loop {
+        if cond() {
+            return true;
+        }
+        if Instant::now() > deadline {
+            return false;
+        }
+        std::thread::sleep(Duration::from_millis(500));
+    }
+}
+
+/// Waits for the attractor to show, then for one more frame of accumulation.
+fn wait_for_attractor(viewer: &mut Guard, display: &str, shot: &Path) -> image::RgbImage {
+    let deadline = Instant::now() + Duration::from_secs(120);
+    loop {
+        std::thread::sleep(Duration::from_secs(2));
+        if let Ok(Some(status)) = viewer.0.try_wait() {
+            panic!("the viewer exited early: {status}");
+        }
+        if let Some(img) = screenshot(display, shot)
+            && non_background_fraction(&img) > 0.01
+        {
+            std::thread::sleep(Duration::from_secs(2));
+            return screenshot(display, shot).unwrap();
+        }
+        assert!(Instant::now() < deadline, "no attractor on screen after 120 s; last screenshot {}", shot.display());
+    }
+}
+
+#[test]
+fn viewer_keeps_unsaved_work_and_gives_the_camera_only_unused_input() {
+    for tool in ["Xvfb", "xdotool", "import"] {
+        if !have(tool) {
+            return common::skip(&format!("window test: {tool} is not installed"));
+        }
+    }
+    if !nlifs::gpu::adapter_available() {
+        return common::skip("window test: no GPU adapter");
+    }
+    let dir: PathBuf = common::temp_dir("window-work");
+    let (display, runtime, _xvfb) = start_xvfb(&dir);
+    let scene = dir.join("plant2.toml");
+    std::fs::copy(common::scene_path("plant2"), &scene).unwrap();
+    let state_home = dir.join("state");
+    let start = || {
+        let child = common::nlifs_command()
+            .arg("view")
+            .arg(&scene)
+            .args(["--points", "262144", "--exit-after-secs", "300"])
+            .env("DISPLAY", &display)
+            .env("XDG_RUNTIME_DIR", &runtime)
+            .env("XDG_STATE_HOME", &state_home)
+            .env("LIBGL_ALWAYS_SOFTWARE", "1")
+            .stdout(Stdio::null())
+            .stderr(Stdio::inherit())
+            .spawn()
+            .expect("start the viewer");
+        Guard(child)
+    };
+    let mut viewer = start();
+    let shot = |name: &str| dir.join(format!("{name}.png"));
+    let before = wait_for_attractor(&mut viewer, &display, &shot("start"));
+    let name = nlifs::scene::Scene::load(&scene).unwrap().name;
+    assert_eq!(title(&display), format!("{name} — nlifs"));
+
+    // How much the view changes by itself (accumulation noise) in 2 s.
+    std::thread::sleep(Duration::from_secs(2));
+    let still = screenshot(&display, &shot("still")).unwrap();
+    let noise = changed_fraction(&before, &still);
+
+    // 1. The wheel over the side panel does not zoom the view.
+    xdotool(&display, &["mousemove", "150", "400"]);
+    for _ in 0..5 {
+        xdotool(&display, &["click", "5"]);
+    }
+    std::thread::sleep(Duration::from_secs(3));
+    let after_wheel = screenshot(&display, &shot("after-wheel")).unwrap();
+    let wheel_change = changed_fraction(&still, &after_wheel);
+    assert!(
+        wheel_change <= (3.0 * noise).max(0.003),
+        "the wheel over the panel changed {wheel_change:.4} of the view (noise {noise:.4}); see {}",
+        shot("after-wheel").display()
+    );
+
+    // 2. A press in the view right after a click on the panel orbits at once. (The panel
+    // scrolls back to its top first, so that the click lands on its heading, not a button.)
+    for _ in 0..10 {
+        xdotool(&display, &["click", "4"]);
+    }
+    std::thread::sleep(Duration::from_secs(1));
+    xdotool(
+        &display,
+        &[
+            "mousemove",
+            "20",
+            "12",
+            "click",
+            "1",
+            "mousemove",
+            "850",
+            "360",
+            "mousedown",
+            "1",
+            "mousemove",
+            "870",
+            "362",
+            "sleep",
+            "0.2",
+            "mousemove",
+            "920",
+            "365",
+            "sleep",
+            "0.2",
+            "mousemove",
+            "990",
+            "370",
+            "sleep",
+            "0.2",
+            "mouseup",
+            "1",
+        ],
+    );
+    let mut orbit_change = 0.0;
+    wait_for(30, || {
+        orbit_change = changed_fraction(&after_wheel, &screenshot(&display, &shot("after-orbit")).unwrap());
+        orbit_change > 0.01
+    });
+    assert!(orbit_change > 0.01, "a drag right after a panel click changed only {orbit_change:.4} of the view");
+
+    // 3. Esc does not quit, with or without unsaved edits.
+    focus(&display);
+    xdotool(&display, &["mousemove", "850", "360", "key", "Escape"]);
+    std::thread::sleep(Duration::from_secs(2));
+    assert!(viewer.0.try_wait().unwrap().is_none(), "Esc quit the viewer");
+    xdotool(&display, &["key", "shift+a"]);
+    assert!(wait_for(20, || title(&display).contains('*')), "no unsaved mark after Shift+A: {}", title(&display));
+    assert_eq!(title(&display), format!("{name}* — nlifs"));
+    xdotool(&display, &["key", "Escape"]);
+    std::thread::sleep(Duration::from_secs(2));
+    assert!(viewer.0.try_wait().unwrap().is_none(), "Esc with unsaved edits quit the viewer");
+
+    // 4. The edit reaches the recovery file within a few seconds.
+    let recovery = state_home.join("nlifs").join("recovery");
+    let recovery_file = || std::fs::read_dir(&recovery).ok()?.flatten().map(|e| e.path()).next();
+    assert!(wait_for(15, || recovery_file().is_some()), "no recovery file in {}", recovery.display());
+    let functions = nlifs::scene::Scene::load(&scene).unwrap().functions.len();
+    let recovered = nlifs::scene::Scene::load(&recovery_file().unwrap()).unwrap();
+    assert_eq!(recovered.functions.len(), functions + 1);
+
+    // 5. Quitting with unsaved edits asks (the dialog stays up; Esc closes it).
+    xdotool(&display, &["key", "ctrl+q"]);
+    std::thread::sleep(Duration::from_secs(3));
+    screenshot(&display, &shot("close-dialog"));
+    assert!(viewer.0.try_wait().unwrap().is_none(), "Ctrl+Q with unsaved edits quit without asking");
+    xdotool(&display, &["key", "Escape"]);
+    std::thread::sleep(Duration::from_secs(2));
+
+    // 6. A kill keeps the edits for the next start, which offers them.
+    let _ = viewer.0.kill();
+    let _ = viewer.0.wait();
+    assert!(recovery_file().is_some());
+    let mut viewer = start();
+    wait_for_attractor(&mut viewer, &display, &shot("restart"));
+    screenshot(&display, &shot("recovery-offer"));
+    // Esc answers nothing: the offer closes, the file stays.
+    focus(&display);
+    xdotool(&display, &["key", "Escape"]);
+    std::thread::sleep(Duration::from_secs(1));
+    assert!(recovery_file().is_some());
+
+    // 7. Add a function in the view, save: the file has it, `nlifs info` reads it, the mark
+    // and the recovery file go, and quitting no longer asks.
+    xdotool(&display, &["mousemove", "850", "360", "key", "shift+a"]);
+    assert!(wait_for(20, || title(&display).contains('*')), "no unsaved mark: {}", title(&display));
+    xdotool(&display, &["key", "ctrl+s"]);
+    assert!(wait_for(20, || !title(&display).contains('*')), "still marked after Ctrl+S: {}", title(&display));
+    assert_eq!(nlifs::scene::Scene::load(&scene).unwrap().functions.len(), functions + 1);
+    let info = common::run_nlifs(&["info", scene.to_str().unwrap()]);
+    assert!(info.status.success(), "{}", String::from_utf8_lossy(&info.stderr));
+    assert!(recovery_file().is_none(), "the recovery file outlived a save");
+    xdotool(&display, &["key", "ctrl+q"]);
+    assert!(wait_for(20, || viewer.0.try_wait().unwrap().is_some()), "Ctrl+Q without unsaved edits did not quit");
+    assert!(viewer.0.try_wait().unwrap().unwrap().success());
+    eprintln!(
+        "window work: noise {noise:.4}, wheel over the panel {wheel_change:.4}, orbit after a panel click {orbit_change:.3}"
+    );
+    if std::env::var_os("NLIFS_KEEP_SCREENSHOTS").is_none() {
+        let _ = std::fs::remove_dir_all(&dir);
+    } else {
+        eprintln!("screenshots in {}", dir.display());
+    }
 }
 
 fn check_viewer(chaos_backend: Option<&str>) {

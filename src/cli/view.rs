@@ -59,6 +59,11 @@ impl From<ChaosBackendArg> for ChaosBackend {
 }
 
 pub fn view(args: ViewArgs) -> anyhow::Result<()> {
+    // A missing or bad scene is an error like in every other command (exit 2, located), not
+    // the default scene with the error in a panel: the window opens only on a scene that reads.
+    if let Some(path) = &args.scene {
+        nlifs::scene::Scene::load(path)?;
+    }
     let mut live = nlifs::live::LiveSettings::default();
     if let Some(n) = args.points {
         live.point_count = n;

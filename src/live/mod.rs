@@ -116,6 +116,22 @@ impl LiveView {
         self.route.cpu.then(|| self.cpu.merged())
     }
 
+    /// Pixels hit by at least one point since the last clear, where it is known without a GPU
+    /// read-back (the CPU route's accumulation: one closest-point key per pixel, or four
+    /// words per pixel with the count last).
+    pub fn lit_pixels(&self) -> Option<u64> {
+        let accum = self.cpu_accum()?;
+        let (w, h) = self.size();
+        let pixels = w as usize * h as usize;
+        if accum.len() == pixels {
+            Some(accum.iter().filter(|&&k| k != crate::splat::EMPTY).count() as u64)
+        } else if accum.len() == 4 * pixels {
+            Some(accum.chunks_exact(4).filter(|a| a[3] > 0).count() as u64)
+        } else {
+            None
+        }
+    }
+
     /// True when accumulation has stopped (nothing changed for `max_splats` splats).
     pub fn converged(&self) -> bool {
         self.gpu.converged()

@@ -13,15 +13,14 @@ use std::path::{Path, PathBuf};
 
 use glam::DVec3;
 
-use crate::camera::OrbitCamera;
-use crate::chaos_game;
 use crate::edit::{Edit, History};
 use crate::scene::Scene;
 use crate::scene::spec::FunctionDef;
 use crate::scene::timeline::{Key, LoopMode};
 
-use super::command::{Command, JobRequest};
+use super::command::{CloseChoice, Command, JobRequest};
 use super::picking;
+use super::recovery;
 use super::state::{Gesture, PointDrag, ViewerState, mtime};
 
 /// What the renderer must refresh after a batch of commands.
@@ -47,17 +46,13 @@ impl ViewerState {
         for command in commands {
             match command {
                 Command::OpenScene(path) => {
-                    if self.load(&path) {
-                        let s = &self.scene.render;
-                        self.live.seed = s.seed;
-                        self.live.mode = s.mode;
-                        self.live.depth_cue = s.depth_cue;
-                        self.live.background = s.background;
-                        self.camera = self.framed_camera();
-                        changes.scene_replaced = true;
-                        changes.camera = true;
-                        changes.live_settings = true;
-                        self.message = Some(format!("opened {}", path.display()));
+                    // Opening over unsaved edits asks first, as closing does.
+                    if self.modified() {
+                        self.end_gesture();
+                        self.ui.close_dialog = true;
+                        self.ui.pending_open = Some(path);
+                    } else {
+                        self.open_scene(&path, &mut changes);
                     }
                 }
                 Command::ReloadScene => {
@@ -67,6 +62,10 @@ impl ViewerState {
                         changes.scene_edited = true;
                         self.message = Some(format!("reloaded {}", path.display()));
                     }
+                }
+                Command::FileChangedOnDisk => {
+                    self.ui.file_changed_on_disk = true;
+                    self.scene_mtime = self.scene_path.as_deref().and_then(mtime).or(self.scene_mtime);
                 }
                 Command::SetFunctionEnabled { function, enabled } => {
                     if let Some(f) = self.scene.functions.get_mut(function) {
@@ -95,44 +94,58 @@ impl ViewerState {
                 }
                 Command::SetProjection(projection) => {
                     self.camera.projection = projection;
+                    self.camera_moved = true;
                     changes.camera = true;
                 }
                 Command::Orbit { dx_px, dy_px } => {
                     self.camera.orbit(dx_px, dy_px);
+                    self.camera_moved = true;
                     changes.camera = true;
                 }
                 Command::Pan { dx_px, dy_px } => {
                     self.camera.pan(dx_px, dy_px, self.height_px);
+                    self.camera_moved = true;
                     changes.camera = true;
                 }
                 Command::Zoom { steps } => {
                     self.camera.zoom(steps);
+                    self.camera_moved = true;
+                    changes.camera = true;
+                }
+                Command::ZoomAt { steps, cursor_px } => {
+                    self.zoom_at(steps, cursor_px);
+                    self.camera_moved = true;
+                    changes.camera = true;
+                }
+                Command::SetCamera(camera) => {
+                    self.camera = camera;
+                    changes.camera = true;
+                }
+                Command::ViewAlong(axis) => {
+                    (self.camera.yaw_deg, self.camera.pitch_deg) = axis.angles_deg();
+                    self.camera_moved = true;
                     changes.camera = true;
                 }
                 Command::FrameAttractor => {
-                    // Keep the user's angles and projection; fit target and distance.
-                    let sample = self
-                        .compiled
-                        .as_ref()
-                        .map(|c| chaos_game::attractor_sample(c, self.live.seed))
-                        .unwrap_or_default();
-                    if sample.is_empty() {
-                        let dim = self.scene.domain.dimension();
-                        self.camera.target = OrbitCamera::framing(self.bounds, dim).target;
-                        self.camera.distance = self.camera.framing_distance(self.bounds);
-                    } else {
-                        self.camera.fit_points(&sample, self.view_aspect());
-                    }
+                    self.frame(false);
+                    changes.camera = true;
+                }
+                Command::FrameAttractorAndGrid => {
+                    self.frame(true);
                     changes.camera = true;
                 }
                 Command::SaveScreenshot(path) => changes.screenshot = Some(path),
+                Command::ScreenshotNextToScene => changes.screenshot = Some(self.screenshot_next_to_scene()),
                 Command::SetViewRect { origin_px, size_px } => {
                     let size_px = size_px.map(|v| v.max(1.0));
                     self.view_origin_px = origin_px;
                     if size_px != [self.width_px, self.height_px] || !self.view_rect_known {
                         [self.width_px, self.height_px] = size_px;
                         changes.camera = true;
-                        if !self.view_rect_known {
+                        // The first report frames for the view's real aspect; later ones (a
+                        // window resize, the panel resized or hidden) only while the user has
+                        // not moved the camera since it was framed.
+                        if !self.view_rect_known || !self.camera_moved {
                             self.camera = self.framed_camera();
                         }
                     }
@@ -202,20 +215,7 @@ impl ViewerState {
                     }
                 }
                 Command::SetSaveText(text) => self.edit.save_text = text,
-                Command::SaveScene(path) => {
-                    self.end_gesture();
-                    match self.scene.save(&path) {
-                        Ok(()) => {
-                            self.scene.path = Some(path.clone());
-                            self.scene_path = Some(path.clone());
-                            // Our own write is not a change to reload.
-                            self.scene_mtime = mtime(&path);
-                            self.path_text = path.display().to_string();
-                            self.message = Some(format!("saved {}", path.display()));
-                        }
-                        Err(e) => self.error = Some(format!("cannot save {}: {e}", path.display())),
-                    }
-                }
+                Command::SaveScene(path) => self.save_scene(&path),
 
                 Command::SetPlaying(playing) => {
                     self.end_gesture();
@@ -294,6 +294,72 @@ impl ViewerState {
                     }
                 }
 
+                Command::Escape => edited |= self.escape(),
+                Command::RequestClose => {
+                    self.end_gesture();
+                    if self.modified() {
+                        self.ui.close_dialog = true;
+                    } else {
+                        self.ui.quit = true;
+                    }
+                }
+                Command::CloseDialog(choice) => {
+                    self.ui.close_dialog = false;
+                    let proceed = match choice {
+                        CloseChoice::Save => {
+                            let path = PathBuf::from(self.edit.save_text.trim());
+                            self.save_scene(&path);
+                            // A failed save keeps the dialog up with the error shown.
+                            self.ui.close_dialog = self.modified();
+                            !self.modified()
+                        }
+                        CloseChoice::Discard => {
+                            if let Some(file) = &self.recovery_file {
+                                recovery::remove(file);
+                            }
+                            true
+                        }
+                        CloseChoice::Cancel => {
+                            self.ui.pending_open = None;
+                            false
+                        }
+                    };
+                    if proceed {
+                        // Then what the dialog interrupted: opening another scene, or quitting.
+                        match self.ui.pending_open.take() {
+                            Some(path) => self.open_scene(&path, &mut changes),
+                            None => self.ui.quit = true,
+                        }
+                    }
+                }
+                Command::SetRecoveryDir(dir) => {
+                    self.recovery_dir = dir;
+                    self.check_recovery();
+                }
+                Command::Recover(restore) => {
+                    if let Some(offer) = self.recovery_offer.take() {
+                        if restore {
+                            self.end_gesture();
+                            let mut scene = *offer.scene;
+                            scene.path = self.scene.path.clone();
+                            self.scene = scene;
+                            self.history = History::default();
+                            edited = true;
+                            self.message = Some("restored unsaved edits".into());
+                        } else if let Some(file) = &self.recovery_file {
+                            recovery::remove(file);
+                        }
+                    }
+                }
+                Command::Autosave => self.autosave(),
+                Command::SetPanelShown(shown) => self.ui.panel_shown = shown,
+                Command::SetShortcutsShown(shown) => self.ui.shortcuts_shown = shown,
+                Command::SetFullscreen(on) => self.ui.fullscreen = on,
+                Command::SetToast(toast) => self.ui.toast = toast,
+                Command::AddFunction | Command::DuplicateFunction(_) | Command::DeleteFunction(_) => {
+                    edited |= self.edit_functions(&command);
+                }
+
                 Command::SetRaytraceForm(form) => self.raytrace_form = form,
                 Command::StartRaytrace => changes.jobs.push(JobRequest::Raytrace {
                     scene: Box::new(self.scene.clone()),
@@ -335,11 +401,31 @@ impl ViewerState {
         changes
     }
 
+    /// Opens the scene at `path` in place of this one (its unsaved edits are gone).
+    fn open_scene(&mut self, path: &Path, changes: &mut Changes) {
+        if self.load(path) {
+            let s = &self.scene.render;
+            self.live.seed = s.seed;
+            self.live.mode = s.mode;
+            self.live.depth_cue = s.depth_cue;
+            self.live.background = s.background;
+            self.camera = self.framed_camera();
+            self.camera_moved = false;
+            changes.scene_replaced = true;
+            changes.camera = true;
+            changes.live_settings = true;
+            self.message = Some(format!("opened {}", path.display()));
+            self.check_recovery();
+        }
+    }
+
     /// Loads `path`; on failure keeps the current scene and records the error.
     fn load(&mut self, path: &Path) -> bool {
         match Scene::load(path) {
             Ok(scene) => {
                 self.scene = scene;
+                self.scene_as_saved = self.scene.clone();
+                self.ui.file_changed_on_disk = false;
                 self.scene_path = Some(path.to_path_buf());
                 self.scene_mtime = mtime(path);
                 self.path_text = path.display().to_string();
@@ -363,7 +449,7 @@ impl ViewerState {
     }
 
     /// Applies `edit` as a gesture of its own (one undo step).
-    fn apply_edit(&mut self, edit: Edit) -> bool {
+    pub(super) fn apply_edit(&mut self, edit: Edit) -> bool {
         self.end_gesture();
         match self.history.apply(&mut self.scene, edit) {
             Ok(()) => true,
@@ -398,7 +484,7 @@ impl ViewerState {
     }
 
     /// Ends the running gesture: its edits become one undo step.
-    fn end_gesture(&mut self) {
+    pub(super) fn end_gesture(&mut self) {
         if let Some(mut gesture) = self.edit.gesture.take()
             && !gesture.edits.is_empty()
         {

@@ -52,7 +52,21 @@ pub enum Command {
         steps: f32,
     },
     FrameAttractor,
+    /// Frames the attractor and the grid box (the domain and every transformed grid).
+    FrameAttractorAndGrid,
+    /// Zooms by wheel `steps` towards the point under `cursor_px` (window pixels).
+    ZoomAt {
+        steps: f32,
+        cursor_px: [f32; 2],
+    },
+    /// Puts the camera back (Esc during an orbit or pan restores the camera at its press).
+    SetCamera(OrbitCamera),
+    /// Blender's numpad views: look along an axis, keeping target and distance.
+    ViewAlong(ViewAxis),
     SaveScreenshot(PathBuf),
+    /// `F12`: a screenshot next to the scene file (or in the working folder for the built-in
+    /// scene), named after the scene and numbered so that none is overwritten.
+    ScreenshotNextToScene,
     /// The part of the window the panels leave to the view (window pixels): the attractor is
     /// drawn and framed there. The first report re-frames the camera for its aspect.
     SetViewRect {
@@ -88,6 +102,32 @@ pub enum Command {
     SetSaveText(String),
     SaveScene(PathBuf),
 
+    // The window: closing, recovery, overlays.
+    /// Esc: cancels a point drag, closes a dialog or an overlay; never quits.
+    Escape,
+    /// The window's close button or `Ctrl+Q`: closes at once without unsaved edits, else asks
+    /// Save / Discard / Cancel.
+    RequestClose,
+    CloseDialog(CloseChoice),
+    /// Where recovery files go (None: no recovery). Checks for one to offer.
+    SetRecoveryDir(Option<PathBuf>),
+    /// Restore (true) or discard (false) the offered recovery file.
+    Recover(bool),
+    /// Every few seconds: writes unsaved edits to the recovery file.
+    Autosave,
+    /// The scene file changed on disk while there were unsaved edits: say so, do not reload.
+    FileChangedOnDisk,
+    SetPanelShown(bool),
+    SetShortcutsShown(bool),
+    SetFullscreen(bool),
+    SetToast(Option<String>),
+
+    // Functions.
+    /// Adds an affine function (a copy of the domain scaled by ½ about its centre).
+    AddFunction,
+    DuplicateFunction(usize),
+    DeleteFunction(usize),
+
     // Timeline.
     SetPlaying(bool),
     /// Advances scene time by `dt_secs` × speed while playing (the event loop's clock).
@@ -118,6 +158,43 @@ pub enum Command {
     StartRecord,
     CancelRecord,
     CloseRaytraceImage,
+}
+
+/// What the user answered when closing with unsaved edits.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum CloseChoice {
+    Save,
+    Discard,
+    Cancel,
+}
+
+/// A view along a world axis (Blender's numpad 1, 3, 7 and, with Ctrl, the opposite side).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ViewAxis {
+    /// From +z (numpad 1).
+    Front,
+    Back,
+    /// From +x (numpad 3).
+    Right,
+    Left,
+    /// From +y (numpad 7).
+    Top,
+    Bottom,
+}
+
+impl ViewAxis {
+    /// Yaw and pitch in degrees (`OrbitCamera`'s convention; the poles stop short of ±90° so
+    /// that the up vector stays defined).
+    pub fn angles_deg(self) -> (f32, f32) {
+        match self {
+            ViewAxis::Front => (0.0, 0.0),
+            ViewAxis::Back => (180.0, 0.0),
+            ViewAxis::Right => (90.0, 0.0),
+            ViewAxis::Left => (-90.0, 0.0),
+            ViewAxis::Top => (0.0, 89.9),
+            ViewAxis::Bottom => (0.0, -89.9),
+        }
+    }
 }
 
 /// A job for `jobs.rs` to start or stop, with everything it needs copied.

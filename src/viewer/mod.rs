@@ -19,16 +19,25 @@
 //! `jobs_ui.rs`, `timeline_ui.rs`), `ui_layer.rs` (egui on wgpu) and `jobs.rs`. State, command
 //! and apply import no UI file.
 
+pub mod actions;
 pub mod apply;
+pub mod clock;
 pub mod command;
+mod frame_log;
+pub mod framing;
 pub mod grid_edit_ui;
+mod input;
 pub mod jobs;
 pub mod jobs_ui;
+pub mod overlay_ui;
 pub mod picking;
+pub mod pointer;
+pub mod recovery;
 pub mod state;
 pub mod timeline_ui;
 pub mod ui;
 pub mod ui_layer;
+pub mod widgets;
 
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -40,9 +49,13 @@ use winit::event_loop::{ActiveEventLoop, ControlFlow, EventLoop};
 use winit::keyboard::{Key, NamedKey};
 use winit::window::{Window, WindowId};
 
-use crate::camera::Projection;
 use crate::gpu::{GpuContext, GpuError};
-use crate::live::{ChaosRoute, LiveSettings, LiveView};
+use crate::live::{LiveSettings, LiveView};
+
+use clock::{Clock, PlaybackClock, WallClock};
+use frame_log::FrameLog;
+use input::{pointer_button, pointer_context};
+use pointer::{PointerEvent, PointerRouter, Route};
 
 pub use command::Command;
 pub use state::ViewerState;
@@ -83,7 +96,11 @@ pub fn run(options: ViewerOptions) -> Result<(), ViewerError> {
         state.apply([Command::OpenScene(path.clone())]);
         // A bad scene leaves the default one on screen with the error in the panel.
     }
-    state.apply([Command::SetGridOverlay(options.grid_overlay), Command::SetPlaying(options.play)]);
+    state.apply([
+        Command::SetGridOverlay(options.grid_overlay),
+        Command::SetPlaying(options.play),
+        Command::SetRecoveryDir(recovery::recovery_dir()),
+    ]);
     let event_loop = EventLoop::new()?;
     let mut app = App {
         state,
@@ -91,9 +108,16 @@ pub fn run(options: ViewerOptions) -> Result<(), ViewerError> {
         gfx: None,
         commands: Vec::with_capacity(64),
         drag: None,
+        drag_start_camera: crate::camera::OrbitCamera::framing((glam::DVec3::ZERO, glam::DVec3::ONE), 3),
         point_drag: None,
+        router: PointerRouter::default(),
+        modifiers: Default::default(),
         jobs: jobs::Jobs::default(),
-        last_tick: None,
+        clock: WallClock::default(),
+        playback_clock: PlaybackClock::default(),
+        last_autosave_secs: 0.0,
+        toast_shown: None,
+        title: String::new(),
         cursor: None,
         last_frame: None,
         last_poll: Instant::now(),
@@ -139,12 +163,22 @@ struct App {
     options: ViewerOptions,
     gfx: Option<Gfx>,
     commands: Vec<Command>,
+    /// The camera drag (orbit, pan) in progress and the camera at its press (Esc restores it).
     drag: Option<MouseButton>,
+    drag_start_camera: crate::camera::OrbitCamera,
     /// Cursor position at the press of a grid point drag.
     point_drag: Option<(f64, f64)>,
+    /// Who gets pointer input, the camera or the panels.
+    router: PointerRouter,
+    modifiers: winit::keyboard::ModifiersState,
     jobs: jobs::Jobs,
-    /// When playback last advanced scene time.
-    last_tick: Option<Instant>,
+    clock: WallClock,
+    playback_clock: PlaybackClock,
+    last_autosave_secs: f64,
+    /// The toast on screen and since when (clock seconds).
+    toast_shown: Option<(String, f64)>,
+    /// The window's title as last set.
+    title: String,
     cursor: Option<(f64, f64)>,
     last_frame: Option<Instant>,
     last_poll: Instant,
@@ -159,71 +193,10 @@ struct App {
     fatal: Option<ViewerError>,
 }
 
-/// Wall time of a frame's stages summed over the frames since the last report, and the process
-/// CPU time since then (`--log-fps`).
-/// The GPU work is asynchronous: on lavapipe its cost shows in `acquire` (waiting for a free
-/// swapchain image, i.e. for the frame before last) and in `present`.
-#[derive(Default)]
-struct FrameLog {
-    since: Option<Instant>,
-    /// Process CPU seconds (all threads, lavapipe's included) at `since`.
-    cpu_since: f64,
-    frames: u32,
-    splats: u64,
-    /// egui's `run_ui` (the panels' layout), plus applying commands.
-    ui_secs: f64,
-    acquire_secs: f64,
-    /// Chaos game (on the CPU route: the whole CPU chaos game and its upload), resolve and egui
-    /// recording: encoding, tessellation, buffer uploads, submit.
-    record_secs: f64,
-    present_secs: f64,
-    /// Cached egui layer renders so far (total) and at the last report.
-    ui_renders: u64,
-    ui_renders_reported: u64,
-    /// Where the chaos game ran (set every frame).
-    route: ChaosRoute,
-}
-
-impl FrameLog {
-    /// Prints and restarts once a second has passed.
-    fn report(&mut self, now: Instant) {
-        let Some(since) = self.since else {
-            *self = Self { since: Some(now), cpu_since: crate::gpu::bench::process_cpu_secs(), ..Self::default() };
-            return;
-        };
-        let secs = (now - since).as_secs_f64();
-        if secs < 1.0 {
-            return;
-        }
-        let n = self.frames.max(1) as f64;
-        let cpu = crate::gpu::bench::process_cpu_secs();
-        eprintln!(
-            "viewer: {:.1} fps, {:.1} M points/s, chaos game on the {} ({}), process CPU {:.0} ms/frame, egui re-rendered in {} frames; wall ms/frame: ui {:.1}, acquire {:.1}, record+submit {:.1}, present {:.1}",
-            self.frames as f64 / secs,
-            self.splats as f64 / secs / 1e6,
-            self.route.name(),
-            self.route.reason,
-            1e3 * (cpu - self.cpu_since) / n,
-            self.ui_renders - self.ui_renders_reported,
-            1e3 * self.ui_secs / n,
-            1e3 * self.acquire_secs / n,
-            1e3 * self.record_secs / n,
-            1e3 * self.present_secs / n,
-        );
-        *self = Self {
-            since: Some(now),
-            cpu_since: cpu,
-            ui_renders: self.ui_renders,
-            ui_renders_reported: self.ui_renders,
-            ..Self::default()
-        };
-    }
-}
-
 impl Gfx {
     fn new(event_loop: &ActiveEventLoop, state: &ViewerState) -> Result<Self, ViewerError> {
         let attributes = Window::default_attributes()
-            .with_title(format!("nlifs — {}", state.scene.name))
+            .with_title(state.window_title())
             .with_inner_size(winit::dpi::PhysicalSize::new(1280u32, 720u32));
         let window = Arc::new(event_loop.create_window(attributes).map_err(|e| ViewerError::Window(e.to_string()))?);
         let instance = wgpu::Instance::new(wgpu::InstanceDescriptor::new_with_display_handle_from_env(Box::new(
@@ -292,15 +265,24 @@ impl ApplicationHandler for App {
         }
     }
 
-    fn window_event(&mut self, event_loop: &ActiveEventLoop, _id: WindowId, event: WindowEvent) {
+    fn window_event(&mut self, _event_loop: &ActiveEventLoop, _id: WindowId, event: WindowEvent) {
         let Some(gfx) = &mut self.gfx else { return };
-        let response = gfx.egui_state.on_window_event(&gfx.window, &event);
-        if response.repaint {
-            gfx.window.request_redraw();
+        let text_focus = gfx.egui_ctx.egui_wants_keyboard_input();
+        // Tab hides the panel rather than moving egui's keyboard focus (unless a text field
+        // has it): egui does not see it.
+        let tab = matches!(&event, WindowEvent::KeyboardInput { event: k, .. }
+            if k.logical_key == Key::Named(NamedKey::Tab));
+        if !tab || text_focus {
+            let response = gfx.egui_state.on_window_event(&gfx.window, &event);
+            if response.repaint {
+                gfx.window.request_redraw();
+            }
         }
-        let egui_wants_pointer = response.consumed || gfx.egui_ctx.egui_wants_pointer_input();
         match event {
-            WindowEvent::CloseRequested => event_loop.exit(),
+            WindowEvent::CloseRequested => {
+                self.commands.push(Command::RequestClose);
+                gfx.window.request_redraw();
+            }
             WindowEvent::Resized(size) => {
                 gfx.config.width = size.width;
                 gfx.config.height = size.height;
@@ -313,71 +295,84 @@ impl ApplicationHandler for App {
             }
             WindowEvent::RedrawRequested => self.frame(),
             WindowEvent::DroppedFile(path) => self.commands.push(Command::OpenScene(path)),
-            WindowEvent::MouseInput { state: ElementState::Pressed, button, .. } if !egui_wants_pointer => {
-                let picked = (button == MouseButton::Left)
-                    .then_some(self.cursor)
-                    .flatten()
-                    .and_then(|(x, y)| self.state.pick_point([x as f32, y as f32]));
-                match picked {
-                    Some((function, point)) => {
-                        self.commands.push(Command::BeginPointDrag { function, point });
-                        self.point_drag = self.cursor;
+            WindowEvent::Focused(false) => {
+                // Releases may never come while another window has the pointer.
+                self.router.reset();
+                self.drag = None;
+                if self.point_drag.take().is_some() {
+                    self.commands.push(Command::EndGesture);
+                }
+            }
+            WindowEvent::ModifiersChanged(m) => self.modifiers = m.state(),
+            WindowEvent::CursorLeft { .. } => self.cursor = None,
+            WindowEvent::MouseInput { state: pressed, button, .. } => {
+                let b = pointer_button(button);
+                let event =
+                    if pressed == ElementState::Pressed { PointerEvent::Press(b) } else { PointerEvent::Release(b) };
+                let ctx = pointer_context(&self.state, &gfx.egui_ctx, self.cursor);
+                if self.router.route(event, &ctx) == Route::Camera {
+                    if pressed == ElementState::Pressed {
+                        let picked = (button == MouseButton::Left)
+                            .then_some(self.cursor)
+                            .flatten()
+                            .and_then(|(x, y)| self.state.pick_point([x as f32, y as f32]));
+                        match picked {
+                            Some((function, point)) => {
+                                self.commands.push(Command::BeginPointDrag { function, point });
+                                self.point_drag = self.cursor;
+                            }
+                            None if self.drag.is_none() => {
+                                self.drag = Some(button);
+                                self.drag_start_camera = self.state.camera;
+                            }
+                            None => {}
+                        }
+                    } else if button == MouseButton::Left && self.point_drag.is_some() {
+                        self.point_drag = None;
+                        self.commands.push(Command::EndGesture);
+                    } else if self.drag == Some(button) {
+                        self.drag = None;
                     }
-                    None => self.drag = Some(button),
                 }
                 gfx.window.request_redraw();
             }
-            WindowEvent::MouseInput { state: ElementState::Released, button: MouseButton::Left, .. }
-                if self.point_drag.is_some() =>
-            {
-                self.point_drag = None;
-                self.commands.push(Command::EndGesture);
-                gfx.window.request_redraw();
-            }
-            WindowEvent::MouseInput { state: ElementState::Released, button, .. } if self.drag == Some(button) => {
-                self.drag = None
-            }
             WindowEvent::CursorMoved { position, .. } => {
-                if let Some((x0, y0)) = self.point_drag {
-                    self.commands
-                        .push(Command::DragPoint { delta_px: [(position.x - x0) as f32, (position.y - y0) as f32] });
-                    gfx.window.request_redraw();
-                } else if let (Some(button), Some((x, y))) = (self.drag, self.cursor) {
-                    let (dx_px, dy_px) = ((position.x - x) as f32, (position.y - y) as f32);
-                    self.commands.push(match button {
-                        MouseButton::Left => Command::Orbit { dx_px, dy_px },
-                        _ => Command::Pan { dx_px, dy_px },
-                    });
-                    gfx.window.request_redraw();
+                let ctx = pointer_context(&self.state, &gfx.egui_ctx, Some((position.x, position.y)));
+                if self.router.route(PointerEvent::Move, &ctx) == Route::Camera {
+                    if let Some((x0, y0)) = self.point_drag {
+                        self.commands.push(Command::DragPoint {
+                            delta_px: [(position.x - x0) as f32, (position.y - y0) as f32],
+                        });
+                        gfx.window.request_redraw();
+                    } else if let (Some(button), Some((x, y))) = (self.drag, self.cursor) {
+                        let (dx_px, dy_px) = ((position.x - x) as f32, (position.y - y) as f32);
+                        self.commands.push(match button {
+                            MouseButton::Left => Command::Orbit { dx_px, dy_px },
+                            _ => Command::Pan { dx_px, dy_px },
+                        });
+                        gfx.window.request_redraw();
+                    }
                 }
                 self.cursor = Some((position.x, position.y));
             }
-            WindowEvent::MouseWheel { delta, .. } if !egui_wants_pointer => {
+            WindowEvent::MouseWheel { delta, .. } => {
                 let steps = match delta {
                     MouseScrollDelta::LineDelta(_, y) => y,
                     MouseScrollDelta::PixelDelta(p) => p.y as f32 / 40.0,
                 };
-                self.commands.push(Command::Zoom { steps });
-                gfx.window.request_redraw();
-            }
-            WindowEvent::KeyboardInput { event, .. }
-                if !response.consumed
-                    && !gfx.egui_ctx.egui_wants_keyboard_input()
-                    && event.state == ElementState::Pressed =>
-            {
-                match event.logical_key.as_ref() {
-                    Key::Character(c) if c.eq_ignore_ascii_case("f") => self.commands.push(Command::FrameAttractor),
-                    Key::Character(c) if c.eq_ignore_ascii_case("p") => {
-                        let next = match self.state.camera.projection {
-                            Projection::Perspective => Projection::Parallel,
-                            Projection::Parallel => Projection::Perspective,
-                        };
-                        self.commands.push(Command::SetProjection(next));
-                    }
-                    Key::Named(NamedKey::Escape) => event_loop.exit(),
-                    _ => {}
+                let ctx = pointer_context(&self.state, &gfx.egui_ctx, self.cursor);
+                if self.router.route(PointerEvent::Wheel(steps), &ctx) == Route::Camera
+                    && let Some((x, y)) = self.cursor
+                {
+                    self.commands.push(Command::ZoomAt { steps, cursor_px: [x as f32, y as f32] });
+                    gfx.window.request_redraw();
                 }
-                gfx.window.request_redraw();
+            }
+            WindowEvent::KeyboardInput { event, .. } if !text_focus && event.state == ElementState::Pressed => {
+                self.key(&event);
+                if let Some(gfx) = &self.gfx {
+                    gfx.window.request_redraw();
+                }
             }
             _ => {}
         }
@@ -400,13 +395,21 @@ impl ApplicationHandler for App {
             event_loop.exit();
             return;
         }
+        if self.state.ui.quit {
+            event_loop.exit();
+            return;
+        }
         let Some(gfx) = &self.gfx else { return };
         // Converged and idle: wake a few times a second (file polling), else draw continuously.
         let busy = self.state.playback.playing
             || self.state.edit.gesture.is_some()
             || self.jobs.view.raytrace.is_some()
             || self.jobs.view.record.is_some();
-        let idle = gfx.live.converged() && self.commands.is_empty() && self.drag.is_none() && !busy;
+        let idle = gfx.live.converged()
+            && self.commands.is_empty()
+            && self.drag.is_none()
+            && self.state.ui.toast.is_none()
+            && !busy;
         if idle {
             let next = self.last_frame.unwrap_or_else(Instant::now) + Duration::from_millis(250);
             if Instant::now() >= next {
@@ -430,15 +433,25 @@ impl App {
                 self.commands.push(c);
             }
         }
-        // Playback: scene time advances by the wall-clock interval since the last frame (at most
-        // 0.25 s, so a stall does not jump the animation).
-        let now = Instant::now();
-        if self.state.playback.playing {
-            let dt_secs = self.last_tick.map_or(0.0, |t| (now - t).as_secs_f64().min(0.25));
+        // Playback: scene time advances by the wall-clock interval since the last frame
+        // (`clock.rs`).
+        let now_secs = self.clock.now_secs();
+        if let Some(dt_secs) = self.playback_clock.advance(now_secs, self.state.playback.playing) {
             self.commands.push(Command::Tick { dt_secs });
-            self.last_tick = Some(now);
-        } else {
-            self.last_tick = None;
+        }
+        if now_secs - self.last_autosave_secs >= recovery::AUTOSAVE_SECS {
+            self.last_autosave_secs = now_secs;
+            self.commands.push(Command::Autosave);
+        }
+        // A toast shows for a few seconds from when it (or another text) appeared.
+        match (&self.state.ui.toast, &self.toast_shown) {
+            (Some(t), Some((shown, since))) if t == shown => {
+                if now_secs - since > TOAST_SECS {
+                    self.commands.push(Command::SetToast(None));
+                }
+            }
+            (Some(t), _) => self.toast_shown = Some((t.clone(), now_secs)),
+            (None, _) => self.toast_shown = None,
         }
         self.jobs.poll(&gfx.egui_ctx);
         let raw_input = gfx.egui_state.take_egui_input(&gfx.window);
@@ -464,11 +477,15 @@ impl App {
         for request in changes.jobs.drain(..) {
             self.jobs.handle(request);
         }
-        if changes.scene_replaced || changes.scene_edited {
-            if let Some(c) = &self.state.compiled {
-                gfx.live.set_ifs(&gfx.ctx, c, self.state.bounds, changes.scene_replaced);
-            }
-            gfx.window.set_title(&format!("nlifs — {}", self.state.scene.name));
+        if (changes.scene_replaced || changes.scene_edited)
+            && let Some(c) = &self.state.compiled
+        {
+            gfx.live.set_ifs(&gfx.ctx, c, self.state.bounds, changes.scene_replaced);
+        }
+        let title = self.state.window_title();
+        if title != self.title {
+            gfx.window.set_title(&title);
+            self.title = title;
         }
         if changes.live_settings
             && let Err(e) = gfx.live.set_settings(&gfx.ctx, self.state.live)
@@ -481,13 +498,15 @@ impl App {
         }
         gfx.live.set_camera(&self.state.camera);
         if let Some(path) = changes.screenshot {
-            self.state.message = Some(match gfx.live.snapshot(&gfx.ctx) {
+            let message = match gfx.live.snapshot(&gfx.ctx) {
                 Ok(image) => match crate::io::save_png(&path, &image) {
                     Ok(()) => format!("saved {}", path.display()),
                     Err(e) => format!("cannot write {}: {e}", path.display()),
                 },
                 Err(e) => format!("screenshot failed: {e}"),
-            });
+            };
+            self.state.apply([Command::SetToast(Some(message.clone()))]);
+            self.state.message = Some(message);
         }
 
         // Textures must be applied every frame even when nothing is drawn.
@@ -584,6 +603,8 @@ impl App {
             s.frames += 1;
             s.chaos_route = gfx.live.route();
             if self.stats_shown.is_none_or(|t| now - t >= Duration::from_millis(500)) {
+                s.accumulated = gfx.live.splats_since_clear();
+                s.lit_pixels = gfx.live.lit_pixels().unwrap_or(0);
                 self.state.stats = self.smoothed;
                 self.stats_shown = Some(now);
             }
@@ -593,6 +614,9 @@ impl App {
         self.splats += splats;
     }
 }
+
+/// Seconds a toast stays on screen.
+const TOAST_SECS: f64 = 4.0;
 
 /// The window pixels (origin, size) of `rect` (egui points at `ppp` pixels per point) inside a
 /// window of `window_px`; at least one pixel wide and tall.

@@ -18,6 +18,7 @@ use crate::scene::Scene;
 use crate::splat::SplatView;
 
 use super::command::{Command, RaytraceForm, RecordForm};
+use super::framing;
 use super::picking::{self, FunctionGrid};
 
 /// The scene shown when the viewer starts without one (the paper's plant, table 4).
@@ -61,6 +62,35 @@ pub struct Playback {
     pub follow_camera: bool,
 }
 
+/// A recovery file found at start-up or on opening a scene, newer than the scene's file.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RecoveryOffer {
+    pub scene: Box<Scene>,
+    /// When it was written ("12 s ago" in the dialog).
+    pub written: SystemTime,
+}
+
+/// What the window shows besides the scene: panels, overlays, dialogs.
+#[derive(Clone, Debug, PartialEq)]
+pub struct UiState {
+    /// The side panel (`Tab` hides it).
+    pub panel_shown: bool,
+    /// The shortcuts overlay (`F1`, `?`).
+    pub shortcuts_shown: bool,
+    /// Asking Save / Discard / Cancel before closing with unsaved edits.
+    pub close_dialog: bool,
+    /// The scene to open once the dialog is answered (None: the dialog is about closing).
+    pub pending_open: Option<PathBuf>,
+    /// The window should close now (set once the user has decided).
+    pub quit: bool,
+    /// Full screen (`F11`).
+    pub fullscreen: bool,
+    /// A short notice over the view (a saved file); the event loop clears it after a while.
+    pub toast: Option<String>,
+    /// The scene file changed on disk while there were unsaved edits: not reloaded.
+    pub file_changed_on_disk: bool,
+}
+
 /// Smoothed frame statistics.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct FrameStats {
@@ -69,6 +99,17 @@ pub struct FrameStats {
     pub frames: u64,
     /// Where the chaos game runs and why.
     pub chaos_route: ChaosRoute,
+    /// Points splatted since the accumulation was last cleared.
+    pub accumulated: u64,
+    /// Pixels hit by at least one of them (0: not known, on the GPU route).
+    pub lit_pixels: u64,
+}
+
+impl FrameStats {
+    /// How converged the picture is: accumulated points over lit pixels.
+    pub fn points_per_lit_pixel(&self) -> f64 {
+        self.accumulated as f64 / self.lit_pixels.max(1) as f64
+    }
 }
 
 /// Everything the viewer shows and edits, besides the GPU objects and the window.
@@ -104,6 +145,20 @@ pub struct ViewerState {
     pub playback: Playback,
     pub raytrace_form: RaytraceForm,
     pub record_form: RecordForm,
+    /// The scene as its file holds it (as loaded or last saved): [`ViewerState::modified`]
+    /// compares against it.
+    pub scene_as_saved: Scene,
+    /// The folder of recovery files (None: no recovery).
+    pub recovery_dir: Option<PathBuf>,
+    /// Where unsaved edits of this scene are written for crash recovery (None: nowhere).
+    pub recovery_file: Option<PathBuf>,
+    /// What this run last wrote there.
+    pub recovery_written: Option<Scene>,
+    /// Unsaved edits from an earlier run, offered for restoring.
+    pub recovery_offer: Option<RecoveryOffer>,
+    pub ui: UiState,
+    /// The user moved the camera since it was last framed: a resize keeps it.
+    pub camera_moved: bool,
 }
 
 pub(super) fn mtime(path: &Path) -> Option<SystemTime> {
@@ -113,6 +168,7 @@ pub(super) fn mtime(path: &Path) -> Option<SystemTime> {
 impl ViewerState {
     /// The state for `scene` (loaded from `path` when given).
     pub fn new(scene: Scene, path: Option<PathBuf>, live: LiveSettings) -> Self {
+        let scene_as_saved = scene.clone();
         let mut state = Self {
             scene,
             scene_mtime: path.as_deref().and_then(mtime),
@@ -144,6 +200,22 @@ impl ViewerState {
             playback: Playback { playing: false, speed: 1.0, follow_camera: false },
             raytrace_form: RaytraceForm::default(),
             record_form: RecordForm::default(),
+            scene_as_saved: scene_as_saved.clone(),
+            recovery_dir: None,
+            recovery_file: None,
+            recovery_written: None,
+            recovery_offer: None,
+            ui: UiState {
+                panel_shown: true,
+                shortcuts_shown: false,
+                close_dialog: false,
+                pending_open: None,
+                quit: false,
+                fullscreen: false,
+                toast: None,
+                file_changed_on_disk: false,
+            },
+            camera_moved: false,
         };
         state.edit.save_text = state.default_save_text();
         state.live.seed = state.scene.render.seed;
@@ -156,11 +228,67 @@ impl ViewerState {
     }
 
     /// The scene's camera at the current time, fitted to a sample of the attractor where the
-    /// scene leaves target and distance open (the same framing as `nlifs render`).
-    pub(super) fn framed_camera(&self) -> OrbitCamera {
-        let sample =
-            self.compiled.as_ref().map(|c| chaos_game::attractor_sample(c, self.live.seed)).unwrap_or_default();
-        crate::render::frame_camera(&self.scene, self.t_secs, self.bounds, &sample, self.view_aspect())
+    /// scene leaves target and distance open (the rule of `nlifs render`, the viewer's margin).
+    pub fn framed_camera(&self) -> OrbitCamera {
+        framing::scene_camera(&self.scene, self.t_secs, self.bounds, &self.framing_sample(), self.view_aspect())
+    }
+
+    /// The attractor sample framing fits (empty without an enabled function).
+    pub fn framing_sample(&self) -> Vec<glam::Vec3> {
+        self.compiled.as_ref().map(|c| framing::framing_sample(c, self.live.seed)).unwrap_or_default()
+    }
+
+    /// The scene differs from its file (or, for the built-in scene, from how it started).
+    pub fn modified(&self) -> bool {
+        self.scene != self.scene_as_saved
+    }
+
+    /// The window's title: the scene's name, `*` when modified, the program.
+    pub fn window_title(&self) -> String {
+        let name = if self.scene.name.trim().is_empty() {
+            self.scene_path
+                .as_ref()
+                .and_then(|p| p.file_name())
+                .map_or("untitled".into(), |n| n.to_string_lossy().into_owned())
+        } else {
+            self.scene.name.clone()
+        };
+        format!("{name}{} — nlifs", if self.modified() { "*" } else { "" })
+    }
+
+    /// Functions that may not be contractive or that leave the grid, for the warning banner:
+    /// one line each.
+    pub fn warnings(&self) -> Vec<String> {
+        let Some(report) = &self.report else { return Vec::new() };
+        let mut lines = Vec::new();
+        for (f, spec) in report.functions.iter().zip(&self.scene.functions) {
+            if !spec.enabled {
+                continue;
+            }
+            if let Some(l) = f.lipschitz_bound
+                && l >= 1.0
+            {
+                lines.push(format!("{} may not be contractive: Lipschitz bound {l:.3} ≥ 1", f.name));
+            }
+            if f.contained == Some(false) {
+                let total = self.function_grid_len(&spec.def);
+                let of = total.map_or(String::new(), |n| format!(" of {n}"));
+                lines.push(format!("{} leaves the grid: {}{of} transformed points outside", f.name, f.outside.len()));
+            }
+        }
+        lines
+    }
+
+    /// The number of points a definition's containment is checked on (grid points, else the
+    /// box corners).
+    fn function_grid_len(&self, def: &crate::scene::spec::FunctionDef) -> Option<usize> {
+        use crate::scene::spec::FunctionDef;
+        match def {
+            FunctionDef::Grid { points } => Some(points.len()),
+            FunctionDef::Builder { .. } => Some(self.scene.domain.points().len()),
+            // The domain box's corners.
+            _ => Some(1 << self.scene.domain.dimension()),
+        }
     }
 
     /// Width over height of the view.
@@ -187,11 +315,15 @@ impl ViewerState {
         }
     }
 
-    /// A reload command when the scene file changed on disk since it was read.
+    /// A command when the scene file changed on disk since it was read: reload it, or, with
+    /// unsaved edits, only say so (reloading would discard them without a word).
     pub fn poll_file(&self) -> Option<Command> {
         let path = self.scene_path.as_ref()?;
         let now = mtime(path)?;
-        (Some(now) != self.scene_mtime).then_some(Command::ReloadScene)
+        if Some(now) == self.scene_mtime {
+            return None;
+        }
+        Some(if self.modified() { Command::FileChangedOnDisk } else { Command::ReloadScene })
     }
 
     /// The default path the scene is saved to: its file, else a new file.

@@ -26,9 +26,13 @@ pub fn timeline_ui(ui: &mut egui::Ui, state: &ViewerState, commands: &mut Vec<Co
         if ui.button("|<").on_hover_text("to the start").clicked() {
             commands.push(Command::SetTime(0.0));
         }
+        // Only the user moves time from here: a slider that wrote back its (clamped, rounded
+        // to 3 decimals) value every frame sent the previous frame's time after each playback
+        // tick, and playback ran at about half speed.
         let mut t = playhead;
-        let scrub = ui.add(egui::Slider::new(&mut t, 0.0..=d).suffix(" s").max_decimals(3).text("t"));
-        if scrub.changed() {
+        let scrub = ui.add(super::widgets::slider(&mut t, 0.0..=d).suffix(" s").max_decimals(3).text("t"));
+        let by_user = scrub.dragged() || scrub.is_pointer_button_down_on() || scrub.has_focus() || scrub.clicked();
+        if scrub.changed() && by_user && t != playhead {
             commands.push(Command::SetTime(t));
         }
         let mut speed = state.playback.speed;

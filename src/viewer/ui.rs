@@ -11,6 +11,7 @@ use crate::scene::spec::{FunctionDef, SplatMode};
 use super::command::Command;
 use super::jobs::JobView;
 use super::state::ViewerState;
+use super::widgets::slider;
 
 /// The left side panel with every section, the timeline at the bottom, the grid overlay, the
 /// ray-traced image window and the keyboard shortcuts. `ppp`: pixels per egui point. Returns
@@ -28,8 +29,11 @@ pub fn panels_ui(
             .resizable(false)
             .show(ui, |ui| super::timeline_ui::timeline_ui(ui, state, commands));
     }
-    egui::Panel::left("nlifs_panel").default_size(310.0).resizable(true).show(ui, |ui| {
-        egui::ScrollArea::vertical().show(ui, |ui| {
+    // Tab hides the panel; it resizes by its right edge, and scrolls when its open sections
+    // do not fit the window.
+    let mut shown = state.ui.panel_shown;
+    egui::Panel::left("nlifs_panel").default_size(310.0).resizable(true).show_collapsible(ui, &mut shown, |ui| {
+        egui::ScrollArea::vertical().auto_shrink([false, false]).show(ui, |ui| {
             ui.heading("nlifs");
             scene_ui(ui, state, commands);
             functions_ui(ui, state, commands);
@@ -44,15 +48,20 @@ pub fn panels_ui(
             }
         });
     });
+    if shown != state.ui.panel_shown {
+        commands.push(Command::SetPanelShown(shown));
+    }
     // The overlay is clipped to what the panels leave of the view.
     let view_rect = ui.available_rect_before_wrap();
     super::grid_edit_ui::grid_overlay_ui(ui.ctx(), view_rect, state, ppp);
     super::jobs_ui::raytrace_window_ui(ui.ctx(), jobs, commands);
+    super::overlay_ui::overlays_ui(ui.ctx(), view_rect, state, commands);
     view_rect
 }
 
-/// Undo (Ctrl+Z), redo (Ctrl+Shift+Z, Ctrl+Y), save (Ctrl+S), axis lock (X, Y, Z, Esc-free),
-/// play/pause (Space); not while a text field has the keyboard (it has its own undo).
+/// Undo (Ctrl+Z), redo (Ctrl+Shift+Z, Ctrl+Y), save (Ctrl+S), axis lock (X, Y, Z), play/pause
+/// (Space); not while a text field has the keyboard (it has its own undo). The window's keys
+/// are in `input.rs`.
 fn shortcuts_ui(ctx: &egui::Context, state: &ViewerState, commands: &mut Vec<Command>) {
     if ctx.egui_wants_keyboard_input() {
         return;
@@ -131,16 +140,37 @@ fn functions_ui(ui: &mut egui::Ui, state: &ViewerState, commands: &mut Vec<Comma
                 }
                 let mut explicit = f.probability.is_some();
                 let mut p = f.probability.unwrap_or(0.0);
-                if ui.checkbox(&mut explicit, "p").changed() {
+                if ui
+                    .checkbox(&mut explicit, "p")
+                    .on_hover_text(
+                        "explicit probability of choosing this function; unticked, it follows the scene's \
+                         probability rule (from the functions' volumes or equal)",
+                    )
+                    .changed()
+                {
                     commands.push(Command::SetFunctionProbability {
                         function: i,
                         probability: explicit.then_some(p.max(0.01)),
                     });
                 }
-                if explicit && ui.add(egui::Slider::new(&mut p, 0.0..=1.0).max_decimals(3)).changed() {
+                if explicit && ui.add(slider(&mut p, 0.0..=1.0).max_decimals(3)).changed() {
                     commands.push(Command::SetFunctionProbability { function: i, probability: Some(p) });
                 }
+                if ui.small_button("copy").on_hover_text("duplicate (Shift+D with it selected)").clicked() {
+                    commands.push(Command::DuplicateFunction(i));
+                }
+                let deletable = state.scene.functions.len() > 1;
+                if ui
+                    .add_enabled(deletable, egui::Button::new("×").small())
+                    .on_hover_text("delete (Delete with it selected)")
+                    .clicked()
+                {
+                    commands.push(Command::DeleteFunction(i));
+                }
             });
+        }
+        if ui.button("Add function").on_hover_text("an affine map halving the grid (Shift+A)").clicked() {
+            commands.push(Command::AddFunction);
         }
     });
 }
@@ -168,21 +198,21 @@ fn builder_ui(ui: &mut egui::Ui, state: &ViewerState, commands: &mut Vec<Command
                 let mut value = step.clone();
                 let changed = match &mut value {
                     Step::Taper { axis, amount, .. } => {
-                        ui.add(egui::Slider::new(amount, -1.0..=1.0).text(format!("taper {}", axis.name()))).changed()
+                        ui.add(slider(amount, -1.0..=1.0).text(format!("taper {}", axis.name()))).changed()
                     }
-                    Step::Twist { axis, degrees, .. } => ui
-                        .add(egui::Slider::new(degrees, -360.0..=360.0).text(format!("twist {} °", axis.name())))
-                        .changed(),
-                    Step::Bend { axis, degrees, .. } => ui
-                        .add(egui::Slider::new(degrees, -180.0..=180.0).text(format!("bend {} °", axis.name())))
-                        .changed(),
-                    Step::Rotate { axis, degrees, .. } => ui
-                        .add(egui::Slider::new(degrees, -180.0..=180.0).text(format!("rotate {} °", axis.name())))
-                        .changed(),
+                    Step::Twist { axis, degrees, .. } => {
+                        ui.add(slider(degrees, -360.0..=360.0).text(format!("twist {} °", axis.name()))).changed()
+                    }
+                    Step::Bend { axis, degrees, .. } => {
+                        ui.add(slider(degrees, -180.0..=180.0).text(format!("bend {} °", axis.name()))).changed()
+                    }
+                    Step::Rotate { axis, degrees, .. } => {
+                        ui.add(slider(degrees, -180.0..=180.0).text(format!("rotate {} °", axis.name()))).changed()
+                    }
                     Step::Scale { by, .. } => {
                         let mut c = false;
                         for (a, label) in ["scale x", "scale y", "scale z"].iter().enumerate() {
-                            c |= ui.add(egui::Slider::new(&mut by[a], 0.0..=1.5).text(*label)).changed();
+                            c |= ui.add(slider(&mut by[a], 0.0..=1.5).text(*label)).changed();
                         }
                         c
                     }
@@ -190,7 +220,7 @@ fn builder_ui(ui: &mut egui::Ui, state: &ViewerState, commands: &mut Vec<Command
                         let mut c = false;
                         for (a, label) in ["move x", "move y", "move z"].iter().enumerate() {
                             let r = 2.0 * (state.scene.domain.max() - state.scene.domain.min())[a].abs().max(1.0);
-                            c |= ui.add(egui::Slider::new(&mut by[a], -r..=r).text(*label)).changed();
+                            c |= ui.add(slider(&mut by[a], -r..=r).text(*label)).changed();
                         }
                         c
                     }
@@ -206,29 +236,36 @@ fn builder_ui(ui: &mut egui::Ui, state: &ViewerState, commands: &mut Vec<Command
 
 fn render_ui(ui: &mut egui::Ui, state: &ViewerState, commands: &mut Vec<Command>) {
     egui::CollapsingHeader::new("Render").default_open(true).show(ui, |ui| {
+        // Only a widget the user changed sends the settings: comparing them with the state
+        // sent them every frame where a widget cannot show the value exactly (a point count
+        // that is no power of two, a background colour that does not survive the colour
+        // button's 8-bit round trip), and that cleared the accumulation every frame.
         let mut live = state.live;
+        let mut changed = false;
         let mut log2_points = (live.point_count as f32).log2().round() as u32;
-        ui.add(egui::Slider::new(&mut log2_points, 12..=24).text("points (log2)"));
-        live.point_count = 1 << log2_points;
-        ui.add(egui::Slider::new(&mut live.steps_per_frame, 1..=64).text("steps / frame"));
+        if ui.add(slider(&mut log2_points, 12..=24).text("points (log2)")).changed() {
+            live.point_count = 1 << log2_points;
+            changed = true;
+        }
+        changed |= ui.add(slider(&mut live.steps_per_frame, 1..=64).text("steps / frame")).changed();
         egui::ComboBox::from_label("splat").selected_text(live.mode.name()).show_ui(ui, |ui| {
             for mode in SplatMode::ALL {
-                ui.selectable_value(&mut live.mode, mode, mode.name());
+                changed |= ui.selectable_value(&mut live.mode, mode, mode.name()).changed();
             }
         });
         egui::ComboBox::from_label("chaos game backend").selected_text(live.chaos_backend.name()).show_ui(ui, |ui| {
             for backend in ChaosBackend::ALL {
-                ui.selectable_value(&mut live.chaos_backend, backend, backend.name());
+                changed |= ui.selectable_value(&mut live.chaos_backend, backend, backend.name()).changed();
             }
         });
-        ui.add(egui::Slider::new(&mut live.depth_cue, 0.0..=1.0).text("depth cue"));
-        ui.add(egui::Slider::new(&mut live.point_radius_px, 0..=3).text("point size (radius px)"));
-        ui.add(egui::Slider::new(&mut live.shading, 0.0..=1.0).text("shading (closest)"));
+        changed |= ui.add(slider(&mut live.depth_cue, 0.0..=1.0).text("depth cue")).changed();
+        changed |= ui.add(slider(&mut live.point_radius_px, 0..=3).text("point size (radius px)")).changed();
+        changed |= ui.add(slider(&mut live.shading, 0.0..=1.0).text("shading (closest)")).changed();
         ui.horizontal(|ui| {
-            ui.color_edit_button_rgb(&mut live.background);
+            changed |= ui.color_edit_button_rgb(&mut live.background).changed();
             ui.label("background");
         });
-        if live != state.live {
+        if changed && live != state.live {
             commands.push(Command::SetLiveSettings(live));
         }
         let mut perspective = state.camera.projection == Projection::Perspective;
@@ -244,7 +281,7 @@ fn render_ui(ui: &mut egui::Ui, state: &ViewerState, commands: &mut Vec<Command>
                 commands.push(Command::FrameAttractor);
             }
         });
-        ui.small("left-drag: orbit · right/middle-drag: pan · wheel: zoom");
+        ui.small("left-drag: orbit · right/middle-drag: pan · wheel: zoom · F1: every key");
     });
 }
 
@@ -263,7 +300,10 @@ fn statistics_ui(ui: &mut egui::Ui, state: &ViewerState) {
             for f in &report.functions {
                 ui.label(&f.name);
                 match f.lipschitz_bound {
-                    Some(l) if l >= 1.0 => ui.colored_label(Color32::from_rgb(255, 110, 90), format!("{l:.3} ⚠")),
+                    Some(l) if l >= 1.0 => ui.colored_label(
+                        Color32::from_rgb(255, 110, 90),
+                        format!("{l:.3} {}", super::overlay_ui::WARNING_SIGN),
+                    ),
                     Some(l) => ui.label(format!("{l:.3}")),
                     None => ui.label("—"),
                 };

@@ -1,0 +1,245 @@
+//! The larger actions [`ViewerState::apply`] dispatches to, kept out of `apply.rs` so that each
+//! file stays readable: saving (and what a save clears), crash recovery (offer, autosave), Esc,
+//! framing, zooming towards the cursor, the screenshot name next to the scene, and adding,
+//! duplicating or deleting a function as one undo step.
+
+use std::path::{Path, PathBuf};
+
+use glam::DVec3;
+
+use crate::camera::OrbitCamera;
+use crate::edit::Edit;
+use crate::scene::spec::FunctionDef;
+
+use super::command::Command;
+use super::framing;
+use super::recovery;
+use super::state::{RecoveryOffer, ViewerState, mtime};
+
+impl ViewerState {
+    /// Saves the scene to `path`; it becomes the scene's file, and its recovery file goes.
+    pub(super) fn save_scene(&mut self, path: &Path) {
+        self.end_gesture();
+        if path.as_os_str().is_empty() {
+            self.error = Some("cannot save: no file name".into());
+            return;
+        }
+        let mut saved = self.scene.clone();
+        saved.path = Some(path.to_path_buf());
+        match saved.save(path) {
+            Ok(()) => {
+                if let Some(file) = &self.recovery_file {
+                    recovery::remove(file);
+                }
+                self.scene = saved;
+                self.scene_as_saved = self.scene.clone();
+                self.scene_path = Some(path.to_path_buf());
+                // Our own write is not a change to reload.
+                self.scene_mtime = mtime(path);
+                self.ui.file_changed_on_disk = false;
+                self.path_text = path.display().to_string();
+                self.edit.save_text = self.default_save_text();
+                self.message = Some(format!("saved {}", path.display()));
+                self.ui.toast = self.message.clone();
+                self.recovery_file = self.recovery_dir.as_deref().map(|d| recovery::recovery_path(d, Some(path)));
+                self.recovery_written = None;
+            }
+            Err(e) => self.error = Some(format!("cannot save {}: {e}", path.display())),
+        }
+    }
+
+    /// Works out this scene's recovery file and offers it when it holds other edits than the
+    /// scene's file.
+    pub(super) fn check_recovery(&mut self) {
+        self.recovery_written = None;
+        self.recovery_offer = None;
+        self.recovery_file =
+            self.recovery_dir.as_deref().map(|d| recovery::recovery_path(d, self.scene_path.as_deref()));
+        let Some(file) = &self.recovery_file else { return };
+        if let Some((mut scene, written)) = recovery::read(file) {
+            scene.path = self.scene.path.clone();
+            if scene != self.scene {
+                self.recovery_offer = Some(RecoveryOffer { scene: Box::new(scene), written });
+            } else {
+                recovery::remove(file);
+            }
+        }
+    }
+
+    /// Writes unsaved edits to the recovery file (when they changed since the last write);
+    /// removes the file this run wrote once the edits are gone (undone back to the file).
+    pub(super) fn autosave(&mut self) {
+        // An offer not yet answered keeps its file as it is.
+        let Some(file) = self.recovery_file.clone().filter(|_| self.recovery_offer.is_none()) else { return };
+        if self.modified() {
+            if self.recovery_written.as_ref() != Some(&self.scene) {
+                match recovery::write(&file, &self.scene) {
+                    Ok(()) => self.recovery_written = Some(self.scene.clone()),
+                    Err(e) => {
+                        self.error = Some(format!("cannot write the recovery file {}: {e}", file.display()));
+                        // Do not retry every few seconds with the same error.
+                        self.recovery_file = None;
+                    }
+                }
+            }
+        } else if self.recovery_written.take().is_some() {
+            recovery::remove(&file);
+        }
+    }
+
+    /// Esc: closes the close dialog, else the recovery offer (its file kept), else the
+    /// shortcuts overlay, else cancels a running point drag (the point goes back). True when
+    /// the scene changed.
+    pub(super) fn escape(&mut self) -> bool {
+        if self.ui.close_dialog {
+            self.ui.close_dialog = false;
+            self.ui.pending_open = None;
+        } else if self.recovery_offer.is_some() {
+            self.recovery_offer = None;
+        } else if self.ui.shortcuts_shown {
+            self.ui.shortcuts_shown = false;
+        } else if self.edit.gesture.as_ref().is_some_and(|g| g.drag.is_some()) {
+            let gesture = self.edit.gesture.take().unwrap_or_default();
+            for e in gesture.edits.iter().rev() {
+                if let Err(e) = e.inverse().apply(&mut self.scene) {
+                    self.error = Some(format!("cannot cancel the drag: {e}"));
+                }
+            }
+            return !gesture.edits.is_empty();
+        }
+        false
+    }
+
+    /// Fits the camera around the attractor (and the grid box), keeping angles and projection.
+    pub(super) fn frame(&mut self, with_grid: bool) {
+        let mut points = self.framing_sample();
+        if with_grid {
+            points.extend(framing::box_corners((self.scene.domain.min(), self.scene.domain.max())));
+            for f in 0..self.scene.functions.len() {
+                if let Some(g) = self.function_grid(f).filter(|_| self.scene.functions[f].enabled) {
+                    points.extend(g.points.iter().map(|p| p.as_vec3()));
+                }
+            }
+        }
+        if points.is_empty() {
+            let dim = self.scene.domain.dimension();
+            self.camera.target = OrbitCamera::framing(self.bounds, dim).target;
+            self.camera.distance = self.camera.framing_distance(self.bounds);
+        } else {
+            let aspect = self.view_aspect();
+            framing::fit(&mut self.camera, &points, aspect);
+        }
+        self.camera_moved = false;
+    }
+
+    /// Zooms by `steps` keeping the point under `cursor_px` (on the plane through the target)
+    /// where it is on screen.
+    pub(super) fn zoom_at(&mut self, steps: f32, cursor_px: [f32; 2]) {
+        let before = self.camera.distance;
+        self.camera.zoom(steps);
+        let factor = self.camera.distance / before.max(1e-12);
+        let (w, h) = (self.width_px.max(1.0), self.height_px.max(1.0));
+        // The cursor in normalized view coordinates, x right and y up, in [-1, 1].
+        let nx = 2.0 * (cursor_px[0] - self.view_origin_px[0]) / w - 1.0;
+        let ny = 1.0 - 2.0 * (cursor_px[1] - self.view_origin_px[1]) / h;
+        if !(nx.is_finite() && ny.is_finite()) || nx.abs() > 1.0 || ny.abs() > 1.0 {
+            return;
+        }
+        // Half the view's height at the target before the zoom (the same for both
+        // projections); the point under the cursor on the target's plane.
+        let half_h = before * (0.5 * self.camera.fov_y_deg.to_radians()).tan();
+        let back = self.camera.eye_direction();
+        let right = glam::Vec3::Y.cross(back).try_normalize().unwrap_or(glam::Vec3::X);
+        let up = back.cross(right);
+        let under = self.camera.target + half_h * (nx * self.view_aspect() * right + ny * up);
+        // Scaling about `under` by the zoom's factor keeps it fixed on screen.
+        self.camera.target = under + (self.camera.target - under) * factor;
+    }
+
+    /// The next free `<scene>-<n>.png` next to the scene file (the working folder for the
+    /// built-in scene).
+    pub(super) fn screenshot_next_to_scene(&self) -> PathBuf {
+        let (dir, stem) = match &self.scene_path {
+            Some(p) => (
+                p.parent().map(Path::to_path_buf).unwrap_or_default(),
+                p.file_stem().map_or("nlifs".into(), |s| s.to_string_lossy().into_owned()),
+            ),
+            None => (PathBuf::new(), "nlifs".into()),
+        };
+        (1..10_000)
+            .map(|n| dir.join(format!("{stem}-{n}.png")))
+            .find(|p| !p.exists())
+            .unwrap_or_else(|| dir.join(format!("{stem}.png")))
+    }
+
+    /// Adds, duplicates or deletes a function: one undo step (the whole scene, since keys refer
+    /// to functions by index). A new function goes last and is selected.
+    pub(super) fn edit_functions(&mut self, command: &Command) -> bool {
+        let mut after = self.scene.clone();
+        let n = after.functions.len();
+        let selected = match *command {
+            Command::AddFunction => {
+                // An affine map halving the domain about its centre: contractive, inside the
+                // grid, and visible at once as a smaller copy of the attractor.
+                let (lo, hi) = (after.domain.min(), after.domain.max());
+                let centre = 0.5 * (lo + hi);
+                let dim = after.domain.dimension();
+                let scale = if dim == 2 { DVec3::new(0.5, 0.5, 1.0) } else { DVec3::splat(0.5) };
+                let matrix = glam::DMat3::from_diagonal(scale);
+                let offset = centre - matrix * centre;
+                let offset = if dim == 2 { DVec3::new(offset.x, offset.y, 0.0) } else { offset };
+                let name =
+                    (n + 1..).map(|k| format!("f{k}")).find(|name| after.functions.iter().all(|f| &f.name != name));
+                after.functions.push(crate::scene::spec::FunctionSpec {
+                    name: name.unwrap_or_default(),
+                    color: crate::color::palette_color(n),
+                    probability: None,
+                    enabled: true,
+                    def: FunctionDef::Affine(crate::model::AffineMap { matrix, offset }),
+                });
+                Some(n)
+            }
+            Command::DuplicateFunction(f) if f < n => {
+                let mut copy = after.functions[f].clone();
+                copy.name = format!("{} copy", copy.name);
+                copy.color = crate::color::palette_color(n);
+                after.functions.push(copy);
+                // Keys animate the copy as they animate the original.
+                if let Some(tl) = &mut after.timeline {
+                    for key in &mut tl.keys {
+                        if let Some(def) = key.function(f).cloned() {
+                            key.set_function(n, Some(def));
+                        }
+                    }
+                }
+                Some(n)
+            }
+            Command::DeleteFunction(f) if f < n && n > 1 => {
+                after.functions.remove(f);
+                if let Some(tl) = &mut after.timeline {
+                    for key in &mut tl.keys {
+                        key.functions.retain(|k| k.function != f);
+                        for k in &mut key.functions {
+                            if k.function > f {
+                                k.function -= 1;
+                            }
+                        }
+                    }
+                }
+                None
+            }
+            Command::DeleteFunction(_) => {
+                self.error = Some("a scene keeps at least one function".into());
+                return false;
+            }
+            _ => return false,
+        };
+        let edit = Edit::ReplaceScene { before: Box::new(self.scene.clone()), after: Box::new(after) };
+        let done = self.apply_edit(edit);
+        if done {
+            self.edit.selected_function = selected;
+            self.edit.selected_point = None;
+        }
+        done
+    }
+}
