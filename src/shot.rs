@@ -103,7 +103,7 @@ impl Shot {
             view,
             plan,
             stream: 0,
-            style: ResolveStyle::default(),
+            style: ResolveStyle::of(settings, scene.domain.dimension()),
         })
     }
 

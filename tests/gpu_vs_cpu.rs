@@ -113,6 +113,7 @@ fn densities_match_cpu() {
             depth_cue: 0.0,
             background: bg,
             shading: 0.0,
+            occlusion: 0.0,
             point_radius_px: 0,
             max_splats: u64::MAX,
             settle_steps: 0,

@@ -9,7 +9,7 @@ use nlifs::output::part::PartSpec;
 use nlifs::output::png::save_rgb8;
 use nlifs::render::render_cpu;
 use nlifs::resolve::{MAX_POINT_RADIUS_PX, ResolveStyle};
-use nlifs::scene::spec::SplatMode;
+use nlifs::scene::spec::{Look, SplatMode};
 use nlifs::shot::{Framing, Shot};
 
 use super::image_args::{ImageArgs, bad, render_part, write_still};
@@ -47,10 +47,17 @@ pub struct RenderArgs {
     /// Splat mode (default: the scene's).
     #[arg(long, value_enum)]
     mode: Option<ModeArg>,
-    /// Screen-space shading strength, 0 (flat colours) to 1 (fully shaded from the depth of
-    /// neighbouring points, as the viewer's shading slider); closest mode.
-    #[arg(long, default_value_t = 0.0, value_parser = parse_shading)]
-    shading: f32,
+    /// The look of closest-mode pictures: `solid` (lit from the depth of neighbouring points,
+    /// with ambient occlusion) or `paper` (the paper's depth-cued flat colour). Default: the
+    /// scene's `[render] look`.
+    #[arg(long, value_enum)]
+    look: Option<LookArg>,
+    /// Lighting strength, 0 (flat colours) to 1 (fully lit), over the look's; closest mode.
+    #[arg(long, value_parser = parse_unit)]
+    shading: Option<f32>,
+    /// Ambient occlusion strength, 0 (none) to 1, over the look's; closest mode.
+    #[arg(long, value_parser = parse_unit)]
+    occlusion: Option<f32>,
     /// Drawn point radius in pixels: each pixel shows the nearest point within it (closest mode).
     #[arg(long, value_name = "PX", default_value_t = 0,
           value_parser = clap::value_parser!(u32).range(0..=MAX_POINT_RADIUS_PX as i64))]
@@ -58,6 +65,21 @@ pub struct RenderArgs {
     /// Where the chaos game runs: gpu, cpu, or auto (gpu when an adapter exists).
     #[arg(long, value_enum, default_value_t = RenderBackend::Cpu)]
     backend: RenderBackend,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum LookArg {
+    Solid,
+    Paper,
+}
+
+impl From<LookArg> for Look {
+    fn from(l: LookArg) -> Self {
+        match l {
+            LookArg::Solid => Look::Solid,
+            LookArg::Paper => Look::Paper,
+        }
+    }
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -115,10 +137,12 @@ pub fn render(args: RenderArgs) -> anyhow::Result<()> {
     let options = args.image.for_file(&output)?;
     let provenance = Provenance::for_render(&scene, args.time, &settings);
     let start = std::time::Instant::now();
-    let style = ResolveStyle { shading: args.shading, point_radius_px: args.point_radius };
-    let shot = Shot::prepare(&scene, args.time, &settings, Framing::Fit, None)
-        .map_err(|e| BadInput(e.to_string()))?
-        .with_style(style);
+    settings.look = args.look.map(Look::from).or(settings.look);
+    settings.shading = args.shading.or(settings.shading);
+    settings.occlusion = args.occlusion.or(settings.occlusion);
+    let shot = Shot::prepare(&scene, args.time, &settings, Framing::Fit, None).map_err(|e| BadInput(e.to_string()))?;
+    let style = ResolveStyle { point_radius_px: args.point_radius, ..shot.style };
+    let shot = shot.with_style(style);
     let bar = progress_bar(shot.plan.chunks() as u64, "render");
     // GPU: explicit `gpu` fails without an adapter; `auto` falls back to the CPU.
     let gpu = match args.backend {
@@ -155,8 +179,8 @@ pub fn render(args: RenderArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// `--shading`: a number in 0..=1.
-fn parse_shading(s: &str) -> Result<f32, String> {
+/// `--shading`, `--occlusion`: a number in 0..=1.
+fn parse_unit(s: &str) -> Result<f32, String> {
     let v: f32 = s.trim().parse().map_err(|_| format!("`{s}` is not a number"))?;
     if !(0.0..=1.0).contains(&v) {
         return Err(format!("{v} is not in 0..=1"));

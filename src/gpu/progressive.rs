@@ -36,6 +36,8 @@ pub struct ProgressiveSettings {
     pub background: [f32; 3],
     /// Screen-space shading strength in [0, 1] (closest mode).
     pub shading: f32,
+    /// Screen-space ambient occlusion strength in [0, 1] (closest mode).
+    pub occlusion: f32,
     /// Drawn point radius in pixels (closest mode: the nearest key within the radius).
     pub point_radius_px: u32,
     /// Splats after which accumulation stops (keeps the u32 sums far from overflow).
@@ -54,6 +56,7 @@ impl Default for ProgressiveSettings {
             depth_cue: 0.75,
             background: crate::scene::spec::RenderSettings::default().background,
             shading: 0.0,
+            occlusion: 0.0,
             point_radius_px: 0,
             max_splats: 1 << 30,
             settle_steps: 8,
@@ -294,7 +297,7 @@ impl Progressive {
             background: s.background,
             depth_cue: s.depth_cue,
             shading: s.shading,
-            occlusion: 0.0,
+            occlusion: s.occlusion,
             point_radius_px: s.point_radius_px,
             near,
             far,

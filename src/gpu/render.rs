@@ -47,6 +47,7 @@ pub fn headless_settings(shot: &Shot) -> ProgressiveSettings {
         depth_cue: settings.depth_cue,
         background: settings.background,
         shading: shot.style.shading,
+        occlusion: shot.style.occlusion,
         point_radius_px: shot.style.point_radius_px,
         max_splats: u64::MAX,
         settle_steps: 0,

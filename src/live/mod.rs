@@ -37,6 +37,7 @@ impl From<&LiveSettings> for ProgressiveSettings {
             depth_cue: s.depth_cue,
             background: s.background,
             shading: s.shading,
+            occlusion: s.occlusion,
             point_radius_px: s.point_radius_px,
             max_splats: s.max_splats,
             settle_steps: s.settle_steps,

@@ -19,6 +19,8 @@ pub struct LiveSettings {
     pub background: [f32; 3],
     /// Screen-space shading strength in [0, 1] (closest mode).
     pub shading: f32,
+    /// Screen-space ambient occlusion strength in [0, 1] (closest mode).
+    pub occlusion: f32,
     /// Drawn point radius in pixels (closest mode: the nearest key within the radius).
     pub point_radius_px: u32,
     /// Splats after which accumulation stops (keeps the u32 sums far from overflow).
@@ -42,6 +44,7 @@ impl Default for LiveSettings {
             depth_cue: 0.75,
             background: crate::scene::spec::RenderSettings::default().background,
             shading: 0.0,
+            occlusion: 0.0,
             point_radius_px: 0,
             max_splats: 1 << 30,
             settle_steps: 8,

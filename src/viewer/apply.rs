@@ -409,6 +409,7 @@ impl ViewerState {
             self.live.mode = s.mode;
             self.live.depth_cue = s.depth_cue;
             self.live.background = s.background;
+            self.take_scene_look();
             self.camera = self.framed_camera();
             self.camera_moved = false;
             changes.scene_replaced = true;

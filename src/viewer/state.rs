@@ -222,9 +222,18 @@ impl ViewerState {
         state.live.mode = state.scene.render.mode;
         state.live.depth_cue = state.scene.render.depth_cue;
         state.live.background = state.scene.render.background;
+        state.take_scene_look();
         state.recompile();
         state.camera = state.framed_camera();
         state
+    }
+
+    /// The live view's shading and occlusion from the scene's look (`[render] look`, `shading`,
+    /// `occlusion`), as `render` and `record` resolve it.
+    pub fn take_scene_look(&mut self) {
+        let style = crate::resolve::ResolveStyle::of(&self.scene.render, self.scene.domain.dimension());
+        self.live.shading = style.shading;
+        self.live.occlusion = style.occlusion;
     }
 
     /// The scene's camera at the current time, fitted to a sample of the attractor where the
