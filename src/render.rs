@@ -7,9 +7,6 @@ use crate::resolve::resolve_image;
 use crate::shot::Shot;
 use crate::splat::Framebuffer;
 
-/// The viewer frames its camera with this; it lives with the shot it belongs to.
-pub use crate::shot::frame_camera;
-
 /// What a render produced: the image and the accumulation it was resolved from.
 pub struct Rendered {
     pub image: image::RgbImage,

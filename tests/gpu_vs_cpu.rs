@@ -15,7 +15,6 @@ use glam::Vec3;
 use nlifs::chaos_game::{self, CompiledIfs, ORBITS_PER_CHUNK, run_chunk};
 use nlifs::gpu::chaos_game::{FrameArgs, GpuChaosGame};
 use nlifs::gpu::readback::read_buffer;
-use nlifs::live::cpu_source::frame_chunks;
 use nlifs::live::{ChaosBackend, LiveSettings, LiveView};
 use nlifs::resolve::{ResolveStyle, resolve_image};
 use nlifs::rng::Pcg32;
@@ -188,16 +187,16 @@ fn cpu_route_uploads_the_cpu_framebuffer() {
         let view = SplatView::new(&camera, width, height, bounds, mode, settings.depth_cue, settings.background);
         let mut expected = Framebuffer::new(view, compiled.colors.clone());
         let points = settings.point_count as u64 * settings.steps_per_frame as u64;
-        let (chunks, steps) = frame_chunks(points, rayon::current_num_threads());
+        let plan = nlifs::chaos_game::ChunkPlan::even(points, rayon::current_num_threads()).unwrap();
         let mut previous_covered = 0;
         for frame in 0..3u32 {
             let mut encoder = ctx.device.create_command_encoder(&Default::default());
             let splats = live.advance(&ctx, &mut encoder);
             ctx.queue.submit([encoder.finish()]);
-            assert_eq!(splats, chunks as u64 * ORBITS_PER_CHUNK as u64 * steps as u64);
+            assert_eq!(splats, plan.splats());
             assert!(splats >= points);
-            for c in 0..chunks {
-                run_chunk(&compiled, settings.seed, frame, c, steps, &mut expected);
+            for chunk in plan.iter() {
+                run_chunk(&compiled, settings.seed, frame, chunk.index, chunk.steps, &mut expected);
             }
             let uploaded = live.read_accum(&ctx).unwrap();
             let cpu = live.cpu_accum().expect("the CPU route runs");
@@ -256,7 +255,7 @@ fn cpu_route_densities_match_gpu_route() {
     let (gpu_counts, _) = counts(ChaosBackend::Gpu, 1);
     // CPU route: 8 frames of 2^20 points in orbits of `cpu_k` steps.
     let (cpu_counts, splats) = counts(ChaosBackend::Cpu, 8);
-    let (_, cpu_k) = frame_chunks(1 << 20, rayon::current_num_threads());
+    let cpu_k = nlifs::chaos_game::ChunkPlan::even(1 << 20, rayon::current_num_threads()).unwrap().steps(0);
     let gpu_k = 4.0;
     let n_gpu: f64 = gpu_counts.iter().map(|&c| c as f64).sum();
     let n_cpu: f64 = cpu_counts.iter().map(|&c| c as f64).sum();

@@ -17,21 +17,10 @@ use std::sync::Arc;
 
 use rayon::prelude::*;
 
-use crate::chaos_game::{CompiledIfs, ORBITS_PER_CHUNK, STEPS_PER_ORBIT, run_chunk};
+use crate::chaos_game::plan::{MAX_POINTS, POINTS_PER_CHUNK};
+use crate::chaos_game::{ChunkPlan, CompiledIfs, run_chunk};
 use crate::scene::spec::SplatMode;
 use crate::splat::{EMPTY, Framebuffer, SplatView};
-
-/// How a frame of `points` splats splits over `workers`: (chunks, steps per orbit). The chunk
-/// count is a multiple of `workers` (each runs the same number) and chunks hold at most
-/// [`STEPS_PER_ORBIT`] steps per orbit; the frame splats chunks × [`ORBITS_PER_CHUNK`] × steps
-/// ≥ `points` points.
-pub fn frame_chunks(points: u64, workers: usize) -> (u32, usize) {
-    let workers = workers.max(1) as u64;
-    let per_chunk = (ORBITS_PER_CHUNK * STEPS_PER_ORBIT) as u64;
-    let chunks = points.div_ceil(per_chunk).max(1).next_multiple_of(workers);
-    let steps = points.div_ceil(chunks * ORBITS_PER_CHUNK as u64).max(1);
-    (chunks as u32, steps as usize)
-}
 
 /// The CPU route's state: the IFS, the per-worker framebuffers (accumulating since the last
 /// clear) and the merged copy that is uploaded. Nothing is allocated per frame except when the
@@ -85,7 +74,11 @@ impl CpuChaosGame {
             return 0;
         }
         let workers = self.workers.len();
-        let (chunks, steps) = frame_chunks(points, workers);
+        // A frame past the random streams' cap (points × steps beyond ~1.8·10¹³) runs the
+        // cap's worth; the view never asks that much, but must not wrap or panic.
+        let Ok(plan) = ChunkPlan::even(points.min(MAX_POINTS - workers as u64 * POINTS_PER_CHUNK), workers) else {
+            return 0;
+        };
         if !self.pool_tried {
             // Without a pool of its own (threads refused) frames run on the global pool.
             self.pool = rayon::ThreadPoolBuilder::new()
@@ -99,8 +92,8 @@ impl CpuChaosGame {
         let merged = &mut self.merged;
         let mut run = || {
             framebuffers.par_iter_mut().enumerate().for_each(|(w, fb)| {
-                for c in (w as u32..chunks).step_by(workers) {
-                    run_chunk(ifs, seed, frame, c, steps, fb);
+                for chunk in plan.iter().skip(w).step_by(workers) {
+                    run_chunk(ifs, seed, frame, chunk.index, chunk.steps, fb);
                 }
             });
             merge(framebuffers, merged);
@@ -109,7 +102,7 @@ impl CpuChaosGame {
             Some(pool) => pool.install(run),
             None => run(),
         }
-        chunks as u64 * ORBITS_PER_CHUNK as u64 * steps as u64
+        plan.splats()
     }
 }
 
@@ -146,24 +139,5 @@ impl CpuChaosGame {
     /// The merged accumulation in the GPU layout (what the live view uploads).
     pub fn merged(&self) -> &[u32] {
         &self.merged
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn frame_chunks_cover_the_points_evenly() {
-        for (points, workers) in [(1u64 << 20, 2usize), (1 << 12, 2), (1, 1), (3 << 20, 2), (1 << 20, 3)] {
-            let (chunks, steps) = frame_chunks(points, workers);
-            let total = chunks as u64 * ORBITS_PER_CHUNK as u64 * steps as u64;
-            assert_eq!(chunks as usize % workers, 0);
-            assert!(steps <= STEPS_PER_ORBIT);
-            assert!(total >= points, "{points} {workers}: {total}");
-            // Less than one step per orbit of slack.
-            assert!(total < points + chunks as u64 * ORBITS_PER_CHUNK as u64, "{points} {workers}: {total}");
-        }
-        assert_eq!(frame_chunks(1 << 20, 2), (4, 4096));
     }
 }

@@ -1,5 +1,5 @@
 //! Framing for the viewer: the attractor (and, for `Shift+F`, the grid box) fitted into the view
-//! rectangle with a margin. A viewer helper rather than a change to `render::frame_camera`
+//! rectangle with a margin. A viewer helper rather than a change to `shot::frame_camera`
 //! (which `nlifs render` shares): the viewer frames from a larger sample, because the 16,384
 //! points of one `attractor_sample` miss thin extremities (plant 1's stem was cut off at the
 //! bottom of the view), and leaves a wider margin, because its picture keeps accumulating
@@ -36,7 +36,7 @@ pub fn fit(camera: &mut OrbitCamera, points: &[Vec3], aspect: f32) {
 /// The scene's camera at `t_secs`, fitted around `sample` where the scene leaves target and
 /// distance open (the same rule as `nlifs render`), with the viewer's margin.
 pub fn scene_camera(scene: &Scene, t_secs: f64, bounds: (DVec3, DVec3), sample: &[Vec3], aspect: f32) -> OrbitCamera {
-    let mut camera = crate::render::frame_camera(scene, t_secs, bounds, sample, aspect);
+    let mut camera = crate::shot::frame_camera(scene, t_secs, bounds, sample, aspect);
     let spec = scene.camera_at(t_secs);
     if spec.target.is_none() && spec.distance.is_none() && !sample.is_empty() {
         camera.distance *= 1.0 + EXTRA_MARGIN;

@@ -10,11 +10,13 @@ use std::time::SystemTime;
 use glam::{DVec3, Vec2};
 
 use crate::camera::OrbitCamera;
-use crate::chaos_game::{self, CompiledIfs};
+use crate::chaos_game::CompiledIfs;
 use crate::edit::{Edit, History};
 use crate::live::{ChaosRoute, LiveSettings};
 use crate::model::IfsReport;
 use crate::scene::Scene;
+use crate::scene::spec::RenderSettings;
+use crate::shot::{Framing, Shot};
 use crate::splat::SplatView;
 
 use super::command::{Command, RaytraceForm, RecordForm};
@@ -311,16 +313,22 @@ impl ViewerState {
     }
 
     /// Recompiles the IFS at the current time (after an edit).
+    /// The tables and bounds come from the one shot setup that `render` and `record` use
+    /// ([`Shot::prepare`]), with the live view's seed; the camera stays the viewer's.
     pub(super) fn recompile(&mut self) {
-        let ifs = self.scene.at(self.t_secs);
-        self.report = Some(ifs.report());
-        self.compiled = CompiledIfs::new(&ifs);
-        match &self.compiled {
-            Some(c) => {
-                self.bounds = chaos_game::attractor_bounds(c, self.live.seed);
+        let settings = RenderSettings { seed: self.live.seed, ..self.scene.render_at(self.t_secs) };
+        match Shot::prepare(&self.scene, self.t_secs, &settings, Framing::Given(self.camera), None) {
+            Ok(shot) => {
+                self.report = Some(shot.ifs.report());
+                self.compiled = Some(shot.compiled);
+                self.bounds = shot.bounds;
                 self.error = None;
             }
-            None => self.error = Some("no function is enabled".into()),
+            Err(e) => {
+                self.report = Some(self.scene.at(self.t_secs).report());
+                self.compiled = None;
+                self.error = Some(e.to_string());
+            }
         }
     }
 
