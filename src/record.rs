@@ -25,13 +25,23 @@ use crate::scene::Scene;
 use crate::scene::timeline::LoopMode;
 use crate::splat::{Framebuffer, SplatView};
 
+/// The most frames one `record` run renders. Each frame takes at least milliseconds, so a
+/// million is hours of work; a longer animation (a 1e8 s timeline has 2.4e9 frames at 24 fps)
+/// is recorded in `--frames` ranges, and no list of all its frames is ever built.
+pub const MAX_FRAMES_PER_RUN: u32 = 1_000_000;
+
 #[derive(Debug, thiserror::Error)]
 pub enum RecordError {
+    #[error(
+        "frames {start}..{end} are {count} frames, more than the {MAX_FRAMES_PER_RUN} one run records; record them in --frames ranges",
+        count = end - start
+    )]
+    TooManyFrames { start: u32, end: u32 },
     #[error("the scene has no enabled function at t = {t_secs} s")]
     NoFunctions { t_secs: f64 },
     #[error("frames {start}..{end} are not within the animation's {count} frames (0..{count})")]
     FrameRange { start: u32, end: u32, count: u32 },
-    #[error("cannot write frame {path}: {source}")]
+    #[error("cannot write frame {path}")]
     Write { path: String, source: std::io::Error },
     #[error(
         "ffmpeg was not found on PATH, so no video was made; the frames are in {dir} (install ffmpeg, or encode them with another tool)"
@@ -249,11 +259,15 @@ pub fn record(
     if frames.start >= frames.end || frames.end > count {
         return Err(RecordError::FrameRange { start: frames.start, end: frames.end, count });
     }
+    if frames.len() > MAX_FRAMES_PER_RUN as usize {
+        return Err(RecordError::TooManyFrames { start: frames.start, end: frames.end });
+    }
     let todo = frames_to_render(rec, dir, frames.clone(), resume);
     if resume {
         remove_stale_temp_files(dir, frames.clone());
     }
-    let skipped = frames.filter(|k| !todo.contains(k)).collect();
+    // `todo` is in increasing order, so a binary search keeps this linear-logarithmic.
+    let skipped = frames.filter(|k| todo.binary_search(k).is_err()).collect();
     for (n, &k) in todo.iter().enumerate() {
         let img = rec.frame(k)?;
         let path = frame_path(dir, k);

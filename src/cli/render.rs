@@ -26,13 +26,13 @@ pub struct RenderArgs {
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..=16384))]
     height: Option<u32>,
     /// Points to draw after the transient (default: the scene's).
-    #[arg(long, value_parser = clap::value_parser!(u64).range(1..))]
+    #[arg(long, value_parser = super::args::point_count)]
     points: Option<u64>,
     /// Random seed (default: the scene's).
     #[arg(long)]
     seed: Option<u32>,
     /// Scene time in seconds.
-    #[arg(long, default_value_t = 0.0)]
+    #[arg(long, default_value_t = 0.0, value_parser = super::args::time_secs)]
     time: f64,
     /// Splat mode (default: the scene's).
     #[arg(long, value_enum)]
