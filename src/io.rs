@@ -172,7 +172,11 @@ mod unnamed {
         Unsupported(W),
     }
 
-    pub(super) fn write<W: FnOnce(&mut dyn Write) -> std::io::Result<()>>(dir: &Path, path: &Path, write: W) -> Outcome<W> {
+    pub(super) fn write<W: FnOnce(&mut dyn Write) -> std::io::Result<()>>(
+        dir: &Path,
+        path: &Path,
+        write: W,
+    ) -> Outcome<W> {
         // Linking an unnamed file without privileges goes through its /proc/self/fd entry.
         if !Path::new("/proc/self/fd").is_dir() {
             return Outcome::Unsupported(write);

@@ -96,11 +96,11 @@ fn serde_messages_name_the_field_in_the_users_words() {
         ("version = 1\ngrid = 5\n", "grid"),
         (
             "version = 1\n[grid]\nx = [0, 1]\ny = [0, 1]\n[[function]]\nkind = \"affine\"\ncolor = 5\nmatrix = [[1, 0], [0, 1]]\n",
-            "function.color",
+            "function[0].color",
         ),
         (
             "version = 1\n[grid]\nx = [0, 1]\ny = [0, 1]\n[[function]]\nkind = \"builder\"\nsteps = [{ op = \"scale\", by = \"big\" }]\n",
-            "function.steps.by",
+            "function[0].steps.by",
         ),
         ("version = 1\n[grid]\nx = [0, 1]\ny = [0, 1]\n[camera]\nyaw_deg = \"1\"\n", "camera.yaw_deg"),
     ];

@@ -25,8 +25,66 @@ fn number() -> impl Strategy<Value = String> {
     ]
 }
 
+/// The usual range of field `i` of [`scene_text`] (low, high, whole numbers only).
+const SANE: [(f64, f64, bool); 40] = [
+    (-1.0, 0.0, false),
+    (1.0, 2.0, false),
+    (-1.0, 0.0, false),
+    (1.0, 2.0, false), // grid x, y
+    (2.0, 10.0, true),
+    (2.0, 10.0, true),
+    (0.0, 1.0, false), // resolution, probability
+    (0.1, 0.9, false),
+    (-90.0, 90.0, false),
+    (-1.0, 0.9, false), // scale, degrees, amount
+    (-0.6, 0.6, false),
+    (-0.6, 0.6, false),
+    (-0.6, 0.6, false),
+    (-0.6, 0.6, false), // matrix
+    (-0.5, 0.5, false),
+    (-0.5, 0.5, false),
+    (0.0, 1.0, false), // offset, probability
+    (-360.0, 360.0, false),
+    (-80.0, 80.0, false),
+    (0.5, 10.0, false),
+    (10.0, 120.0, false), // camera
+    (1.0, 64.0, true),
+    (1.0, 64.0, true),
+    (1.0, 100_000.0, true), // width, height, points
+    (-0.2, 0.2, false),
+    (-0.2, 0.2, false),
+    (-0.2, 0.2, false), // translate
+    (0.0, 0.4, false),
+    (0.6, 1.0, false),
+    (0.0, 1000.0, true), // taper range, seed
+    (-1.0, 0.0, false),
+    (1.0, 2.0, false),
+    (2.0, 6.0, true),
+    (-0.6, 0.6, false), // z, resolution, matrix
+    (0.0, 1.0, false),
+    (0.0, 1.0, false),
+    (1.0, 10.0, false), // depth cue, background, duration
+    (0.0, 1.0, false),
+    (-360.0, 360.0, false),
+    (1.0, 100_000.0, true), // key time, yaw, points
+];
+
+/// One value per field: mostly in its usual range, so that most scenes load and go on to be
+/// resolved and rendered, and about one field in thirty an extreme from [`number`], so that
+/// each check is met alone as well as together.
 fn numbers(n: usize) -> impl Strategy<Value = Vec<String>> {
-    prop::collection::vec(number(), n)
+    let fields: Vec<BoxedStrategy<String>> = SANE[..n]
+        .iter()
+        .map(|&(lo, hi, int)| {
+            let sane = if int {
+                (lo as i64..=hi as i64).prop_map(|x| x.to_string()).boxed()
+            } else {
+                (lo..hi).prop_map(|x| format!("{x:?}")).boxed()
+            };
+            prop_oneof![30 => sane, 1 => number()].boxed()
+        })
+        .collect();
+    fields
 }
 
 /// A scene using every numeric field of the format, with the numbers `v` (in order).
@@ -52,8 +110,31 @@ steps = [{{ op = \"scale\", by = {} }}, {{ op = \"rotate\", axis = \"z\", degree
 [camera]\nyaw_deg = {}\npitch_deg = {}\ndistance = {}\nfov_y_deg = {}\n\
 [render]\nwidth = {}\nheight = {}\npoints = {}\nseed = {}\ndepth_cue = {}\nbackground = [{}, 0.5, 0.5]\n\
 [timeline]\nduration_secs = {}\n[[key]]\nt_secs = {}\n[key.camera]\nyaw_deg = {}\n[key.render]\npoints = {}\n",
-        v[0], v[1], v[2], v[3], v[6], v[7], v[8], v[9], v[27], v[28], v[16], v[17], v[18], v[19], v[20], v[21],
-        v[22], v[23], v[29], v[34], v[35], v[36], v[37], v[38], v[39],
+        v[0],
+        v[1],
+        v[2],
+        v[3],
+        v[6],
+        v[7],
+        v[8],
+        v[9],
+        v[27],
+        v[28],
+        v[16],
+        v[17],
+        v[18],
+        v[19],
+        v[20],
+        v[21],
+        v[22],
+        v[23],
+        v[29],
+        v[34],
+        v[35],
+        v[36],
+        v[37],
+        v[38],
+        v[39],
     )
 }
 

@@ -92,7 +92,9 @@ pub fn record(args: RecordArgs) -> anyhow::Result<()> {
         .into());
     }
     if frames.len() > record::MAX_FRAMES_PER_RUN as usize {
-        return Err(BadInput(record::RecordError::TooManyFrames { start: frames.start, end: frames.end }.to_string()).into());
+        return Err(
+            BadInput(record::RecordError::TooManyFrames { start: frames.start, end: frames.end }.to_string()).into()
+        );
     }
     let todo = record::frames_to_render(&rec, &args.output, frames.clone(), args.resume).len();
     if args.resume && todo < frames.len() {

@@ -145,7 +145,7 @@ impl RectGrid {
             // they become infinite and every point built on them NaN.
             if xs.len() >= 2 && !(xs[xs.len() - 1] - xs[0]).is_finite() {
                 return Err(format!(
-                    "axis {name} spans {} to {}, a width past the largest number (about 1.8e308); use a smaller extent",
+                    "axis {name} spans {:e} to {:e}, a width past the largest number (about 1.8e308); use a smaller extent",
                     xs[0],
                     xs[xs.len() - 1]
                 ));

@@ -6,8 +6,8 @@
 //! ("data did not match any variant of untagged enum …") names a Rust type and not the shapes
 //! the user may write; `check/words.rs` puts serde's remaining messages in the user's words.
 
-use serde::de::{Deserializer, SeqAccess, Visitor};
 use serde::Deserialize;
+use serde::de::{Deserializer, SeqAccess, Visitor};
 use toml::Spanned;
 
 /// The scene format version this build reads and writes.

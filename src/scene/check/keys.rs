@@ -56,7 +56,7 @@ impl Checker<'_> {
                     return Err(self.err(
                         d.span(),
                         "timeline.duration_secs",
-                        format!("must be positive and at most {MAX_TIME_SECS:e} s, found {v}"),
+                        format!("must be positive and at most {MAX_TIME_SECS:e} s, found {}", super::words::show(v)),
                     ));
                 }
                 if loop_mode == LoopMode::Loop && v <= last {

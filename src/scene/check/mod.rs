@@ -69,7 +69,7 @@ impl Scene {
         let raw: SceneToml = toml::from_str(text).map_err(|e| {
             let span = e.span().unwrap_or(0..0);
             let (line, column) = line_col(text, span.start);
-            let field = words::key_path(&e);
+            let field = words::key_path(&e).map(|p| words::with_index(&p, text, span.start));
             let message = words::in_user_words(e.message());
             let message = match &field {
                 Some(f) => format!("`{f}`: {message}"),
@@ -115,7 +115,7 @@ impl Checker<'_> {
         if v.get_ref().is_finite() {
             Ok(*v.get_ref())
         } else {
-            Err(self.err(v.span(), field, format!("must be a finite number, found {}", v.get_ref())))
+            Err(self.err(v.span(), field, format!("must be a finite number, found {}", words::show(*v.get_ref()))))
         }
     }
 
@@ -123,7 +123,11 @@ impl Checker<'_> {
     fn in_range(&self, v: &Spanned<f64>, field: &str, lo: f64, hi: f64) -> Res<f64> {
         let x = self.finite(v, field)?;
         if !(lo..=hi).contains(&x) {
-            return Err(self.err(v.span(), field, format!("must lie in {lo}..{hi}, found {x}")));
+            return Err(self.err(
+                v.span(),
+                field,
+                format!("must lie in {}..{}, found {}", words::show(lo), words::show(hi), words::show(x)),
+            ));
         }
         Ok(x)
     }
@@ -139,7 +143,7 @@ impl Checker<'_> {
             return Err(self.err(
                 span,
                 field,
-                format!("numbers must be finite and within ±{MAX_COORDINATE:e}, found {x}"),
+                format!("numbers must be finite and within ±{MAX_COORDINATE:e}, found {}", words::show(*x)),
             ));
         }
         Ok(())
@@ -441,7 +445,13 @@ impl Checker<'_> {
     /// Whether a builder's steps keep every sampled point a number: each parameter is bounded,
     /// but a chain of large scales can still overflow f64, and one infinite corner would turn
     /// every later computation on the map into NaN.
-    pub(super) fn resolves_finite(&self, def: &FunctionDef, domain: &RectGrid, span: Range<usize>, field: &str) -> Res<()> {
+    pub(super) fn resolves_finite(
+        &self,
+        def: &FunctionDef,
+        domain: &RectGrid,
+        span: Range<usize>,
+        field: &str,
+    ) -> Res<()> {
         let FunctionDef::Builder { resolution, builder } = def else { return Ok(()) };
         let grid = RectGrid::uniform(domain.min(), domain.max(), *resolution);
         if let Some(p) = grid.points().into_iter().find(|&p| !builder.apply(p).is_finite()) {
@@ -584,13 +594,7 @@ impl Checker<'_> {
                         "a 2D twist rotates about z, with the angle growing `along` x or y",
                     ));
                 }
-                Step::Twist {
-                    axis: a,
-                    along,
-                    degrees: degrees("degrees")?,
-                    range: range_along(along)?,
-                    center,
-                }
+                Step::Twist { axis: a, along, degrees: degrees("degrees")?, range: range_along(along)?, center }
             }
             "bend" => {
                 let a = axis(None)?;
@@ -601,13 +605,7 @@ impl Checker<'_> {
                 if dim == 2 && (a == Axis::Z || t == Axis::Z) {
                     return Err(self.err(span, &field("axis"), "a 2D bend uses the x and y axes"));
                 }
-                Step::Bend {
-                    axis: a,
-                    toward: t,
-                    degrees: degrees("degrees")?,
-                    range: range_along(a)?,
-                    center,
-                }
+                Step::Bend { axis: a, toward: t, degrees: degrees("degrees")?, range: range_along(a)?, center }
             }
             _ => {
                 let matrix = self.matrix(s.matrix.as_ref().ok_or_else(|| missing("matrix"))?, &field("matrix"), dim)?;
@@ -642,7 +640,7 @@ impl Checker<'_> {
                 return Err(self.err(
                     d.span(),
                     &format!("{prefix}.distance"),
-                    format!("must be positive and at most {MAX_COORDINATE:e}, found {v}"),
+                    format!("must be positive and at most {MAX_COORDINATE:e}, found {}", words::show(v)),
                 ));
             }
             out.distance = Some(v);

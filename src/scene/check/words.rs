@@ -15,6 +15,29 @@ pub(super) fn key_path(e: &toml::de::Error) -> Option<String> {
     (!path.is_empty()).then(|| path.to_string())
 }
 
+/// `path` with the index of its array-of-tables entry: toml names `function.color`, and the
+/// entry is the `[[function]]` header that last precedes the error at byte `offset`, so the
+/// path becomes `function[2].color` (likewise for `[[key]]`).
+pub(super) fn with_index(path: &str, text: &str, offset: usize) -> String {
+    let (head, rest) = path.split_once('.').unwrap_or((path, ""));
+    if !matches!(head, "function" | "key") {
+        return path.to_string();
+    }
+    let header = format!("[[{head}]]");
+    let before = &text[..offset.min(text.len())];
+    let count = before.lines().filter(|l| l.trim_start().starts_with(&header)).count();
+    if count == 0 {
+        return path.to_string();
+    }
+    let indexed = format!("{head}[{}]", count - 1);
+    if rest.is_empty() { indexed } else { format!("{indexed}.{rest}") }
+}
+
+/// A number as a user would write it: `1e300` rather than its 301 digits.
+pub(super) fn show(x: f64) -> String {
+    if x != 0.0 && x.is_finite() && !(1e-5..1e16).contains(&x.abs()) { format!("{x:e}") } else { format!("{x}") }
+}
+
 /// `message` with serde's type words replaced by the format's, e.g. `invalid type: string "1",
 /// expected f64` → `expected a number, found the text "1"`.
 pub(super) fn in_user_words(message: &str) -> String {
@@ -62,7 +85,12 @@ fn found_words(found: &str) -> String {
         return format!("the whole number {}", inner(s));
     }
     if let Some(s) = found.strip_prefix("floating point ") {
-        return format!("the number {}", inner(s));
+        // serde prints every digit (1e300 as 301 of them); a long number is shown as 1e300.
+        let text = inner(s);
+        return match text.parse::<f64>() {
+            Ok(x) => format!("the number {}", show(x)),
+            _ => format!("the number {text}"),
+        };
     }
     if let Some(s) = found.strip_prefix("boolean ") {
         return inner(s);
@@ -79,13 +107,27 @@ mod tests {
     use super::*;
 
     #[test]
+    fn array_entries_get_their_index() {
+        let text = "[[function]]\nkind = 1\n[[function]]\ncolor = 5\n";
+        assert_eq!(with_index("function.color", text, text.find("5").unwrap()), "function[1].color");
+        assert_eq!(with_index("grid.x", text, 3), "grid.x");
+    }
+
+    #[test]
     fn type_words_become_format_words() {
-        assert_eq!(in_user_words("invalid type: string \"1\", expected f64"), "expected a number, found the text \"1\"");
+        assert_eq!(
+            in_user_words("invalid type: string \"1\", expected f64"),
+            "expected a number, found the text \"1\""
+        );
         assert_eq!(
             in_user_words("invalid type: integer `5`, expected struct GridToml"),
             "expected a table, found the whole number 5"
         );
         assert_eq!(in_user_words("invalid type: sequence, expected i64"), "expected a whole number, found a list");
         assert_eq!(in_user_words("missing field `x`"), "missing field `x`");
+        assert_eq!(
+            in_user_words(&format!("invalid type: floating point `{:?}`, expected i64", -1e300)),
+            "expected a whole number, found the number -1e300"
+        );
     }
 }
