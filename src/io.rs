@@ -29,7 +29,7 @@ impl std::fmt::Display for WriteError {
             ErrorKind::NotADirectory => "a part of its path is a file, not a folder",
             ErrorKind::PermissionDenied => "permission denied (the folder is read-only or not yours)",
             ErrorKind::ReadOnlyFilesystem => "the file system is read-only",
-            ErrorKind::NotFound => "its folder does not exist and cannot be made there",
+            ErrorKind::NotFound => "no file can be created there (the folder is missing or takes no new files)",
             ErrorKind::StorageFull => "the disk is full",
             // The cause says it best (the closure's own messages, e.g. a format's size limit).
             _ => return write!(f, "{}", self.cause),
@@ -101,7 +101,12 @@ fn write_atomic_inner(path: &Path, write: impl FnOnce(&mut dyn Write) -> std::io
         Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
         _ => PathBuf::from("."),
     };
-    std::fs::create_dir_all(&dir)?;
+    // create_dir_all says "File exists" when a part of the path is a file; the user's words
+    // for that are "not a folder".
+    std::fs::create_dir_all(&dir).map_err(|e| match e.kind() {
+        ErrorKind::AlreadyExists => std::io::Error::from(ErrorKind::NotADirectory),
+        _ => e,
+    })?;
     remove_stale_temp_files(&dir, path);
     #[cfg(target_os = "linux")]
     let write = match unnamed::write(&dir, path, write) {

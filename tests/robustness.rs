@@ -369,7 +369,7 @@ fn gltf_buffers_are_capped_and_accessors_checked() {
 
 #[test]
 fn the_timeline_check_reuses_unchanged_functions_and_caps_its_work() {
-    use nlifs::scene::timeline_check::{MAX_CHECK_MATRICES, check_timeline};
+    use nlifs::scene::timeline_check::check_timeline;
     // Four 3D builders at the largest resolution and 20 keys that change only the camera:
     // the functions are checked once, not at every one of the 180 sampled times.
     let mut text = String::from("version = 1\n[grid]\nx = [0, 1]\ny = [0, 1]\nz = [0, 1]\n");
@@ -389,7 +389,30 @@ fn the_timeline_check_reuses_unchanged_functions_and_caps_its_work() {
     assert_eq!(check.samples_per_interval, 8);
     // 4 bounds of 16 M matrices each: seconds, not the 30 min of checking each time.
     assert!(start.elapsed().as_secs() < 120, "{:?}", start.elapsed());
-    assert!(MAX_CHECK_MATRICES > 0);
+}
+
+#[test]
+fn the_timeline_check_samples_more_thinly_past_its_cap() {
+    use nlifs::scene::timeline_check::{MAX_CHECK_MATRICES, check_timeline_capped};
+    // One 9×9 builder (64 cells of 4 matrices) changed by 5 keys: 7 stretches.
+    let mut text = String::from("version = 1\n[grid]\nx = [0, 1]\ny = [0, 1]\n");
+    text += "[[function]]\nname = \"f\"\nkind = \"builder\"\nsteps = [{ op = \"scale\", by = 0.5 }]\n";
+    for k in 0..5 {
+        text += &format!(
+            "[[key]]\nt_secs = {k}\n[[key.function]]\nname = \"f\"\nsteps = [{{ op = \"scale\", by = {} }}]\n",
+            0.4 + 0.01 * k as f64
+        );
+    }
+    let scene = Scene::parse(&text, "t.toml").unwrap();
+    let per_time = 64 * 4;
+    let full = check_timeline_capped(&scene, 8, MAX_CHECK_MATRICES, &mut |_, _| {}).unwrap();
+    assert_eq!(full.samples_per_interval, 8);
+    // A cap of three times per stretch: 8 → 4 → 2 sampled between keys.
+    let capped = check_timeline_capped(&scene, 8, per_time * 7 * 3, &mut |_, _| {}).unwrap();
+    assert_eq!(capped.samples_per_interval, 2);
+    assert!(capped.samples < full.samples);
+    let keys_only = check_timeline_capped(&scene, 8, 1, &mut |_, _| {}).unwrap();
+    assert_eq!((keys_only.samples_per_interval, keys_only.samples), (0, 5));
 }
 
 #[test]

@@ -84,6 +84,17 @@ pub fn check_timeline_with_progress(
     samples_per_interval: usize,
     progress: &mut dyn FnMut(usize, usize),
 ) -> Option<TimelineCheck> {
+    check_timeline_capped(scene, samples_per_interval, MAX_CHECK_MATRICES, progress)
+}
+
+/// [`check_timeline_with_progress`] with the work cap `max_matrices` (3×3 spectral norms)
+/// instead of [`MAX_CHECK_MATRICES`].
+pub fn check_timeline_capped(
+    scene: &Scene,
+    samples_per_interval: usize,
+    max_matrices: u64,
+    progress: &mut dyn FnMut(usize, usize),
+) -> Option<TimelineCheck> {
     let tl = scene.timeline.as_ref()?;
     // Functions that a key changes cost a bound per sampled time; the rest one in all.
     let keyed_cost: u64 = (0..scene.functions.len())
@@ -93,7 +104,7 @@ pub fn check_timeline_with_progress(
     let stretches = tl.keys.len() as u64 + 2;
     let mut samples_per_interval = samples_per_interval;
     while samples_per_interval > 0
-        && keyed_cost.saturating_mul(stretches * (samples_per_interval as u64 + 1)) > MAX_CHECK_MATRICES
+        && keyed_cost.saturating_mul(stretches * (samples_per_interval as u64 + 1)) > max_matrices
     {
         samples_per_interval /= 2;
     }
