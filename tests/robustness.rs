@@ -80,7 +80,7 @@ fn grid_code_does_not_panic_on_an_overflowing_or_nan_grid() {
 
 #[test]
 fn builder_steps_that_overflow_are_a_located_error() {
-    let text = "version = 1\n[grid]\nx = [0, 1e150]\ny = [0, 1]\n[[function]]\nkind = \"builder\"\n\
+    let text = "version = 1\n[grid]\nx = [0, 1e18]\ny = [0, 1]\n[[function]]\nkind = \"builder\"\n\
                 steps = [{ op = \"scale\", by = 1e150 }, { op = \"scale\", by = 1e150 }, { op = \"scale\", by = 1e150 }]\n";
     let e = parse_err(text);
     assert_eq!(e.field.as_deref(), Some("function[0].steps"), "{e}");
@@ -426,4 +426,29 @@ fn record_refuses_runs_past_its_frame_cap() {
     assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
     assert!(stderr(&o).contains(&nlifs::record::MAX_FRAMES_PER_RUN.to_string()), "{}", stderr(&o));
     assert!(start.elapsed().as_secs() < 60, "{:?}", start.elapsed());
+}
+
+// Family 4: scale. The renderers work in f32; a grid too small, too large or too far from the
+// origin for them is refused with the supported range instead of rendering blank.
+
+#[test]
+fn grid_extents_outside_the_supported_range_are_refused() {
+    use nlifs::scene::spec::{GRID_EXTENT_RANGE, MAX_GRID_OFFSET_RATIO};
+    let scene = |y: &str| {
+        format!(
+            "version = 1\n[grid]\nx = [0, 1]\ny = {y}\n[[function]]\nkind = \"affine\"\nmatrix = [[0.5, 0], [0, 0.5]]\n"
+        )
+    };
+    for y in ["[0, 5e-324]", "[0, 1e-9]", "[0, 1e19]", "[1e6, 1000001]"] {
+        let e = parse_err(&scene(y));
+        assert_eq!(e.field.as_deref(), Some("grid.y"), "{y}: {e}");
+    }
+    let (lo, hi) = GRID_EXTENT_RANGE;
+    for y in [
+        format!("[0, {lo:e}]"),
+        format!("[0, {hi:e}]"),
+        format!("[{}, {MAX_GRID_OFFSET_RATIO:e}]", MAX_GRID_OFFSET_RATIO - 1.0),
+    ] {
+        assert!(Scene::parse(&scene(&y), "t.toml").is_ok(), "{y}");
+    }
 }

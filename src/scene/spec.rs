@@ -23,6 +23,17 @@ pub const MAX_POINTS: u64 = 1 << 40;
 /// quantity of a checked scene is a number.
 pub const MAX_COORDINATE: f64 = 1e150;
 
+/// The supported extent of a grid axis (its last coordinate minus its first). The renderers
+/// work in f32: below 1e-6 the chaos game's points collapse onto one pixel and the ray
+/// tracer's spheres to nothing; above 1e18 the renders go blank. Within it a scene renders the
+/// same picture at any scale.
+pub const GRID_EXTENT_RANGE: (f64, f64) = (1e-6, 1e18);
+
+/// How far from the origin a grid may lie, in multiples of its extent along that axis: f32
+/// has 24 bits, and a grid 1e5 widths away already shows the steps between f32 numbers in a
+/// render (1e6: every point on a visible lattice).
+pub const MAX_GRID_OFFSET_RATIO: f64 = 1e4;
+
 /// The largest magnitude of an angle in degrees (steps' `degrees`, `camera.yaw_deg`): ten turns.
 /// The renderers turn angles into f32 sines and cosines; beyond a few turns f32 has too few
 /// digits left for the fraction of a turn.

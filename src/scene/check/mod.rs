@@ -17,11 +17,12 @@ use crate::scene::file::{
     CameraToml, ColorToml, FORMAT_VERSION, FunctionToml, RenderToml, SceneToml, StepToml, VectorToml,
 };
 use crate::scene::spec::{
-    CameraSpec, FunctionDef, FunctionSpec, MAX_ANGLE_DEG, MAX_COORDINATE, MAX_POINTS, RenderSettings, SplatMode,
+    CameraSpec, FunctionDef, FunctionSpec, MAX_COORDINATE, MAX_POINTS, RenderSettings, SplatMode,
 };
 use crate::scene::{Scene, SceneError};
 
 mod keys;
+mod numbers;
 mod read;
 mod words;
 
@@ -71,44 +72,6 @@ impl Checker<'_> {
             field: Some(field.to_string()),
             message: format!("`{field}`: {message}"),
         }
-    }
-
-    fn finite(&self, v: &Spanned<f64>, field: &str) -> Res<f64> {
-        if v.get_ref().is_finite() {
-            Ok(*v.get_ref())
-        } else {
-            Err(self.err(v.span(), field, format!("must be a finite number, found {}", words::show(*v.get_ref()))))
-        }
-    }
-
-    /// A number in `lo..=hi`; the message states the range.
-    fn in_range(&self, v: &Spanned<f64>, field: &str, lo: f64, hi: f64) -> Res<f64> {
-        let x = self.finite(v, field)?;
-        if !(lo..=hi).contains(&x) {
-            return Err(self.err(
-                v.span(),
-                field,
-                format!("must lie in {}..{}, found {}", words::show(lo), words::show(hi), words::show(x)),
-            ));
-        }
-        Ok(x)
-    }
-
-    /// An angle in degrees, at most [`MAX_ANGLE_DEG`] either way.
-    fn angle(&self, v: &Spanned<f64>, field: &str) -> Res<f64> {
-        self.in_range(v, field, -MAX_ANGLE_DEG, MAX_ANGLE_DEG)
-    }
-
-    /// Coordinates: finite numbers of magnitude at most [`MAX_COORDINATE`].
-    fn coordinates(&self, span: Range<usize>, xs: &[f64], field: &str) -> Res<()> {
-        if let Some(x) = xs.iter().find(|x| !(x.abs() <= MAX_COORDINATE)) {
-            return Err(self.err(
-                span,
-                field,
-                format!("numbers must be finite and within ±{MAX_COORDINATE:e}, found {}", words::show(*x)),
-            ));
-        }
-        Ok(())
     }
 
     fn vec3(&self, v: &Spanned<Vec<f64>>, field: &str, dim: usize) -> Res<DVec3> {
@@ -191,6 +154,10 @@ impl Checker<'_> {
                 (g.z.as_ref().map_or(grid_span.clone(), |z| z.span()), "grid.z")
             };
             return Err(self.err(span, field, msg));
+        }
+        for (axis, field) in [(&g.x, "grid.x"), (&g.y, "grid.y")].into_iter().chain(g.z.as_ref().map(|z| (z, "grid.z")))
+        {
+            self.supported_extent(axis, field)?;
         }
         if let Some(z) = &g.z
             && z.get_ref().len() < 2
