@@ -83,15 +83,32 @@ pub fn write_glb(w: &mut dyn Write, json: &serde_json::Value, bin: &[u8]) -> std
         json_bytes.push(b' ');
     }
     let bin_padded = bin.len().div_ceil(4) * 4;
-    let total = 12 + 8 + json_bytes.len() + 8 + bin_padded;
+    let (total, json_len, bin_len) = glb_lengths(json_bytes.len(), bin_padded)?;
     w.write_all(b"glTF")?;
     w.write_all(&2u32.to_le_bytes())?;
-    w.write_all(&(total as u32).to_le_bytes())?;
-    w.write_all(&(json_bytes.len() as u32).to_le_bytes())?;
+    w.write_all(&total.to_le_bytes())?;
+    w.write_all(&json_len.to_le_bytes())?;
     w.write_all(b"JSON")?;
     w.write_all(&json_bytes)?;
-    w.write_all(&(bin_padded as u32).to_le_bytes())?;
+    w.write_all(&bin_len.to_le_bytes())?;
     w.write_all(b"BIN\0")?;
     w.write_all(bin)?;
     w.write_all(&vec![0u8; bin_padded - bin.len()])
+}
+
+/// The file, JSON chunk and BIN chunk lengths of a GLB with padded chunks of `json_bytes` and
+/// `bin_bytes`. GLB stores them in 32 bits, so a file past 4 GiB is refused before anything is
+/// written, with an error of kind `FileTooLarge` that gives the size.
+pub fn glb_lengths(json_bytes: usize, bin_bytes: usize) -> std::io::Result<(u32, u32, u32)> {
+    let total = 12 + 8 + json_bytes as u64 + 8 + bin_bytes as u64;
+    match (u32::try_from(total), u32::try_from(json_bytes), u32::try_from(bin_bytes)) {
+        (Ok(total), Ok(json), Ok(bin)) => Ok((total, json, bin)),
+        _ => Err(std::io::Error::new(
+            std::io::ErrorKind::FileTooLarge,
+            format!(
+                "the GLB would have {total} bytes, more than the {} (4 GiB) the format can hold; ask for fewer points or a lower depth",
+                u32::MAX
+            ),
+        )),
+    }
 }

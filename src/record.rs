@@ -26,13 +26,23 @@ use crate::scene::timeline::LoopMode;
 use crate::shot::{Framing, Shot, ShotError};
 use crate::splat::Framebuffer;
 
+/// The most frames one `record` run renders. Each frame takes at least milliseconds, so a
+/// million is hours of work; a longer animation (a 1e8 s timeline has 2.4e9 frames at 24 fps)
+/// is recorded in `--frames` ranges, and no list of all its frames is ever built.
+pub const MAX_FRAMES_PER_RUN: u32 = 1_000_000;
+
 #[derive(Debug, thiserror::Error)]
 pub enum RecordError {
     #[error(transparent)]
     Shot(#[from] ShotError),
+    #[error(
+        "frames {start}..{end} are {count} frames, more than the {MAX_FRAMES_PER_RUN} one run records; record them in --frames ranges",
+        count = end - start
+    )]
+    TooManyFrames { start: u32, end: u32 },
     #[error("frames {start}..{end} are not within the animation's {count} frames (0..{count})")]
     FrameRange { start: u32, end: u32, count: u32 },
-    #[error("cannot write frame {path}: {source}")]
+    #[error("cannot write frame {path}")]
     Write { path: String, source: std::io::Error },
     #[error(transparent)]
     Output(#[from] crate::output::OutputError),
@@ -299,11 +309,15 @@ pub fn record_as(
     if frames.start >= frames.end || frames.end > count {
         return Err(RecordError::FrameRange { start: frames.start, end: frames.end, count });
     }
+    if frames.len() > MAX_FRAMES_PER_RUN as usize {
+        return Err(RecordError::TooManyFrames { start: frames.start, end: frames.end });
+    }
     let todo = frames_to_render_as(rec, dir, frames.clone(), resume, options.format);
     if resume {
         remove_stale_temp_files(dir, frames.clone(), options.format.extension());
     }
-    let skipped = frames.filter(|k| !todo.contains(k)).collect();
+    // `todo` is in increasing order, so a binary search keeps this linear-logarithmic.
+    let skipped = frames.filter(|k| todo.binary_search(k).is_err()).collect();
     for (n, &k) in todo.iter().enumerate() {
         let path = frame_path_as(dir, k, options.format);
         let provenance = rec.provenance(k);

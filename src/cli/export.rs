@@ -31,7 +31,7 @@ pub enum ExportCommand {
         #[arg(long)]
         seed: Option<u32>,
         /// Scene time in seconds.
-        #[arg(long, default_value_t = 0.0)]
+        #[arg(long, default_value_t = 0.0, value_parser = super::args::time_secs)]
         time: f64,
     },
     /// The deterministic approximation W^n(A) as a glTF 2.0 binary mesh (.glb).
@@ -63,7 +63,7 @@ pub struct ExportPovArgs {
     height: u32,
     #[arg(long, default_value_t = 6, value_parser = clap::value_parser!(u32).range(0..=16))]
     depth: u32,
-    #[arg(long, default_value_t = 0.0)]
+    #[arg(long, default_value_t = 0.0, value_parser = super::args::time_secs)]
     time: f64,
 }
 

@@ -6,11 +6,9 @@ use std::path::PathBuf;
 use clap::Args;
 
 use nlifs::model::IfsReport;
+use nlifs::scene::warnings::{TIMELINE_SAMPLES_PER_INTERVAL, ifs_warnings};
 
-use super::load;
-
-/// Samples strictly between neighbouring keys for the timeline check of `nlifs info`.
-const TIMELINE_SAMPLES_PER_INTERVAL: usize = 8;
+use super::{load, progress_bar};
 
 #[derive(Args)]
 pub struct InfoArgs {
@@ -18,8 +16,8 @@ pub struct InfoArgs {
     /// Print JSON instead of a table.
     #[arg(long)]
     json: bool,
-    /// Scene time in seconds.
-    #[arg(long, default_value_t = 0.0)]
+    /// Scene time in seconds (0 to 1e9).
+    #[arg(long, default_value_t = 0.0, value_parser = super::args::time_secs)]
     time: f64,
 }
 
@@ -32,7 +30,16 @@ pub fn info(args: InfoArgs) -> anyhow::Result<()> {
     let ifs = scene.at(args.time);
     let report: IfsReport = ifs.report();
     // Sampled along the whole timeline, for animated scenes.
-    let timeline = nlifs::scene::timeline_check::check_timeline(&scene, TIMELINE_SAMPLES_PER_INTERVAL);
+    let bar = progress_bar(0, "timeline check");
+    let timeline = nlifs::scene::timeline_check::check_timeline_with_progress(
+        &scene,
+        TIMELINE_SAMPLES_PER_INTERVAL,
+        &mut |done, total| {
+            bar.set_length(total as u64);
+            bar.set_position(done as u64);
+        },
+    );
+    bar.finish_and_clear();
     if args.json {
         let mut value = serde_json::to_value(&report)?;
         if let (Some(check), Some(obj)) = (&timeline, value.as_object_mut()) {
@@ -71,11 +78,10 @@ pub fn info(args: InfoArgs) -> anyhow::Result<()> {
         for (k, p) in &f.outside {
             println!("    point {k} at ({:.4}, {:.4}, {:.4}) lies outside the grid", p[0], p[1], p[2]);
         }
-        if let Some(l) = f.lipschitz_bound
-            && l >= 1.0
-        {
-            println!("    warning: {} may not be contractive (Lipschitz bound {l:.4} ≥ 1)", f.name);
-        }
+    }
+    // The same sentences `render`, `record` and `snapshot` print.
+    for w in ifs_warnings(&report) {
+        println!("warning: {w}");
     }
     println!(
         "IFS: max grid_ratio {}, max lipschitz_bound {}, all contained: {}",
@@ -86,7 +92,7 @@ pub fn info(args: InfoArgs) -> anyhow::Result<()> {
     if let Some(check) = timeline {
         print!(
             "timeline: {}, {:.3} s, {} keys; checked at {} times (keys and {} between each): ",
-            check.loop_mode, check.duration_secs, check.keys, check.samples, TIMELINE_SAMPLES_PER_INTERVAL
+            check.loop_mode, check.duration_secs, check.keys, check.samples, check.samples_per_interval
         );
         if check.problems.is_empty() {
             println!("contractive and contained throughout");

@@ -88,6 +88,9 @@ pub fn main() -> ExitCode {
                     || c.downcast_ref::<nlifs::raytrace::RaytraceError>().is_some_and(|e| e.is_bad_input())
                     || c.is::<nlifs::scene::LoadError>()
                     || c.is::<nlifs::scene::SceneError>()
+                    || c.downcast_ref::<std::io::Error>()
+                        .and_then(nlifs::io::WriteError::of)
+                        .is_some_and(|e| e.is_bad_input())
             });
             ExitCode::from(if bad_input { 2 } else { 1 })
         }

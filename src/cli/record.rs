@@ -32,7 +32,7 @@ pub struct RecordArgs {
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..=16384))]
     height: Option<u32>,
     /// Points per frame (default: the scene's render.points at the frame's time).
-    #[arg(long, value_parser = clap::value_parser!(u64).range(1..))]
+    #[arg(long, value_parser = super::args::point_count)]
     points_per_frame: Option<u64>,
     /// Where frames are rendered: cpu, the only recorder in this build (it has no GPU path).
     #[arg(long, value_enum, default_value_t = RecordBackend::Cpu)]
@@ -90,6 +90,9 @@ pub fn record(args: RecordArgs) -> anyhow::Result<()> {
     settings.motion_blur_samples = args.motion_blur;
     settings.shutter = args.shutter;
     let rec = Recorder::new(&scene, settings).map_err(|e| BadInput(e.to_string()))?;
+    for warning in nlifs::scene::warnings::before_record(&scene) {
+        eprintln!("warning: {warning}");
+    }
     let count = rec.frame_count();
     if args.print_frame_count {
         println!("{count}");
@@ -102,6 +105,11 @@ pub fn record(args: RecordArgs) -> anyhow::Result<()> {
             frames.start, frames.end, args.fps
         ))
         .into());
+    }
+    if frames.len() > record::MAX_FRAMES_PER_RUN as usize {
+        return Err(
+            BadInput(record::RecordError::TooManyFrames { start: frames.start, end: frames.end }.to_string()).into()
+        );
     }
     let todo = record::frames_to_render_as(&rec, &args.output, frames.clone(), args.resume, options.format).len();
     if args.resume && todo < frames.len() {

@@ -36,13 +36,13 @@ pub struct RenderArgs {
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..=16384))]
     height: Option<u32>,
     /// Points to draw after the transient (default: the scene's).
-    #[arg(long, value_parser = clap::value_parser!(u64).range(1..))]
+    #[arg(long, value_parser = super::args::point_count)]
     points: Option<u64>,
     /// Random seed (default: the scene's).
     #[arg(long)]
     seed: Option<u32>,
     /// Scene time in seconds.
-    #[arg(long, default_value_t = 0.0)]
+    #[arg(long, default_value_t = 0.0, value_parser = super::args::time_secs)]
     time: f64,
     /// Splat mode (default: the scene's).
     #[arg(long, value_enum)]
@@ -155,18 +155,26 @@ pub fn render(args: RenderArgs) -> anyhow::Result<()> {
     if gpu.is_some() && !options.is_plain_png() {
         return Err(BadInput("--format png16/exr and --transparent need --backend cpu".into()).into());
     }
-    match &gpu {
+    for warning in nlifs::scene::warnings::scene_warnings(&scene, args.time) {
+        bar.suspend(|| eprintln!("warning: {warning}"));
+    }
+    let image = match &gpu {
         Some(ctx) => {
             bar.finish_and_clear();
             eprintln!("rendering on {}", ctx.describe());
             let image = nlifs::gpu::render::render_gpu(ctx, &shot)?.image;
             save_rgb8(&output, &image, Some(&provenance)).map_err(bad)?;
+            image
         }
         None => {
             let r = render_cpu(&shot, &|d, _| bar.set_position(d));
             bar.finish_and_clear();
             write_still(&output, &options, &r.framebuffer, &shot.camera, Some(&r.image), &provenance)?;
+            r.image
         }
+    };
+    if let Some(warning) = nlifs::scene::warnings::coverage_warning(&image, settings.background) {
+        eprintln!("warning: {warning}");
     }
     eprintln!(
         "wrote {} ({}×{}, {} points, {:.2} s)",

@@ -10,8 +10,8 @@ use clap::{Args, ValueEnum};
 use nlifs::io::save_png;
 use nlifs::raytrace::{self, ColorMode, RaytraceSettings};
 
-use super::args::{GeometryArgs, check_png};
-use super::{BadInput, load, progress_bar};
+use super::args::{GeometryArgs, check_png, hex_color, positive_pixels};
+use super::{load, progress_bar};
 
 #[derive(Clone, Copy, ValueEnum)]
 enum ColorArg {
@@ -48,8 +48,9 @@ pub struct SnapshotArgs {
     /// Stop refining where a node projects smaller than a pixel (--depth becomes the cap).
     #[arg(long)]
     adaptive: bool,
-    /// With --adaptive: stop where a node's sphere projects smaller than this many pixels.
-    #[arg(long, default_value_t = 1.0)]
+    /// With --adaptive: stop where a node's sphere projects smaller than this many pixels
+    /// (above 0, at most 1e6).
+    #[arg(long, default_value_t = 1.0, value_parser = positive_pixels)]
     stop_pixels: f32,
     #[arg(long, value_enum, default_value = "function")]
     color: ColorArg,
@@ -60,15 +61,8 @@ pub struct SnapshotArgs {
     #[arg(long)]
     no_ground: bool,
     /// Background as sRGB hex (#rrggbb); default: the scene's.
-    #[arg(long)]
-    background: Option<String>,
-}
-
-/// `--background`: the one hex colour parser (the scene format's), as linear RGB.
-fn parse_hex(text: &str) -> anyhow::Result<[f32; 3]> {
-    let srgb =
-        nlifs::color::parse_hex(text).ok_or_else(|| BadInput(format!("--background {text}: expected #rrggbb")))?;
-    Ok(srgb.map(nlifs::color::srgb8_to_linear))
+    #[arg(long, value_parser = hex_color)]
+    background: Option<[f32; 3]>,
 }
 
 pub fn snapshot(args: SnapshotArgs) -> anyhow::Result<()> {
@@ -86,13 +80,22 @@ pub fn snapshot(args: SnapshotArgs) -> anyhow::Result<()> {
         shadows: !args.no_shadows,
         ground: !args.no_ground,
         seed: scene.render.seed,
-        background: args.background.as_deref().map(parse_hex).transpose()?,
+        background: args.background,
     };
+    for w in nlifs::scene::warnings::scene_warnings(&scene, args.geometry.time) {
+        eprintln!("warning: {w}");
+    }
     let bar = progress_bar(args.height as u64, "trace");
     let cancel = AtomicBool::new(false);
     let traced = raytrace::render(&scene, args.geometry.time, None, &settings, &|d, _| bar.set_position(d), &cancel)?;
     bar.finish_and_clear();
     save_png(&args.output, &traced.image).with_context(|| format!("cannot write {}", args.output.display()))?;
+    if traced.stats.leaf_hits == 0 {
+        eprintln!(
+            "warning: the picture shows no part of W^{}(A): no ray hit it (the camera looks away from it)",
+            args.geometry.depth
+        );
+    }
     let rays = traced.stats.primary_rays + traced.stats.shadow_rays;
     eprintln!(
         "wrote {} ({}×{}, {} spp, {} leaves to depth {}, {} nodes; build {:.2} s, trace {:.2} s, {:.2} Mrays/s)",

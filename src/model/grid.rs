@@ -33,7 +33,15 @@ impl RectGrid {
             if n <= 1 {
                 return vec![lo[a]];
             }
-            (0..n).map(|i| lo[a] + (hi[a] - lo[a]) * i as f64 / (n - 1) as f64).collect()
+            let span = hi[a] - lo[a];
+            (0..n)
+                .map(|i| {
+                    let t = i as f64 / (n - 1) as f64;
+                    // A span past f64's range (`[-1e308, 1e308]`) is interpolated without
+                    // forming it; finite spans keep the formula that earlier output came from.
+                    if span.is_finite() { lo[a] + span * t } else { lo[a] * (1.0 - t) + hi[a] * t }
+                })
+                .collect()
         };
         Self { axes: [axis(0), axis(1), axis(2)] }
     }
@@ -103,7 +111,9 @@ impl RectGrid {
             if xs.len() < 2 {
                 continue;
             }
-            let x = p[a].clamp(xs[0], xs[xs.len() - 1]);
+            // max/min rather than clamp: clamp panics on NaN bounds, and a NaN point lands on
+            // the grid's first corner instead of poisoning the cell search.
+            let x = p[a].max(xs[0]).min(xs[xs.len() - 1]);
             // Largest i with xs[i] <= x, kept to a valid cell index.
             let i = xs.partition_point(|&c| c <= x).saturating_sub(1).min(xs.len() - 2);
             cell[a] = i;
@@ -130,6 +140,15 @@ impl RectGrid {
             }
             if let Some(w) = xs.windows(2).find(|w| w[1] <= w[0]) {
                 return Err(format!("axis {name} must increase strictly, but {} is followed by {}", w[0], w[1]));
+            }
+            // Cell widths and the extent are divided by and interpolated over; past f64's range
+            // they become infinite and every point built on them NaN.
+            if xs.len() >= 2 && !(xs[xs.len() - 1] - xs[0]).is_finite() {
+                return Err(format!(
+                    "axis {name} spans {:e} to {:e}, a width past the largest number (about 1.8e308); use a smaller extent",
+                    xs[0],
+                    xs[xs.len() - 1]
+                ));
             }
         }
         Ok(())
@@ -213,18 +232,18 @@ impl GridMap {
     }
 
     /// The edge vectors of cell `cell` along axis `a`, each divided by the cell's width along
-    /// `a`: 4 of them in 3D, 2 in 2D.
-    fn scaled_edges(&self, cell: [usize; 3], a: usize) -> Vec<DVec3> {
+    /// `a`: 4 of them in 3D, 2 in 2D (the rest of the array is unused).
+    fn scaled_edges(&self, cell: [usize; 3], a: usize) -> ([DVec3; 4], usize) {
         let width = self.grid.axes[a][cell[a] + 1] - self.grid.axes[a][cell[a]];
-        self.corners_used()
-            .iter()
-            .filter(|o| o[a] == 0)
-            .map(|&o| {
-                let mut o1 = o;
-                o1[a] = 1;
-                (self.corner(cell, o1) - self.corner(cell, o)) / width
-            })
-            .collect()
+        let mut out = [DVec3::ZERO; 4];
+        let mut n = 0;
+        for &o in self.corners_used().iter().filter(|o| o[a] == 0) {
+            let mut o1 = o;
+            o1[a] = 1;
+            out[n] = (self.corner(cell, o1) - self.corner(cell, o)) / width;
+            n += 1;
+        }
+        (out, n)
     }
 
     /// A guaranteed upper bound of the Lipschitz constant (Euclidean norm) of this map on the
@@ -240,27 +259,33 @@ impl GridMap {
     /// Lipschitz constant there is the supremum of the Jacobian norm; clamping outside the box
     /// is a projection onto a convex set and does not increase distances. Hence the bound holds
     /// for all pairs of points in space.
+    ///
+    /// A 64³ grid has 250 000 cells of 64 matrices each, so the slabs of cells along x are
+    /// spread over threads; the maximum does not depend on the order, so the result is the
+    /// same on any number of threads.
     pub fn lipschitz_bound_cells(&self, cells: [std::ops::RangeInclusive<usize>; 3]) -> f64 {
+        use rayon::prelude::*;
         let dim = self.grid.dimension();
-        let mut best = 0.0f64;
-        for cx in cells[0].clone() {
+        let slab = |cx: usize| {
+            let mut best = 0.0f64;
             for cy in cells[1].clone() {
                 for cz in cells[2].clone() {
                     let cell = [cx, cy, cz];
-                    let ex = self.scaled_edges(cell, 0);
-                    let ey = self.scaled_edges(cell, 1);
-                    let ez = if dim == 3 { self.scaled_edges(cell, 2) } else { vec![DVec3::ZERO] };
-                    for &a in &ex {
-                        for &b in &ey {
-                            for &c in &ez {
+                    let (ex, nx) = self.scaled_edges(cell, 0);
+                    let (ey, ny) = self.scaled_edges(cell, 1);
+                    let (ez, nz) = if dim == 3 { self.scaled_edges(cell, 2) } else { ([DVec3::ZERO; 4], 1) };
+                    for &a in &ex[..nx] {
+                        for &b in &ey[..ny] {
+                            for &c in &ez[..nz] {
                                 best = best.max(spectral_norm_bound(DMat3::from_cols(a, b, c)));
                             }
                         }
                     }
                 }
             }
-        }
-        best
+            best
+        };
+        cells[0].clone().into_par_iter().map(slab).reduce(|| 0.0, f64::max)
     }
 
     /// [`Self::lipschitz_bound_cells`] over the whole grid.

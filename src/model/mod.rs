@@ -337,7 +337,17 @@ fn apply_floor(p: &mut [f64], active: &[usize]) {
 }
 
 fn normalize(p: &mut [f64], active: &[usize]) {
-    let total: f64 = active.iter().map(|&i| p[i]).sum();
+    let mut total: f64 = active.iter().map(|&i| p[i]).sum();
+    if total == f64::INFINITY {
+        // Weights near f64's limit (1e308 each) overflow the sum; scaled by the largest first,
+        // each is at most 1 and the sum at most the function count. Only then, so that ordinary
+        // weights keep the exact quotients they always had.
+        let largest = active.iter().map(|&i| p[i]).fold(0.0f64, f64::max);
+        for &i in active {
+            p[i] /= largest;
+        }
+        total = active.iter().map(|&i| p[i]).sum();
+    }
     for &i in active {
         p[i] = if total > 0.0 { p[i] / total } else { 1.0 / active.len() as f64 };
     }

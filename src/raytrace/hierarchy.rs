@@ -227,9 +227,10 @@ impl Hierarchy {
                     });
                 }
                 if h.nodes.len() > NODE_LIMIT {
-                    return Err(RaytraceError::TooLarge(format!(
-                        "more than {NODE_LIMIT} nodes; lower --depth or raise --stop-pixels"
-                    )));
+                    // Only an adaptive build has a pixel size to raise (`export mesh` has none).
+                    let advice =
+                        if stop.pixel.is_some() { "lower --depth or raise --stop-pixels" } else { "lower --depth" };
+                    return Err(RaytraceError::TooLarge(format!("more than {NODE_LIMIT} nodes; {advice}")));
                 }
             }
             level = next;

@@ -126,6 +126,8 @@ impl CameraRays {
 pub struct TraceStats {
     pub primary_rays: u64,
     pub shadow_rays: u64,
+    /// Primary rays that hit a leaf of W^n(A) (0: the camera saw none of it).
+    pub leaf_hits: u64,
 }
 
 /// Samples of a pixel traced together (more are traced in batches of this many).
@@ -207,6 +209,7 @@ impl Tracer<'_> {
                 )
             {
                 scratch.last_hit = hit.node;
+                stats.leaf_hits += 1;
                 (point[k], normal[k]) = self.hierarchy.surface(ray, &hit);
                 albedo[k] = self.albedo(&hit);
                 specular[k] = 0.25;
@@ -307,6 +310,7 @@ pub fn trace(
     let done = AtomicU64::new(0);
     let primary = AtomicU64::new(0);
     let shadow = AtomicU64::new(0);
+    let hits = AtomicU64::new(0);
     let srgb = Srgb8Table::new();
     let mut pixels = vec![0u8; w as usize * h as usize * 3];
     pixels.par_chunks_mut(w as usize * 3).enumerate().try_for_each(|(y, row)| {
@@ -345,9 +349,17 @@ pub fn trace(
         }
         primary.fetch_add(stats.primary_rays, Ordering::Relaxed);
         shadow.fetch_add(stats.shadow_rays, Ordering::Relaxed);
+        hits.fetch_add(stats.leaf_hits, Ordering::Relaxed);
         progress(done.fetch_add(1, Ordering::Relaxed) + 1, h as u64);
         Ok(())
     })?;
     let image = image::RgbImage::from_raw(w, h, pixels).ok_or(RaytraceError::TooLarge("image buffer".into()))?;
-    Ok((image, TraceStats { primary_rays: primary.into_inner(), shadow_rays: shadow.into_inner() }))
+    Ok((
+        image,
+        TraceStats {
+            primary_rays: primary.into_inner(),
+            shadow_rays: shadow.into_inner(),
+            leaf_hits: hits.into_inner(),
+        },
+    ))
 }

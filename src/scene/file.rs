@@ -1,10 +1,13 @@
 //! The scene file as written: the versioned TOML format (documented in README.md) read by serde
 //! into `*Toml` structs that keep the span of every field (`toml::Spanned`) and reject unknown
-//! fields. This is the first of the two reading passes; the second (`check.rs`) gives the
-//! structs their meaning. The type names show in serde's messages (e.g. "data did not match
-//! any variant of untagged enum ColorToml"), so renaming one changes an error message.
+//! fields. This is the first of the two reading passes; the second (`check/`) gives the
+//! structs their meaning. The two fields that take either of two shapes (a colour, a step's
+//! `by`) have hand-written visitors rather than serde's untagged enums, whose one message
+//! ("data did not match any variant of untagged enum …") names a Rust type and not the shapes
+//! the user may write; `check/words.rs` puts serde's remaining messages in the user's words.
 
 use serde::Deserialize;
+use serde::de::{Deserializer, SeqAccess, Visitor};
 use toml::Spanned;
 
 /// The scene format version this build reads and writes.
@@ -75,18 +78,69 @@ pub(super) struct GridToml {
     pub(super) z: Option<Spanned<Vec<f64>>>,
 }
 
-#[derive(Deserialize)]
-#[serde(untagged)]
+/// A colour as written: `"#rrggbb"` or `[r, g, b]`.
 pub(super) enum ColorToml {
     Hex(String),
     Rgb(Vec<f64>),
 }
 
-#[derive(Deserialize)]
-#[serde(untagged)]
+/// A step's `by`: one number for every axis, or one per axis.
 pub(super) enum VectorToml {
     Scalar(f64),
     Vector(Vec<f64>),
+}
+
+/// Reads the numbers of a list (integers are numbers too).
+fn numbers<'de, A: SeqAccess<'de>>(mut seq: A) -> Result<Vec<f64>, A::Error> {
+    let mut out = Vec::new();
+    while let Some(x) = seq.next_element::<f64>()? {
+        out.push(x);
+    }
+    Ok(out)
+}
+
+impl<'de> Deserialize<'de> for ColorToml {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct V;
+        impl<'de> Visitor<'de> for V {
+            type Value = ColorToml;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str("a colour, \"#rrggbb\" or [r, g, b] with numbers in 0..1")
+            }
+            fn visit_str<E: serde::de::Error>(self, v: &str) -> Result<ColorToml, E> {
+                Ok(ColorToml::Hex(v.to_string()))
+            }
+            fn visit_seq<A: SeqAccess<'de>>(self, seq: A) -> Result<ColorToml, A::Error> {
+                numbers(seq).map(ColorToml::Rgb)
+            }
+        }
+        d.deserialize_any(V)
+    }
+}
+
+impl<'de> Deserialize<'de> for VectorToml {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct V;
+        impl<'de> Visitor<'de> for V {
+            type Value = VectorToml;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str("a number or a list of numbers")
+            }
+            fn visit_f64<E: serde::de::Error>(self, v: f64) -> Result<VectorToml, E> {
+                Ok(VectorToml::Scalar(v))
+            }
+            fn visit_i64<E: serde::de::Error>(self, v: i64) -> Result<VectorToml, E> {
+                Ok(VectorToml::Scalar(v as f64))
+            }
+            fn visit_u64<E: serde::de::Error>(self, v: u64) -> Result<VectorToml, E> {
+                Ok(VectorToml::Scalar(v as f64))
+            }
+            fn visit_seq<A: SeqAccess<'de>>(self, seq: A) -> Result<VectorToml, A::Error> {
+                numbers(seq).map(VectorToml::Vector)
+            }
+        }
+        d.deserialize_any(V)
+    }
 }
 
 #[derive(Deserialize)]
@@ -126,7 +180,7 @@ pub(super) struct StepToml {
 #[serde(deny_unknown_fields)]
 pub(super) struct CameraToml {
     pub(super) target: Option<Spanned<Vec<f64>>>,
-    pub(super) yaw_deg: Option<f64>,
+    pub(super) yaw_deg: Option<Spanned<f64>>,
     pub(super) pitch_deg: Option<Spanned<f64>>,
     pub(super) distance: Option<Spanned<f64>>,
     pub(super) fov_y_deg: Option<Spanned<f64>>,

@@ -23,6 +23,7 @@ pub mod file;
 pub mod spec;
 pub mod timeline;
 pub mod timeline_check;
+pub mod warnings;
 mod write;
 
 /// A problem in a scene file, located.
@@ -37,10 +38,14 @@ pub struct SceneError {
     pub message: String,
 }
 
+/// Why a scene file could not be read. The operating system's reason is part of the message
+/// and not a `source`, so that a printed error chain shows it once.
 #[derive(Debug, thiserror::Error)]
 pub enum LoadError {
-    #[error("cannot read scene file {path}: {source}")]
-    Io { path: String, source: std::io::Error },
+    #[error("cannot read scene file {path}: {cause}")]
+    Io { path: String, cause: std::io::Error },
+    #[error("{path} is larger than {limit_bytes} bytes, the most a scene file may have")]
+    TooLarge { path: String, limit_bytes: u64 },
     #[error(transparent)]
     Scene(#[from] SceneError),
 }

@@ -12,6 +12,38 @@ use crate::color;
 use crate::model::builder::{Builder, Step};
 use crate::model::{AffineMap, JuliaMap};
 
+/// The most points one render draws, in the scene (`render.points`, `key.render.points`) and on
+/// the command line (`render --points`, `record --points-per-frame`), so that both refuse the
+/// same counts with the same words. 2^40 points take days on any machine of today; past it the
+/// chunk arithmetic of the chaos game would need more than 32 bits of chunk index.
+pub const MAX_POINTS: u64 = 1 << 40;
+
+/// The largest magnitude of a coordinate, offset, centre, matrix entry or scale factor in a
+/// scene. Squares of it (distances, norms, determinants) stay finite in f64, so every derived
+/// quantity of a checked scene is a number.
+pub const MAX_COORDINATE: f64 = 1e150;
+
+/// The supported extent of a grid axis (its last coordinate minus its first). The renderers
+/// work in f32: below 1e-6 the chaos game's points collapse onto one pixel and the ray
+/// tracer's spheres to nothing; above 1e18 the renders go blank. Within it a scene renders the
+/// same picture at any scale.
+pub const GRID_EXTENT_RANGE: (f64, f64) = (1e-6, 1e18);
+
+/// How far from the origin a grid may lie, in multiples of its extent along that axis: f32
+/// has 24 bits, and a grid 1e5 widths away already shows the steps between f32 numbers in a
+/// render (1e6: every point on a visible lattice).
+pub const MAX_GRID_OFFSET_RATIO: f64 = 1e4;
+
+/// The largest magnitude of an angle in degrees (steps' `degrees`, `camera.yaw_deg`): ten turns.
+/// The renderers turn angles into f32 sines and cosines; beyond a few turns f32 has too few
+/// digits left for the fraction of a turn.
+pub const MAX_ANGLE_DEG: f64 = 3600.0;
+
+/// The latest scene time in seconds (key times, `timeline.duration_secs`, `--time`): about 31
+/// years, far beyond any animation, and small enough that a time of frame k at 1000 fps is
+/// still exact to the microsecond in f64.
+pub const MAX_TIME_SECS: f64 = 1e9;
+
 /// How points become pixels; the splat (`src/splat.rs` and its GPU twin) explains each mode.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum SplatMode {

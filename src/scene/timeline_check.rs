@@ -2,9 +2,21 @@
 //! every enabled function, at each key and at sampled times between keys, reported per stretch
 //! of the timeline. It resolves the IFS at each sampled time, so it needs the whole `Scene`;
 //! the timeline itself (`timeline.rs`) does not.
+//!
+//! The cost is that of the Lipschitz bound (64 matrices per grid cell) times the functions
+//! that change times the sampled times. A function that no key changes is checked once, a
+//! function is re-checked only when its definition differs from the last one checked, and when
+//! the total would pass [`MAX_CHECK_MATRICES`] the times between keys are sampled more thinly
+//! (down to the keys alone); the check says how many it took.
 
+use crate::model::{Function, Map};
 use crate::scene::Scene;
+use crate::scene::spec::FunctionDef;
 use crate::scene::timeline::LoopMode;
+
+/// The most 3×3 spectral norms one timeline check computes (about 20 s on one core, a few on
+/// many); past it fewer times between keys are sampled.
+pub const MAX_CHECK_MATRICES: u64 = 2_000_000_000;
 
 /// Where along the timeline a check failed.
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]
@@ -41,6 +53,9 @@ pub struct TimelineCheck {
     pub keys: usize,
     /// Times at which the IFS was resolved and checked.
     pub samples: usize,
+    /// Times sampled strictly between neighbouring keys: as asked, or fewer to keep the check
+    /// within [`MAX_CHECK_MATRICES`].
+    pub samples_per_interval: usize,
     pub problems: Vec<TimelineProblem>,
 }
 
@@ -49,7 +64,50 @@ pub struct TimelineCheck {
 /// (including before the first key, after the last, and in loop mode the wrap back to the first).
 /// A problem is reported once per stretch and function, with the worst bound or first time seen.
 pub fn check_timeline(scene: &Scene, samples_per_interval: usize) -> Option<TimelineCheck> {
+    check_timeline_with_progress(scene, samples_per_interval, &mut |_, _| {})
+}
+
+/// The 3×3 matrices one Lipschitz bound of `def` computes (0 for maps without one).
+fn bound_cost(def: &FunctionDef, scene: &Scene) -> u64 {
+    let combos = if scene.domain.dimension() == 3 { 64 } else { 4 };
+    let cells = |dims: [usize; 3]| dims.iter().map(|&n| n.saturating_sub(1).max(1) as u64).product::<u64>();
+    match def {
+        FunctionDef::Grid { .. } => cells(scene.domain.dims()) * combos,
+        FunctionDef::Builder { resolution, .. } => cells(*resolution) * combos,
+        FunctionDef::Affine(_) | FunctionDef::Julia(_) => 1,
+    }
+}
+
+/// [`check_timeline`], calling `progress(times_done, times)` after each sampled time.
+pub fn check_timeline_with_progress(
+    scene: &Scene,
+    samples_per_interval: usize,
+    progress: &mut dyn FnMut(usize, usize),
+) -> Option<TimelineCheck> {
+    check_timeline_capped(scene, samples_per_interval, MAX_CHECK_MATRICES, progress)
+}
+
+/// [`check_timeline_with_progress`] with the work cap `max_matrices` (3×3 spectral norms)
+/// instead of [`MAX_CHECK_MATRICES`].
+pub fn check_timeline_capped(
+    scene: &Scene,
+    samples_per_interval: usize,
+    max_matrices: u64,
+    progress: &mut dyn FnMut(usize, usize),
+) -> Option<TimelineCheck> {
     let tl = scene.timeline.as_ref()?;
+    // Functions that a key changes cost a bound per sampled time; the rest one in all.
+    let keyed_cost: u64 = (0..scene.functions.len())
+        .filter(|&i| tl.keys.iter().any(|k| k.function(i).is_some()))
+        .map(|i| bound_cost(&scene.functions[i].def, scene))
+        .sum();
+    let stretches = tl.keys.len() as u64 + 2;
+    let mut samples_per_interval = samples_per_interval;
+    while samples_per_interval > 0
+        && keyed_cost.saturating_mul(stretches * (samples_per_interval as u64 + 1)) > max_matrices
+    {
+        samples_per_interval /= 2;
+    }
     let d = tl.duration_secs;
     let mut spans: Vec<(TimelineSpan, Vec<f64>)> = Vec::new();
     let interior = |a: f64, b: f64| -> Vec<f64> {
@@ -78,26 +136,51 @@ pub fn check_timeline(scene: &Scene, samples_per_interval: usize) -> Option<Time
     }
     let mut problems = Vec::new();
     let mut samples = 0;
+    let total: usize = spans.iter().map(|(_, t)| t.len()).sum();
+    // Per function: the last definition checked, its Lipschitz bound and outside count.
+    let mut last: Vec<Option<(FunctionDef, Option<f64>, usize)>> = vec![None; scene.functions.len()];
     for (span, times) in spans {
         let mut worst: Vec<Option<(f64, f64)>> = vec![None; scene.functions.len()];
         let mut leaves: Vec<Option<(f64, usize)>> = vec![None; scene.functions.len()];
         for &t in &times {
             samples += 1;
-            let report = scene.at(t).report();
-            for (fi, f) in report.functions.iter().enumerate() {
-                if !scene.functions[fi].enabled {
+            for (fi, spec) in scene.functions.iter().enumerate() {
+                if !spec.enabled {
                     continue;
                 }
-                if let Some(l) = f.lipschitz_bound
+                let def = scene.function_def_at(fi, t);
+                if last[fi].as_ref().is_none_or(|(d, _, _)| *d != def) {
+                    let map = scene.resolve(&def);
+                    let ifs = crate::model::Ifs {
+                        domain: scene.domain.clone(),
+                        functions: vec![Function {
+                            name: spec.name.clone(),
+                            map,
+                            color: spec.color,
+                            weight: spec.probability,
+                            enabled: true,
+                        }],
+                        probability_mode: scene.probability_mode,
+                    };
+                    let bound = ifs.functions[0].map.lipschitz_bound();
+                    let outside = match &ifs.functions[0].map {
+                        Map::Julia(_) => 0,
+                        _ => ifs.outside_points(0).map_or(0, |o| o.len()),
+                    };
+                    last[fi] = Some((def, bound, outside));
+                }
+                let Some((_, bound, outside)) = &last[fi] else { continue };
+                if let Some(l) = *bound
                     && l >= 1.0
                     && worst[fi].is_none_or(|(m, _)| l > m)
                 {
                     worst[fi] = Some((l, t));
                 }
-                if f.contained == Some(false) && leaves[fi].is_none() {
-                    leaves[fi] = Some((t, f.outside.len()));
+                if *outside > 0 && leaves[fi].is_none() {
+                    leaves[fi] = Some((t, *outside));
                 }
             }
+            progress(samples, total);
         }
         for (fi, f) in scene.functions.iter().enumerate() {
             if let Some((max_bound, t_secs)) = worst[fi] {
@@ -116,7 +199,14 @@ pub fn check_timeline(scene: &Scene, samples_per_interval: usize) -> Option<Time
             }
         }
     }
-    Some(TimelineCheck { loop_mode: tl.loop_mode.name(), duration_secs: d, keys: n, samples, problems })
+    Some(TimelineCheck {
+        loop_mode: tl.loop_mode.name(),
+        duration_secs: d,
+        keys: n,
+        samples,
+        samples_per_interval,
+        problems,
+    })
 }
 
 impl std::fmt::Display for TimelineProblem {

@@ -9,7 +9,7 @@ use toml::Spanned;
 use crate::model::builder::Builder;
 use crate::model::{AffineMap, JuliaMap, RectGrid};
 use crate::scene::file::{KeyToml, TimelineToml};
-use crate::scene::spec::{self, CameraSpec, FunctionDef, FunctionSpec};
+use crate::scene::spec::{self, CameraSpec, FunctionDef, FunctionSpec, MAX_POINTS, MAX_TIME_SECS};
 use crate::scene::timeline::{Ease, FunctionKey, Interpolation, Key, LoopMode, RenderKey, Timeline};
 
 use super::{Checker, Res};
@@ -52,8 +52,12 @@ impl Checker<'_> {
         let duration_secs = match raw.and_then(|r| r.get_ref().duration_secs.as_ref()) {
             Some(d) => {
                 let v = self.finite(d, "timeline.duration_secs")?;
-                if v <= 0.0 {
-                    return Err(self.err(d.span(), "timeline.duration_secs", "must be positive"));
+                if !(v > 0.0 && v <= MAX_TIME_SECS) {
+                    return Err(self.err(
+                        d.span(),
+                        "timeline.duration_secs",
+                        format!("must be positive and at most {MAX_TIME_SECS:e} s, found {}", super::words::show(v)),
+                    ));
                 }
                 if loop_mode == LoopMode::Loop && v <= last {
                     return Err(self.err(
@@ -88,10 +92,7 @@ impl Checker<'_> {
         let dim = domain.dimension();
         let field = |name: &str| format!("key[{i}].{name}");
         let k = k.get_ref();
-        let t_secs = self.finite(&k.t_secs, &field("t_secs"))?;
-        if t_secs < 0.0 {
-            return Err(self.err(k.t_secs.span(), &field("t_secs"), "must not be negative"));
-        }
+        let t_secs = self.in_range(&k.t_secs, &field("t_secs"), 0.0, MAX_TIME_SECS)?;
         let interpolation = match &k.interpolation {
             None => Interpolation::default(),
             Some(s) => Interpolation::parse(s.get_ref()).ok_or_else(|| {
@@ -181,7 +182,9 @@ impl Checker<'_> {
                         for (n, s) in steps.get_ref().iter().enumerate() {
                             out.push(self.step(&format!("{prefix}.steps[{n}]"), s, domain, centre)?);
                         }
-                        FunctionDef::Builder { resolution: *resolution, builder: Builder { steps: out } }
+                        let def = FunctionDef::Builder { resolution: *resolution, builder: Builder { steps: out } };
+                        self.resolves_finite(&def, domain, steps.span(), &format!("{prefix}.steps"))?;
+                        def
                     }
                 },
                 FunctionDef::Affine(a) => {
@@ -224,11 +227,11 @@ impl Checker<'_> {
         if let Some(r) = &k.render {
             if let Some(p) = &r.points {
                 let x = *p.get_ref();
-                if !(1..=1 << 40).contains(&x) {
+                if !(1..=MAX_POINTS as i64).contains(&x) {
                     return Err(self.err(
                         p.span(),
                         &field("render.points"),
-                        format!("must lie in 1..={}, found {x}", 1u64 << 40),
+                        format!("must lie in 1..={MAX_POINTS}, found {x}"),
                     ));
                 }
                 render.points = Some(x as u64);

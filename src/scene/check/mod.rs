@@ -5,7 +5,6 @@
 //! checked in `keys.rs`, against the functions read here.
 
 use std::ops::Range;
-use std::path::Path;
 
 use glam::{DMat3, DVec3};
 use toml::Spanned;
@@ -17,27 +16,29 @@ use crate::model::{AffineMap, JuliaMap, ProbabilityMode, RectGrid};
 use crate::scene::file::{
     CameraToml, ColorToml, FORMAT_VERSION, FunctionToml, RenderToml, SceneToml, StepToml, VectorToml,
 };
-use crate::scene::spec::{CameraSpec, FunctionDef, FunctionSpec, Look, RenderSettings, SplatMode};
-use crate::scene::{LoadError, Scene, SceneError};
+use crate::scene::spec::{
+    CameraSpec, FunctionDef, FunctionSpec, Look, MAX_COORDINATE, MAX_POINTS, RenderSettings, SplatMode,
+};
+use crate::scene::{Scene, SceneError};
 
 mod keys;
+mod numbers;
+mod read;
+mod words;
 
 impl Scene {
-    /// Reads and checks a scene file.
-    pub fn load(path: &Path) -> Result<Self, LoadError> {
-        let text = std::fs::read_to_string(path)
-            .map_err(|source| LoadError::Io { path: path.display().to_string(), source })?;
-        let mut scene = Self::parse(&text, &path.display().to_string())?;
-        scene.path = Some(path.to_path_buf());
-        Ok(scene)
-    }
-
     /// Parses scene text; `file` names it in errors.
     pub fn parse(text: &str, file: &str) -> Result<Self, SceneError> {
         let raw: SceneToml = toml::from_str(text).map_err(|e| {
             let span = e.span().unwrap_or(0..0);
             let (line, column) = line_col(text, span.start);
-            SceneError { file: file.to_string(), line, column, field: None, message: e.message().trim().to_string() }
+            let field = words::key_path(&e).map(|p| words::with_index(&p, text, span.start));
+            let message = words::in_user_words(e.message());
+            let message = match &field {
+                Some(f) => format!("`{f}`: {message}"),
+                None => message,
+            };
+            SceneError { file: file.to_string(), line, column, field, message }
         })?;
         Checker { text, file }.scene(raw)
     }
@@ -73,22 +74,12 @@ impl Checker<'_> {
         }
     }
 
-    fn finite(&self, v: &Spanned<f64>, field: &str) -> Res<f64> {
-        if v.get_ref().is_finite() {
-            Ok(*v.get_ref())
-        } else {
-            Err(self.err(v.span(), field, "must be a finite number"))
-        }
-    }
-
     fn vec3(&self, v: &Spanned<Vec<f64>>, field: &str, dim: usize) -> Res<DVec3> {
         let xs = v.get_ref();
         if xs.len() != dim {
             return Err(self.err(v.span(), field, format!("expected {dim} numbers, found {}", xs.len())));
         }
-        if xs.iter().any(|x| !x.is_finite()) {
-            return Err(self.err(v.span(), field, "numbers must be finite"));
-        }
+        self.coordinates(v.span(), xs, field)?;
         Ok(DVec3::new(xs[0], xs[1], if dim == 3 { xs[2] } else { 0.0 }))
     }
 
@@ -121,9 +112,7 @@ impl Checker<'_> {
                 format!("expected a {dim}×{dim} matrix as {dim} rows of {dim} numbers"),
             ));
         }
-        if rows.iter().flatten().any(|x| !x.is_finite()) {
-            return Err(self.err(m.span(), field, "numbers must be finite"));
-        }
+        self.coordinates(m.span(), &rows.iter().flatten().copied().collect::<Vec<_>>(), field)?;
         let at = |r: usize, c: usize| if r < dim && c < dim { rows[r][c] } else { 0.0 };
         // Rows as written; glam is column-major.
         Ok(DMat3::from_cols(
@@ -150,6 +139,11 @@ impl Checker<'_> {
         if let Some(z) = &g.z {
             axes[2] = z.get_ref().clone();
         }
+        self.coordinates(g.x.span(), g.x.get_ref(), "grid.x")?;
+        self.coordinates(g.y.span(), g.y.get_ref(), "grid.y")?;
+        if let Some(z) = &g.z {
+            self.coordinates(z.span(), z.get_ref(), "grid.z")?;
+        }
         let domain = RectGrid { axes };
         if let Err(msg) = domain.validate() {
             let (span, field) = if msg.contains("axis x") {
@@ -160,6 +154,10 @@ impl Checker<'_> {
                 (g.z.as_ref().map_or(grid_span.clone(), |z| z.span()), "grid.z")
             };
             return Err(self.err(span, field, msg));
+        }
+        for (axis, field) in [(&g.x, "grid.x"), (&g.y, "grid.y")].into_iter().chain(g.z.as_ref().map(|z| (z, "grid.z")))
+        {
+            self.supported_extent(axis, field)?;
         }
         if let Some(z) = &g.z
             && z.get_ref().len() < 2
@@ -321,7 +319,9 @@ impl Checker<'_> {
                 for (k, s) in steps.get_ref().iter().enumerate() {
                     out.push(self.step(&format!("function[{i}].steps[{k}]"), s, domain, centre)?);
                 }
-                FunctionDef::Builder { resolution, builder: Builder { steps: out } }
+                let def = FunctionDef::Builder { resolution, builder: Builder { steps: out } };
+                self.resolves_finite(&def, domain, steps.span(), &field("steps"))?;
+                def
             }
             "affine" => {
                 let matrix = self.matrix(f.matrix.as_ref().ok_or_else(|| missing("matrix"))?, &field("matrix"), dim)?;
@@ -369,6 +369,31 @@ impl Checker<'_> {
             enabled: f.enabled.unwrap_or(true),
             def,
         })
+    }
+
+    /// Whether a builder's steps keep every sampled point a number: each parameter is bounded,
+    /// but a chain of large scales can still overflow f64, and one infinite corner would turn
+    /// every later computation on the map into NaN.
+    pub(super) fn resolves_finite(
+        &self,
+        def: &FunctionDef,
+        domain: &RectGrid,
+        span: Range<usize>,
+        field: &str,
+    ) -> Res<()> {
+        let FunctionDef::Builder { resolution, builder } = def else { return Ok(()) };
+        let grid = RectGrid::uniform(domain.min(), domain.max(), *resolution);
+        if let Some(p) = grid.points().into_iter().find(|&p| !builder.apply(p).is_finite()) {
+            return Err(self.err(
+                span,
+                field,
+                format!(
+                    "the steps send the grid point ({}, {}, {}) past the largest number; use smaller factors",
+                    p.x, p.y, p.z
+                ),
+            ));
+        }
+        Ok(())
     }
 
     fn step(&self, prefix: &str, s: &Spanned<StepToml>, domain: &RectGrid, centre: DVec3) -> Res<Step> {
@@ -429,8 +454,12 @@ impl Checker<'_> {
                 None => Ok([domain.min()[a.index()], domain.max()[a.index()]]),
                 Some(r) => {
                     let v = r.get_ref();
-                    if v.len() != 2 || v.iter().any(|x| !x.is_finite()) || v[0] == v[1] {
+                    if v.len() != 2 || v[0] == v[1] {
                         return Err(self.err(r.span(), &field("range"), "expected [start, end] with start ≠ end"));
+                    }
+                    self.coordinates(r.span(), v, &field("range"))?;
+                    if !(v[1] - v[0]).is_finite() {
+                        return Err(self.err(r.span(), &field("range"), "start and end are too far apart"));
                     }
                     Ok([v[0], v[1]])
                 }
@@ -439,7 +468,8 @@ impl Checker<'_> {
         let by = |default_scalar: bool| -> Res<DVec3> {
             let b = s.by.as_ref().ok_or_else(|| missing("by"))?;
             match b.get_ref() {
-                VectorToml::Scalar(x) if default_scalar && x.is_finite() => {
+                VectorToml::Scalar(x) if default_scalar => {
+                    self.coordinates(b.span(), &[*x], &field("by"))?;
                     Ok(if dim == 3 { DVec3::splat(*x) } else { DVec3::new(*x, *x, 1.0) })
                 }
                 VectorToml::Scalar(_) => Err(self.err(b.span(), &field("by"), format!("expected {dim} numbers"))),
@@ -456,9 +486,13 @@ impl Checker<'_> {
             let v = v.as_ref().ok_or_else(|| missing(name))?;
             self.finite(v, &field(name))
         };
+        let degrees = |name: &str| -> Res<f64> {
+            let v = s.degrees.as_ref().ok_or_else(|| missing(name))?;
+            self.angle(v, &field(name))
+        };
         let step = match op {
             "scale" => Step::Scale { by: by(true)?, center },
-            "rotate" => Step::Rotate { axis: axis(default_axis)?, degrees: number(&s.degrees, "degrees")?, center },
+            "rotate" => Step::Rotate { axis: axis(default_axis)?, degrees: degrees("degrees")?, center },
             "translate" => Step::Translate { by: by(false)? },
             "taper" => {
                 let a = axis(if dim == 2 { Some(Axis::Y) } else { None })?;
@@ -489,13 +523,7 @@ impl Checker<'_> {
                         "a 2D twist rotates about z, with the angle growing `along` x or y",
                     ));
                 }
-                Step::Twist {
-                    axis: a,
-                    along,
-                    degrees: number(&s.degrees, "degrees")?,
-                    range: range_along(along)?,
-                    center,
-                }
+                Step::Twist { axis: a, along, degrees: degrees("degrees")?, range: range_along(along)?, center }
             }
             "bend" => {
                 let a = axis(None)?;
@@ -506,13 +534,7 @@ impl Checker<'_> {
                 if dim == 2 && (a == Axis::Z || t == Axis::Z) {
                     return Err(self.err(span, &field("axis"), "a 2D bend uses the x and y axes"));
                 }
-                Step::Bend {
-                    axis: a,
-                    toward: t,
-                    degrees: number(&s.degrees, "degrees")?,
-                    range: range_along(a)?,
-                    center,
-                }
+                Step::Bend { axis: a, toward: t, degrees: degrees("degrees")?, range: range_along(a)?, center }
             }
             _ => {
                 let matrix = self.matrix(s.matrix.as_ref().ok_or_else(|| missing("matrix"))?, &field("matrix"), dim)?;
@@ -527,7 +549,10 @@ impl Checker<'_> {
     }
 
     fn camera(&self, prefix: &str, c: &CameraToml, dim: usize) -> Res<CameraSpec> {
-        let mut out = CameraSpec { yaw_deg: c.yaw_deg, ..Default::default() };
+        let mut out = CameraSpec::default();
+        if let Some(y) = &c.yaw_deg {
+            out.yaw_deg = Some(self.angle(y, &format!("{prefix}.yaw_deg"))?);
+        }
         if let Some(t) = &c.target {
             out.target = Some(self.vec3(t, &format!("{prefix}.target"), 3.min(t.get_ref().len().max(dim)))?);
         }
@@ -540,8 +565,12 @@ impl Checker<'_> {
         }
         if let Some(d) = &c.distance {
             let v = self.finite(d, &format!("{prefix}.distance"))?;
-            if v <= 0.0 {
-                return Err(self.err(d.span(), &format!("{prefix}.distance"), "must be positive"));
+            if !(v > 0.0 && v <= MAX_COORDINATE) {
+                return Err(self.err(
+                    d.span(),
+                    &format!("{prefix}.distance"),
+                    format!("must be positive and at most {MAX_COORDINATE:e}, found {}", words::show(v)),
+                ));
             }
             out.distance = Some(v);
         }
@@ -584,7 +613,7 @@ impl Checker<'_> {
             out.height = int(v, "render.height", 1, 16384)? as u32;
         }
         if let Some(v) = &r.points {
-            out.points = int(v, "render.points", 1, 1 << 40)? as u64;
+            out.points = int(v, "render.points", 1, MAX_POINTS as i64)? as u64;
         }
         if let Some(v) = &r.seed {
             out.seed = int(v, "render.seed", 0, u32::MAX as i64)? as u32;
