@@ -18,7 +18,7 @@ pub const WARNING_SIGN: char = '!';
 
 /// The keys, as the shortcuts overlay and the README list them.
 pub const SHORTCUTS: &[(&str, &str)] = &[
-    ("left drag", "orbit (a grid point with the grid overlay on: drag it)"),
+    ("left drag", "orbit, pan in a 2D scene (a grid point with the grid overlay on: drag it)"),
     ("right / middle drag", "pan"),
     ("wheel", "zoom towards the cursor"),
     ("F / Shift+F", "frame the attractor / the attractor and the grid box"),

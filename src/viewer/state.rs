@@ -22,6 +22,7 @@ use crate::splat::SplatView;
 use super::command::{Command, RaytraceForm, RecordForm};
 use super::framing;
 use super::picking::{self, FunctionGrid};
+use super::pointer::Button;
 
 /// The scene shown when the viewer starts without one (the paper's plant, table 4).
 pub const DEFAULT_SCENE: &str = include_str!("../../scenes/plant2.toml");
@@ -299,6 +300,17 @@ impl ViewerState {
             FunctionDef::Builder { .. } => Some(self.scene.domain.points().len()),
             // The domain box's corners.
             _ => Some(1 << self.scene.domain.dimension()),
+        }
+    }
+
+    /// What a camera drag with `button` by (`dx_px`, `dy_px`) does: the left button orbits and
+    /// the others pan, except in a 2D scene, where the left button pans too (orbiting would only
+    /// tilt the plane away from the view).
+    pub fn camera_drag(&self, button: Button, dx_px: f32, dy_px: f32) -> Command {
+        if button == Button::Left && self.scene.domain.dimension() != 2 {
+            Command::Orbit { dx_px, dy_px }
+        } else {
+            Command::Pan { dx_px, dy_px }
         }
     }
 
