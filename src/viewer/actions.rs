@@ -1,7 +1,8 @@
 //! The larger actions [`ViewerState::apply`] dispatches to, kept out of `apply.rs` so that each
 //! file stays readable: saving (and what a save clears), crash recovery (offer, autosave), Esc,
-//! framing, zooming towards the cursor, the screenshot name next to the scene, and adding,
-//! duplicating or deleting a function as one undo step.
+//! framing, zooming towards the cursor, the view's camera saved into the scene or keyed, the
+//! screenshot name next to the scene, and adding, duplicating or deleting a function as one
+//! undo step.
 
 use std::path::{Path, PathBuf};
 
@@ -9,7 +10,8 @@ use glam::DVec3;
 
 use crate::camera::OrbitCamera;
 use crate::edit::Edit;
-use crate::scene::spec::FunctionDef;
+use crate::scene::spec::{CameraSpec, FunctionDef};
+use crate::scene::timeline::Key;
 
 use super::command::Command;
 use super::framing;
@@ -154,6 +156,66 @@ impl ViewerState {
         let under = self.camera.target + half_h * (nx * self.view_aspect() * right + ny * up);
         // Scaling about `under` by the zoom's factor keeps it fixed on screen.
         self.camera.target = under + (self.camera.target - under) * factor;
+    }
+
+    /// The view's camera as a scene's camera settings, every field set. Each value is the
+    /// shortest decimal that reads back as the camera's `f32` (a yaw of 35.2, not
+    /// 35.200000762939453, in a saved file).
+    pub fn camera_spec(&self) -> CameraSpec {
+        let short = |v: f32| v.to_string().parse::<f64>().unwrap_or(v as f64);
+        let c = &self.camera;
+        CameraSpec {
+            target: Some(DVec3::new(short(c.target.x), short(c.target.y), short(c.target.z))),
+            yaw_deg: Some(short(c.yaw_deg)),
+            pitch_deg: Some(short(c.pitch_deg)),
+            distance: Some(short(c.distance)),
+            fov_y_deg: Some(short(c.fov_y_deg)),
+            projection: Some(c.projection),
+        }
+    }
+
+    /// "Save view": the scene's camera becomes the view's (one undo step; the scene is then
+    /// modified, and a save writes it to the file). True when the scene changed.
+    pub(super) fn save_view(&mut self) -> bool {
+        let camera = self.camera_spec();
+        if self.scene.camera == camera {
+            return false;
+        }
+        let mut after = self.scene.clone();
+        after.camera = camera;
+        let done = self.apply_edit(Edit::ReplaceScene { before: Box::new(self.scene.clone()), after: Box::new(after) });
+        if done {
+            self.message = Some("the view is the scene's camera now (save to keep it)".into());
+        }
+        done
+    }
+
+    /// "Key camera": the view's camera in the key at the playhead, or in a new key there holding
+    /// only the camera (one undo step). Needs a timeline. True when the scene changed.
+    pub(super) fn key_camera(&mut self) -> bool {
+        if self.scene.timeline.is_none() {
+            self.error = Some("cannot key the camera: the scene has no timeline".into());
+            return false;
+        }
+        // Keying belongs to one playhead, as other edits do.
+        self.playback.playing = false;
+        let t = self.playhead_secs();
+        let mut key = self
+            .key_at_playhead()
+            .and_then(|k| self.scene.timeline.as_ref().map(|tl| tl.keys[k].clone()))
+            .unwrap_or_else(|| Key::new(t));
+        let camera = self.camera_spec();
+        if key.camera == camera {
+            return false;
+        }
+        key.camera = camera;
+        match Edit::add_key(&self.scene, key) {
+            Ok(e) => self.apply_edit(e),
+            Err(e) => {
+                self.error = Some(format!("cannot key the camera: {e}"));
+                false
+            }
+        }
     }
 
     /// The next free `<scene>-<n>.png` next to the scene file (the working folder for the

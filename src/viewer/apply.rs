@@ -134,6 +134,8 @@ impl ViewerState {
                     self.frame(true);
                     changes.camera = true;
                 }
+                Command::SaveView => edited |= self.save_view(),
+                Command::KeyCamera => edited |= self.key_camera(),
                 Command::SaveScreenshot(path) => changes.screenshot = Some(path),
                 Command::ScreenshotNextToScene => changes.screenshot = Some(self.screenshot_next_to_scene()),
                 Command::SetViewRect { origin_px, size_px } => {

@@ -63,6 +63,12 @@ pub enum Command {
     SetCamera(OrbitCamera),
     /// Blender's numpad views: look along an axis, keeping target and distance.
     ViewAlong(ViewAxis),
+    /// "Save view": the view's camera becomes the scene's camera (saved with the scene; one
+    /// undo step).
+    SaveView,
+    /// "Key camera": the view's camera keyed at the playhead (in the key there, else a new
+    /// key; one undo step). Only with a timeline.
+    KeyCamera,
     SaveScreenshot(PathBuf),
     /// `F12`: a screenshot next to the scene file (or in the working folder for the built-in
     /// scene), named after the scene and numbered so that none is overwritten.
