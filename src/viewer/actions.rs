@@ -13,7 +13,8 @@ use crate::edit::Edit;
 use crate::scene::spec::{CameraSpec, FunctionDef};
 use crate::scene::timeline::Key;
 
-use super::command::Command;
+use super::apply::Changes;
+use super::command::{Command, JobConfirm, JobKind, JobRequest};
 use super::framing;
 use super::recovery;
 use super::state::{RecoveryOffer, ViewerState, mtime};
@@ -89,11 +90,14 @@ impl ViewerState {
         }
     }
 
-    /// Esc: closes the close dialog, else the recovery offer (its file kept), else the
+    /// Esc: cancels a job waiting for its confirmation, else closes the close dialog, else the recovery offer (its file kept), else the
     /// shortcuts overlay, else cancels a running point drag (the point goes back). True when
     /// the scene changed.
     pub(super) fn escape(&mut self) -> bool {
-        if self.ui.close_dialog {
+        if self.ui.job_confirm.is_some() {
+            // Esc is Cancel.
+            self.ui.job_confirm = None;
+        } else if self.ui.close_dialog {
             self.ui.close_dialog = false;
             self.ui.pending_open = None;
         } else if self.recovery_offer.is_some() {
@@ -214,6 +218,49 @@ impl ViewerState {
             Err(e) => {
                 self.error = Some(format!("cannot key the camera: {e}"));
                 false
+            }
+        }
+    }
+
+    /// Starts `job`, or, when a function may not be contractive, holds it and asks first.
+    pub(super) fn start_job(&mut self, job: JobKind, changes: &mut Changes) {
+        let doubts = self.contractivity_doubts();
+        if doubts.is_empty() {
+            changes.jobs.push(self.job_request(job));
+            return;
+        }
+        let verb = match job {
+            JobKind::Raytrace => "Ray-trace",
+            JobKind::Record => "Record",
+        };
+        self.ui.job_confirm = Some(JobConfirm { job, question: format!("{} {verb} anyway?", doubts.join(" ")) });
+    }
+
+    /// What `jobs.rs` needs to run `job` on the scene as it is now.
+    pub(super) fn job_request(&self, job: JobKind) -> JobRequest {
+        match job {
+            JobKind::Raytrace => JobRequest::Raytrace {
+                scene: Box::new(self.scene.clone()),
+                t_secs: self.t_secs,
+                camera: self.camera,
+                form: self.raytrace_form.clone(),
+            },
+            JobKind::Record => {
+                // The current view: the viewer's camera (where keys leave it open) and splat settings.
+                let mut scene = self.scene.clone();
+                let c = &self.camera;
+                scene.camera = CameraSpec {
+                    target: Some(c.target.as_dvec3()),
+                    yaw_deg: Some(c.yaw_deg as f64),
+                    pitch_deg: Some(c.pitch_deg as f64),
+                    distance: Some(c.distance as f64),
+                    fov_y_deg: Some(c.fov_y_deg as f64),
+                    projection: Some(c.projection),
+                };
+                scene.render.mode = self.live.mode;
+                scene.render.depth_cue = self.live.depth_cue;
+                scene.render.background = self.live.background;
+                JobRequest::Record { scene: Box::new(scene), form: self.record_form.clone() }
             }
         }
     }

@@ -158,10 +158,14 @@ pub enum Command {
 
     // Background jobs.
     SetRaytraceForm(RaytraceForm),
+    /// Starts the ray-trace, or first asks when a function may not be contractive.
     StartRaytrace,
     CancelRaytrace,
     SetRecordForm(RecordForm),
+    /// Starts the recording, or first asks when a function may not be contractive.
     StartRecord,
+    /// The answer to "may not be contractive … anyway?": start the job (true) or not.
+    ConfirmJob(bool),
     CancelRecord,
     CloseRaytraceImage,
 }
@@ -172,6 +176,22 @@ pub enum CloseChoice {
     Save,
     Discard,
     Cancel,
+}
+
+/// A background job the viewer starts on the user's word.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum JobKind {
+    Raytrace,
+    Record,
+}
+
+/// A job held back until the user answers whether to run it on a scene that may not be
+/// contractive (such a scene ray-traced for 40 s into two flat colour fields).
+#[derive(Clone, Debug, PartialEq)]
+pub struct JobConfirm {
+    pub job: JobKind,
+    /// The question, naming each doubtful function and its bound.
+    pub question: String,
 }
 
 /// A view along a world axis (Blender's numpad 1, 3, 7 and, with Ctrl, the opposite side).

@@ -19,7 +19,7 @@ use crate::scene::spec::RenderSettings;
 use crate::shot::{Framing, Shot};
 use crate::splat::SplatView;
 
-use super::command::{Command, RaytraceForm, RecordForm};
+use super::command::{Command, JobConfirm, RaytraceForm, RecordForm};
 use super::framing;
 use super::picking::{self, FunctionGrid};
 use super::pointer::Button;
@@ -92,6 +92,8 @@ pub struct UiState {
     pub toast: Option<String>,
     /// The scene file changed on disk while there were unsaved edits: not reloaded.
     pub file_changed_on_disk: bool,
+    /// A job waiting for Continue / Cancel: a function may not be contractive.
+    pub job_confirm: Option<JobConfirm>,
 }
 
 /// Smoothed frame statistics.
@@ -217,6 +219,7 @@ impl ViewerState {
                 fullscreen: false,
                 toast: None,
                 file_changed_on_disk: false,
+                job_confirm: None,
             },
             camera_moved: false,
         };
@@ -289,6 +292,20 @@ impl ViewerState {
             }
         }
         lines
+    }
+
+    /// "Function f2 may not be contractive (bound 1.250)." for every enabled function whose
+    /// Lipschitz bound is 1 or more at the current time, one sentence each; empty when none.
+    pub fn contractivity_doubts(&self) -> Vec<String> {
+        let Some(report) = &self.report else { return Vec::new() };
+        report
+            .functions
+            .iter()
+            .zip(&self.scene.functions)
+            .filter(|(_, spec)| spec.enabled)
+            .filter_map(|(f, _)| f.lipschitz_bound.filter(|&l| l >= 1.0).map(|l| (f, l)))
+            .map(|(f, l)| format!("Function {} may not be contractive (bound {l:.3}).", f.name))
+            .collect()
     }
 
     /// The number of points a definition's containment is checked on (grid points, else the
