@@ -298,7 +298,7 @@ fn render_ui(ui: &mut egui::Ui, state: &ViewerState, commands: &mut Vec<Command>
                 commands.push(Command::KeyCamera);
             }
         });
-        ui.small("left-drag: orbit · right/middle-drag: pan · wheel: zoom · F1: every key");
+        ui.small("left-drag: orbit (pan in 2D) · right/middle-drag: pan · wheel: zoom · F1: every key");
     });
 }
 
