@@ -103,6 +103,13 @@ fn overlays_and_dialogs_lay_out_without_sending_anything() {
     for _ in 0..3 {
         assert_eq!(run_ui(&ctx, &s), Vec::new());
     }
+    // The question before a job on a scene that may not be contractive.
+    let mut s = ViewerState::new(Scene::parse(BAD, "bad.toml").unwrap(), None, LiveSettings::default());
+    s.apply([Command::StartRaytrace]);
+    assert!(s.ui.job_confirm.is_some());
+    for _ in 0..3 {
+        assert_eq!(run_ui(&ctx, &s), Vec::new());
+    }
 }
 
 #[test]

@@ -1,7 +1,8 @@
 //! The larger actions [`ViewerState::apply`] dispatches to, kept out of `apply.rs` so that each
 //! file stays readable: saving (and what a save clears), crash recovery (offer, autosave), Esc,
-//! framing, zooming towards the cursor, the screenshot name next to the scene, and adding,
-//! duplicating or deleting a function as one undo step.
+//! framing, zooming towards the cursor, the view's camera saved into the scene or keyed, the
+//! screenshot name next to the scene, and adding, duplicating or deleting a function as one
+//! undo step.
 
 use std::path::{Path, PathBuf};
 
@@ -9,9 +10,11 @@ use glam::DVec3;
 
 use crate::camera::OrbitCamera;
 use crate::edit::Edit;
-use crate::scene::spec::FunctionDef;
+use crate::scene::spec::{CameraSpec, FunctionDef};
+use crate::scene::timeline::Key;
 
-use super::command::Command;
+use super::apply::Changes;
+use super::command::{Command, JobConfirm, JobKind, JobRequest};
 use super::framing;
 use super::recovery;
 use super::state::{RecoveryOffer, ViewerState, mtime};
@@ -87,11 +90,14 @@ impl ViewerState {
         }
     }
 
-    /// Esc: closes the close dialog, else the recovery offer (its file kept), else the
+    /// Esc: cancels a job waiting for its confirmation, else closes the close dialog, else the recovery offer (its file kept), else the
     /// shortcuts overlay, else cancels a running point drag (the point goes back). True when
     /// the scene changed.
     pub(super) fn escape(&mut self) -> bool {
-        if self.ui.close_dialog {
+        if self.ui.job_confirm.is_some() {
+            // Esc is Cancel.
+            self.ui.job_confirm = None;
+        } else if self.ui.close_dialog {
             self.ui.close_dialog = false;
             self.ui.pending_open = None;
         } else if self.recovery_offer.is_some() {
@@ -154,6 +160,109 @@ impl ViewerState {
         let under = self.camera.target + half_h * (nx * self.view_aspect() * right + ny * up);
         // Scaling about `under` by the zoom's factor keeps it fixed on screen.
         self.camera.target = under + (self.camera.target - under) * factor;
+    }
+
+    /// The view's camera as a scene's camera settings, every field set. Each value is the
+    /// shortest decimal that reads back as the camera's `f32` (a yaw of 35.2, not
+    /// 35.200000762939453, in a saved file).
+    pub fn camera_spec(&self) -> CameraSpec {
+        let short = |v: f32| v.to_string().parse::<f64>().unwrap_or(v as f64);
+        let c = &self.camera;
+        CameraSpec {
+            target: Some(DVec3::new(short(c.target.x), short(c.target.y), short(c.target.z))),
+            yaw_deg: Some(short(c.yaw_deg)),
+            pitch_deg: Some(short(c.pitch_deg)),
+            distance: Some(short(c.distance)),
+            fov_y_deg: Some(short(c.fov_y_deg)),
+            projection: Some(c.projection),
+        }
+    }
+
+    /// "Save view": the scene's camera becomes the view's (one undo step; the scene is then
+    /// modified, and a save writes it to the file). True when the scene changed.
+    pub(super) fn save_view(&mut self) -> bool {
+        let camera = self.camera_spec();
+        if self.scene.camera == camera {
+            return false;
+        }
+        let mut after = self.scene.clone();
+        after.camera = camera;
+        let done = self.apply_edit(Edit::ReplaceScene { before: Box::new(self.scene.clone()), after: Box::new(after) });
+        if done {
+            self.message = Some("the view is the scene's camera now (save to keep it)".into());
+        }
+        done
+    }
+
+    /// "Key camera": the view's camera in the key at the playhead, or in a new key there holding
+    /// only the camera (one undo step). Needs a timeline. True when the scene changed.
+    pub(super) fn key_camera(&mut self) -> bool {
+        if self.scene.timeline.is_none() {
+            self.error = Some("cannot key the camera: the scene has no timeline".into());
+            return false;
+        }
+        // Keying belongs to one playhead, as other edits do.
+        self.playback.playing = false;
+        let t = self.playhead_secs();
+        let mut key = self
+            .key_at_playhead()
+            .and_then(|k| self.scene.timeline.as_ref().map(|tl| tl.keys[k].clone()))
+            .unwrap_or_else(|| Key::new(t));
+        let camera = self.camera_spec();
+        if key.camera == camera {
+            return false;
+        }
+        key.camera = camera;
+        match Edit::add_key(&self.scene, key) {
+            Ok(e) => self.apply_edit(e),
+            Err(e) => {
+                self.error = Some(format!("cannot key the camera: {e}"));
+                false
+            }
+        }
+    }
+
+    /// Starts `job`, or, when a function may not be contractive, holds it and asks first.
+    pub(super) fn start_job(&mut self, job: JobKind, changes: &mut Changes) {
+        let doubts = self.contractivity_doubts();
+        if doubts.is_empty() {
+            changes.jobs.push(self.job_request(job));
+            return;
+        }
+        let verb = match job {
+            JobKind::Raytrace => "Ray-trace",
+            JobKind::Record => "Record",
+        };
+        self.ui.job_confirm = Some(JobConfirm { job, question: format!("{} {verb} anyway?", doubts.join(" ")) });
+    }
+
+    /// What `jobs.rs` needs to run `job` on the scene as it is now.
+    pub(super) fn job_request(&self, job: JobKind) -> JobRequest {
+        match job {
+            JobKind::Raytrace => JobRequest::Raytrace {
+                scene: Box::new(self.scene.clone()),
+                t_secs: self.t_secs,
+                camera: self.camera,
+                form: self.raytrace_form.clone(),
+            },
+            JobKind::Record => {
+                // The current view: the viewer's camera (where keys leave it open) and splat settings.
+                let mut scene = self.scene.clone();
+                let c = &self.camera;
+                scene.camera = CameraSpec {
+                    target: Some(c.target.as_dvec3()),
+                    yaw_deg: Some(c.yaw_deg as f64),
+                    pitch_deg: Some(c.pitch_deg as f64),
+                    distance: Some(c.distance as f64),
+                    fov_y_deg: Some(c.fov_y_deg as f64),
+                    projection: Some(c.projection),
+                };
+                scene.render.mode = self.live.mode;
+                scene.render.depth_cue = self.live.depth_cue;
+                scene.render.background = self.live.background;
+                JobRequest::Record { scene: Box::new(scene), form: self.record_form.clone() }
+            }
+        }
     }
 
     /// The next free `<scene>-<n>.png` next to the scene file (the working folder for the

@@ -18,7 +18,7 @@ use crate::scene::Scene;
 use crate::scene::spec::FunctionDef;
 use crate::scene::timeline::{Key, LoopMode};
 
-use super::command::{CloseChoice, Command, JobRequest};
+use super::command::{CloseChoice, Command, JobKind, JobRequest};
 use super::picking;
 use super::recovery;
 use super::state::{Gesture, PointDrag, ViewerState, mtime};
@@ -134,6 +134,8 @@ impl ViewerState {
                     self.frame(true);
                     changes.camera = true;
                 }
+                Command::SaveView => edited |= self.save_view(),
+                Command::KeyCamera => edited |= self.key_camera(),
                 Command::SaveScreenshot(path) => changes.screenshot = Some(path),
                 Command::ScreenshotNextToScene => changes.screenshot = Some(self.screenshot_next_to_scene()),
                 Command::SetViewRect { origin_px, size_px } => {
@@ -361,30 +363,16 @@ impl ViewerState {
                 }
 
                 Command::SetRaytraceForm(form) => self.raytrace_form = form,
-                Command::StartRaytrace => changes.jobs.push(JobRequest::Raytrace {
-                    scene: Box::new(self.scene.clone()),
-                    t_secs: self.t_secs,
-                    camera: self.camera,
-                    form: self.raytrace_form.clone(),
-                }),
+                Command::StartRaytrace => self.start_job(JobKind::Raytrace, &mut changes),
                 Command::CancelRaytrace => changes.jobs.push(JobRequest::CancelRaytrace),
                 Command::SetRecordForm(form) => self.record_form = form,
-                Command::StartRecord => {
-                    // The current view: the viewer's camera (where keys leave it open) and splat settings.
-                    let mut scene = self.scene.clone();
-                    let c = &self.camera;
-                    scene.camera = crate::scene::spec::CameraSpec {
-                        target: Some(c.target.as_dvec3()),
-                        yaw_deg: Some(c.yaw_deg as f64),
-                        pitch_deg: Some(c.pitch_deg as f64),
-                        distance: Some(c.distance as f64),
-                        fov_y_deg: Some(c.fov_y_deg as f64),
-                        projection: Some(c.projection),
-                    };
-                    scene.render.mode = self.live.mode;
-                    scene.render.depth_cue = self.live.depth_cue;
-                    scene.render.background = self.live.background;
-                    changes.jobs.push(JobRequest::Record { scene: Box::new(scene), form: self.record_form.clone() });
+                Command::StartRecord => self.start_job(JobKind::Record, &mut changes),
+                Command::ConfirmJob(go) => {
+                    if let Some(confirm) = self.ui.job_confirm.take()
+                        && go
+                    {
+                        changes.jobs.push(self.job_request(confirm.job));
+                    }
                 }
                 Command::CancelRecord => changes.jobs.push(JobRequest::CancelRecord),
                 Command::CloseRaytraceImage => changes.jobs.push(JobRequest::CloseImage),

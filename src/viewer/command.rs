@@ -63,6 +63,12 @@ pub enum Command {
     SetCamera(OrbitCamera),
     /// Blender's numpad views: look along an axis, keeping target and distance.
     ViewAlong(ViewAxis),
+    /// "Save view": the view's camera becomes the scene's camera (saved with the scene; one
+    /// undo step).
+    SaveView,
+    /// "Key camera": the view's camera keyed at the playhead (in the key there, else a new
+    /// key; one undo step). Only with a timeline.
+    KeyCamera,
     SaveScreenshot(PathBuf),
     /// `F12`: a screenshot next to the scene file (or in the working folder for the built-in
     /// scene), named after the scene and numbered so that none is overwritten.
@@ -152,10 +158,14 @@ pub enum Command {
 
     // Background jobs.
     SetRaytraceForm(RaytraceForm),
+    /// Starts the ray-trace, or first asks when a function may not be contractive.
     StartRaytrace,
     CancelRaytrace,
     SetRecordForm(RecordForm),
+    /// Starts the recording, or first asks when a function may not be contractive.
     StartRecord,
+    /// The answer to "may not be contractive … anyway?": start the job (true) or not.
+    ConfirmJob(bool),
     CancelRecord,
     CloseRaytraceImage,
 }
@@ -166,6 +176,22 @@ pub enum CloseChoice {
     Save,
     Discard,
     Cancel,
+}
+
+/// A background job the viewer starts on the user's word.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum JobKind {
+    Raytrace,
+    Record,
+}
+
+/// A job held back until the user answers whether to run it on a scene that may not be
+/// contractive (such a scene ray-traced for 40 s into two flat colour fields).
+#[derive(Clone, Debug, PartialEq)]
+pub struct JobConfirm {
+    pub job: JobKind,
+    /// The question, naming each doubtful function and its bound.
+    pub question: String,
 }
 
 /// A view along a world axis (Blender's numpad 1, 3, 7 and, with Ctrl, the opposite side).

@@ -113,7 +113,7 @@ pub(super) fn pointer_context(
     cursor: Option<(f64, f64)>,
 ) -> pointer::PointerContext {
     let cursor_px = cursor.map(|(x, y)| [x as f32, y as f32]);
-    let modal = state.ui.close_dialog || state.recovery_offer.is_some();
+    let modal = state.ui.close_dialog || state.recovery_offer.is_some() || state.ui.job_confirm.is_some();
     let over_layer = cursor_px.is_some_and(|[x, y]| {
         let ppp = egui_ctx.pixels_per_point();
         egui_ctx.layer_id_at(egui::pos2(x / ppp, y / ppp)).is_some_and(|layer| layer.order != egui::Order::Background)

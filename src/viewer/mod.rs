@@ -346,10 +346,7 @@ impl ApplicationHandler for App {
                         gfx.window.request_redraw();
                     } else if let (Some(button), Some((x, y))) = (self.drag, self.cursor) {
                         let (dx_px, dy_px) = ((position.x - x) as f32, (position.y - y) as f32);
-                        self.commands.push(match button {
-                            MouseButton::Left => Command::Orbit { dx_px, dy_px },
-                            _ => Command::Pan { dx_px, dy_px },
-                        });
+                        self.commands.push(self.state.camera_drag(pointer_button(button), dx_px, dy_px));
                         gfx.window.request_redraw();
                     }
                 }

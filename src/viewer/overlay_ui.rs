@@ -1,13 +1,14 @@
 //! What the viewer draws over the view rather than in the side panel: the warning banner (a
 //! function that may not be contractive or leaves the grid; the file changed on disk while
 //! there are unsaved edits), the toast (a saved file), the status line (accumulated points and
-//! points per lit pixel), the shortcuts overlay (`F1`, `?`) and the two dialogs, closing with
-//! unsaved edits and restoring a recovery file. Like every `*_ui` file it only reads the state
+//! points per lit pixel), the shortcuts overlay (`F1`, `?`) and the dialogs: closing with
+//! unsaved edits, restoring a recovery file, and starting a job on a scene that may not be
+//! contractive. Like every `*_ui` file it only reads the state
 //! and emits commands.
 
 use egui::{Align2, Color32, RichText};
 
-use super::command::{CloseChoice, Command};
+use super::command::{CloseChoice, Command, JobConfirm};
 use super::state::ViewerState;
 
 /// The mark in text that warns (the Statistics table): a glyph the bundled font draws. The
@@ -18,7 +19,7 @@ pub const WARNING_SIGN: char = '!';
 
 /// The keys, as the shortcuts overlay and the README list them.
 pub const SHORTCUTS: &[(&str, &str)] = &[
-    ("left drag", "orbit (a grid point with the grid overlay on: drag it)"),
+    ("left drag", "orbit, pan in a 2D scene (a grid point with the grid overlay on: drag it)"),
     ("right / middle drag", "pan"),
     ("wheel", "zoom towards the cursor"),
     ("F / Shift+F", "frame the attractor / the attractor and the grid box"),
@@ -47,7 +48,9 @@ pub fn overlays_ui(ctx: &egui::Context, view_rect: egui::Rect, state: &ViewerSta
     if state.ui.shortcuts_shown {
         shortcuts_overlay_ui(ctx, commands);
     }
-    if state.ui.close_dialog {
+    if let Some(confirm) = &state.ui.job_confirm {
+        job_confirm_ui(ctx, confirm, commands);
+    } else if state.ui.close_dialog {
         close_dialog_ui(ctx, state, commands);
     } else if state.recovery_offer.is_some() {
         recovery_dialog_ui(ctx, state, commands);
@@ -205,6 +208,23 @@ fn close_dialog_ui(ctx: &egui::Context, state: &ViewerState, commands: &mut Vec<
             }
             if ui.button("Cancel").clicked() {
                 commands.push(Command::CloseDialog(CloseChoice::Cancel));
+            }
+        });
+    });
+}
+
+/// "Function f2 may not be contractive (bound 1.250). Ray-trace anyway?"
+fn job_confirm_ui(ctx: &egui::Context, confirm: &JobConfirm, commands: &mut Vec<Command>) {
+    egui::Modal::new(egui::Id::unique("nlifs_job_confirm")).show(ctx, |ui| {
+        ui.heading("May not be contractive");
+        ui.label(&confirm.question);
+        ui.small("The attractor may not exist: the picture can come out as flat colour fields.");
+        ui.horizontal(|ui| {
+            if ui.button("Continue").clicked() {
+                commands.push(Command::ConfirmJob(true));
+            }
+            if ui.button("Cancel").clicked() {
+                commands.push(Command::ConfirmJob(false));
             }
         });
     });

@@ -19,9 +19,10 @@ use crate::scene::spec::RenderSettings;
 use crate::shot::{Framing, Shot};
 use crate::splat::SplatView;
 
-use super::command::{Command, RaytraceForm, RecordForm};
+use super::command::{Command, JobConfirm, RaytraceForm, RecordForm};
 use super::framing;
 use super::picking::{self, FunctionGrid};
+use super::pointer::Button;
 
 /// The scene shown when the viewer starts without one (the paper's plant, table 4).
 pub const DEFAULT_SCENE: &str = include_str!("../../scenes/plant2.toml");
@@ -91,6 +92,8 @@ pub struct UiState {
     pub toast: Option<String>,
     /// The scene file changed on disk while there were unsaved edits: not reloaded.
     pub file_changed_on_disk: bool,
+    /// A job waiting for Continue / Cancel: a function may not be contractive.
+    pub job_confirm: Option<JobConfirm>,
 }
 
 /// Smoothed frame statistics.
@@ -216,6 +219,7 @@ impl ViewerState {
                 fullscreen: false,
                 toast: None,
                 file_changed_on_disk: false,
+                job_confirm: None,
             },
             camera_moved: false,
         };
@@ -290,6 +294,20 @@ impl ViewerState {
         lines
     }
 
+    /// "Function f2 may not be contractive (bound 1.250)." for every enabled function whose
+    /// Lipschitz bound is 1 or more at the current time, one sentence each; empty when none.
+    pub fn contractivity_doubts(&self) -> Vec<String> {
+        let Some(report) = &self.report else { return Vec::new() };
+        report
+            .functions
+            .iter()
+            .zip(&self.scene.functions)
+            .filter(|(_, spec)| spec.enabled)
+            .filter_map(|(f, _)| f.lipschitz_bound.filter(|&l| l >= 1.0).map(|l| (f, l)))
+            .map(|(f, l)| format!("Function {} may not be contractive (bound {l:.3}).", f.name))
+            .collect()
+    }
+
     /// The number of points a definition's containment is checked on (grid points, else the
     /// box corners).
     fn function_grid_len(&self, def: &crate::scene::spec::FunctionDef) -> Option<usize> {
@@ -299,6 +317,17 @@ impl ViewerState {
             FunctionDef::Builder { .. } => Some(self.scene.domain.points().len()),
             // The domain box's corners.
             _ => Some(1 << self.scene.domain.dimension()),
+        }
+    }
+
+    /// What a camera drag with `button` by (`dx_px`, `dy_px`) does: the left button orbits and
+    /// the others pan, except in a 2D scene, where the left button pans too (orbiting would only
+    /// tilt the plane away from the view).
+    pub fn camera_drag(&self, button: Button, dx_px: f32, dy_px: f32) -> Command {
+        if button == Button::Left && self.scene.domain.dimension() != 2 {
+            Command::Orbit { dx_px, dy_px }
+        } else {
+            Command::Pan { dx_px, dy_px }
         }
     }
 

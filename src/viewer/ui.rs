@@ -282,7 +282,23 @@ fn render_ui(ui: &mut egui::Ui, state: &ViewerState, commands: &mut Vec<Command>
                 commands.push(Command::FrameAttractor);
             }
         });
-        ui.small("left-drag: orbit · right/middle-drag: pan · wheel: zoom · F1: every key");
+        ui.horizontal(|ui| {
+            if ui
+                .button("Save view")
+                .on_hover_text("make this view the scene's camera (saved with the scene)")
+                .clicked()
+            {
+                commands.push(Command::SaveView);
+            }
+            let keyed = ui
+                .add_enabled(state.scene.timeline.is_some(), egui::Button::new("Key camera"))
+                .on_hover_text("key this view's camera at the playhead")
+                .on_disabled_hover_text("the scene has no timeline (add a key first)");
+            if keyed.clicked() {
+                commands.push(Command::KeyCamera);
+            }
+        });
+        ui.small("left-drag: orbit (pan in 2D) · right/middle-drag: pan · wheel: zoom · F1: every key");
     });
 }
 
