@@ -278,10 +278,23 @@ pub fn frames_to_render(rec: &Recorder, dir: &Path, frames: Range<u32>, resume: 
     frames_to_render_as(rec, dir, frames, resume, Format::Png)
 }
 
-/// [`frames_to_render`] for frames in `format`.
+/// [`frames_to_render`] for frames in `format`. A PNG frame is kept only when it is complete
+/// and was made of what would make it now: the fingerprint of the scene and settings in its
+/// text chunks ([`Recorder::provenance`]) equals this recording's, so a resumed sequence never
+/// mixes settings. (EXR frames carry no scene; they are checked for completeness only.)
 pub fn frames_to_render_as(rec: &Recorder, dir: &Path, frames: Range<u32>, resume: bool, format: Format) -> Vec<u32> {
     let s = rec.settings();
-    frames.filter(|&k| !(resume && is_complete_frame(&frame_path_as(dir, k, format), s.width, s.height))).collect()
+    let keep = |k: u32| {
+        let path = frame_path_as(dir, k, format);
+        is_complete_frame(&path, s.width, s.height) && (format == Format::Exr || made_by(&path, &rec.provenance(k)))
+    };
+    frames.filter(|&k| !(resume && keep(k))).collect()
+}
+
+/// The PNG at `path` carries `provenance`'s fingerprint (a frame of older nlifs, with no scene
+/// inside, does not).
+fn made_by(path: &Path, provenance: &Provenance) -> bool {
+    crate::output::png::scene_from_png(path).is_ok_and(|found| found.fingerprint() == provenance.fingerprint())
 }
 
 /// Renders frames `frames` into `dir`. With `resume`, frames already complete are kept; any

@@ -397,7 +397,7 @@ fn chunked_recording_equals_one_run() {
 fn resume_restores_deleted_and_truncated_frames() {
     let dir = temp_dir("resume");
     let scene_path = common::scene_path("twist-anim");
-    let run = |extra: &[&str]| {
+    let run_with = |points: &str, extra: &[&str]| {
         let out = common::nlifs_command()
             .arg("record")
             .arg(&scene_path)
@@ -413,7 +413,7 @@ fn resume_restores_deleted_and_truncated_frames() {
                 "--height",
                 "48",
                 "--points-per-frame",
-                "20000",
+                points,
                 "--backend",
                 "cpu",
             ])
@@ -423,6 +423,7 @@ fn resume_restores_deleted_and_truncated_frames() {
         assert!(out.status.success(), "nlifs record failed: {}", String::from_utf8_lossy(&out.stderr));
         String::from_utf8_lossy(&out.stderr).into_owned()
     };
+    let run = |extra: &[&str]| run_with("20000", extra);
     run(&[]);
     let original: Vec<Vec<u8>> = (0..4).map(|k| frame_bytes(&dir, k)).collect();
     std::fs::remove_file(record::frame_path(&dir, 1)).unwrap();
@@ -432,6 +433,16 @@ fn resume_restores_deleted_and_truncated_frames() {
     assert!(stderr.contains("2 of 4 frames already complete"), "{stderr}");
     for (k, bytes) in original.iter().enumerate() {
         assert_eq!(&frame_bytes(&dir, k as u32), bytes, "frame {k} after resume");
+    }
+    // A complete frame made with other settings is redone, not kept: the frames' fingerprints
+    // (scene and settings, in their text chunks) differ.
+    run_with("30000", &[]);
+    let denser: Vec<Vec<u8>> = (0..4).map(|k| frame_bytes(&dir, k)).collect();
+    let stderr = run(&["--resume"]);
+    assert!(stderr.contains("wrote 4 frames") && !stderr.contains("already complete"), "{stderr}");
+    for (k, bytes) in original.iter().enumerate() {
+        assert_eq!(&frame_bytes(&dir, k as u32), bytes, "frame {k} after resuming over other settings");
+        assert_ne!(&denser[k], bytes, "frame {k}: 30000 points should differ from 20000");
     }
     // No temporary files are left behind.
     let leftovers: Vec<_> = std::fs::read_dir(&dir)
