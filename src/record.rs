@@ -271,6 +271,8 @@ pub struct RecordReport {
     pub rendered: Vec<u32>,
     /// Complete frames left as they were (with `resume`).
     pub skipped: Vec<u32>,
+    /// Rendered 8-bit frames in which no point landed (all background).
+    pub empty: Vec<u32>,
 }
 
 /// The frames of `frames` that still need rendering (all of them unless `resume`).
@@ -331,17 +333,23 @@ pub fn record_as(
     }
     // `todo` is in increasing order, so a binary search keeps this linear-logarithmic.
     let skipped = frames.filter(|k| todo.binary_search(k).is_err()).collect();
+    let mut empty = Vec::new();
     for (n, &k) in todo.iter().enumerate() {
         let path = frame_path_as(dir, k, options.format);
         let provenance = rec.provenance(k);
         if options.is_plain_png() {
-            crate::output::png::save_rgb8(&path, &rec.frame(k)?, Some(&provenance))?;
+            let image = rec.frame(k)?;
+            let background = rec.scene.render_at(rec.time_of(k)).background;
+            if crate::scene::warnings::covered_pixels(&image, background) == 0 {
+                empty.push(k);
+            }
+            crate::output::png::save_rgb8(&path, &image, Some(&provenance))?;
         } else {
             crate::output::write_image(&path, &rec.frame_layers(k)?, options, Some(&provenance))?;
         }
         progress(n + 1, todo.len());
     }
-    Ok(RecordReport { rendered: todo, skipped })
+    Ok(RecordReport { rendered: todo, skipped, empty })
 }
 
 /// Removes temporary frame files (`.frame_00042.png.<pid>.tmp`) that a killed run left for

@@ -277,6 +277,28 @@ fn snapshot_says_when_no_ray_hit_the_attractor() {
     assert!(stderr(&o).contains("no ray hit"), "{}", stderr(&o));
 }
 
+#[test]
+fn render_and_record_say_when_no_point_landed() {
+    let dir = scratch("render-away");
+    let scene = dir.join("s.toml");
+    let away = format!("{SIERPINSKI}[camera]\ntarget = [1000, 1000, 1000]\ndistance = 1\n");
+    std::fs::write(&scene, format!("{away}[timeline]\nduration_secs = 1.0\n")).unwrap();
+    let png = dir.join("o.png");
+    let size = ["--width", "16", "--height", "12"];
+    let mut args = vec!["render", scene.to_str().unwrap(), "-o", png.to_str().unwrap(), "--points", "20000"];
+    args.extend(size);
+    let o = nlifs(&args);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    assert!(stderr(&o).contains("the picture is empty"), "{}", stderr(&o));
+    let frames = dir.join("frames");
+    let mut args = vec!["record", scene.to_str().unwrap(), "-o", frames.to_str().unwrap(), "--fps", "2"];
+    args.extend(size);
+    args.extend(["--points-per-frame", "20000"]);
+    let o = nlifs(&args);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    assert!(stderr(&o).contains("3 of 3 frames are empty"), "{}", stderr(&o));
+}
+
 // Family 9: no debris.
 
 #[test]

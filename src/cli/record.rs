@@ -140,6 +140,15 @@ pub fn record(args: RecordArgs) -> anyhow::Result<()> {
         report.rendered.len() as f64 / secs.max(1e-9),
         if report.skipped.is_empty() { String::new() } else { format!(", kept {} complete", report.skipped.len()) }
     );
+    if !report.empty.is_empty() {
+        eprintln!(
+            "warning: {} of {} frames are empty, no point of the attractor landed in them (first: frame {}); \
+             the camera looks away from it, or the IFS diverges (`nlifs info` shows its contractivity)",
+            report.empty.len(),
+            report.rendered.len(),
+            report.empty[0]
+        );
+    }
     if let Some(video) = &args.video {
         record::encode_video(&args.output, frames, args.fps, video)?;
         eprintln!("wrote {}", video.display());
