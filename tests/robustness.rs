@@ -155,6 +155,11 @@ fn output_path_errors_exit_2() {
         assert_eq!(o.status.code(), Some(2), "{out}: {}", stderr(&o));
         assert!(stderr(&o).contains("cannot write"), "{out}: {}", stderr(&o));
     }
+    // `render` writes through the image outputs: the same, and the reason said once.
+    let o = nlifs(&["render", scene.to_str().unwrap(), "-o", "/proc/nlifs-out.png", "--points", "1000"]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    let reason = "no file can be created there";
+    assert_eq!(stderr(&o).matches(reason).count(), 1, "{}", stderr(&o));
 }
 
 #[test]

@@ -82,7 +82,7 @@ pub fn main() -> ExitCode {
     match run(cli) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("error: {e:#}");
+            eprintln!("error: {}", message(&e));
             let bad_input = e.chain().any(|c| {
                 c.is::<BadInput>()
                     || c.downcast_ref::<nlifs::raytrace::RaytraceError>().is_some_and(|e| e.is_bad_input())
@@ -95,6 +95,22 @@ pub fn main() -> ExitCode {
             ExitCode::from(if bad_input { 2 } else { 1 })
         }
     }
+}
+
+/// The error and its causes joined by ": ", each said once: a library error that already
+/// quotes its source (`cannot write x: <why>`) is not followed by that source again.
+fn message(e: &anyhow::Error) -> String {
+    let mut text = String::new();
+    for cause in e.chain().map(|c| c.to_string()) {
+        if text.contains(&cause) {
+            continue;
+        }
+        if !text.is_empty() {
+            text.push_str(": ");
+        }
+        text.push_str(&cause);
+    }
+    text
 }
 
 fn run(cli: Cli) -> anyhow::Result<()> {
