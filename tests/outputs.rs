@@ -154,6 +154,15 @@ fn pngs_carry_their_scene() {
     let (copy, t_secs) = nlifs::output::png::extract_scene(&png, &dir).unwrap();
     assert_eq!((copy.file_name().unwrap().to_str(), t_secs), (Some("p.scene.toml"), 0.25));
     assert_eq!(nlifs::scene::Scene::load(&copy).unwrap().to_toml(), common::load_scene("plant2").to_toml());
+    // `nlifs info` reads the scene inside; a PNG without one is bad input.
+    let out = common::run_nlifs(&["info", s(&png)]);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(stdout.contains("scene inside") && stdout.contains("t = 0.25 s"), "{stdout}");
+    let bare = dir.join("bare.png");
+    image::RgbImage::new(4, 4).save(&bare).unwrap();
+    let err = nlifs(&["info", s(&bare)], 2);
+    assert!(err.contains("no embedded scene"), "{err}");
     // nlifs's chunks come before the pixels.
     let bytes = std::fs::read(&png).unwrap();
     assert_eq!(text_chunks(&bytes, &png).unwrap()[0].0, SCENE_KEYWORD);

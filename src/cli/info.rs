@@ -26,7 +26,14 @@ fn fmt_opt(v: Option<f64>) -> String {
 }
 
 pub fn info(args: InfoArgs) -> anyhow::Result<()> {
-    let scene = load(&args.scene)?;
+    // A PNG that nlifs wrote carries its scene (output::png): its info is that scene's.
+    let scene = if nlifs::output::png::is_png(&args.scene) {
+        let (scene, t_secs) = nlifs::output::png::load_scene_or_png(&args.scene).map_err(super::image_args::bad)?;
+        println!("scene inside {} (the image was made at t = {t_secs} s)", args.scene.display());
+        scene
+    } else {
+        load(&args.scene)?
+    };
     let ifs = scene.at(args.time);
     let report: IfsReport = ifs.report();
     // Sampled along the whole timeline, for animated scenes.

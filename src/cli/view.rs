@@ -61,8 +61,19 @@ impl From<ChaosBackendArg> for ChaosBackend {
 pub fn view(args: ViewArgs) -> anyhow::Result<()> {
     // A missing or bad scene is an error like in every other command (exit 2, located), not
     // the default scene with the error in a panel: the window opens only on a scene that reads.
+    let mut args = args;
     if let Some(path) = &args.scene {
-        nlifs::scene::Scene::load(path)?;
+        if nlifs::output::png::is_png(path) {
+            // A PNG that nlifs wrote: its scene is written out as a TOML file of its own (in the
+            // temporary folder, so that nothing next to the image is overwritten and a save never
+            // writes over the image) and opened from there.
+            let (toml, t_secs) =
+                nlifs::output::png::extract_scene(path, &std::env::temp_dir()).map_err(super::image_args::bad)?;
+            eprintln!("opened the scene inside {} (made at t = {t_secs} s) as {}", path.display(), toml.display());
+            args.scene = Some(toml);
+        } else {
+            nlifs::scene::Scene::load(path)?;
+        }
     }
     let mut live = nlifs::live::LiveSettings::default();
     if let Some(n) = args.points {
