@@ -304,6 +304,26 @@ fn render_and_record_say_when_no_point_landed() {
     assert!(stderr(&o).contains("3 of 3 frames are empty"), "{}", stderr(&o));
 }
 
+#[test]
+fn a_closed_pipe_ends_quietly() {
+    use std::io::Read;
+    // `nlifs info scene | head -1`: the reader goes away after the first bytes; nlifs must end
+    // as Unix tools do (SIGPIPE), not panic in println!. (info computes its report between
+    // its first lines and the rest, so the later lines meet the closed pipe.)
+    let mut child = Command::new(env!("CARGO_BIN_EXE_nlifs"))
+        .args(["info", concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/plant2.toml")])
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut first = [0u8; 1];
+    child.stdout.take().unwrap().read_exact(&mut first).unwrap();
+    let out = child.wait_with_output().unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!err.contains("panicked"), "{err}");
+    assert_ne!(out.status.code(), Some(101), "{err}");
+}
+
 // Family 9: no debris.
 
 #[test]

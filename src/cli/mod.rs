@@ -70,6 +70,7 @@ struct BadInput(String);
 /// Parses the command line and runs it: exit code 0 on success, 2 for bad input (arguments,
 /// scene files, geometry the ray tracer refuses), 1 for anything else.
 pub fn main() -> ExitCode {
+    quiet_on_closed_pipe();
     env_logger::Builder::from_env(env_logger::Env::default().default_filter_or("warn")).init();
     let cli = match Cli::try_parse() {
         Ok(cli) => cli,
@@ -94,6 +95,19 @@ pub fn main() -> ExitCode {
             });
             ExitCode::from(if bad_input { 2 } else { 1 })
         }
+    }
+}
+
+/// `nlifs info scene.toml | head` ends quietly when `head` closes the pipe, as Unix tools do,
+/// instead of panicking in `println!`: Rust ignores SIGPIPE by default, so writes fail with
+/// EPIPE; the default action ends the process at the first write to a closed pipe.
+fn quiet_on_closed_pipe() {
+    #[cfg(unix)]
+    // SAFETY: called first thing in main, before any thread exists; SIG_DFL is a valid action
+    // for SIGPIPE and `signal` has no other precondition.
+    #[expect(unsafe_code, reason = "restoring a signal's default action has no safe wrapper in std")]
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
     }
 }
 

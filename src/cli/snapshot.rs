@@ -4,10 +4,10 @@
 use std::path::PathBuf;
 use std::sync::atomic::AtomicBool;
 
-use anyhow::Context;
 use clap::{Args, ValueEnum};
 
-use nlifs::io::save_png;
+use nlifs::output::Provenance;
+use nlifs::output::png::save_rgb8;
 use nlifs::raytrace::{self, ColorMode, RaytraceSettings};
 
 use super::args::{GeometryArgs, check_png, hex_color, positive_pixels};
@@ -89,7 +89,19 @@ pub fn snapshot(args: SnapshotArgs) -> anyhow::Result<()> {
     let cancel = AtomicBool::new(false);
     let traced = raytrace::render(&scene, args.geometry.time, None, &settings, &|d, _| bar.set_position(d), &cancel)?;
     bar.finish_and_clear();
-    save_png(&args.output, &traced.image).with_context(|| format!("cannot write {}", args.output.display()))?;
+    // The scene and the tracer's settings ride in the PNG, as in every image nlifs writes.
+    let made_of = serde_json::json!({
+        "width": args.width,
+        "height": args.height,
+        "spp": args.spp,
+        "depth": args.geometry.depth,
+        "adaptive": args.adaptive,
+        "stop_pixels": args.stop_pixels,
+        "shadows": !args.no_shadows,
+        "ground": !args.no_ground,
+    });
+    let provenance = Provenance::for_command(&scene, args.geometry.time, "snapshot", made_of);
+    save_rgb8(&args.output, &traced.image, Some(&provenance)).map_err(super::image_args::bad)?;
     if traced.stats.leaf_hits == 0 {
         eprintln!(
             "warning: the picture shows no part of W^{}(A): no ray hit it (the camera looks away from it)",
