@@ -439,3 +439,39 @@ fn check_viewer(chaos_backend: Option<&str>) {
     drop(viewer);
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn viewer_screenshot_carries_the_scene_and_reopens() {
+    if !have("Xvfb") {
+        return common::skip("window test: Xvfb is not installed");
+    }
+    if !nlifs::gpu::adapter_available() {
+        return common::skip("window test: no GPU adapter");
+    }
+    let dir: PathBuf = common::temp_dir("window-screenshot");
+    let (display, runtime, _xvfb) = start_xvfb(&dir);
+    let run = |scene: &Path, png: &Path| {
+        let status = common::nlifs_command()
+            .arg("view")
+            .arg(scene)
+            .args(["--points", "65536", "--exit-after-secs", "3", "--screenshot"])
+            .arg(png)
+            .env("DISPLAY", &display)
+            .env("XDG_RUNTIME_DIR", &runtime)
+            .env("XDG_STATE_HOME", dir.join("state"))
+            .env("LIBGL_ALWAYS_SOFTWARE", "1")
+            .stdout(Stdio::null())
+            .status()
+            .expect("run the viewer");
+        assert!(status.success(), "nlifs view {} exited with {status}", scene.display());
+    };
+    let first = dir.join("first.png");
+    run(&common::scene_path("twisting"), &first);
+    let inside = nlifs::output::png::scene_from_png(&first).expect("the screenshot carries its scene");
+    assert_eq!(inside.scene("screenshot").unwrap().name, common::load_scene("twisting").name);
+    // The screenshot opens as its scene, and shows the attractor again.
+    let second = dir.join("second.png");
+    run(&first, &second);
+    let img = image::open(&second).unwrap().to_rgb8();
+    assert!(non_background_fraction(&img) > 0.02, "reopened screenshot shows too little");
+}

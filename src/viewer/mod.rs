@@ -382,8 +382,8 @@ impl ApplicationHandler for App {
             if let (Some(path), Some(gfx)) = (&self.options.screenshot, &mut self.gfx) {
                 match gfx.live.snapshot(&gfx.ctx) {
                     Ok(image) => {
-                        if let Err(e) = crate::io::save_png(path, &image) {
-                            eprintln!("cannot write {}: {e}", path.display());
+                        if let Err(e) = save_screenshot(&self.state, path, &image) {
+                            eprintln!("{e}");
                         }
                     }
                     Err(e) => eprintln!("screenshot failed: {e}"),
@@ -496,9 +496,9 @@ impl App {
         gfx.live.set_camera(&self.state.camera);
         if let Some(path) = changes.screenshot {
             let message = match gfx.live.snapshot(&gfx.ctx) {
-                Ok(image) => match crate::io::save_png(&path, &image) {
+                Ok(image) => match save_screenshot(&self.state, &path, &image) {
                     Ok(()) => format!("saved {}", path.display()),
-                    Err(e) => format!("cannot write {}: {e}", path.display()),
+                    Err(e) => e.to_string(),
                 },
                 Err(e) => format!("screenshot failed: {e}"),
             };
@@ -627,4 +627,25 @@ fn view_pixels(rect: egui::Rect, ppp: f32, window_px: [u32; 2]) -> ([u32; 2], [u
     let x1 = ((rect.max.x * ppp).round().max(0.0) as u32).clamp(x0 + 1, w);
     let y1 = ((rect.max.y * ppp).round().max(0.0) as u32).clamp(y0 + 1, h);
     ([x0, y0], [x1 - x0, y1 - y0])
+}
+
+/// Writes a screenshot of the view with the scene, time and live settings inside (as every PNG
+/// nlifs writes), so that `nlifs view` reopens it.
+fn save_screenshot(
+    state: &ViewerState,
+    path: &std::path::Path,
+    image: &image::RgbImage,
+) -> Result<(), crate::output::OutputError> {
+    let live = &state.live;
+    let settings = serde_json::json!({
+        "width": image.width(),
+        "height": image.height(),
+        "points_per_frame": live.point_count,
+        "steps_per_frame": live.steps_per_frame,
+        "seed": live.seed,
+        "shading": live.shading,
+        "occlusion": live.occlusion,
+    });
+    let provenance = crate::output::Provenance::for_command(&state.scene, state.t_secs, "view", settings);
+    crate::output::png::save_rgb8(path, image, Some(&provenance))
 }
