@@ -337,25 +337,7 @@ fn check_viewer(chaos_backend: Option<&str>) {
     }
     let label = chaos_backend.unwrap_or("auto");
     let dir: PathBuf = common::temp_dir(&format!("window-smoke-{label}"));
-    let runtime = dir.join("xdg");
-    std::fs::create_dir_all(&runtime).unwrap();
-    #[cfg(unix)]
-    {
-        use std::os::unix::fs::PermissionsExt;
-        std::fs::set_permissions(&runtime, std::fs::Permissions::from_mode(0o700)).unwrap();
-    }
-
-    // Xvfb picks a free display and writes its number to stdout (-displayfd 1).
-    let mut xvfb = Command::new("Xvfb")
-        .args(["-displayfd", "1", "-screen", "0", "1280x720x24", "-nolisten", "tcp"])
-        .stdout(Stdio::piped())
-        .stderr(Stdio::null())
-        .spawn()
-        .expect("start Xvfb");
-    let mut line = String::new();
-    BufReader::new(xvfb.stdout.take().unwrap()).read_line(&mut line).unwrap();
-    let _xvfb = Guard(xvfb);
-    let display = format!(":{}", line.trim());
+    let (display, runtime, _xvfb) = start_xvfb(&dir);
 
     let scene = common::scene_path("plant2");
     let viewer = common::nlifs_command()
