@@ -28,6 +28,9 @@ pub struct ViewArgs {
     /// Start with the grid overlay (initial and transformed grids) shown.
     #[arg(long)]
     grid: bool,
+    /// Start with the nesting view W^K of the grid box shown (the paper's plates 5 and 7).
+    #[arg(long, value_name = "K")]
+    nesting: Option<u32>,
     /// Start playing the timeline.
     #[arg(long)]
     play: bool,
@@ -92,6 +95,7 @@ pub fn view(args: ViewArgs) -> anyhow::Result<()> {
         exit_after_secs: args.exit_after_secs,
         screenshot: args.screenshot,
         grid_overlay: args.grid,
+        nesting_level: args.nesting,
         play: args.play,
         log_fps: args.log_fps,
     };

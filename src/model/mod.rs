@@ -6,6 +6,7 @@
 
 pub mod builder;
 pub mod grid;
+pub mod nesting;
 
 use glam::{DMat3, DVec3};
 pub use grid::{GridMap, RectGrid};

@@ -358,6 +358,7 @@ impl ViewerState {
                 Command::SetShortcutsShown(shown) => self.ui.shortcuts_shown = shown,
                 Command::SetFullscreen(on) => self.ui.fullscreen = on,
                 Command::SetToast(toast) => self.ui.toast = toast,
+                Command::SetNestingView(nesting) => self.nesting = nesting,
                 Command::AddFunction | Command::DuplicateFunction(_) | Command::DeleteFunction(_) => {
                     edited |= self.edit_functions(&command);
                 }

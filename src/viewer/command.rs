@@ -127,6 +127,8 @@ pub enum Command {
     SetShortcutsShown(bool),
     SetFullscreen(bool),
     SetToast(Option<String>),
+    /// Shows or hides the W^k nesting view, its level and its fill.
+    SetNestingView(NestingView),
 
     // Functions.
     /// Adds an affine function (a copy of the domain scaled by ½ about its centre).
@@ -263,4 +265,15 @@ impl Default for RecordForm {
     fn default() -> Self {
         Self { width: 480, height: 360, fps: 24.0, points_per_frame: 500_000, dir_text: "nlifs-record".into() }
     }
+}
+
+/// The nesting view of the paper's plates 5 and 7: W^k of the grid box over the points
+/// (`crate::model::nesting`), as outlines or translucent faces.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub struct NestingView {
+    pub shown: bool,
+    /// k in W^k (0: the grid box itself).
+    pub level: u32,
+    /// Faces filled faintly, not only outlined.
+    pub translucent: bool,
 }

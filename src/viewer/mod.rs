@@ -29,6 +29,7 @@ pub mod grid_edit_ui;
 mod input;
 pub mod jobs;
 pub mod jobs_ui;
+pub mod nesting_ui;
 pub mod overlay_ui;
 pub mod picking;
 pub mod pointer;
@@ -58,6 +59,7 @@ use input::{pointer_button, pointer_context};
 use pointer::{PointerEvent, PointerRouter, Route};
 
 pub use command::Command;
+use command::NestingView;
 pub use state::ViewerState;
 
 #[derive(Debug, thiserror::Error)]
@@ -82,6 +84,8 @@ pub struct ViewerOptions {
     pub screenshot: Option<PathBuf>,
     /// Start with the grid overlay shown.
     pub grid_overlay: bool,
+    /// Start with the nesting view at this level.
+    pub nesting_level: Option<u32>,
     /// Start playing the timeline (if the scene has one).
     pub play: bool,
     /// Print frames per second, process CPU per frame and the wall time of each stage of a
@@ -98,6 +102,11 @@ pub fn run(options: ViewerOptions) -> Result<(), ViewerError> {
     }
     state.apply([
         Command::SetGridOverlay(options.grid_overlay),
+        Command::SetNestingView(NestingView {
+            shown: options.nesting_level.is_some(),
+            level: options.nesting_level.unwrap_or(1),
+            translucent: false,
+        }),
         Command::SetPlaying(options.play),
         Command::SetRecoveryDir(recovery::recovery_dir()),
     ]);

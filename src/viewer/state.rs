@@ -19,7 +19,7 @@ use crate::scene::spec::RenderSettings;
 use crate::shot::{Framing, Shot};
 use crate::splat::SplatView;
 
-use super::command::{Command, JobConfirm, RaytraceForm, RecordForm};
+use super::command::{Command, JobConfirm, NestingView, RaytraceForm, RecordForm};
 use super::framing;
 use super::picking::{self, FunctionGrid};
 use super::pointer::Button;
@@ -164,6 +164,8 @@ pub struct ViewerState {
     pub ui: UiState,
     /// The user moved the camera since it was last framed: a resize keeps it.
     pub camera_moved: bool,
+    /// The W^k nesting view drawn over the points.
+    pub nesting: NestingView,
 }
 
 pub(super) fn mtime(path: &Path) -> Option<SystemTime> {
@@ -222,6 +224,7 @@ impl ViewerState {
                 job_confirm: None,
             },
             camera_moved: false,
+            nesting: NestingView { shown: false, level: 1, translucent: false },
         };
         state.edit.save_text = state.default_save_text();
         state.live.seed = state.scene.render.seed;

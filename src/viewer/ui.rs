@@ -38,6 +38,7 @@ pub fn panels_ui(
             scene_ui(ui, state, commands);
             functions_ui(ui, state, commands);
             super::grid_edit_ui::grid_edit_ui(ui, state, commands);
+            super::nesting_ui::nesting_ui(ui, state, commands);
             builder_ui(ui, state, commands);
             render_ui(ui, state, commands);
             statistics_ui(ui, state);
@@ -54,6 +55,7 @@ pub fn panels_ui(
     // The overlay is clipped to what the panels leave of the view.
     let view_rect = ui.available_rect_before_wrap();
     super::grid_edit_ui::grid_overlay_ui(ui.ctx(), view_rect, state, ppp);
+    super::nesting_ui::nesting_overlay_ui(ui.ctx(), view_rect, state, ppp);
     super::jobs_ui::raytrace_window_ui(ui.ctx(), jobs, commands);
     super::overlay_ui::overlays_ui(ui.ctx(), view_rect, state, commands);
     view_rect
