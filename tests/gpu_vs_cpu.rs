@@ -270,3 +270,241 @@ fn cpu_route_densities_match_gpu_route() {
     );
     eprintln!("CPU route vs GPU route: {n_gpu} / {n_cpu} samples, worst |Δ|/tolerance {worst:.3}");
 }
+
+// ---------------------------------------------------------------------------------------------
+// The GPU recorder (`record --backend gpu`) against the CPU recorder.
+
+use nlifs::record::{self, RecordSettings, Recorder};
+
+/// twist-anim (3D, an orbiting camera) drawn in density mode without depth cue, so that a
+/// pixel's count is its density.
+fn density_scene() -> Scene {
+    let mut scene = common::load_scene("twist-anim");
+    scene.render.mode = SplatMode::Density;
+    scene.render.depth_cue = 0.0;
+    scene
+}
+
+fn record_settings(scene: &Scene) -> RecordSettings {
+    RecordSettings {
+        fps: 3.0,
+        width: 160,
+        height: 120,
+        points_per_frame: Some(400_000),
+        motion_blur_samples: 2,
+        shutter: 1.0,
+        ..RecordSettings::for_scene(scene)
+    }
+}
+
+/// Every temporal sample of a GPU-recorded frame has the densities of the CPU recorder's same
+/// sample (same time, camera, bounds and view) within 6σ on a coarse grid, the tolerance derived
+/// from the sample counts and orbit lengths as in `densities_match_cpu`.
+#[test]
+fn gpu_recorder_densities_match_cpu_recorder() {
+    let Some(ctx) = gpu() else { return };
+    let scene = density_scene();
+    let settings = record_settings(&scene);
+    let points = settings.points_per_frame.unwrap().div_ceil(2);
+    let cpu = Recorder::new(&scene, settings.clone()).unwrap();
+    let gpu = Recorder::new(&scene, settings.clone()).unwrap().on_gpu(ctx).unwrap();
+    let cells = (16usize, 12usize);
+    let (w, h) = (settings.width as usize, settings.height as usize);
+    for frame in [1u32, 5] {
+        let a = cpu.sample_framebuffers(frame).unwrap();
+        let b = gpu.sample_framebuffers(frame).unwrap();
+        assert_eq!(a.len(), 2);
+        assert_eq!(b.len(), 2);
+        for (s, ((fa, sa), (fb, sb))) in a.iter().zip(&b).enumerate() {
+            assert_eq!((sa.t_secs, sa.camera, sa.stream), (sb.t_secs, sb.camera, sb.stream), "sample {s}");
+            assert_eq!(fa.view.pixel_from_world, fb.view.pixel_from_world);
+            let counts = |fb: &Framebuffer| -> Vec<u32> { fb.accum.iter().map(|a| a[3]).collect() };
+            let (ca, cb) = (counts(fa), counts(fb));
+            let (na, nb) = (ca.iter().map(|&c| c as f64).sum::<f64>(), cb.iter().map(|&c| c as f64).sum::<f64>());
+            // Most points land on screen (the camera frames the timeline's bounds).
+            assert!(na > 0.5 * points as f64 && nb > 0.5 * points as f64, "{na} / {nb} of {points} on screen");
+            let k_cpu = nlifs::chaos_game::ChunkPlan::new(points).unwrap().steps(0) as f64;
+            let k_gpu = nlifs::gpu::batch::BatchPlan::new(points).steps_per_thread as f64;
+            let worst = assert_densities_agree(
+                &format!("recorder frame {frame} sample {s}"),
+                &Density {
+                    label: "GPU recorder",
+                    density: &coarse_density(&cb, w, h, cells),
+                    samples: nb,
+                    steps_per_orbit: k_gpu,
+                },
+                &Density {
+                    label: "CPU recorder",
+                    density: &coarse_density(&ca, w, h, cells),
+                    samples: na,
+                    steps_per_orbit: k_cpu,
+                },
+                cells,
+            );
+            eprintln!("recorder frame {frame} sample {s}: {nb} GPU / {na} CPU samples, worst |Δ|/tolerance {worst:.3}");
+        }
+    }
+}
+
+/// Two GPU recordings of the same frames (separate recorders and GPU contexts, as two runs
+/// make them) have the same bytes, closest mode with the solid look and density mode; a
+/// resumed GPU run keeps them and a CPU run over them redoes them (their fingerprints say GPU).
+#[test]
+fn gpu_recordings_are_reproducible_byte_for_byte() {
+    if gpu().is_none() {
+        return;
+    }
+    for (label, scene) in [("closest", common::load_scene("twist-anim")), ("density", density_scene())] {
+        let settings = RecordSettings { points_per_frame: Some(300_000), ..record_settings(&scene) };
+        let dirs = [common::temp_dir(&format!("gpu-rec-a-{label}")), common::temp_dir(&format!("gpu-rec-b-{label}"))];
+        for dir in &dirs {
+            let rec = Recorder::new(&scene, settings.clone()).unwrap().on_gpu(gpu().unwrap()).unwrap();
+            let report = record::record(&rec, dir, 0..3, false, &mut |_, _| {}).unwrap();
+            assert_eq!(report.rendered, vec![0, 1, 2]);
+            assert!(report.empty.is_empty(), "{label}: empty frames {:?}", report.empty);
+        }
+        for k in 0..3 {
+            let a = std::fs::read(record::frame_path(&dirs[0], k)).unwrap();
+            let b = std::fs::read(record::frame_path(&dirs[1], k)).unwrap();
+            assert!(a == b, "{label}: frame {k} differs between two GPU recordings");
+        }
+        let rec = Recorder::new(&scene, settings.clone()).unwrap().on_gpu(gpu().unwrap()).unwrap();
+        assert_eq!(record::frames_to_render(&rec, &dirs[0], 0..3, true), Vec::<u32>::new(), "{label}: GPU resume");
+        let cpu = Recorder::new(&scene, settings.clone()).unwrap();
+        assert_eq!(record::frames_to_render(&cpu, &dirs[0], 0..3, true), vec![0, 1, 2], "{label}: CPU over GPU frames");
+        for dir in &dirs {
+            let _ = std::fs::remove_dir_all(dir);
+        }
+    }
+}
+
+/// `nlifs record --backend gpu` writes frames and says the adapter; `--backend auto` on a
+/// software adapter takes the CPU and says so, and then writes the CPU recorder's bytes.
+#[test]
+fn record_cli_backends() {
+    let Some(ctx) = gpu() else { return };
+    let software = nlifs::gpu::batch::is_software(&ctx);
+    let scene = common::scene_path("twist-anim");
+    let run = |backend: &str, dir: &std::path::Path| {
+        let out = common::run_nlifs(&[
+            "record",
+            scene.to_str().unwrap(),
+            "-o",
+            dir.to_str().unwrap(),
+            "--frames",
+            "0..2",
+            "--fps",
+            "3",
+            "--width",
+            "64",
+            "--height",
+            "48",
+            "--points-per-frame",
+            "20000",
+            "--backend",
+            backend,
+        ]);
+        let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
+        assert!(out.status.success(), "record --backend {backend}: {stderr}");
+        stderr
+    };
+    let dirs: Vec<_> = ["cpu", "gpu", "auto"].iter().map(|b| common::temp_dir(&format!("rec-cli-{b}"))).collect();
+    let stderr_cpu = run("cpu", &dirs[0]);
+    assert!(stderr_cpu.contains("chaos game on the CPU"), "{stderr_cpu}");
+    let stderr_gpu = run("gpu", &dirs[1]);
+    assert!(stderr_gpu.contains("chaos game on the GPU"), "{stderr_gpu}");
+    let stderr_auto = run("auto", &dirs[2]);
+    let same_as = |dir: &std::path::Path| {
+        (0..2).all(|k| {
+            std::fs::read(record::frame_path(dir, k)).unwrap()
+                == std::fs::read(record::frame_path(&dirs[2], k)).unwrap()
+        })
+    };
+    if software {
+        assert!(stderr_auto.contains("software rasterizer"), "{stderr_auto}");
+        assert!(same_as(&dirs[0]), "auto on a software adapter should write the CPU recorder's frames");
+    } else {
+        assert!(stderr_auto.contains("chaos game on the GPU"), "{stderr_auto}");
+        assert!(same_as(&dirs[1]), "auto on a hardware adapter should write the GPU recorder's frames");
+    }
+    for dir in &dirs {
+        let _ = std::fs::remove_dir_all(dir);
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// `render --backend gpu` in batches.
+
+/// A GPU still of many points runs in several timed batches and keeps the CPU render's
+/// densities (6σ on a coarse grid, orbits of the batch plan's length on the GPU side).
+#[test]
+fn batched_gpu_render_densities_match_cpu_render() {
+    let Some(ctx) = gpu() else { return };
+    let mut scene = scene("plant2", false);
+    scene.render.mode = SplatMode::Density;
+    scene.render.depth_cue = 0.0;
+    let points = 6_000_000u64;
+    let settings = nlifs::scene::spec::RenderSettings { width: 160, height: 120, points, ..scene.render.clone() };
+    let shot = nlifs::shot::Shot::prepare(&scene, 0.0, &settings, nlifs::shot::Framing::Fit, None).unwrap();
+    let gpu = nlifs::gpu::render::render_gpu(&ctx, &shot).unwrap();
+    let plan = nlifs::gpu::batch::BatchPlan::new(points);
+    assert_eq!(gpu.stats.splats, plan.splats());
+    // The first batch splats 2^20 points, so this many points take more than one.
+    assert!(gpu.stats.batches >= 2, "{:?}", gpu.stats);
+    let cpu = nlifs::render::render_cpu(&shot, &|_, _| {});
+    let counts = |fb: &Framebuffer| -> Vec<u32> { fb.accum.iter().map(|a| a[3]).collect() };
+    let (cg, cc) = (counts(&gpu.framebuffer), counts(&cpu.framebuffer));
+    let (ng, nc) = (cg.iter().map(|&c| c as f64).sum::<f64>(), cc.iter().map(|&c| c as f64).sum::<f64>());
+    assert!(ng > 0.9 * points as f64 && nc > 0.9 * points as f64, "{ng} / {nc} of {points} on screen");
+    let cells = (16usize, 12usize);
+    let worst = assert_densities_agree(
+        "batched GPU render",
+        &Density {
+            label: "GPU",
+            density: &coarse_density(&cg, 160, 120, cells),
+            samples: ng,
+            steps_per_orbit: plan.steps_per_thread as f64,
+        },
+        &Density {
+            label: "CPU",
+            density: &coarse_density(&cc, 160, 120, cells),
+            samples: nc,
+            steps_per_orbit: shot.plan.steps(0) as f64,
+        },
+        cells,
+    );
+    eprintln!("batched GPU render: {:?}, worst |Δ|/tolerance {worst:.3}", gpu.stats);
+}
+
+/// An image whose accumulation exceeds what the device binds is refused before any GPU buffer
+/// is made: exit 2, the size in the message, no file.
+#[test]
+fn gpu_render_past_the_device_limits_is_bad_input() {
+    let Some(ctx) = gpu() else { return };
+    let limits = ctx.device.limits();
+    let limit = limits.max_storage_buffer_binding_size.min(limits.max_buffer_size);
+    // 16 bytes a pixel: 16384² needs 4 GiB, past any 32-bit binding.
+    assert!(16 * 16384u64 * 16384 > limit, "this adapter binds {limit} bytes");
+    let dir = common::temp_dir("gpu-too-large");
+    let out = dir.join("big.png");
+    let scene = common::scene_path("plant2");
+    let run = common::run_nlifs(&[
+        "render",
+        scene.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+        "--backend",
+        "gpu",
+        "--width",
+        "16384",
+        "--height",
+        "16384",
+        "--points",
+        "1000",
+    ]);
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert_eq!(run.status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains("16384×16384") && stderr.contains("--backend cpu"), "{stderr}");
+    assert!(!out.exists());
+    let _ = std::fs::remove_dir_all(&dir);
+}
