@@ -3,8 +3,9 @@
 //! EXR, alpha) serve GPU renders and GPU-recorded frames alike.
 //!
 //! The shot's points are split by a [`BatchPlan`]: `threads` persistent GPU points, each advanced
-//! `steps_per_thread` steps after the transient, in batches of at most `steps_per_batch` steps,
-//! one queue submission each, so that no submission runs long enough to trip a driver watchdog.
+//! through its transient (not splatted) and then `steps_per_thread` splatted steps, in batches
+//! of a bounded number of steps, one queue submission each, so that no submission runs long
+//! enough to trip a driver watchdog.
 //! Batch `b` of a shot draws from the GPU streams `(batch_seed(seed, b), shot.stream, thread)`:
 //! the shot's stream is the chaos game's `frame` argument as on the CPU, and the accumulation
 //! (a minimum of keys, sums of integers) does not depend on the order of the splats, so the
@@ -35,9 +36,9 @@ pub const MAX_BATCH_THREADS: u64 = 1 << 20;
 /// Splats every thread makes at least, when the shot has that many points: the transient each
 /// thread runs first is paid once per thread.
 pub const MIN_STEPS_PER_THREAD: u64 = 16;
-/// Splats of one batch with fixed sizing.
+/// Point steps (splatted or transient) of one batch with fixed sizing.
 pub const FIXED_BATCH_SPLATS: u64 = 1 << 23;
-/// Splats of the first, measuring batch with timed sizing.
+/// Point steps of the first, measuring batch with timed sizing.
 pub const FIRST_TIMED_BATCH_SPLATS: u64 = 1 << 20;
 /// What a timed batch aims at: well under the 2 s after which Windows resets a GPU, and under
 /// the few hundred milliseconds a desktop stays usable for.
@@ -65,7 +66,8 @@ impl BatchPlan {
         self.threads as u64 * self.steps_per_thread
     }
 
-    /// Steps of a fixed-size batch ([`FIXED_BATCH_SPLATS`] splats, at least one step).
+    /// Steps of a fixed-size batch (of every thread: [`FIXED_BATCH_SPLATS`] point steps in all,
+    /// at least one step).
     pub fn fixed_batch_steps(&self) -> u64 {
         (FIXED_BATCH_SPLATS / self.threads as u64).max(1)
     }
@@ -117,7 +119,10 @@ impl GpuSplatter {
         game.resize(&ctx.device, width, height);
         game.set_point_count(&ctx.device, plan.threads);
         game.set_ifs(&ctx.device, &ctx.queue, &shot.compiled);
-        let transient = shot.compiled.transient;
+        // Every thread runs its transient (not splatted), then its splatted steps; batches cut
+        // this sequence anywhere, the transient included, so no batch outgrows its size.
+        let transient = shot.compiled.transient as u64;
+        let total = transient + plan.steps_per_thread;
         let mut stats = BatchStats::default();
         let mut done = 0u64;
         let mut steps = match self.sizing {
@@ -125,22 +130,22 @@ impl GpuSplatter {
             BatchSizing::Timed => (FIRST_TIMED_BATCH_SPLATS / plan.threads as u64).max(1),
         };
         let start = Instant::now();
-        while done < plan.steps_per_thread {
-            steps = steps.min(plan.steps_per_thread - done).min(u32::MAX as u64 - transient as u64);
+        while done < total {
+            steps = steps.clamp(1, total - done).min(u32::MAX as u64);
             let first = stats.batches == 0;
-            let skip = if first { transient } else { 0 };
             let args = FrameArgs {
                 view: &shot.view,
                 seed: batch_seed(shot.settings.seed, stats.batches),
                 frame: shot.stream,
-                steps: skip + steps as u32,
-                skip_steps: skip,
+                steps: steps as u32,
+                skip_steps: transient.saturating_sub(done).min(steps) as u32,
                 restart: first,
                 clear: first,
             };
-            let batch_start = Instant::now();
             let mut encoder = ctx.device.create_command_encoder(&Default::default());
+            // Encoding may build the pipeline (first use): not part of the submission's time.
             game.encode(&ctx.device, &ctx.queue, &mut encoder, &args);
+            let batch_start = Instant::now();
             let submission = ctx.queue.submit([encoder.finish()]);
             ctx.device
                 .poll(wgpu::PollType::Wait { submission_index: Some(submission), timeout: None })
@@ -150,9 +155,9 @@ impl GpuSplatter {
             stats.batches += 1;
             done += steps;
             if self.sizing == BatchSizing::Timed {
-                // Map steps per second (the transient's too), so the next batch takes the target.
-                let rate = plan.threads as f64 * (skip as f64 + steps as f64) / secs.max(1e-6);
-                steps = ((rate * TARGET_BATCH_SECS / plan.threads as f64) as u64).max(1);
+                // Steps per second of every thread, so that the next batch takes the target.
+                let rate = steps as f64 / secs.max(1e-6);
+                steps = (rate * TARGET_BATCH_SECS) as u64;
             }
         }
         stats.secs = start.elapsed().as_secs_f64();
