@@ -12,10 +12,11 @@
 //! framebuffer is a pure function of the shot and the plan on one adapter.
 //!
 //! Two ways of sizing the batches:
-//! - fixed ([`BatchPlan::fixed`], the recorder): at most [`FIXED_BATCH_SPLATS`] splats a batch,
+//! - fixed ([`BatchSizing::Fixed`], the recorder): [`FIXED_BATCH_SPLATS`] point steps a batch,
 //!   whatever the machine's speed, so a frame has the same bytes on every run on one adapter.
-//!   At 2^23 splats a batch that is well under a watchdog's second on any GPU that splats
-//!   10^8 points/s (lavapipe on two cores splats about 10^8, see docs/performance.md);
+//!   2^23 point steps take under 10 ms on a GPU that runs 10^9 a second, far from a watchdog's
+//!   2 s; on lavapipe with two cores (about 10^7 a CPU second, docs/performance.md) about half
+//!   a second, on a software rasterizer that no watchdog watches;
 //! - timed ([`BatchSizing::Timed`], `render --backend gpu`): the first batch is small, its
 //!   measured speed sizes the next to about [`TARGET_BATCH_SECS`], and every batch re-measures;
 //!   the image then depends on the batch sizes (it agrees with the CPU's in distribution, as
