@@ -11,6 +11,10 @@
 //! (a minimum of keys, sums of integers) does not depend on the order of the splats, so the
 //! framebuffer is a pure function of the shot and the plan on one adapter.
 //!
+//! In the average and density modes the GPU's u32 colour sums could wrap past 2^24 splats on
+//! one pixel, so these modes accumulate in passes of at most [`PASS_SPLATS`] splats, each read
+//! back and added up on the host with the CPU merge's saturating sums.
+//!
 //! Two ways of sizing the batches:
 //! - fixed ([`BatchSizing::Fixed`], the recorder): [`FIXED_BATCH_SPLATS`] point steps a batch,
 //!   whatever the machine's speed, so a frame has the same bytes on every run on one adapter.
@@ -41,6 +45,10 @@ pub const MIN_STEPS_PER_THREAD: u64 = 16;
 pub const FIXED_BATCH_SPLATS: u64 = 1 << 23;
 /// Point steps of the first, measuring batch with timed sizing.
 pub const FIRST_TIMED_BATCH_SPLATS: u64 = 1 << 20;
+/// Most splats a pass of the average and density modes accumulates on the GPU before it is
+/// added up on the host: each splat adds at most 255 to a pixel's u32 colour sums, so 2^24
+/// splats cannot wrap one.
+pub const PASS_SPLATS: u64 = 1 << 24;
 /// What a timed batch aims at: well under the 2 s after which Windows resets a GPU, and under
 /// the few hundred milliseconds a desktop stays usable for.
 pub const TARGET_BATCH_SECS: f64 = 0.2;
@@ -124,6 +132,15 @@ impl GpuSplatter {
         // this sequence anywhere, the transient included, so no batch outgrows its size.
         let transient = shot.compiled.transient as u64;
         let total = transient + plan.steps_per_thread;
+        // Sums (average and density modes) are u32 on the GPU: a pass of at most PASS_SPLATS
+        // splats cannot wrap one, and passes add up on the host, saturating as the CPU's merge.
+        let pass_steps = match shot.view.mode {
+            SplatMode::Closest => u64::MAX,
+            SplatMode::Average | SplatMode::Density => (PASS_SPLATS / plan.threads as u64).max(1),
+        };
+        let mut pass_end = transient.saturating_add(pass_steps);
+        let mut passes: Option<Framebuffer> = None;
+        let mut clear = true;
         let mut stats = BatchStats::default();
         let mut done = 0u64;
         let mut steps = match self.sizing {
@@ -132,7 +149,7 @@ impl GpuSplatter {
         };
         let start = Instant::now();
         while done < total {
-            steps = steps.clamp(1, total - done).min(u32::MAX as u64);
+            steps = steps.clamp(1, total - done).min(pass_end - done).min(u32::MAX as u64);
             let first = stats.batches == 0;
             let args = FrameArgs {
                 view: &shot.view,
@@ -141,8 +158,9 @@ impl GpuSplatter {
                 steps: steps as u32,
                 skip_steps: transient.saturating_sub(done).min(steps) as u32,
                 restart: first,
-                clear: first,
+                clear,
             };
+            clear = false;
             let mut encoder = ctx.device.create_command_encoder(&Default::default());
             // Encoding may build the pipeline (first use): not part of the submission's time.
             game.encode(&ctx.device, &ctx.queue, &mut encoder, &args);
@@ -155,6 +173,15 @@ impl GpuSplatter {
             stats.longest_batch_secs = stats.longest_batch_secs.max(secs);
             stats.batches += 1;
             done += steps;
+            if done == pass_end && done < total {
+                let pass = read_framebuffer(ctx, game, shot)?;
+                passes = Some(match passes {
+                    None => pass,
+                    Some(sum) => sum.merge(pass),
+                });
+                pass_end = pass_end.saturating_add(pass_steps);
+                clear = true;
+            }
             if self.sizing == BatchSizing::Timed {
                 // Steps per second of every thread, so that the next batch takes the target.
                 let rate = steps as f64 / secs.max(1e-6);
@@ -163,7 +190,11 @@ impl GpuSplatter {
         }
         stats.secs = start.elapsed().as_secs_f64();
         stats.splats = plan.splats();
-        let framebuffer = read_framebuffer(ctx, game, shot)?;
+        let last = read_framebuffer(ctx, game, shot)?;
+        let framebuffer = match passes {
+            None => last,
+            Some(sum) => sum.merge(last),
+        };
         Ok((framebuffer, stats))
     }
 }
