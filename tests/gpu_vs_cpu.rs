@@ -352,8 +352,9 @@ fn gpu_recorder_densities_match_cpu_recorder() {
 }
 
 /// Two GPU recordings of the same frames (separate recorders and GPU contexts, as two runs
-/// make them) have the same bytes, closest mode with the solid look and density mode; a
-/// resumed GPU run keeps them and a CPU run over them redoes them (their fingerprints say GPU).
+/// make them), and the same frames recorded in chunks out of order, have the same bytes, in
+/// closest and density modes; a resumed GPU run keeps them and a CPU run over them redoes them
+/// (their fingerprints say GPU).
 #[test]
 fn gpu_recordings_are_reproducible_byte_for_byte() {
     if gpu().is_none() {
@@ -368,11 +369,20 @@ fn gpu_recordings_are_reproducible_byte_for_byte() {
             assert_eq!(report.rendered, vec![0, 1, 2]);
             assert!(report.empty.is_empty(), "{label}: empty frames {:?}", report.empty);
         }
+        // The same frames in chunks (frame 2 first), as a job array's tasks make them.
+        let chunks = common::temp_dir(&format!("gpu-rec-chunks-{label}"));
+        for range in [2..3, 0..2] {
+            let rec = Recorder::new(&scene, settings.clone()).unwrap().on_gpu(gpu().unwrap()).unwrap();
+            record::record(&rec, &chunks, range, false, &mut |_, _| {}).unwrap();
+        }
         for k in 0..3 {
             let a = std::fs::read(record::frame_path(&dirs[0], k)).unwrap();
             let b = std::fs::read(record::frame_path(&dirs[1], k)).unwrap();
+            let c = std::fs::read(record::frame_path(&chunks, k)).unwrap();
             assert!(a == b, "{label}: frame {k} differs between two GPU recordings");
+            assert!(a == c, "{label}: frame {k} differs between one GPU run and chunks");
         }
+        let _ = std::fs::remove_dir_all(&chunks);
         let rec = Recorder::new(&scene, settings.clone()).unwrap().on_gpu(gpu().unwrap()).unwrap();
         assert_eq!(record::frames_to_render(&rec, &dirs[0], 0..3, true), Vec::<u32>::new(), "{label}: GPU resume");
         let cpu = Recorder::new(&scene, settings.clone()).unwrap();
