@@ -61,7 +61,7 @@ pub struct RenderArgs {
     #[arg(long, value_name = "PX", default_value_t = 0,
           value_parser = clap::value_parser!(u32).range(0..=MAX_POINT_RADIUS_PX as i64))]
     point_radius: u32,
-    /// Where the chaos game runs: gpu, cpu, or auto (gpu when an adapter exists).
+    /// Where the chaos game runs: gpu, cpu, or auto (gpu when a hardware adapter exists).
     #[arg(long, value_enum, default_value_t = RenderBackend::Cpu)]
     backend: RenderBackend,
 }
@@ -143,11 +143,14 @@ pub fn render(args: RenderArgs) -> anyhow::Result<()> {
     let style = ResolveStyle { point_radius_px: args.point_radius, ..shot.style };
     let shot = shot.with_style(style);
     let bar = progress_bar(shot.plan.chunks() as u64, "render");
-    // GPU: explicit `gpu` fails without an adapter (exit 2); `auto` falls back to the CPU.
+    // GPU: explicit `gpu` fails without an adapter (exit 2); `auto` takes a hardware adapter
+    // only (the CPU outruns a software rasterizer), as `record --backend auto` does.
     let gpu = match args.backend {
         RenderBackend::Cpu => None,
         RenderBackend::Gpu => Some(nlifs::gpu::GpuContext::headless().map_err(gpu_error)?),
-        RenderBackend::Auto => nlifs::gpu::GpuContext::headless().ok(),
+        RenderBackend::Auto => {
+            nlifs::gpu::GpuContext::headless().ok().filter(|ctx| !nlifs::gpu::batch::is_software(ctx))
+        }
     };
     for warning in nlifs::scene::warnings::scene_warnings(&scene, args.time) {
         bar.suspend(|| eprintln!("warning: {warning}"));
