@@ -135,3 +135,44 @@ pub fn coverage(
         })
         .collect())
 }
+
+// ---------------------------------------------------------------------------------------------
+// `nlifs bench record`: frames per second of a recording, per chaos-game backend.
+
+/// What one backend's recording took.
+pub struct RecordBench {
+    /// `cpu`, or `gpu` with the adapter's name.
+    pub backend: String,
+    pub frames: u32,
+    /// Wall seconds and this process's CPU seconds (all threads, a software rasterizer's too).
+    pub secs: f64,
+    pub cpu_secs: f64,
+}
+
+/// Records frames `0..frames` of `scene` with `settings` into `dir` (PNG frames, as `nlifs
+/// record` writes them), the chaos game on `gpu` when given, after one untimed frame (the GPU
+/// compiles its pipelines on first use).
+pub fn record(
+    scene: &Scene,
+    settings: crate::record::RecordSettings,
+    frames: u32,
+    gpu: Option<crate::gpu::GpuContext>,
+    dir: &std::path::Path,
+) -> Result<RecordBench, crate::record::RecordError> {
+    let mut rec = crate::record::Recorder::new(scene, settings)?;
+    if let Some(ctx) = gpu {
+        rec = rec.on_gpu(ctx)?;
+    }
+    let backend = rec.gpu_adapter().map_or_else(|| "cpu".to_string(), |a| format!("gpu ({a})"));
+    let frames = 0..frames.clamp(1, rec.frame_count());
+    rec.frame(0)?;
+    let cpu0 = crate::gpu::bench::process_cpu_secs();
+    let start = Instant::now();
+    crate::record::record(&rec, dir, frames.clone(), false, &mut |_, _| {})?;
+    Ok(RecordBench {
+        backend,
+        frames: frames.len() as u32,
+        secs: start.elapsed().as_secs_f64(),
+        cpu_secs: crate::gpu::bench::process_cpu_secs() - cpu0,
+    })
+}

@@ -270,3 +270,267 @@ fn cpu_route_densities_match_gpu_route() {
     );
     eprintln!("CPU route vs GPU route: {n_gpu} / {n_cpu} samples, worst |Δ|/tolerance {worst:.3}");
 }
+
+// ---------------------------------------------------------------------------------------------
+// The GPU recorder (`record --backend gpu`) against the CPU recorder.
+
+use nlifs::record::{self, RecordSettings, Recorder};
+
+/// twist-anim (3D, an orbiting camera) drawn in density mode without depth cue, so that a
+/// pixel's count is its density.
+fn density_scene() -> Scene {
+    let mut scene = common::load_scene("twist-anim");
+    scene.render.mode = SplatMode::Density;
+    scene.render.depth_cue = 0.0;
+    scene
+}
+
+fn record_settings(scene: &Scene) -> RecordSettings {
+    RecordSettings {
+        fps: 3.0,
+        width: 160,
+        height: 120,
+        points_per_frame: Some(400_000),
+        motion_blur_samples: 2,
+        shutter: 1.0,
+        ..RecordSettings::for_scene(scene)
+    }
+}
+
+/// Every temporal sample of a GPU-recorded frame is the CPU recorder's same sample (same time,
+/// camera, stream and view), and its densities agree within 6σ on a coarse grid with the CPU
+/// chaos game of that sample run in short orbits (k = 4 steps, as in `densities_match_cpu`, so
+/// that the bound is tight: the CPU recorder's own orbits of ~10^3 steps would loosen it).
+#[test]
+fn gpu_recorder_densities_match_cpu_recorder() {
+    let Some(ctx) = gpu() else { return };
+    let scene = density_scene();
+    let settings = RecordSettings { points_per_frame: Some(2_000_000), ..record_settings(&scene) };
+    let points = settings.points_per_frame.unwrap().div_ceil(2);
+    let cpu = Recorder::new(&scene, settings.clone()).unwrap();
+    let gpu = Recorder::new(&scene, settings.clone()).unwrap().on_gpu(ctx).unwrap();
+    let cells = (16usize, 12usize);
+    let (w, h) = (settings.width as usize, settings.height as usize);
+    let k_gpu = nlifs::gpu::batch::BatchPlan::new(points).steps_per_thread as f64;
+    let k_cpu = 4u32;
+    for frame in [1u32, 5] {
+        let cpu_samples = cpu.samples(frame);
+        let gpu_samples = gpu.sample_framebuffers(frame).unwrap();
+        assert_eq!(cpu_samples.len(), 2);
+        assert_eq!(gpu_samples.len(), 2);
+        for (s, (a, (fb, shot))) in cpu_samples.iter().zip(&gpu_samples).enumerate() {
+            assert_eq!((a.t_secs, a.camera, a.stream, a.bounds), (shot.t_secs, shot.camera, shot.stream, shot.bounds));
+            // The CPU twin of this sample: 2^20 points in orbits of k_cpu steps.
+            let mut reference = Framebuffer::new(shot.view, shot.compiled.colors.clone());
+            for c in 0..(1u32 << 20) / (ORBITS_PER_CHUNK as u32 * k_cpu) {
+                run_chunk(&shot.compiled, 77, shot.stream, c, k_cpu as usize, &mut reference);
+            }
+            let counts = |fb: &Framebuffer| -> Vec<u32> { fb.accum.iter().map(|a| a[3]).collect() };
+            let (cg, cc) = (counts(fb), counts(&reference));
+            let (ng, nc) = (cg.iter().map(|&c| c as f64).sum::<f64>(), cc.iter().map(|&c| c as f64).sum::<f64>());
+            // Most points land on screen (the camera frames the timeline's bounds).
+            assert!(ng > 0.5 * points as f64, "{ng} of {points} GPU points on screen");
+            let worst = assert_densities_agree(
+                &format!("recorder frame {frame} sample {s}"),
+                &Density {
+                    label: "GPU recorder",
+                    density: &coarse_density(&cg, w, h, cells),
+                    samples: ng,
+                    steps_per_orbit: k_gpu,
+                },
+                &Density {
+                    label: "CPU",
+                    density: &coarse_density(&cc, w, h, cells),
+                    samples: nc,
+                    steps_per_orbit: k_cpu as f64,
+                },
+                cells,
+            );
+            eprintln!("recorder frame {frame} sample {s}: {ng} GPU / {nc} CPU samples, worst |Δ|/tolerance {worst:.3}");
+        }
+    }
+}
+
+/// Two GPU recordings of the same frames (separate recorders and GPU contexts, as two runs
+/// make them), and the same frames recorded in chunks out of order, have the same bytes, in
+/// closest and density modes; a resumed GPU run keeps them and a CPU run over them redoes them
+/// (their fingerprints say GPU).
+#[test]
+fn gpu_recordings_are_reproducible_byte_for_byte() {
+    if gpu().is_none() {
+        return;
+    }
+    for (label, scene) in [("closest", common::load_scene("twist-anim")), ("density", density_scene())] {
+        let settings = RecordSettings { points_per_frame: Some(300_000), ..record_settings(&scene) };
+        let dirs = [common::temp_dir(&format!("gpu-rec-a-{label}")), common::temp_dir(&format!("gpu-rec-b-{label}"))];
+        for dir in &dirs {
+            let rec = Recorder::new(&scene, settings.clone()).unwrap().on_gpu(gpu().unwrap()).unwrap();
+            let report = record::record(&rec, dir, 0..3, false, &mut |_, _| {}).unwrap();
+            assert_eq!(report.rendered, vec![0, 1, 2]);
+            assert!(report.empty.is_empty(), "{label}: empty frames {:?}", report.empty);
+        }
+        // The same frames in chunks (frame 2 first), as a job array's tasks make them.
+        let chunks = common::temp_dir(&format!("gpu-rec-chunks-{label}"));
+        for range in [2..3, 0..2] {
+            let rec = Recorder::new(&scene, settings.clone()).unwrap().on_gpu(gpu().unwrap()).unwrap();
+            record::record(&rec, &chunks, range, false, &mut |_, _| {}).unwrap();
+        }
+        for k in 0..3 {
+            let a = std::fs::read(record::frame_path(&dirs[0], k)).unwrap();
+            let b = std::fs::read(record::frame_path(&dirs[1], k)).unwrap();
+            let c = std::fs::read(record::frame_path(&chunks, k)).unwrap();
+            assert!(a == b, "{label}: frame {k} differs between two GPU recordings");
+            assert!(a == c, "{label}: frame {k} differs between one GPU run and chunks");
+        }
+        let _ = std::fs::remove_dir_all(&chunks);
+        let rec = Recorder::new(&scene, settings.clone()).unwrap().on_gpu(gpu().unwrap()).unwrap();
+        assert_eq!(record::frames_to_render(&rec, &dirs[0], 0..3, true), Vec::<u32>::new(), "{label}: GPU resume");
+        let cpu = Recorder::new(&scene, settings.clone()).unwrap();
+        assert_eq!(record::frames_to_render(&cpu, &dirs[0], 0..3, true), vec![0, 1, 2], "{label}: CPU over GPU frames");
+        for dir in &dirs {
+            let _ = std::fs::remove_dir_all(dir);
+        }
+    }
+}
+
+/// `nlifs record --backend gpu` writes frames and says the adapter; `--backend auto` on a
+/// software adapter takes the CPU and says so, and then writes the CPU recorder's bytes.
+#[test]
+fn record_cli_backends() {
+    let Some(ctx) = gpu() else { return };
+    let software = nlifs::gpu::batch::is_software(&ctx);
+    let scene = common::scene_path("twist-anim");
+    let run = |backend: &str, dir: &std::path::Path| {
+        let out = common::run_nlifs(&[
+            "record",
+            scene.to_str().unwrap(),
+            "-o",
+            dir.to_str().unwrap(),
+            "--frames",
+            "0..2",
+            "--fps",
+            "3",
+            "--width",
+            "64",
+            "--height",
+            "48",
+            "--points-per-frame",
+            "20000",
+            "--backend",
+            backend,
+        ]);
+        let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
+        assert!(out.status.success(), "record --backend {backend}: {stderr}");
+        stderr
+    };
+    let dirs: Vec<_> = ["cpu", "gpu", "auto"].iter().map(|b| common::temp_dir(&format!("rec-cli-{b}"))).collect();
+    let stderr_cpu = run("cpu", &dirs[0]);
+    assert!(stderr_cpu.contains("chaos game on the CPU"), "{stderr_cpu}");
+    let stderr_gpu = run("gpu", &dirs[1]);
+    assert!(stderr_gpu.contains("chaos game on the GPU"), "{stderr_gpu}");
+    let stderr_auto = run("auto", &dirs[2]);
+    let same_as = |dir: &std::path::Path| {
+        (0..2).all(|k| {
+            std::fs::read(record::frame_path(dir, k)).unwrap()
+                == std::fs::read(record::frame_path(&dirs[2], k)).unwrap()
+        })
+    };
+    if software {
+        assert!(stderr_auto.contains("software rasterizer"), "{stderr_auto}");
+        assert!(same_as(&dirs[0]), "auto on a software adapter should write the CPU recorder's frames");
+    } else {
+        assert!(stderr_auto.contains("chaos game on the GPU"), "{stderr_auto}");
+        assert!(same_as(&dirs[1]), "auto on a hardware adapter should write the GPU recorder's frames");
+    }
+    for dir in &dirs {
+        let _ = std::fs::remove_dir_all(dir);
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// `render --backend gpu` in batches.
+
+/// A GPU still of many points runs in several timed batches and, past 2^24 splats, in passes
+/// added up on the host; it keeps the CPU chaos game's densities (6σ on a coarse grid; the CPU
+/// side in orbits of 4 steps for a tight bound, the GPU side in orbits of the batch plan's
+/// length), and every pass's points are counted.
+#[test]
+fn batched_gpu_render_densities_match_cpu_render() {
+    let Some(ctx) = gpu() else { return };
+    let mut scene = scene("plant2", false);
+    scene.render.mode = SplatMode::Density;
+    scene.render.depth_cue = 0.0;
+    // 2^20 GPU points of 20 steps: a pass of 16 steps (2^24 splats) and one of 4.
+    let points = 20_000_000u64;
+    let settings = nlifs::scene::spec::RenderSettings { width: 160, height: 120, points, ..scene.render.clone() };
+    let shot = nlifs::shot::Shot::prepare(&scene, 0.0, &settings, nlifs::shot::Framing::Fit, None).unwrap();
+    let gpu = nlifs::gpu::render::render_gpu(&ctx, &shot).unwrap();
+    let plan = nlifs::gpu::batch::BatchPlan::new(points);
+    assert_eq!(gpu.stats.splats, plan.splats());
+    // The first batch splats 2^20 points, so this many points take more than one.
+    assert!(gpu.stats.batches >= 2, "{:?}", gpu.stats);
+    let k_cpu = 4u32;
+    let mut reference = Framebuffer::new(shot.view, shot.compiled.colors.clone());
+    for c in 0..(2u32 << 20) / (ORBITS_PER_CHUNK as u32 * k_cpu) {
+        run_chunk(&shot.compiled, 77, 0, c, k_cpu as usize, &mut reference);
+    }
+    let counts = |fb: &Framebuffer| -> Vec<u32> { fb.accum.iter().map(|a| a[3]).collect() };
+    let (cg, cc) = (counts(&gpu.framebuffer), counts(&reference));
+    let (ng, nc) = (cg.iter().map(|&c| c as f64).sum::<f64>(), cc.iter().map(|&c| c as f64).sum::<f64>());
+    assert!(plan.splats() > nlifs::gpu::batch::PASS_SPLATS);
+    // Both passes counted (one pass alone would hold at most 2^24 of the 2·10^7).
+    assert!(ng > 0.9 * points as f64 && ng <= plan.splats() as f64, "{ng} of {points} on screen");
+    let cells = (16usize, 12usize);
+    let worst = assert_densities_agree(
+        "batched GPU render",
+        &Density {
+            label: "GPU",
+            density: &coarse_density(&cg, 160, 120, cells),
+            samples: ng,
+            steps_per_orbit: plan.steps_per_thread as f64,
+        },
+        &Density {
+            label: "CPU",
+            density: &coarse_density(&cc, 160, 120, cells),
+            samples: nc,
+            steps_per_orbit: k_cpu as f64,
+        },
+        cells,
+    );
+    eprintln!("batched GPU render: {:?}, worst |Δ|/tolerance {worst:.3}", gpu.stats);
+    // The resolve of a GPU render is the CPU's resolve of its accumulation.
+    assert!(gpu.image == nlifs::resolve::resolve_image(&gpu.framebuffer, &shot.camera, &shot.style));
+}
+
+/// An image whose accumulation exceeds what the device binds is refused before any GPU buffer
+/// is made: exit 2, the size in the message, no file.
+#[test]
+fn gpu_render_past_the_device_limits_is_bad_input() {
+    let Some(ctx) = gpu() else { return };
+    let limits = ctx.device.limits();
+    let limit = limits.max_storage_buffer_binding_size.min(limits.max_buffer_size);
+    // 16 bytes a pixel: 16384² needs 4 GiB, past any 32-bit binding.
+    assert!(16 * 16384u64 * 16384 > limit, "this adapter binds {limit} bytes");
+    let dir = common::temp_dir("gpu-too-large");
+    let out = dir.join("big.png");
+    let scene = common::scene_path("plant2");
+    let run = common::run_nlifs(&[
+        "render",
+        scene.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+        "--backend",
+        "gpu",
+        "--width",
+        "16384",
+        "--height",
+        "16384",
+        "--points",
+        "1000",
+    ]);
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert_eq!(run.status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains("16384×16384") && stderr.contains("--backend cpu"), "{stderr}");
+    assert!(!out.exists());
+    let _ = std::fs::remove_dir_all(&dir);
+}

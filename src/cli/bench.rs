@@ -1,6 +1,7 @@
 //! `nlifs bench`: throughput figures for the documents. The ray tracer against POV-Ray on the
-//! same spheres, the GPU chaos game, the CPU chaos game on one core, and how much of an
-//! attractor a budget of points covers under each probability choice.
+//! same spheres, the GPU chaos game, a 1920×1080 recording on the CPU and the GPU, the CPU
+//! chaos game on one core, and how much of an attractor a budget of points covers under each
+//! probability choice.
 
 use std::path::{Path, PathBuf};
 use std::sync::atomic::AtomicBool;
@@ -52,6 +53,25 @@ pub enum BenchCommand {
         #[arg(long, default_value_t = 60)]
         frames: u32,
     },
+    /// Frames per second of `nlifs record` at 1920×1080, the chaos game on the CPU and on the
+    /// GPU (any adapter, a software one included, to measure it).
+    Record {
+        #[arg(default_value = "scenes/twist-anim.toml")]
+        scene: PathBuf,
+        /// Frames to record (after one untimed frame).
+        #[arg(long, default_value_t = 4)]
+        frames: u32,
+        #[arg(long, default_value_t = 1920)]
+        width: u32,
+        #[arg(long, default_value_t = 1080)]
+        height: u32,
+        /// Points per frame (default: the scene's).
+        #[arg(long, value_parser = super::args::point_count)]
+        points_per_frame: Option<u64>,
+        /// Where the frames go (one folder per backend).
+        #[arg(long, default_value = "target/bench-record")]
+        out: PathBuf,
+    },
     /// CPU chaos game on one core: map only and map + splat at 1920×1080.
     Cpu {
         /// Scene to run (default: the paper's tapering).
@@ -87,6 +107,9 @@ pub fn run(command: BenchCommand) -> anyhow::Result<()> {
             Ok(())
         }
         BenchCommand::Cpu { scene, points, repeats } => cpu(&scene, points, repeats),
+        BenchCommand::Record { scene, frames, width, height, points_per_frame, out } => {
+            record(&scene, frames, width, height, points_per_frame, &out)
+        }
         BenchCommand::Coverage { scene, budget, reference, size } => {
             let s = load(&scene)?;
             println!("{}: share of the attractor's {size}x{size} pixels lit by {budget} points", s.name);
@@ -97,6 +120,51 @@ pub fn run(command: BenchCommand) -> anyhow::Result<()> {
             Ok(())
         }
     }
+}
+
+fn record(
+    path: &Path,
+    frames: u32,
+    width: u32,
+    height: u32,
+    points_per_frame: Option<u64>,
+    out: &Path,
+) -> anyhow::Result<()> {
+    let scene = load(path)?;
+    let settings = nlifs::record::RecordSettings {
+        width,
+        height,
+        points_per_frame,
+        ..nlifs::record::RecordSettings::for_scene(&scene)
+    };
+    let points = points_per_frame.unwrap_or(scene.render.points);
+    println!("record {}: {width}×{height}, {points} points per frame, {frames} frames", scene.name);
+    for gpu in [false, true] {
+        let ctx = if gpu {
+            match nlifs::gpu::GpuContext::headless() {
+                Ok(ctx) => Some(ctx),
+                Err(e) => {
+                    println!("  gpu: skipped ({e})");
+                    continue;
+                }
+            }
+        } else {
+            None
+        };
+        let dir = out.join(if gpu { "gpu" } else { "cpu" });
+        let r =
+            nlifs::bench::record(&scene, settings.clone(), frames, ctx, &dir).map_err(|e| BadInput(e.to_string()))?;
+        println!(
+            "  {:<40} {:6.3} frames/s ({:.2} s wall, {:.2} s process CPU for {} frames) -> {}",
+            r.backend,
+            r.frames as f64 / r.secs,
+            r.secs,
+            r.cpu_secs,
+            r.frames,
+            dir.display()
+        );
+    }
+    Ok(())
 }
 
 fn cpu(path: &Path, points: u64, repeats: usize) -> anyhow::Result<()> {

@@ -1,5 +1,7 @@
 //! `nlifs record`: an animated scene rendered frame by frame to DIR/frame_NNNNN.png, resumable
 //! and splittable over a job array, optionally encoded into a video with the system ffmpeg.
+//! The chaos game runs on the CPU or the GPU (`--backend`), or the frames are ray-traced as
+//! `nlifs snapshot` traces a still (`--renderer raytrace`, with the snapshot's options).
 
 use std::path::PathBuf;
 
@@ -9,9 +11,13 @@ use indicatif::{ProgressBar, ProgressStyle};
 
 use nlifs::chaos_game::ChunkPlan;
 use nlifs::output::Format;
-use nlifs::record::{self, RecordSettings, Recorder};
+use nlifs::raytrace::Initial;
+use nlifs::record::{self, RecordSettings, Recorder, Renderer, TraceOptions};
 
+use super::args::{hex_color, positive_pixels};
 use super::image_args::ImageArgs;
+use super::render::gpu_error;
+use super::snapshot::ColorArg;
 use super::{BadInput, load};
 
 #[derive(Args)]
@@ -34,9 +40,14 @@ pub struct RecordArgs {
     /// Points per frame (default: the scene's render.points at the frame's time).
     #[arg(long, value_parser = super::args::point_count)]
     points_per_frame: Option<u64>,
-    /// Where frames are rendered: cpu, the only recorder in this build (it has no GPU path).
-    #[arg(long, value_enum, default_value_t = RecordBackend::Cpu)]
+    /// Where the chaos game runs: cpu (the same bytes on every machine), gpu (the same bytes
+    /// on every run on one adapter), or auto: the GPU where the adapter is a hardware one.
+    #[arg(long, value_enum, default_value_t = RecordBackend::Auto)]
     backend: RecordBackend,
+    /// What draws the frames: chaos (the chaos game's points) or raytrace (W^n(A) ray-traced
+    /// as `nlifs snapshot` does, with its options below).
+    #[arg(long, value_enum, default_value_t = RendererArg::Chaos)]
+    renderer: RendererArg,
     /// Keep frames that are already complete (decode fully); redo anything else.
     #[arg(long)]
     resume: bool,
@@ -54,19 +65,131 @@ pub struct RecordArgs {
     print_frame_count: bool,
     #[command(flatten)]
     image: ImageArgs,
+    #[command(flatten)]
+    trace: TraceArgs,
 }
 
-/// The recorders that exist. A GPU recorder would add a variant here.
+/// `nlifs snapshot`'s options, for `--renderer raytrace` (its defaults where left out).
+#[derive(Args)]
+struct TraceArgs {
+    /// Ray tracing: samples per pixel (stratified; default 4).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=1024))]
+    spp: Option<u32>,
+    /// Ray tracing: n of W^n(A) (with --adaptive: the most refinement; default 6).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(0..=16))]
+    depth: Option<u32>,
+    /// Ray tracing: initial object A: sphere (default), grid or a .glb/.gltf file.
+    #[arg(long)]
+    initial: Option<String>,
+    /// Ray tracing: stop refining where a node projects smaller than a pixel.
+    #[arg(long)]
+    adaptive: bool,
+    /// Ray tracing, with --adaptive: the projected size in pixels to stop at (default 1).
+    #[arg(long, value_parser = positive_pixels)]
+    stop_pixels: Option<f32>,
+    /// Ray tracing: colour by function (default) or depth.
+    #[arg(long, value_enum)]
+    color: Option<ColorArg>,
+    /// Ray tracing: no shadow rays.
+    #[arg(long)]
+    no_shadows: bool,
+    /// Ray tracing: no ground plane.
+    #[arg(long)]
+    no_ground: bool,
+    /// Ray tracing: background as sRGB hex (#rrggbb); default: the scene's.
+    #[arg(long, value_parser = hex_color)]
+    background: Option<[f32; 3]>,
+}
+
+impl TraceArgs {
+    /// The flags given, by name (each applies to the ray tracer only).
+    fn given(&self) -> Vec<&'static str> {
+        [
+            (self.spp.is_some(), "--spp"),
+            (self.depth.is_some(), "--depth"),
+            (self.initial.is_some(), "--initial"),
+            (self.adaptive, "--adaptive"),
+            (self.stop_pixels.is_some(), "--stop-pixels"),
+            (self.color.is_some(), "--color"),
+            (self.no_shadows, "--no-shadows"),
+            (self.no_ground, "--no-ground"),
+            (self.background.is_some(), "--background"),
+        ]
+        .into_iter()
+        .filter_map(|(given, name)| given.then_some(name))
+        .collect()
+    }
+
+    fn options(&self) -> anyhow::Result<TraceOptions> {
+        let d = TraceOptions::default();
+        let initial = match &self.initial {
+            None => d.initial,
+            Some(text) => match Initial::parse(text) {
+                Initial::Gltf(path)
+                    if !path
+                        .extension()
+                        .and_then(|e| e.to_str())
+                        .is_some_and(|e| e.eq_ignore_ascii_case("glb") || e.eq_ignore_ascii_case("gltf")) =>
+                {
+                    return Err(BadInput(format!(
+                        "--initial {}: expected sphere, grid or a .glb/.gltf file",
+                        path.display()
+                    ))
+                    .into());
+                }
+                initial => initial,
+            },
+        };
+        Ok(TraceOptions {
+            spp: self.spp.unwrap_or(d.spp),
+            depth: self.depth.unwrap_or(d.depth),
+            adaptive: self.adaptive,
+            stop_pixels: self.stop_pixels.unwrap_or(d.stop_pixels),
+            initial,
+            color_mode: self.color.map_or(d.color_mode, Into::into),
+            shadows: !self.no_shadows,
+            ground: !self.no_ground,
+            background: self.background.or(d.background),
+        })
+    }
+}
+
 #[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
 enum RecordBackend {
     Cpu,
+    Gpu,
+    Auto,
+}
+
+#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
+enum RendererArg {
+    Chaos,
+    Raytrace,
 }
 
 pub fn record(args: RecordArgs) -> anyhow::Result<()> {
-    // The only recorder there is; a GPU one would be chosen here.
-    let RecordBackend::Cpu = args.backend;
     let scene = load(&args.scene)?;
     let options = args.image.for_frames()?;
+    let renderer = match args.renderer {
+        RendererArg::Chaos => {
+            if let Some(flag) = args.trace.given().first() {
+                return Err(BadInput(format!("{flag} applies to --renderer raytrace, not to the chaos game")).into());
+            }
+            Renderer::Chaos
+        }
+        RendererArg::Raytrace => {
+            if args.points_per_frame.is_some() {
+                return Err(BadInput("--points-per-frame applies to the chaos game, not to --renderer raytrace (its detail is --depth and --spp)".into()).into());
+            }
+            if args.backend == RecordBackend::Gpu {
+                return Err(BadInput("--renderer raytrace traces on the CPU; leave out --backend gpu".into()).into());
+            }
+            if !options.is_plain_png() {
+                return Err(BadInput(record::RecordError::RaytraceLayers.to_string()).into());
+            }
+            Renderer::Raytrace(args.trace.options()?)
+        }
+    };
     if args.video.is_some() && options.format == Format::Exr {
         return Err(BadInput("--video encodes PNG frames; leave out --video with --format exr".into()).into());
     }
@@ -89,7 +212,8 @@ pub fn record(args: RecordArgs) -> anyhow::Result<()> {
     settings.points_per_frame = args.points_per_frame;
     settings.motion_blur_samples = args.motion_blur;
     settings.shutter = args.shutter;
-    let rec = Recorder::new(&scene, settings).map_err(|e| BadInput(e.to_string()))?;
+    settings.renderer = renderer;
+    let mut rec = Recorder::new(&scene, settings).map_err(|e| BadInput(e.to_string()))?;
     for warning in nlifs::scene::warnings::before_record(&scene) {
         eprintln!("warning: {warning}");
     }
@@ -97,6 +221,11 @@ pub fn record(args: RecordArgs) -> anyhow::Result<()> {
     if args.print_frame_count {
         println!("{count}");
         return Ok(());
+    }
+    if rec.settings().renderer == Renderer::Chaos {
+        rec = choose_backend(rec, args.backend)?;
+    } else {
+        eprintln!("record: ray-traced on the CPU");
     }
     let frames = args.frames.clone().unwrap_or(0..count);
     if frames.end > count {
@@ -154,4 +283,35 @@ pub fn record(args: RecordArgs) -> anyhow::Result<()> {
         eprintln!("wrote {}", video.display());
     }
     Ok(())
+}
+
+/// `rec` with its chaos game where `backend` says, and a line saying where that is: `auto`
+/// takes the GPU only where the adapter is a hardware one (a software rasterizer is slower
+/// than the CPU chaos game).
+fn choose_backend(rec: Recorder<'_>, backend: RecordBackend) -> anyhow::Result<Recorder<'_>> {
+    let ctx = match backend {
+        RecordBackend::Cpu => None,
+        RecordBackend::Gpu => Some(nlifs::gpu::GpuContext::headless().map_err(gpu_error)?),
+        RecordBackend::Auto => match nlifs::gpu::GpuContext::headless() {
+            Ok(ctx) if nlifs::gpu::batch::is_software(&ctx) => {
+                eprintln!("record: chaos game on the CPU ({} is a software rasterizer)", ctx.describe());
+                return Ok(rec);
+            }
+            Ok(ctx) => Some(ctx),
+            Err(_) => {
+                eprintln!("record: chaos game on the CPU (no GPU adapter)");
+                return Ok(rec);
+            }
+        },
+    };
+    let Some(ctx) = ctx else {
+        eprintln!("record: chaos game on the CPU");
+        return Ok(rec);
+    };
+    let rec = rec.on_gpu(ctx).map_err(|e| match e {
+        record::RecordError::Gpu(e) => gpu_error(e),
+        e => e.into(),
+    })?;
+    eprintln!("record: chaos game on the GPU, {}", rec.gpu_adapter().unwrap_or_default());
+    Ok(rec)
 }

@@ -6,13 +6,12 @@ use clap::{Args, ValueEnum};
 
 use nlifs::output::Provenance;
 use nlifs::output::part::PartSpec;
-use nlifs::output::png::save_rgb8;
 use nlifs::render::render_cpu;
 use nlifs::resolve::{MAX_POINT_RADIUS_PX, ResolveStyle};
 use nlifs::scene::spec::{Look, SplatMode};
 use nlifs::shot::{Framing, Shot};
 
-use super::image_args::{ImageArgs, bad, render_part, write_still};
+use super::image_args::{ImageArgs, render_part, write_still};
 use super::{BadInput, load, progress_bar};
 
 #[derive(Args)]
@@ -62,7 +61,7 @@ pub struct RenderArgs {
     #[arg(long, value_name = "PX", default_value_t = 0,
           value_parser = clap::value_parser!(u32).range(0..=MAX_POINT_RADIUS_PX as i64))]
     point_radius: u32,
-    /// Where the chaos game runs: gpu, cpu, or auto (gpu when an adapter exists).
+    /// Where the chaos game runs: gpu, cpu, or auto (gpu when a hardware adapter exists).
     #[arg(long, value_enum, default_value_t = RenderBackend::Cpu)]
     backend: RenderBackend,
 }
@@ -144,17 +143,15 @@ pub fn render(args: RenderArgs) -> anyhow::Result<()> {
     let style = ResolveStyle { point_radius_px: args.point_radius, ..shot.style };
     let shot = shot.with_style(style);
     let bar = progress_bar(shot.plan.chunks() as u64, "render");
-    // GPU: explicit `gpu` fails without an adapter; `auto` falls back to the CPU.
+    // GPU: explicit `gpu` fails without an adapter (exit 2); `auto` takes a hardware adapter
+    // only (the CPU outruns a software rasterizer), as `record --backend auto` does.
     let gpu = match args.backend {
         RenderBackend::Cpu => None,
-        RenderBackend::Gpu => Some(nlifs::gpu::GpuContext::headless()?),
-        // The GPU writes the plain PNG only; other outputs need the framebuffer's layers.
-        RenderBackend::Auto if options.is_plain_png() => nlifs::gpu::GpuContext::headless().ok(),
-        RenderBackend::Auto => None,
+        RenderBackend::Gpu => Some(nlifs::gpu::GpuContext::headless().map_err(gpu_error)?),
+        RenderBackend::Auto => {
+            nlifs::gpu::GpuContext::headless().ok().filter(|ctx| !nlifs::gpu::batch::is_software(ctx))
+        }
     };
-    if gpu.is_some() && !options.is_plain_png() {
-        return Err(BadInput("--format png16/exr and --transparent need --backend cpu".into()).into());
-    }
     for warning in nlifs::scene::warnings::scene_warnings(&scene, args.time) {
         bar.suspend(|| eprintln!("warning: {warning}"));
     }
@@ -162,9 +159,16 @@ pub fn render(args: RenderArgs) -> anyhow::Result<()> {
         Some(ctx) => {
             bar.finish_and_clear();
             eprintln!("rendering on {}", ctx.describe());
-            let image = nlifs::gpu::render::render_gpu(ctx, &shot)?.image;
-            save_rgb8(&output, &image, Some(&provenance)).map_err(bad)?;
-            image
+            // In batches of bounded length (no driver watchdog trips), read back for the resolve.
+            let r = nlifs::gpu::render::render_gpu(ctx, &shot).map_err(gpu_error)?;
+            eprintln!(
+                "GPU: {} points in {} batches, longest {:.0} ms",
+                r.stats.splats,
+                r.stats.batches,
+                1e3 * r.stats.longest_batch_secs
+            );
+            write_still(&output, &options, &r.framebuffer, &shot.camera, Some(&r.image), &provenance)?;
+            r.image
         }
         None => {
             let r = render_cpu(&shot, &|d, _| bar.set_position(d));
@@ -185,6 +189,12 @@ pub fn render(args: RenderArgs) -> anyhow::Result<()> {
         start.elapsed().as_secs_f64()
     );
     Ok(())
+}
+
+/// A GPU error as the CLI reports it: bad input (exit 2) where the request exceeds the machine
+/// (no adapter, an image or point count past the device's limits).
+pub fn gpu_error(e: nlifs::gpu::GpuError) -> anyhow::Error {
+    if e.is_bad_input() { BadInput(e.to_string()).into() } else { e.into() }
 }
 
 /// `--shading`, `--occlusion`: a number in 0..=1.

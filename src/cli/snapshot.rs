@@ -14,7 +14,7 @@ use super::args::{GeometryArgs, check_png, hex_color, positive_pixels};
 use super::{load, progress_bar};
 
 #[derive(Clone, Copy, ValueEnum)]
-enum ColorArg {
+pub(super) enum ColorArg {
     /// Per-function colour (the outermost function of each leaf).
     Function,
     /// Colour by depth.

@@ -1,6 +1,7 @@
 //! `nlifs bench gpu`: throughput of the live view (chaos-game steps with their splat, per
-//! second, and frames per second including the resolve at 1280×720), and how many frames
-//! after a scene edit the image is back within sampling noise of converged.
+//! second, and frames per second including the resolve at 1280×720), the chaos game alone in
+//! each splat mode, and how many frames after a scene edit the image is back within sampling
+//! noise of converged.
 
 use std::fmt;
 use std::time::Instant;
@@ -29,6 +30,8 @@ pub struct BenchReport {
     pub chaos_ms: [f64; 2],
     pub resolve_ms: [f64; 2],
     pub clear_ms: [f64; 2],
+    /// The chaos game with its splat alone in each splat mode, ms per frame [wall, process CPU].
+    pub per_mode_ms: Vec<(SplatMode, [f64; 2])>,
     /// Frames until the image after an edit is within noise; None if not within the window.
     pub frames_to_converge: Option<u32>,
     /// (frame, L1 distance after the edit, L1 distance of a fresh run of as many splats).
@@ -61,6 +64,17 @@ impl fmt::Display for BenchReport {
             self.clear_ms[0],
             self.clear_ms[1]
         )?;
+        writeln!(f, "  chaos game + splat per splat mode (M points/s by wall time / by process CPU time):")?;
+        for (mode, [wall, cpu]) in &self.per_mode_ms {
+            let per_frame = self.points as f64 * self.steps as f64 / 1e6;
+            writeln!(
+                f,
+                "    {:<8} {:8.1} / {:8.1}",
+                mode.name(),
+                per_frame / (wall / 1e3).max(1e-9),
+                per_frame / (cpu / 1e3).max(1e-9)
+            )?;
+        }
         writeln!(
             f,
             "after an edit (coarse-grid L1 distance to the converged image: edited vs fresh run of equal splats):"
@@ -197,6 +211,16 @@ pub fn run(scene: &Scene, points: u32, steps: u32, frames: u32) -> Result<BenchR
     });
     let resolve_ms = time_stage(&mut live, &|live, encoder| live.draw(&ctx, encoder, &view, format, [0, 0]));
     let clear_ms = time_stage(&mut live, &|live, encoder| live.encode_clear(&ctx, encoder));
+    let mut per_mode_ms = Vec::new();
+    for mode in [SplatMode::Closest, SplatMode::Average, SplatMode::Density] {
+        live.set_settings(&ctx, ProgressiveSettings { mode, ..settings })?;
+        // The first frame after the change clears and may build the mode's pipeline.
+        submit_frame(&ctx, &mut live, None);
+        let ms = time_stage(&mut live, &|live, encoder| {
+            live.advance(&ctx, encoder);
+        });
+        per_mode_ms.push((mode, ms));
+    }
 
     // Convergence after an edit, in density mode on a smaller view (readbacks every frame).
     let (w, h) = (320, 180);
@@ -247,6 +271,7 @@ pub fn run(scene: &Scene, points: u32, steps: u32, frames: u32) -> Result<BenchR
         chaos_ms,
         resolve_ms,
         clear_ms,
+        per_mode_ms,
         frames_to_converge,
         convergence,
     })

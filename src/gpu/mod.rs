@@ -7,6 +7,7 @@
 //! Without an adapter everything here returns [`GpuError::NoAdapter`]; callers fall back to the
 //! CPU path (`render --backend auto`) or report it.
 
+pub mod batch;
 pub mod bench;
 pub mod chaos_game;
 pub mod progressive;
@@ -27,6 +28,18 @@ pub enum GpuError {
     TooManyPoints(u64),
     #[error("the scene has no enabled function")]
     NoFunctions,
+    #[error(
+        "a {width}×{height} image needs a {bytes}-byte accumulation buffer on the GPU, more than the {limit} bytes {adapter} can bind; render it on the CPU (--backend cpu) or smaller"
+    )]
+    FramebufferTooLarge { width: u32, height: u32, bytes: u64, limit: u64, adapter: String },
+}
+
+impl GpuError {
+    /// The request cannot be met on this machine's GPU whatever is tried again (a size or a
+    /// point count past its limits, no adapter): the command line's bad input, exit 2.
+    pub fn is_bad_input(&self) -> bool {
+        matches!(self, GpuError::NoAdapter | GpuError::TooManyPoints(_) | GpuError::FramebufferTooLarge { .. })
+    }
 }
 
 /// An instance, adapter, device and queue.

@@ -7,14 +7,21 @@ use super::{GpuContext, GpuError};
 
 /// Copies `buffer` (which must have COPY_SRC usage) to the host.
 pub fn read_buffer(ctx: &GpuContext, buffer: &wgpu::Buffer) -> Result<Vec<u8>, GpuError> {
+    read_buffer_prefix(ctx, buffer, buffer.size())
+}
+
+/// Copies the first `bytes` bytes of `buffer` (COPY_SRC usage; `bytes` a multiple of 4 and at
+/// most its size) to the host.
+pub fn read_buffer_prefix(ctx: &GpuContext, buffer: &wgpu::Buffer, bytes: u64) -> Result<Vec<u8>, GpuError> {
+    let bytes = bytes.min(buffer.size());
     let staging = ctx.device.create_buffer(&wgpu::BufferDescriptor {
         label: Some("readback"),
-        size: buffer.size(),
+        size: bytes,
         usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
         mapped_at_creation: false,
     });
     let mut encoder = ctx.device.create_command_encoder(&Default::default());
-    encoder.copy_buffer_to_buffer(buffer, 0, &staging, 0, buffer.size());
+    encoder.copy_buffer_to_buffer(buffer, 0, &staging, 0, bytes);
     ctx.queue.submit([encoder.finish()]);
     map_and_read(ctx, &staging)
 }

@@ -157,7 +157,7 @@ pub fn render(
     let (hierarchy, camera) = if settings.adaptive {
         let camera = match camera {
             Some(c) => c,
-            None => scene.camera_for(framing_bounds(&ifs, &settings.initial, settings.depth)?),
+            None => scene.camera_for_at(t_secs, framing_bounds(&ifs, &settings.initial, settings.depth)?),
         };
         let rays = tracer::CameraRays::new(&camera, settings.width, settings.height, 1.0);
         let pixel = PixelFootprint {
@@ -170,7 +170,8 @@ pub fn render(
         (Hierarchy::build(&ifs, &object, Stop { max_depth: settings.depth, pixel: Some(pixel) })?, camera)
     } else {
         let h = build_fixed(&ifs, &settings.initial, settings.depth)?;
-        let camera = camera.unwrap_or_else(|| scene.camera_for((h.bounds.0.as_dvec3(), h.bounds.1.as_dvec3())));
+        let camera =
+            camera.unwrap_or_else(|| scene.camera_for_at(t_secs, (h.bounds.0.as_dvec3(), h.bounds.1.as_dvec3())));
         (h, camera)
     };
     let build_secs = start.elapsed().as_secs_f64();

@@ -123,6 +123,7 @@ impl Jobs {
                         points_per_frame: Some(form.points_per_frame.max(1)),
                         motion_blur_samples: 1,
                         shutter: 0.5,
+                        renderer: crate::record::Renderer::Chaos,
                     };
                     let rec = Recorder::new(&scene, settings).map_err(|e| e.to_string())?;
                     std::fs::create_dir_all(&dir).map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
