@@ -14,12 +14,13 @@ use super::command::Command;
 use super::state::ViewerState;
 use super::widgets::slider;
 
-/// What the "p" of a function means here, shown when the pointer rests on it.
+/// What the "p" of a function means here, shown when the pointer rests on it. (Only glyphs
+/// that the bundled font draws: it has Σ and ≈ but no arrows and no ∝.)
 pub const PROBABILITY_HELP: &str = "p: how often the chaos game applies this function.\n\
     Only ratios matter: the weights are normalized to shares that sum to 1 over the enabled \
     functions (the share is shown after the weight).\n\
     Automatic (the default): the shares follow from how much each function shrinks, \
-    p ∝ s^D with s its mean linear scale and D the similarity dimension (Σ s^D = 1); no function \
+    p proportional to s^D, with s its mean linear scale and D the similarity dimension (Σ s^D = 1); no function \
     gets less than a tenth of an equal share, so thin parts still fill. Adaptive: the same rule \
     with the scale at each point.\n\
     Changing a p makes the probabilities explicit, every other function keeping its current \
@@ -157,11 +158,11 @@ pub fn builder_ui(ui: &mut egui::Ui, state: &ViewerState, commands: &mut Vec<Com
             for (k, step) in builder.steps.iter().enumerate() {
                 ui.horizontal(|ui| {
                     ui.label(format!("{}. {}", k + 1, step_title(step)));
-                    if ui.add_enabled(k > 0, egui::Button::new("↑").small()).on_hover_text("move up").clicked() {
+                    if ui.add_enabled(k > 0, egui::Button::new("up").small()).on_hover_text("move up").clicked() {
                         commands.push(Command::MoveBuilderStep { function, from: k, to: k - 1 });
                     }
                     if ui
-                        .add_enabled(k + 1 < count, egui::Button::new("↓").small())
+                        .add_enabled(k + 1 < count, egui::Button::new("down").small())
                         .on_hover_text("move down")
                         .clicked()
                     {
