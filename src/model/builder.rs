@@ -95,6 +95,43 @@ pub enum Step {
     },
 }
 
+/// What a step does, without its numbers: the choice offered when a step is added.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum StepKind {
+    Scale,
+    Rotate,
+    Translate,
+    Taper,
+    Twist,
+    Bend,
+    Affine,
+}
+
+impl StepKind {
+    pub const ALL: [StepKind; 7] = [
+        StepKind::Scale,
+        StepKind::Rotate,
+        StepKind::Translate,
+        StepKind::Taper,
+        StepKind::Twist,
+        StepKind::Bend,
+        StepKind::Affine,
+    ];
+
+    /// The step's `op` in the scene format.
+    pub fn name(self) -> &'static str {
+        match self {
+            StepKind::Scale => "scale",
+            StepKind::Rotate => "rotate",
+            StepKind::Translate => "translate",
+            StepKind::Taper => "taper",
+            StepKind::Twist => "twist",
+            StepKind::Bend => "bend",
+            StepKind::Affine => "affine",
+        }
+    }
+}
+
 /// Linear ramp from 0 at `range[0]` to 1 at `range[1]`, clamped.
 fn ramp(x: f64, range: [f64; 2]) -> f64 {
     let len = range[1] - range[0];
@@ -115,6 +152,44 @@ fn rotate_about(p: DVec3, axis: Axis, radians: f64, center: DVec3) -> DVec3 {
 }
 
 impl Step {
+    pub fn kind(&self) -> StepKind {
+        match self {
+            Step::Scale { .. } => StepKind::Scale,
+            Step::Rotate { .. } => StepKind::Rotate,
+            Step::Translate { .. } => StepKind::Translate,
+            Step::Taper { .. } => StepKind::Taper,
+            Step::Twist { .. } => StepKind::Twist,
+            Step::Bend { .. } => StepKind::Bend,
+            Step::Affine { .. } => StepKind::Affine,
+        }
+    }
+
+    /// A step of `kind` that changes nothing (scale 1, angle 0, amount 0, the identity), on the
+    /// grid box [`lo`, `hi`] of dimension `dim`: centred on the box, its range the box's extent
+    /// along the step's axis, with the axes the scene format defaults to (y in 3D; in 2D
+    /// rotations and twists about z, the twist growing along y, the bend from y towards x).
+    /// Added to a builder it leaves the map as it was, and its parameters then shape it.
+    pub fn identity(kind: StepKind, dim: usize, lo: DVec3, hi: DVec3) -> Step {
+        let center = 0.5 * (lo + hi);
+        let range = |a: Axis| [lo[a.index()], hi[a.index()]];
+        let about = if dim == 2 { Axis::Z } else { Axis::Y };
+        match kind {
+            StepKind::Scale => Step::Scale { by: DVec3::ONE, center },
+            StepKind::Rotate => Step::Rotate { axis: about, degrees: 0.0, center },
+            StepKind::Translate => Step::Translate { by: DVec3::ZERO },
+            StepKind::Taper => Step::Taper { axis: Axis::Y, amount: 0.0, range: range(Axis::Y), center },
+            StepKind::Twist => Step::Twist { axis: about, along: Axis::Y, degrees: 0.0, range: range(Axis::Y), center },
+            StepKind::Bend => {
+                Step::Bend { axis: Axis::Y, toward: Axis::X, degrees: 0.0, range: range(Axis::Y), center }
+            }
+            StepKind::Affine => {
+                // A 2D affine map has zeros in its z row and column, as the scene format reads it.
+                let matrix = if dim == 2 { DMat3::from_diagonal(DVec3::new(1.0, 1.0, 0.0)) } else { DMat3::IDENTITY };
+                Step::Affine { matrix, offset: DVec3::ZERO }
+            }
+        }
+    }
+
     pub fn apply(&self, p: DVec3) -> DVec3 {
         match *self {
             Step::Scale { by, center } => center + (p - center) * by,
@@ -179,6 +254,25 @@ impl Builder {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn identity_steps_change_nothing() {
+        let (lo, hi) = (DVec3::new(-1.0, 0.0, 2.0), DVec3::new(3.0, 5.0, 4.0));
+        for dim in [2usize, 3] {
+            for kind in StepKind::ALL {
+                let step = Step::identity(kind, dim, lo, hi);
+                assert_eq!(step.kind(), kind);
+                for k in 0..27 {
+                    let t = DVec3::new((k % 3) as f64, ((k / 3) % 3) as f64, (k / 9) as f64) / 2.0;
+                    let mut p = lo + (hi - lo) * t;
+                    if dim == 2 {
+                        p.z = 0.0;
+                    }
+                    assert!(step.apply(p).distance(p) < 1e-12, "{kind:?} in {dim}D moved {p}");
+                }
+            }
+        }
+    }
 
     #[test]
     fn taper_scales_linearly() {

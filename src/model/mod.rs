@@ -5,6 +5,7 @@
 //! scene (`crate::scene`) keeps the editable parameters and produces an `Ifs` for a given time.
 
 pub mod builder;
+pub mod fit;
 pub mod grid;
 pub mod nesting;
 

@@ -67,24 +67,14 @@ impl ViewerState {
                     self.ui.file_changed_on_disk = true;
                     self.scene_mtime = self.scene_path.as_deref().and_then(mtime).or(self.scene_mtime);
                 }
+                // Undoable, in `authoring.rs`.
                 Command::SetFunctionEnabled { function, enabled } => {
-                    if let Some(f) = self.scene.functions.get_mut(function) {
-                        f.enabled = enabled;
-                        edited = true;
-                    }
+                    edited |= self.set_function_enabled(function, enabled)
                 }
                 Command::SetFunctionProbability { function, probability } => {
-                    if let Some(f) = self.scene.functions.get_mut(function) {
-                        f.probability = probability.map(|p| p.max(0.0));
-                        edited = true;
-                    }
+                    edited |= self.set_function_probability(function, probability)
                 }
-                Command::SetFunctionColor { function, color } => {
-                    if let Some(f) = self.scene.functions.get_mut(function) {
-                        f.color = color;
-                        edited = true;
-                    }
-                }
+                Command::SetFunctionColor { function, color } => edited |= self.set_function_color(function, color),
                 Command::SetBuilderStep { function, step, value } => {
                     edited |= self.set_builder_step(function, step, value);
                 }
@@ -377,6 +367,16 @@ impl ViewerState {
                 }
                 Command::CancelRecord => changes.jobs.push(JobRequest::CancelRecord),
                 Command::CloseRaytraceImage => changes.jobs.push(JobRequest::CloseImage),
+
+                // Authoring (`authoring.rs`).
+                Command::SetFunctionKind { function, kind } => edited |= self.set_function_kind(function, kind),
+                Command::SetProbabilityMode(mode) => edited |= self.set_probability_mode(mode),
+                Command::InsertBuilderStep { function, index, kind } => {
+                    edited |= self.insert_builder_step(function, index, kind)
+                }
+                Command::RemoveBuilderStep { function, step } => edited |= self.remove_builder_step(function, step),
+                Command::MoveBuilderStep { function, from, to } => edited |= self.move_builder_step(function, from, to),
+                Command::MoveKey { key, t_secs } => edited |= self.move_key(key, t_secs),
             }
         }
         if edited {

@@ -7,8 +7,10 @@ use std::path::PathBuf;
 use glam::DVec3;
 
 use crate::camera::{OrbitCamera, Projection};
+use crate::edit::FunctionKind;
 use crate::live::LiveSettings;
-use crate::model::builder::Step;
+use crate::model::ProbabilityMode;
+use crate::model::builder::{Step, StepKind};
 use crate::scene::Scene;
 use crate::scene::timeline::{Ease, Interpolation, LoopMode};
 
@@ -170,6 +172,41 @@ pub enum Command {
     ConfirmJob(bool),
     CancelRecord,
     CloseRaytraceImage,
+
+    // Authoring: a function's kind and probabilities, a builder's steps, key times. Each is one
+    // undo step (a drag of a key is one gesture).
+    /// Changes a function's kind, keeping the map as close as the kind allows (the message
+    /// says when the change was only approximate).
+    SetFunctionKind {
+        function: usize,
+        kind: FunctionKind,
+    },
+    /// How the chaos game picks functions. Explicit fills every function's weight with its
+    /// current share; back to an automatic mode clears the weights.
+    SetProbabilityMode(ProbabilityMode),
+    /// Inserts an identity step of `kind` (it changes nothing until its parameters are set) at
+    /// position `index` of a builder's steps.
+    InsertBuilderStep {
+        function: usize,
+        index: usize,
+        kind: StepKind,
+    },
+    RemoveBuilderStep {
+        function: usize,
+        step: usize,
+    },
+    /// Moves a builder's step `from` to position `to`.
+    MoveBuilderStep {
+        function: usize,
+        from: usize,
+        to: usize,
+    },
+    /// Drags key `key` towards `t_secs` (clamped between its neighbours and inside the
+    /// timeline); part of the running gesture, so that a whole drag is one undo step.
+    MoveKey {
+        key: usize,
+        t_secs: f64,
+    },
 }
 
 /// What the user answered when closing with unsaved edits.

@@ -21,10 +21,12 @@
 
 pub mod actions;
 pub mod apply;
+mod authoring;
 pub mod clock;
 pub mod command;
 mod frame_log;
 pub mod framing;
+pub mod functions_ui;
 pub mod grid_edit_ui;
 mod input;
 pub mod jobs;

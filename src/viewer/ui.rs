@@ -1,12 +1,11 @@
 //! The viewer's egui panels. Each `*_ui` function reads the [`ViewerState`] and pushes
 //! [`Command`]s; none of them changes the state directly.
 
-use egui::{Color32, RichText};
+use egui::Color32;
 
 use crate::camera::Projection;
 use crate::live::ChaosBackend;
-use crate::model::builder::Step;
-use crate::scene::spec::{FunctionDef, SplatMode};
+use crate::scene::spec::SplatMode;
 
 use super::command::Command;
 use super::jobs::JobView;
@@ -36,10 +35,10 @@ pub fn panels_ui(
         egui::ScrollArea::vertical().auto_shrink([false, false]).show(ui, |ui| {
             ui.heading("nlifs");
             scene_ui(ui, state, commands);
-            functions_ui(ui, state, commands);
+            super::functions_ui::functions_ui(ui, state, commands);
             super::grid_edit_ui::grid_edit_ui(ui, state, commands);
             super::nesting_ui::nesting_ui(ui, state, commands);
-            builder_ui(ui, state, commands);
+            super::functions_ui::builder_ui(ui, state, commands);
             render_ui(ui, state, commands);
             statistics_ui(ui, state);
             screenshot_ui(ui, state, commands);
@@ -124,114 +123,6 @@ fn scene_ui(ui: &mut egui::Ui, state: &ViewerState, commands: &mut Vec<Command>)
         }
         if let Some(m) = &state.message {
             ui.small(m);
-        }
-    });
-}
-
-fn functions_ui(ui: &mut egui::Ui, state: &ViewerState, commands: &mut Vec<Command>) {
-    egui::CollapsingHeader::new("Functions").default_open(true).show(ui, |ui| {
-        for (i, f) in state.scene.functions.iter().enumerate() {
-            ui.horizontal(|ui| {
-                let mut enabled = f.enabled;
-                if ui.checkbox(&mut enabled, &f.name).changed() {
-                    commands.push(Command::SetFunctionEnabled { function: i, enabled });
-                }
-                let mut color = f.color;
-                if ui.color_edit_button_rgb(&mut color).changed() {
-                    commands.push(Command::SetFunctionColor { function: i, color });
-                }
-                let mut explicit = f.probability.is_some();
-                let mut p = f.probability.unwrap_or(0.0);
-                if ui
-                    .checkbox(&mut explicit, "p")
-                    .on_hover_text(
-                        "explicit probability of choosing this function; unticked, it follows the scene's \
-                         probability rule (from the functions' volumes or equal)",
-                    )
-                    .changed()
-                {
-                    commands.push(Command::SetFunctionProbability {
-                        function: i,
-                        probability: explicit.then_some(p.max(0.01)),
-                    });
-                }
-                if explicit && ui.add(slider(&mut p, 0.0..=1.0).max_decimals(3)).changed() {
-                    commands.push(Command::SetFunctionProbability { function: i, probability: Some(p) });
-                }
-                if ui.small_button("copy").on_hover_text("duplicate (Shift+D with it selected)").clicked() {
-                    commands.push(Command::DuplicateFunction(i));
-                }
-                let deletable = state.scene.functions.len() > 1;
-                if ui
-                    .add_enabled(deletable, egui::Button::new("×").small())
-                    .on_hover_text("delete (Delete with it selected)")
-                    .clicked()
-                {
-                    commands.push(Command::DeleteFunction(i));
-                }
-            });
-        }
-        if ui.button("Add function").on_hover_text("an affine map halving the grid (Shift+A)").clicked() {
-            commands.push(Command::AddFunction);
-        }
-    });
-}
-
-/// Sliders for the amounts of every builder step (taper, twist, bend, rotate, scale,
-/// translate); a change is applied live.
-fn builder_ui(ui: &mut egui::Ui, state: &ViewerState, commands: &mut Vec<Command>) {
-    let builders: Vec<_> = state
-        .scene
-        .functions
-        .iter()
-        .enumerate()
-        .filter_map(|(i, f)| match state.scene.function_def_at(i, state.t_secs) {
-            FunctionDef::Builder { builder, .. } => Some((i, &f.name, builder)),
-            _ => None,
-        })
-        .collect();
-    if builders.is_empty() {
-        return;
-    }
-    egui::CollapsingHeader::new("Builder parameters").default_open(true).show(ui, |ui| {
-        for (function, name, builder) in builders {
-            ui.label(RichText::new(name.as_str()).strong());
-            for (k, step) in builder.steps.iter().enumerate() {
-                let mut value = step.clone();
-                let changed = match &mut value {
-                    Step::Taper { axis, amount, .. } => {
-                        ui.add(slider(amount, -1.0..=1.0).text(format!("taper {}", axis.name()))).changed()
-                    }
-                    Step::Twist { axis, degrees, .. } => {
-                        ui.add(slider(degrees, -360.0..=360.0).text(format!("twist {} °", axis.name()))).changed()
-                    }
-                    Step::Bend { axis, degrees, .. } => {
-                        ui.add(slider(degrees, -180.0..=180.0).text(format!("bend {} °", axis.name()))).changed()
-                    }
-                    Step::Rotate { axis, degrees, .. } => {
-                        ui.add(slider(degrees, -180.0..=180.0).text(format!("rotate {} °", axis.name()))).changed()
-                    }
-                    Step::Scale { by, .. } => {
-                        let mut c = false;
-                        for (a, label) in ["scale x", "scale y", "scale z"].iter().enumerate() {
-                            c |= ui.add(slider(&mut by[a], 0.0..=1.5).text(*label)).changed();
-                        }
-                        c
-                    }
-                    Step::Translate { by } => {
-                        let mut c = false;
-                        for (a, label) in ["move x", "move y", "move z"].iter().enumerate() {
-                            let r = 2.0 * (state.scene.domain.max() - state.scene.domain.min())[a].abs().max(1.0);
-                            c |= ui.add(slider(&mut by[a], -r..=r).text(*label)).changed();
-                        }
-                        c
-                    }
-                    Step::Affine { .. } => false,
-                };
-                if changed {
-                    commands.push(Command::SetBuilderStep { function, step: k, value });
-                }
-            }
         }
     });
 }

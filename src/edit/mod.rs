@@ -7,7 +7,8 @@
 //! (before = the value at the press) to [`History::record_applied`]; or apply edits through
 //! [`History::apply`]. Edits address a function's definition in the base scene (`key: None`)
 //! or its override in key `key` of the timeline; the `*_at_playhead` constructors choose,
-//! creating the key at the playhead when there is none.
+//! creating the key at the playhead when there is none. Edits that change a function's
+//! structure (its kind, a builder's list of steps) are in `structure.rs`.
 
 use glam::DVec3;
 
@@ -15,6 +16,14 @@ use crate::model::builder::Step;
 use crate::scene::Scene;
 use crate::scene::spec::{self, FunctionDef};
 use crate::scene::timeline::{self, Key, Timeline};
+
+mod structure;
+
+pub use structure::{FunctionKind, KindChange};
+
+/// The least time between two keys that a key drag leaves: a millisecond, far above
+/// [`timeline::KEY_TIME_TOL_SECS`], so that two keys never read as one.
+pub const MIN_KEY_GAP_SECS: f64 = 1e-3;
 
 #[derive(Debug, thiserror::Error, PartialEq)]
 pub enum EditError {
@@ -32,6 +41,8 @@ pub enum EditError {
     NoStep { function: usize, step: usize, count: usize },
     #[error("the new definition of function {function} {message}")]
     Structure { function: usize, message: String },
+    #[error("function {function} is a {kind} function, which has no grid, builder or affine form")]
+    NoConversion { function: usize, kind: &'static str },
     #[error("the scene is not in the state this edit expects (it was made for another scene, or edits were skipped)")]
     Stale,
 }
@@ -59,6 +70,13 @@ pub enum Edit {
         index: usize,
         before: Key,
         after: Key,
+    },
+    /// Key `index` moved in time from `before_secs` to `after_secs`, staying between its
+    /// neighbours (keys keep their order).
+    MoveKey {
+        index: usize,
+        before_secs: f64,
+        after_secs: f64,
     },
     /// The timeline's duration (period in loop mode).
     SetDuration {
@@ -199,6 +217,24 @@ impl Edit {
         Ok(Edit::DeleteKey { index, key: tl.keys.get(index).ok_or(EditError::NoKey(index))?.clone() })
     }
 
+    /// Moves key `index` towards `t_secs`, clamped so that it stays at least
+    /// [`MIN_KEY_GAP_SECS`] from its neighbours and inside the timeline (`[0, duration]`; in
+    /// loop mode before the period's end, where the first key comes again).
+    pub fn move_key(scene: &Scene, index: usize, t_secs: f64) -> Result<Edit, EditError> {
+        let tl = scene.timeline.as_ref().ok_or(EditError::NoTimeline)?;
+        let key = tl.keys.get(index).ok_or(EditError::NoKey(index))?;
+        let end = if tl.loop_mode == timeline::LoopMode::Loop {
+            tl.duration_secs - MIN_KEY_GAP_SECS
+        } else {
+            tl.duration_secs
+        };
+        let lo = index.checked_sub(1).map_or(0.0, |k| tl.keys[k].t_secs + MIN_KEY_GAP_SECS);
+        let hi = tl.keys.get(index + 1).map_or(end, |k| k.t_secs - MIN_KEY_GAP_SECS);
+        // No room between the neighbours (or a time that is not a number): the key stays.
+        let after_secs = if t_secs.is_finite() && lo <= hi { t_secs.clamp(lo, hi) } else { key.t_secs };
+        Ok(Edit::MoveKey { index, before_secs: key.t_secs, after_secs })
+    }
+
     /// The edit that undoes this one.
     pub fn inverse(&self) -> Edit {
         match self.clone() {
@@ -208,6 +244,9 @@ impl Edit {
             Edit::InsertKey { index, key } => Edit::DeleteKey { index, key },
             Edit::DeleteKey { index, key } => Edit::InsertKey { index, key },
             Edit::ReplaceKey { index, before, after } => Edit::ReplaceKey { index, before: after, after: before },
+            Edit::MoveKey { index, before_secs, after_secs } => {
+                Edit::MoveKey { index, before_secs: after_secs, after_secs: before_secs }
+            }
             Edit::SetTimeline { before, after } => Edit::SetTimeline { before: after, after: before },
             Edit::SetDuration { before, after } => Edit::SetDuration { before: after, after: before },
             Edit::ReplaceScene { before, after } => Edit::ReplaceScene { before: after, after: before },
@@ -247,11 +286,20 @@ impl Edit {
             Edit::ReplaceKey { index, after, .. } => {
                 scene.timeline.as_mut().ok_or(EditError::NoTimeline)?.keys[index] = after;
             }
+            Edit::MoveKey { index, after_secs, .. } => {
+                scene.timeline.as_mut().ok_or(EditError::NoTimeline)?.keys[index].t_secs = after_secs;
+            }
             Edit::SetTimeline { after, .. } => scene.timeline = after,
             Edit::SetDuration { after, .. } => {
                 scene.timeline.as_mut().ok_or(EditError::NoTimeline)?.duration_secs = after
             }
-            Edit::ReplaceScene { after, .. } => *scene = *after,
+            Edit::ReplaceScene { after, .. } => {
+                // The file the scene lives in is not part of the edit (a "save as" between an
+                // edit and its undo moves the scene to another file).
+                let path = scene.path.take();
+                *scene = *after;
+                scene.path = path;
+            }
             Edit::Batch(_) => unreachable!("handled above"),
         }
         Ok(())
@@ -301,12 +349,25 @@ impl Edit {
                 }
                 Ok(())
             }
+            Edit::MoveKey { index, before_secs, after_secs } => {
+                let ks = keys()?;
+                let tol = timeline::KEY_TIME_TOL_SECS;
+                let ordered = ks.get(*index).is_some_and(|k| k.t_secs == *before_secs)
+                    && after_secs.is_finite()
+                    && *after_secs >= 0.0
+                    && index.checked_sub(1).is_none_or(|k| ks[k].t_secs + tol < *after_secs)
+                    && ks.get(index + 1).is_none_or(|k| k.t_secs - tol > *after_secs);
+                ordered.then_some(()).ok_or(EditError::Stale)
+            }
             Edit::SetTimeline { before, .. } => (&scene.timeline == before).then_some(()).ok_or(EditError::Stale),
             Edit::SetDuration { before, .. } => {
                 let tl = scene.timeline.as_ref().ok_or(EditError::NoTimeline)?;
                 (tl.duration_secs == *before).then_some(()).ok_or(EditError::Stale)
             }
-            Edit::ReplaceScene { before, .. } => (scene == before.as_ref()).then_some(()).ok_or(EditError::Stale),
+            Edit::ReplaceScene { before, .. } => {
+                let same = Scene { path: before.path.clone(), ..scene.clone() } == **before;
+                same.then_some(()).ok_or(EditError::Stale)
+            }
             Edit::Batch(_) => Ok(()),
         }
     }
