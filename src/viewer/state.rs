@@ -164,6 +164,8 @@ pub struct ViewerState {
     pub ui: UiState,
     /// The user moved the camera since it was last framed: a resize keeps it.
     pub camera_moved: bool,
+    /// Recent files, file dialogs, the error shown over the view (`files.rs`).
+    pub files: super::files::FilesState,
 }
 
 pub(super) fn mtime(path: &Path) -> Option<SystemTime> {
@@ -222,6 +224,7 @@ impl ViewerState {
                 job_confirm: None,
             },
             camera_moved: false,
+            files: super::files::FilesState::default(),
         };
         state.edit.save_text = state.default_save_text();
         state.live.seed = state.scene.render.seed;
