@@ -5,7 +5,7 @@
 //!
 //! A file that cannot be opened (a scene with an error, located as file:line:col; a PNG without
 //! a scene inside; any other kind of file) leaves the current scene in place and shows the
-//! error over the view ([`FilesState::view_error`]), as a reload that fails does. Opening over
+//! error over the view (`FilesState::view_error`, in `files_state.rs`), as a reload that fails does. Opening over
 //! unsaved edits asks Save / Discard / Cancel first, as closing does.
 
 use std::path::{Path, PathBuf};
@@ -14,23 +14,6 @@ use super::apply::Changes;
 use super::command::{Command, FileDialogKind, FileDialogRequest};
 use super::recent::{self, RecentFiles};
 use super::state::ViewerState;
-
-/// Files, dialogs and what the machine offers for them.
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct FilesState {
-    /// Where the recent files list is kept (None: only in memory).
-    pub config_dir: Option<PathBuf>,
-    pub recent: RecentFiles,
-    /// A file that did not open or reload, said over the view until dismissed or until a scene
-    /// loads.
-    pub view_error: Option<String>,
-    /// Native file dialogs can be shown here (a desktop portal or zenity).
-    pub native_dialogs: bool,
-    /// ffmpeg runs here (the record form's video).
-    pub ffmpeg: bool,
-    /// A native dialog is open (one at a time).
-    pub dialog_open: bool,
-}
 
 /// Says what to do where no native dialog can be shown.
 pub fn no_dialog_notice(kind: FileDialogKind) -> String {

@@ -17,7 +17,7 @@
 //! command logic), `picking.rs` (projection, picking and drag maths on a `SplatView`), the UI
 //! files that read the state and emit commands (`ui.rs` with the side panel, `grid_edit_ui.rs`,
 //! `jobs_ui.rs`, `timeline_ui.rs`), `ui_layer.rs` (egui on wgpu) and `jobs.rs`. State, command
-//! and apply import no UI file. Files: `files.rs` (open, save, drops, as commands), `recent.rs`
+//! and apply import no UI file. Files: `files.rs` (open, save, drops, as commands; its state in `files_state.rs`), `recent.rs`
 //! (the recent files list), `dialogs.rs` (native dialogs on a thread of their own); the job
 //! forms' checks are in `job_plan.rs`.
 
@@ -27,6 +27,7 @@ pub mod clock;
 pub mod command;
 pub mod dialogs;
 pub mod files;
+pub mod files_state;
 mod frame_log;
 pub mod framing;
 pub mod grid_edit_ui;

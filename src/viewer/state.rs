@@ -165,7 +165,7 @@ pub struct ViewerState {
     /// The user moved the camera since it was last framed: a resize keeps it.
     pub camera_moved: bool,
     /// Recent files, file dialogs, the error shown over the view (`files.rs`).
-    pub files: super::files::FilesState,
+    pub files: super::files_state::FilesState,
 }
 
 pub(super) fn mtime(path: &Path) -> Option<SystemTime> {
@@ -224,7 +224,7 @@ impl ViewerState {
                 job_confirm: None,
             },
             camera_moved: false,
-            files: super::files::FilesState::default(),
+            files: super::files_state::FilesState::default(),
         };
         state.edit.save_text = state.default_save_text();
         state.live.seed = state.scene.render.seed;
