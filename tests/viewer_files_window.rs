@@ -2,7 +2,8 @@
 //! remembered in the recent files (in a config folder the test chooses); when the scene file is
 //! broken on disk, the failed reload is said over the view (a red banner with the located
 //! error) while the attractor stays; fixing the file takes the banner away; and Ctrl+O, where
-//! no file dialog can be shown, says to use the path fields instead of freezing or failing.
+//! no file dialog can be shown, says in a toast to use the path fields instead of freezing or
+//! failing.
 //!
 //! Needs Xvfb, xdotool, imagemagick and a GPU adapter (lavapipe will do); without them it skips
 //! loudly, unless NLIFS_REQUIRE_GPU=1, in which case it fails. Screenshots are kept in the
@@ -61,6 +62,18 @@ fn banner_pixels(img: &image::RgbImage) -> usize {
         for x in VIEW_X0..img.width() {
             let p = img.get_pixel(x, y).0;
             n += (near(p, [62, 18, 9]) || near(p, [255, 140, 120])) as usize;
+        }
+    }
+    n
+}
+
+/// Pixels of a toast's fill (egui's popup grey, 27 in every channel, within 3 levels) in the
+/// bottom band of the view, where toasts show; the view's own background is darker and bluer.
+fn toast_pixels(img: &image::RgbImage) -> usize {
+    let mut n = 0;
+    for y in img.height().saturating_sub(120)..img.height() {
+        for x in VIEW_X0..img.width() {
+            n += img.get_pixel(x, y).0.iter().all(|&c| (c as i32 - 27).abs() <= 3) as usize;
         }
     }
     n
@@ -164,6 +177,9 @@ fn a_broken_reload_is_said_over_the_view_and_ctrl_o_without_a_dialog_explains() 
     std::fs::write(&scene, &good).unwrap();
     let gone = wait_for(20, || banner_pixels(&screenshot(&display, &shot("fixed"))) < 50);
     assert!(gone, "the error stayed after the file was fixed; see {}", shot("fixed").display());
+    // Whatever toast was up is gone after its 4 s.
+    std::thread::sleep(Duration::from_secs(5));
+    let before = toast_pixels(&screenshot(&display, &shot("fixed")));
 
     // Ctrl+O with no dialog to show: a notice, the viewer keeps running.
     let focus = Command::new("xdotool")
@@ -177,5 +193,12 @@ fn a_broken_reload_is_said_over_the_view_and_ctrl_o_without_a_dialog_explains() 
     let notice = screenshot(&display, &shot("ctrl-o"));
     assert!(viewer.0.try_wait().unwrap().is_none(), "the viewer exited after Ctrl+O");
     assert!(lit_pixels(&notice) > 2000, "see {}", shot("ctrl-o").display());
+    // The notice is a toast of some 500 × 40 pixels.
+    let toast = toast_pixels(&notice);
+    assert!(
+        toast > before + 5000,
+        "no notice after Ctrl+O ({toast} vs {before} grey pixels); see {}",
+        shot("ctrl-o").display()
+    );
     eprintln!("window files: screenshots in {}", dir.display());
 }
