@@ -260,8 +260,14 @@ fn ray_trace_and_record_jobs_run_in_the_background_and_cancel() {
     // Record the timeline (CPU): every frame written.
     let mut s = state_for("twist-anim.toml");
     let out = dir.join("frames");
-    let form =
-        RecordForm { width: 32, height: 24, fps: 2.0, points_per_frame: 2000, dir_text: out.display().to_string() };
+    let form = RecordForm {
+        width: 32,
+        height: 24,
+        fps: 2.0,
+        points_per_frame: 2000,
+        dir_text: out.display().to_string(),
+        ..Default::default()
+    };
     for r in s.apply([Command::SetRecordForm(form.clone()), Command::StartRecord]).jobs {
         jobs.handle(r);
     }

@@ -46,6 +46,7 @@ impl ViewerState {
                 self.ui.toast = self.message.clone();
                 self.recovery_file = self.recovery_dir.as_deref().map(|d| recovery::recovery_path(d, Some(path)));
                 self.recovery_written = None;
+                self.remember_recent(path);
             }
             Err(e) => self.error = Some(format!("cannot save {}: {e}", path.display())),
         }
@@ -90,9 +91,9 @@ impl ViewerState {
         }
     }
 
-    /// Esc: cancels a job waiting for its confirmation, else closes the close dialog, else the recovery offer (its file kept), else the
-    /// shortcuts overlay, else cancels a running point drag (the point goes back). True when
-    /// the scene changed.
+    /// Esc: cancels a job waiting for its confirmation, else closes the close dialog, else the
+    /// recovery offer (its file kept), else the shortcuts overlay, else the error over the view,
+    /// else cancels a running point drag (the point goes back). True when the scene changed.
     pub(super) fn escape(&mut self) -> bool {
         if self.ui.job_confirm.is_some() {
             // Esc is Cancel.
@@ -104,6 +105,8 @@ impl ViewerState {
             self.recovery_offer = None;
         } else if self.ui.shortcuts_shown {
             self.ui.shortcuts_shown = false;
+        } else if self.files.view_error.is_some() {
+            self.files.view_error = None;
         } else if self.edit.gesture.as_ref().is_some_and(|g| g.drag.is_some()) {
             let gesture = self.edit.gesture.take().unwrap_or_default();
             for e in gesture.edits.iter().rev() {
@@ -189,7 +192,9 @@ impl ViewerState {
         after.camera = camera;
         let done = self.apply_edit(Edit::ReplaceScene { before: Box::new(self.scene.clone()), after: Box::new(after) });
         if done {
-            self.message = Some("the view is the scene's camera now (save to keep it)".into());
+            let notice = "the view is the scene's camera now (Ctrl+S writes it to the file)";
+            self.message = Some(notice.into());
+            self.ui.toast = Some(notice.into());
         }
         done
     }
@@ -222,8 +227,18 @@ impl ViewerState {
         }
     }
 
-    /// Starts `job`, or, when a function may not be contractive, holds it and asks first.
+    /// Starts `job`, or, when a function may not be contractive, holds it and asks first. A
+    /// ray-trace past the node budget or a recording the form cannot make does not start (the
+    /// form says why; so does the panel's error line).
     pub(super) fn start_job(&mut self, job: JobKind, changes: &mut Changes) {
+        let refusal = match job {
+            JobKind::Raytrace => self.raytrace_estimate().refusal(),
+            JobKind::Record => self.record_plan().err(),
+        };
+        if let Some(why) = refusal {
+            self.error = Some(format!("cannot start: {why}"));
+            return;
+        }
         let doubts = self.contractivity_doubts();
         if doubts.is_empty() {
             changes.jobs.push(self.job_request(job));

@@ -18,7 +18,7 @@ use crate::scene::Scene;
 use crate::scene::spec::FunctionDef;
 use crate::scene::timeline::{Key, LoopMode};
 
-use super::command::{CloseChoice, Command, JobKind, JobRequest};
+use super::command::{CloseChoice, Command, FileDialogRequest, JobKind, JobRequest};
 use super::picking;
 use super::recovery;
 use super::state::{Gesture, PointDrag, ViewerState, mtime};
@@ -35,6 +35,8 @@ pub struct Changes {
     pub screenshot: Option<PathBuf>,
     /// Jobs to start or cancel.
     pub jobs: Vec<JobRequest>,
+    /// A native file dialog to show (`files.rs`).
+    pub file_dialog: Option<FileDialogRequest>,
 }
 
 impl ViewerState {
@@ -338,6 +340,7 @@ impl ViewerState {
                             self.history = History::default();
                             edited = true;
                             self.message = Some("restored unsaved edits".into());
+                            self.ui.toast = Some("restored the unsaved edits from the recovery file".into());
                         } else if let Some(file) = &self.recovery_file {
                             recovery::remove(file);
                         }
@@ -377,6 +380,13 @@ impl ViewerState {
                 Command::RemoveBuilderStep { function, step } => edited |= self.remove_builder_step(function, step),
                 Command::MoveBuilderStep { function, from, to } => edited |= self.move_builder_step(function, from, to),
                 Command::MoveKey { key, t_secs } => edited |= self.move_key(key, t_secs),
+                Command::Save
+                | Command::ShowFileDialog(_)
+                | Command::FileDialogDone { .. }
+                | Command::OpenFile(_)
+                | Command::SetConfigDir(_)
+                | Command::SetToolSupport { .. }
+                | Command::DismissViewError => self.file_command(command, &mut changes),
             }
         }
         if edited {
@@ -391,7 +401,7 @@ impl ViewerState {
     }
 
     /// Opens the scene at `path` in place of this one (its unsaved edits are gone).
-    fn open_scene(&mut self, path: &Path, changes: &mut Changes) {
+    pub(super) fn open_scene(&mut self, path: &Path, changes: &mut Changes) {
         if self.load(path) {
             let s = &self.scene.render;
             self.live.seed = s.seed;
@@ -405,6 +415,7 @@ impl ViewerState {
             changes.camera = true;
             changes.live_settings = true;
             self.message = Some(format!("opened {}", path.display()));
+            self.remember_recent(path);
             self.check_recovery();
         }
     }
@@ -426,13 +437,15 @@ impl ViewerState {
                 self.edit.selected_point = None;
                 self.edit.save_text = self.default_save_text();
                 self.playback.playing &= self.scene.timeline.is_some();
+                self.files.view_error = None;
                 self.recompile();
                 true
             }
             Err(e) => {
                 // Do not retry the same broken file every frame.
                 self.scene_mtime = mtime(path).or(self.scene_mtime);
-                self.error = Some(e.to_string());
+                // Over the view too, where the eye is (a dropped or reloaded file).
+                self.set_view_error(e.to_string());
                 false
             }
         }

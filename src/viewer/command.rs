@@ -207,6 +207,30 @@ pub enum Command {
         key: usize,
         t_secs: f64,
     },
+    // Files: dialogs, recent files, drops (`files.rs`).
+    /// Ctrl+S: saves to the save field's file, or asks where (Save As) for a scene without a
+    /// file of its own.
+    Save,
+    /// Opens the native Open or Save As dialog, or, where none can be shown, says how to do
+    /// without one (the path fields).
+    ShowFileDialog(FileDialogKind),
+    /// What the native dialog returned (None: cancelled, or no dialog could be shown).
+    FileDialogDone {
+        kind: FileDialogKind,
+        path: Option<PathBuf>,
+    },
+    /// A file dropped onto the window, picked in Open or in the recent files: a scene, or a
+    /// PNG that nlifs wrote (its scene opens). Anything else is an error shown in the view.
+    OpenFile(PathBuf),
+    /// Where the recent files list lives (None: nowhere); reads it.
+    SetConfigDir(Option<PathBuf>),
+    /// What this machine offers: native file dialogs, ffmpeg (the event loop finds out).
+    SetToolSupport {
+        native_dialogs: bool,
+        ffmpeg: bool,
+    },
+    /// Closes the error shown over the view.
+    DismissViewError,
 }
 
 /// What the user answered when closing with unsaved edits.
@@ -296,11 +320,28 @@ pub struct RecordForm {
     pub fps: f64,
     pub points_per_frame: u64,
     pub dir_text: String,
+    /// Frames `first..end` (end exclusive); None: every frame of the timeline.
+    pub frame_range: Option<(u32, u32)>,
+    /// The frames' image format (a video needs PNG frames).
+    pub format: crate::output::Format,
+    /// Encode the frames into a video with ffmpeg afterwards.
+    pub video: bool,
+    pub video_text: String,
 }
 
 impl Default for RecordForm {
     fn default() -> Self {
-        Self { width: 480, height: 360, fps: 24.0, points_per_frame: 500_000, dir_text: "nlifs-record".into() }
+        Self {
+            width: 480,
+            height: 360,
+            fps: 24.0,
+            points_per_frame: 500_000,
+            dir_text: "nlifs-record".into(),
+            frame_range: None,
+            format: crate::output::Format::Png,
+            video: false,
+            video_text: "nlifs-record.mp4".into(),
+        }
     }
 }
 
@@ -313,4 +354,23 @@ pub struct NestingView {
     pub level: u32,
     /// Faces filled faintly, not only outlined.
     pub translucent: bool,
+}
+
+/// The viewer's file dialogs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FileDialogKind {
+    /// Open a scene (or a PNG that nlifs wrote).
+    Open,
+    /// Save the scene to a file chosen in the dialog; it becomes the scene's file.
+    SaveAs,
+}
+
+/// A native dialog for the event loop to show, off its thread.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FileDialogRequest {
+    pub kind: FileDialogKind,
+    /// The folder it starts in (the scene's).
+    pub directory: Option<PathBuf>,
+    /// Save As: the file name it proposes.
+    pub file_name: Option<String>,
 }

@@ -1,23 +1,31 @@
 //! Long work the viewer starts and keeps running beside the UI: "ray-trace this view" and
 //! "record timeline". Each job runs on its own thread with an atomic progress counter and an
 //! atomic cancel flag; the event loop polls it once per frame ([`Jobs::poll`]) and the panel
-//! reads a plain-data [`JobView`]. Nothing here blocks the UI thread.
+//! reads a plain-data [`JobView`] with the fraction done and the time left ([`eta_secs`]).
+//! Nothing here blocks the UI thread. A recording runs the plan the form checked
+//! (`job_plan.rs`): its frames, their format, then the video through ffmpeg; another renderer
+//! for the frames would be one more field of that plan, chosen where the frames are made below.
 
 use std::path::PathBuf;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::thread::JoinHandle;
+use std::time::Instant;
 
 use crate::raytrace::{RaytraceSettings, Traced};
-use crate::record::{RecordSettings, Recorder};
+use crate::record::Recorder;
 
 use super::command::JobRequest;
+use super::job_plan::{self, RaytraceEstimate};
 
 struct Running<T> {
     cancel: Arc<AtomicBool>,
     done: Arc<AtomicU64>,
     total: Arc<AtomicU64>,
     handle: JoinHandle<T>,
+    /// When the first unit's total became known (a ray-trace builds its hierarchy first, with
+    /// no units to count): the time left is reckoned from there.
+    units_started: Option<Instant>,
 }
 
 impl<T: Send + 'static> Running<T> {
@@ -26,29 +34,82 @@ impl<T: Send + 'static> Running<T> {
             (Arc::new(AtomicBool::new(false)), Arc::new(AtomicU64::new(0)), Arc::new(AtomicU64::new(0)));
         let (c, d, t) = (cancel.clone(), done.clone(), total.clone());
         let handle = std::thread::Builder::new().name("nlifs-job".into()).spawn(move || work(&c, &d, &t))?;
-        Ok(Self { cancel, done, total, handle })
+        Ok(Self { cancel, done, total, handle, units_started: None })
     }
 
-    fn fraction(&self) -> f32 {
+    fn progress(&mut self) -> JobProgress {
         let total = self.total.load(Ordering::Relaxed);
-        if total == 0 { 0.0 } else { (self.done.load(Ordering::Relaxed) as f64 / total as f64) as f32 }
+        if total > 0 && self.units_started.is_none() {
+            self.units_started = Some(Instant::now());
+        }
+        JobProgress::new(
+            self.done.load(Ordering::Relaxed),
+            total,
+            self.units_started.map_or(0.0, |t| t.elapsed().as_secs_f64()),
+            self.cancel.load(Ordering::Relaxed),
+        )
+    }
+}
+
+/// How far a running job is.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct JobProgress {
+    /// Units done (rows, frames) of `total` (0: not known yet, e.g. while a hierarchy builds).
+    pub done: u64,
+    pub total: u64,
+    /// Seconds since the units started.
+    pub elapsed_secs: f64,
+    /// Time left at the rate so far (None until a unit is done).
+    pub eta_secs: Option<f64>,
+    /// Cancel was asked; the job stops at its next check.
+    pub cancelling: bool,
+}
+
+impl JobProgress {
+    pub fn new(done: u64, total: u64, elapsed_secs: f64, cancelling: bool) -> Self {
+        Self { done, total, elapsed_secs, eta_secs: eta_secs(elapsed_secs, done, total), cancelling }
+    }
+
+    /// Done over total in [0, 1] (0 while the total is not known).
+    pub fn fraction(&self) -> f32 {
+        if self.total == 0 { 0.0 } else { (self.done.min(self.total) as f64 / self.total as f64) as f32 }
+    }
+}
+
+/// Seconds left when `done` of `total` units took `elapsed_secs`, at the same rate; None before
+/// the first unit (no rate yet) or without a total. Units of one job cost about the same (rows
+/// of one image, frames of one timeline), so the average rate so far is the estimate.
+pub fn eta_secs(elapsed_secs: f64, done: u64, total: u64) -> Option<f64> {
+    if done == 0 || total == 0 || !elapsed_secs.is_finite() {
+        return None;
+    }
+    let left = total.saturating_sub(done) as f64;
+    Some(elapsed_secs.max(0.0) * left / done as f64)
+}
+
+/// A duration for people: `42 s`, `3 min 05 s`, `1 h 02 min`.
+pub fn format_secs(secs: f64) -> String {
+    let s = secs.max(0.0).round() as u64;
+    if s < 60 {
+        format!("{s} s")
+    } else if s < 3600 {
+        format!("{} min {:02} s", s / 60, s % 60)
+    } else {
+        format!("{} h {:02} min", s / 3600, (s % 3600) / 60)
     }
 }
 
 /// What the panel shows of the jobs.
 #[derive(Clone, Debug, Default)]
 pub struct JobView {
-    /// Progress in [0, 1] while a ray-trace runs.
-    pub raytrace: Option<f32>,
-    pub record: Option<f32>,
+    /// Progress while a ray-trace runs.
+    pub raytrace: Option<JobProgress>,
+    pub record: Option<JobProgress>,
     /// The last ray-traced image shown in a window.
     pub raytrace_image: Option<(egui::TextureId, [usize; 2])>,
     pub raytrace_message: Option<String>,
     pub record_message: Option<String>,
 }
-
-/// The most leaves a ray-trace from the viewer may build (about 1 GB of hierarchy).
-const MAX_LEAVES: f64 = 8.0e6;
 
 type RaytraceResult = (Result<Traced, String>, PathBuf);
 
@@ -57,6 +118,7 @@ pub struct Jobs {
     raytrace: Option<Running<RaytraceResult>>,
     record: Option<Running<Result<String, String>>>,
     texture: Option<egui::TextureHandle>,
+    notices: Vec<String>,
     pub view: JobView,
 }
 
@@ -72,18 +134,15 @@ impl Jobs {
                     width: form.width.clamp(16, 4096),
                     height: form.height.clamp(16, 4096),
                     spp: form.spp.clamp(1, 64),
-                    depth: form.depth.min(12),
+                    depth: job_plan::effective_depth(&form),
                     ..RaytraceSettings::default()
                 };
                 let png = PathBuf::from(form.png_text.trim());
-                // W^n(A) has m^n leaves: refuse what would not fit in memory rather than abort.
-                let m = scene.at(t_secs).active().len().max(1) as f64;
-                if m.powi(settings.depth as i32) > MAX_LEAVES {
-                    let depth = (MAX_LEAVES.ln() / m.ln()).floor();
-                    self.view.raytrace_message = Some(format!(
-                        "depth {} gives {m}^{} leaves; at most depth {depth} here",
-                        settings.depth, settings.depth
-                    ));
+                // The state refused this already (`job_plan.rs`); checked again so that no
+                // request builds past the budget.
+                let functions = scene.at(t_secs).active().len();
+                if let Some(why) = RaytraceEstimate::new(functions, job_plan::effective_depth(&form)).refusal() {
+                    self.view.raytrace_message = Some(why);
                     return;
                 }
                 let job = Running::spawn(move |cancel, done, total| {
@@ -114,33 +173,15 @@ impl Jobs {
                 if self.record.is_some() {
                     return;
                 }
-                let dir = PathBuf::from(form.dir_text.trim());
-                let job = Running::spawn(move |cancel, done, total| {
-                    let settings = RecordSettings {
-                        fps: form.fps.clamp(1.0, 240.0),
-                        width: form.width.clamp(16, 4096),
-                        height: form.height.clamp(16, 4096),
-                        points_per_frame: Some(form.points_per_frame.max(1)),
-                        motion_blur_samples: 1,
-                        shutter: 0.5,
-                        renderer: crate::record::Renderer::Chaos,
-                    };
-                    let rec = Recorder::new(&scene, settings).map_err(|e| e.to_string())?;
-                    std::fs::create_dir_all(&dir).map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
-                    let count = rec.frame_count();
-                    total.store(count as u64, Ordering::Relaxed);
-                    // Frame by frame through `record`, so a cancel stops between frames and
-                    // every written frame is whole (each is written atomically).
-                    for k in 0..count {
-                        if cancel.load(Ordering::Relaxed) {
-                            return Ok(format!("cancelled after {k} of {count} frames in {}", dir.display()));
-                        }
-                        crate::record::record(&rec, &dir, k..k + 1, false, &mut |_, _| {})
-                            .map_err(|e| e.to_string())?;
-                        done.store(k as u64 + 1, Ordering::Relaxed);
+                // ffmpeg was checked with the form; `encode_video` says so again if it went.
+                let plan = match job_plan::plan_record(&form, &scene, true) {
+                    Ok(plan) => plan,
+                    Err(why) => {
+                        self.view.record_message = Some(why);
+                        return;
                     }
-                    Ok(format!("recorded {count} frames to {}", dir.display()))
-                });
+                };
+                let job = Running::spawn(move |cancel, done, total| record_job(&scene, &plan, cancel, done, total));
                 match job {
                     Ok(job) => {
                         self.record = Some(job);
@@ -162,10 +203,10 @@ impl Jobs {
     }
 
     /// Collects finished jobs (uploading a ray-traced image as a texture) and refreshes the
-    /// view. True while a job runs (the event loop then keeps drawing for the progress bars).
+    /// view. True while a job runs. What a finished job says waits in [`Jobs::take_notices`].
     pub fn poll(&mut self, ctx: &egui::Context) -> bool {
-        self.view.raytrace = self.raytrace.as_ref().map(Running::fraction);
-        self.view.record = self.record.as_ref().map(Running::fraction);
+        self.view.raytrace = self.raytrace.as_mut().map(Running::progress);
+        self.view.record = self.record.as_mut().map(Running::progress);
         if self.raytrace.as_ref().is_some_and(|r| r.handle.is_finished())
             && let Some(r) = self.raytrace.take()
         {
@@ -194,6 +235,7 @@ impl Jobs {
                 Ok((Err(e), _)) => format!("ray-trace: {e}"),
                 Err(_) => "ray-trace failed (the thread panicked)".into(),
             });
+            self.notices.extend(self.view.raytrace_message.clone());
         }
         if self.record.as_ref().is_some_and(|r| r.handle.is_finished())
             && let Some(r) = self.record.take()
@@ -204,7 +246,51 @@ impl Jobs {
                 Ok(Err(e)) => format!("record: {e}"),
                 Err(_) => "record failed (the thread panicked)".into(),
             });
+            self.notices.extend(self.view.record_message.clone());
         }
         self.raytrace.is_some() || self.record.is_some()
     }
+
+    /// What jobs that finished since the last call said (for a toast each).
+    pub fn take_notices(&mut self) -> Vec<String> {
+        std::mem::take(&mut self.notices)
+    }
+}
+
+/// Records `plan`'s frames of `scene` one by one (a cancel stops between frames, and every
+/// written frame is whole: each is written atomically), then encodes the video.
+fn record_job(
+    scene: &crate::scene::Scene,
+    plan: &job_plan::RecordPlan,
+    cancel: &AtomicBool,
+    done: &AtomicU64,
+    total: &AtomicU64,
+) -> Result<String, String> {
+    let rec = Recorder::new(scene, plan.settings.clone()).map_err(|e| e.to_string())?;
+    let dir = &plan.dir;
+    std::fs::create_dir_all(dir).map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
+    let frames = plan.frames.clone();
+    let count = frames.len();
+    // The video's encoding counts as one more unit.
+    total.store(count as u64 + plan.video.is_some() as u64, Ordering::Relaxed);
+    for (n, k) in frames.clone().enumerate() {
+        if cancel.load(Ordering::Relaxed) {
+            return Ok(format!("cancelled after {n} of {count} frames in {}", dir.display()));
+        }
+        crate::record::record_as(&rec, dir, k..k + 1, false, &plan.options, &mut |_, _| {})
+            .map_err(|e| e.to_string())?;
+        done.store(n as u64 + 1, Ordering::Relaxed);
+    }
+    let format = match plan.options.format {
+        crate::output::Format::Png => String::new(),
+        other => format!("{} ", other.name()),
+    };
+    let frames_text = format!("{count} {format}frames to {}", dir.display());
+    let Some(video) = &plan.video else { return Ok(format!("recorded {frames_text}")) };
+    if cancel.load(Ordering::Relaxed) {
+        return Ok(format!("recorded {frames_text}; the video was cancelled"));
+    }
+    crate::record::encode_video(dir, frames, plan.settings.fps, video).map_err(|e| e.to_string())?;
+    done.store(count as u64 + 1, Ordering::Relaxed);
+    Ok(format!("recorded {frames_text} and the video {}", video.display()))
 }

@@ -1,24 +1,40 @@
 //! Panels for the background jobs (ray-trace this view, record the timeline) with their
-//! progress bars, and the window showing the last ray-traced image. They only read the state and
-//! the jobs' progress and emit commands; `jobs.rs` runs the jobs.
+//! progress bars, time left and Cancel, and the window showing the last ray-traced image. The
+//! forms show what `job_plan.rs` makes of them (the hierarchy's size, the frames to record, why
+//! a job cannot start, with its button disabled). They only read the state and the jobs'
+//! progress and emit commands; `jobs.rs` runs the jobs.
 
 use egui::{Color32, RichText};
 
+use crate::output::Format;
+
 use super::command::{Command, RaytraceForm, RecordForm};
-use super::jobs::JobView;
+use super::job_plan::{self, NODE_BUDGET};
+use super::jobs::{JobProgress, JobView, format_secs};
 use super::state::ViewerState;
 
+const ERROR_COLOR: Color32 = Color32::from_rgb(255, 110, 90);
+
+/// "37 % · 12 s left" with a Cancel button, while a job runs; then its last message.
 fn progress_ui(
     ui: &mut egui::Ui,
-    fraction: Option<f32>,
+    progress: Option<JobProgress>,
     message: &Option<String>,
     cancel: Command,
     commands: &mut Vec<Command>,
 ) {
-    if let Some(f) = fraction {
+    if let Some(p) = progress {
         ui.horizontal(|ui| {
-            ui.add(egui::ProgressBar::new(f).show_percentage().desired_width(180.0));
-            if ui.button("Cancel").clicked() {
+            let text = match (p.cancelling, p.eta_secs) {
+                (true, _) => "cancelling…".to_string(),
+                (false, _) if p.total == 0 => "preparing…".to_string(),
+                (false, Some(eta)) => {
+                    format!("{:.0} % · {} left", 100.0 * p.fraction(), format_secs(eta))
+                }
+                (false, None) => format!("{:.0} %", 100.0 * p.fraction()),
+            };
+            ui.add(egui::ProgressBar::new(p.fraction()).text(text).desired_width(190.0));
+            if ui.add_enabled(!p.cancelling, egui::Button::new("Cancel")).clicked() {
                 commands.push(cancel);
             }
         });
@@ -46,7 +62,21 @@ pub fn raytrace_ui(ui: &mut egui::Ui, state: &ViewerState, jobs: &JobView, comma
         if form != state.raytrace_form {
             commands.push(Command::SetRaytraceForm(form));
         }
-        if ui.add_enabled(jobs.raytrace.is_none(), egui::Button::new("Ray-trace this view")).clicked() {
+        let estimate = state.raytrace_estimate();
+        let refusal = estimate.refusal();
+        ui.small(format!(
+            "hierarchy: about {} nodes ({} functions, depth {}; about {}); budget {} nodes",
+            job_plan::format_count(estimate.nodes),
+            estimate.functions,
+            estimate.depth,
+            job_plan::format_bytes(estimate.bytes),
+            job_plan::format_count(NODE_BUDGET)
+        ));
+        if let Some(why) = &refusal {
+            ui.colored_label(ERROR_COLOR, why);
+        }
+        let can_start = jobs.raytrace.is_none() && refusal.is_none();
+        if ui.add_enabled(can_start, egui::Button::new("Ray-trace this view")).clicked() {
             commands.push(Command::StartRaytrace);
         }
         progress_ui(ui, jobs.raytrace, &jobs.raytrace_message, Command::CancelRaytrace, commands);
@@ -67,15 +97,45 @@ pub fn record_ui(ui: &mut egui::Ui, state: &ViewerState, jobs: &JobView, command
                 .speed(1000.0)
                 .prefix("points / frame "),
         );
+        let count = job_plan::frame_count(&state.scene, form.fps);
         ui.horizontal(|ui| {
-            ui.label("directory");
+            let mut all = form.frame_range.is_none();
+            if ui.checkbox(&mut all, format!("all {count} frames")).changed() {
+                form.frame_range = if all { None } else { Some((0, count)) };
+            }
+            if let Some((first, end)) = &mut form.frame_range {
+                ui.add(egui::DragValue::new(first).range(0..=count.saturating_sub(1)).prefix("from "));
+                ui.add(egui::DragValue::new(end).range(1..=count).prefix("to "))
+                    .on_hover_text("the end is exclusive: 0 to 24 is frames 0…23");
+            }
+        });
+        ui.horizontal(|ui| {
+            ui.label("frames as");
+            for format in Format::ALL {
+                ui.selectable_value(&mut form.format, format, format.name());
+            }
+        });
+        ui.horizontal(|ui| {
+            ui.label("folder");
             ui.text_edit_singleline(&mut form.dir_text);
+        });
+        ui.horizontal(|ui| {
+            ui.checkbox(&mut form.video, "make a video");
+            ui.add_enabled(form.video, egui::TextEdit::singleline(&mut form.video_text));
         });
         if form != state.record_form {
             commands.push(Command::SetRecordForm(form));
         }
+        if !state.files.ffmpeg {
+            ui.small("ffmpeg was not found: a video needs it (the frames do not).");
+        }
         ui.small("CPU, deterministic; the viewer's camera and splat settings.");
-        if ui.add_enabled(jobs.record.is_none(), egui::Button::new("Record timeline")).clicked() {
+        let plan = state.record_plan();
+        if let Err(why) = &plan {
+            ui.colored_label(ERROR_COLOR, why);
+        }
+        let can_start = jobs.record.is_none() && plan.is_ok();
+        if ui.add_enabled(can_start, egui::Button::new("Record timeline")).clicked() {
             commands.push(Command::StartRecord);
         }
         progress_ui(ui, jobs.record, &jobs.record_message, Command::CancelRecord, commands);

@@ -17,24 +17,31 @@
 //! command logic), `picking.rs` (projection, picking and drag maths on a `SplatView`), the UI
 //! files that read the state and emit commands (`ui.rs` with the side panel, `grid_edit_ui.rs`,
 //! `jobs_ui.rs`, `timeline_ui.rs`), `ui_layer.rs` (egui on wgpu) and `jobs.rs`. State, command
-//! and apply import no UI file.
+//! and apply import no UI file. Files: `files.rs` (open, save, drops, as commands; its state in `files_state.rs`), `recent.rs`
+//! (the recent files list), `dialogs.rs` (native dialogs on a thread of their own); the job
+//! forms' checks are in `job_plan.rs`.
 
 pub mod actions;
 pub mod apply;
 mod authoring;
 pub mod clock;
 pub mod command;
+pub mod dialogs;
+pub mod files;
+pub mod files_state;
 mod frame_log;
 pub mod framing;
 pub mod functions_ui;
 pub mod grid_edit_ui;
 mod input;
+pub mod job_plan;
 pub mod jobs;
 pub mod jobs_ui;
 pub mod nesting_ui;
 pub mod overlay_ui;
 pub mod picking;
 pub mod pointer;
+pub mod recent;
 pub mod recovery;
 pub mod state;
 pub mod timeline_ui;
@@ -98,6 +105,13 @@ pub struct ViewerOptions {
 /// Opens the viewer and runs until the window closes.
 pub fn run(options: ViewerOptions) -> Result<(), ViewerError> {
     let mut state = ViewerState::new(ViewerState::default_scene(), None, options.live);
+    state.apply([
+        Command::SetConfigDir(recent::config_dir()),
+        Command::SetToolSupport {
+            native_dialogs: dialogs::native_dialogs_available(),
+            ffmpeg: crate::record::ffmpeg_available(),
+        },
+    ]);
     if let Some(path) = &options.scene {
         state.apply([Command::OpenScene(path.clone())]);
         // A bad scene leaves the default one on screen with the error in the panel.
@@ -124,6 +138,7 @@ pub fn run(options: ViewerOptions) -> Result<(), ViewerError> {
         router: PointerRouter::default(),
         modifiers: Default::default(),
         jobs: jobs::Jobs::default(),
+        dialogs: dialogs::Dialogs::default(),
         clock: WallClock::default(),
         playback_clock: PlaybackClock::default(),
         last_autosave_secs: 0.0,
@@ -183,6 +198,7 @@ struct App {
     router: PointerRouter,
     modifiers: winit::keyboard::ModifiersState,
     jobs: jobs::Jobs,
+    dialogs: dialogs::Dialogs,
     clock: WallClock,
     playback_clock: PlaybackClock,
     last_autosave_secs: f64,
@@ -305,7 +321,10 @@ impl ApplicationHandler for App {
                 }
             }
             WindowEvent::RedrawRequested => self.frame(),
-            WindowEvent::DroppedFile(path) => self.commands.push(Command::OpenScene(path)),
+            WindowEvent::DroppedFile(path) => {
+                self.commands.push(Command::OpenFile(path));
+                gfx.window.request_redraw();
+            }
             WindowEvent::Focused(false) => {
                 // Releases may never come while another window has the pointer.
                 self.router.reset();
@@ -462,6 +481,10 @@ impl App {
             (None, _) => self.toast_shown = None,
         }
         self.jobs.poll(&gfx.egui_ctx);
+        for notice in self.jobs.take_notices() {
+            self.commands.push(Command::SetToast(Some(notice)));
+        }
+        self.commands.extend(self.dialogs.poll());
         let raw_input = gfx.egui_state.take_egui_input(&gfx.window);
         let state = &self.state;
         let commands = &mut self.commands;
@@ -484,6 +507,13 @@ impl App {
         let mut changes = self.state.apply(self.commands.drain(..));
         for request in changes.jobs.drain(..) {
             self.jobs.handle(request);
+        }
+        if let Some(request) = changes.file_dialog.take() {
+            let kind = request.kind;
+            if let Err(e) = self.dialogs.start(request, &gfx.window) {
+                self.state.apply([Command::FileDialogDone { kind, path: None }]);
+                self.state.error = Some(e);
+            }
         }
         if (changes.scene_replaced || changes.scene_edited)
             && let Some(c) = &self.state.compiled
@@ -508,7 +538,8 @@ impl App {
         if let Some(path) = changes.screenshot {
             let message = match gfx.live.snapshot(&gfx.ctx) {
                 Ok(image) => match save_screenshot(&self.state, &path, &image) {
-                    Ok(()) => format!("saved {}", path.display()),
+                    // Where it went, in full (F12 names the file itself).
+                    Ok(()) => format!("saved the screenshot {}", recent::absolute(&path).display()),
                     Err(e) => e.to_string(),
                 },
                 Err(e) => format!("screenshot failed: {e}"),

@@ -1,6 +1,7 @@
 //! What the viewer draws over the view rather than in the side panel: the warning banner (a
-//! function that may not be contractive or leaves the grid; the file changed on disk while
-//! there are unsaved edits), the toast (a saved file), the status line (accumulated points and
+//! file that did not open or reload, with its error located; a function that may not be
+//! contractive or leaves the grid; the file changed on disk while there are unsaved edits), the
+//! toast (a saved file), the status line (accumulated points and
 //! points per lit pixel), the shortcuts overlay (`F1`, `?`) and the dialogs: closing with
 //! unsaved edits, restoring a recovery file, and starting a job on a scene that may not be
 //! contractive. Like every `*_ui` file it only reads the state
@@ -28,7 +29,9 @@ pub const SHORTCUTS: &[(&str, &str)] = &[
     ("X, Y, Z", "lock point drags to that axis (toggle)"),
     ("Space", "play / pause the timeline"),
     ("Ctrl+Z / Ctrl+Shift+Z, Ctrl+Y", "undo / redo"),
-    ("Ctrl+S", "save the scene"),
+    ("Ctrl+O", "open a scene (or a PNG that nlifs wrote)"),
+    ("Ctrl+S / Ctrl+Shift+S", "save the scene / save it as another file"),
+    ("drop a file", "open a scene, or the scene inside a PNG that nlifs wrote"),
     ("Shift+A, Shift+D, Delete", "add a function; duplicate, delete the selected one"),
     ("F12", "screenshot next to the scene"),
     ("Tab", "hide / show the side panel"),
@@ -61,7 +64,8 @@ pub fn overlays_ui(ctx: &egui::Context, view_rect: egui::Rect, state: &ViewerSta
 fn banner_ui(ctx: &egui::Context, view_rect: egui::Rect, state: &ViewerState, commands: &mut Vec<Command>) {
     let warnings = state.warnings();
     let changed = state.ui.file_changed_on_disk;
-    if warnings.is_empty() && !changed {
+    let error = state.files.view_error.as_deref();
+    if warnings.is_empty() && !changed && error.is_none() {
         return;
     }
     egui::Area::new(egui::Id::unique("nlifs_banner"))
@@ -70,6 +74,19 @@ fn banner_ui(ctx: &egui::Context, view_rect: egui::Rect, state: &ViewerState, co
         .show(ctx, |ui| {
             ui.set_max_width((view_rect.width() - 16.0).max(100.0));
             egui::Frame::new().fill(WARNING_FILL).corner_radius(4.0).inner_margin(6.0).show(ui, |ui| {
+                if let Some(error) = error {
+                    ui.horizontal(|ui| {
+                        warning_icon(ui);
+                        // The button first: a long error wraps in what is left of the line.
+                        if ui.small_button("×").on_hover_text("dismiss (Esc); the scene shown is kept").clicked() {
+                            commands.push(Command::DismissViewError);
+                        }
+                        ui.add(
+                            egui::Label::new(RichText::new(error).color(Color32::from_rgb(255, 140, 120)).strong())
+                                .wrap(),
+                        );
+                    });
+                }
                 for line in &warnings {
                     ui.horizontal(|ui| {
                         warning_icon(ui);

@@ -166,6 +166,8 @@ pub struct ViewerState {
     pub camera_moved: bool,
     /// The W^k nesting view drawn over the points.
     pub nesting: NestingView,
+    /// Recent files, file dialogs, the error shown over the view (`files.rs`).
+    pub files: super::files_state::FilesState,
 }
 
 pub(super) fn mtime(path: &Path) -> Option<SystemTime> {
@@ -225,6 +227,7 @@ impl ViewerState {
             },
             camera_moved: false,
             nesting: NestingView { shown: false, level: 1, translucent: false },
+            files: super::files_state::FilesState::default(),
         };
         state.edit.save_text = state.default_save_text();
         state.live.seed = state.scene.render.seed;

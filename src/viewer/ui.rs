@@ -7,7 +7,7 @@ use crate::camera::Projection;
 use crate::live::ChaosBackend;
 use crate::scene::spec::SplatMode;
 
-use super::command::Command;
+use super::command::{Command, FileDialogKind};
 use super::jobs::JobView;
 use super::state::ViewerState;
 use super::widgets::slider;
@@ -33,7 +33,10 @@ pub fn panels_ui(
     let mut shown = state.ui.panel_shown;
     egui::Panel::left("nlifs_panel").default_size(310.0).resizable(true).show_collapsible(ui, &mut shown, |ui| {
         egui::ScrollArea::vertical().auto_shrink([false, false]).show(ui, |ui| {
-            ui.heading("nlifs");
+            ui.horizontal(|ui| {
+                ui.heading("nlifs");
+                file_menu_ui(ui, state, commands);
+            });
             scene_ui(ui, state, commands);
             super::functions_ui::functions_ui(ui, state, commands);
             super::grid_edit_ui::grid_edit_ui(ui, state, commands);
@@ -60,9 +63,9 @@ pub fn panels_ui(
     view_rect
 }
 
-/// Undo (Ctrl+Z), redo (Ctrl+Shift+Z, Ctrl+Y), save (Ctrl+S), axis lock (X, Y, Z), play/pause
-/// (Space); not while a text field has the keyboard (it has its own undo). The window's keys
-/// are in `input.rs`.
+/// Undo (Ctrl+Z), redo (Ctrl+Shift+Z, Ctrl+Y), open (Ctrl+O), save (Ctrl+S), save as
+/// (Ctrl+Shift+S), axis lock (X, Y, Z), play/pause (Space); not while a text field has the
+/// keyboard (it has its own undo). The window's keys are in `input.rs`.
 fn shortcuts_ui(ctx: &egui::Context, state: &ViewerState, commands: &mut Vec<Command>) {
     if ctx.egui_wants_keyboard_input() {
         return;
@@ -77,8 +80,14 @@ fn shortcuts_ui(ctx: &egui::Context, state: &ViewerState, commands: &mut Vec<Com
         if i.consume_shortcut(&KeyboardShortcut::new(Modifiers::COMMAND, Key::Z)) {
             commands.push(Command::Undo);
         }
+        if i.consume_shortcut(&KeyboardShortcut::new(Modifiers::COMMAND | Modifiers::SHIFT, Key::S)) {
+            commands.push(Command::ShowFileDialog(FileDialogKind::SaveAs));
+        }
         if i.consume_shortcut(&KeyboardShortcut::new(Modifiers::COMMAND, Key::S)) {
-            commands.push(Command::SaveScene(state.edit.save_text.trim().into()));
+            commands.push(Command::Save);
+        }
+        if i.consume_shortcut(&KeyboardShortcut::new(Modifiers::COMMAND, Key::O)) {
+            commands.push(Command::ShowFileDialog(FileDialogKind::Open));
         }
         if i.modifiers.is_none() {
             for (key, axis) in [(Key::X, 0), (Key::Y, 1), (Key::Z, 2)] {
@@ -99,6 +108,38 @@ fn shortcuts_ui(ctx: &egui::Context, state: &ViewerState, commands: &mut Vec<Com
     }
 }
 
+/// The File menu: open, the recent files, save, save as, quit.
+fn file_menu_ui(ui: &mut egui::Ui, state: &ViewerState, commands: &mut Vec<Command>) {
+    ui.menu_button("File", |ui| {
+        if ui.add(egui::Button::new("Open…").shortcut_text("Ctrl+O")).clicked() {
+            commands.push(Command::ShowFileDialog(FileDialogKind::Open));
+        }
+        ui.menu_button("Open recent", |ui| {
+            if state.files.recent.paths.is_empty() {
+                ui.add_enabled(false, egui::Button::new("no recent files"));
+            }
+            for path in &state.files.recent.paths {
+                let name = path.file_name().map_or_else(|| path.display().to_string(), |n| n.to_string_lossy().into());
+                if ui.button(name).on_hover_text(path.display().to_string()).clicked() {
+                    commands.push(Command::OpenFile(path.clone()));
+                }
+            }
+        });
+        ui.separator();
+        let save = ui.add(egui::Button::new("Save").shortcut_text("Ctrl+S"));
+        if save.on_hover_text(format!("writes {}", state.edit.save_text.trim())).clicked() {
+            commands.push(Command::Save);
+        }
+        if ui.add(egui::Button::new("Save as…").shortcut_text("Ctrl+Shift+S")).clicked() {
+            commands.push(Command::ShowFileDialog(FileDialogKind::SaveAs));
+        }
+        ui.separator();
+        if ui.add(egui::Button::new("Quit").shortcut_text("Ctrl+Q")).clicked() {
+            commands.push(Command::RequestClose);
+        }
+    });
+}
+
 fn scene_ui(ui: &mut egui::Ui, state: &ViewerState, commands: &mut Vec<Command>) {
     egui::CollapsingHeader::new("Scene").default_open(true).show(ui, |ui| {
         ui.label(format!(
@@ -117,7 +158,20 @@ fn scene_ui(ui: &mut egui::Ui, state: &ViewerState, commands: &mut Vec<Command>)
                 commands.push(Command::OpenScene(text.trim().into()));
             }
         });
-        ui.small("…or drop a .toml file onto the window. The file is reloaded when it changes.");
+        let mut save_text = state.edit.save_text.clone();
+        ui.horizontal(|ui| {
+            if ui.text_edit_singleline(&mut save_text).changed() {
+                commands.push(Command::SetSaveText(save_text.clone()));
+            }
+            if ui.button("Save as").on_hover_text("save the scene to this file; it becomes the scene's file").clicked()
+            {
+                commands.push(Command::SaveScene(save_text.trim().into()));
+            }
+        });
+        ui.small(
+            "…or drop a .toml file, or a PNG that nlifs wrote, onto the window. The file is reloaded when it \
+             changes.",
+        );
         if let Some(e) = &state.error {
             ui.colored_label(Color32::from_rgb(255, 110, 90), format!("error: {e}"));
         }

@@ -1,0 +1,184 @@
+//! Opening and saving files in the viewer, as state and command logic: Save (Ctrl+S), the
+//! Open and Save As dialogs (requested here, shown by `dialogs.rs` off the event loop's thread,
+//! answered by [`Command::FileDialogDone`]), files dropped onto the window or picked from the
+//! recent files, and the recent files list (`recent.rs`).
+//!
+//! A file that cannot be opened (a scene with an error, located as file:line:col; a PNG without
+//! a scene inside; any other kind of file) leaves the current scene in place and shows the
+//! error over the view (`FilesState::view_error`, in `files_state.rs`), as a reload that fails does. Opening over
+//! unsaved edits asks Save / Discard / Cancel first, as closing does.
+
+use std::path::{Path, PathBuf};
+
+use super::apply::Changes;
+use super::command::{Command, FileDialogKind, FileDialogRequest};
+use super::recent::{self, RecentFiles};
+use super::state::ViewerState;
+
+/// Says what to do where no native dialog can be shown.
+pub fn no_dialog_notice(kind: FileDialogKind) -> String {
+    let what = match kind {
+        FileDialogKind::Open => "type the file's path in the Scene section and press Open (or drop the file here)",
+        FileDialogKind::SaveAs => "type the new file's path in the Scene section and press Save as",
+    };
+    format!("No file dialog can be shown here (no desktop portal, no zenity): {what}.")
+}
+
+impl ViewerState {
+    /// Applies the file commands (see [`Command::Save`] and those after it).
+    pub(super) fn file_command(&mut self, command: Command, changes: &mut Changes) {
+        match command {
+            Command::Save => {
+                if self.scene_path.is_none() && self.files.native_dialogs {
+                    self.show_file_dialog(FileDialogKind::SaveAs, changes);
+                } else {
+                    let path = PathBuf::from(self.edit.save_text.trim());
+                    self.save_scene(&path);
+                }
+            }
+            Command::ShowFileDialog(kind) => self.show_file_dialog(kind, changes),
+            Command::FileDialogDone { kind, path } => {
+                self.files.dialog_open = false;
+                match (kind, path) {
+                    (_, None) => {
+                        self.message =
+                            Some("no file chosen (if no dialog appeared, type the path in the Scene section)".into())
+                    }
+                    (FileDialogKind::Open, Some(path)) => self.open_file(&path, changes),
+                    (FileDialogKind::SaveAs, Some(path)) => {
+                        // A name typed without an extension gets the scene's.
+                        let path = if path.extension().is_none() { path.with_extension("toml") } else { path };
+                        self.save_scene(&path);
+                    }
+                }
+            }
+            Command::OpenFile(path) => self.open_file(&path, changes),
+            Command::SetConfigDir(dir) => {
+                self.files.recent = dir.as_deref().map(RecentFiles::load).unwrap_or_default();
+                self.files.config_dir = dir;
+                if self.files.recent.prune_missing() {
+                    self.save_recent();
+                }
+            }
+            Command::SetToolSupport { native_dialogs, ffmpeg } => {
+                self.files.native_dialogs = native_dialogs;
+                self.files.ffmpeg = ffmpeg;
+            }
+            Command::DismissViewError => self.files.view_error = None,
+            _ => {}
+        }
+    }
+
+    /// Asks the event loop for a native dialog, or says how to do without one.
+    fn show_file_dialog(&mut self, kind: FileDialogKind, changes: &mut Changes) {
+        if self.files.dialog_open {
+            self.message = Some("a file dialog is already open".into());
+            return;
+        }
+        if !self.files.native_dialogs {
+            let notice = no_dialog_notice(kind);
+            self.message = Some(notice.clone());
+            self.ui.toast = Some(notice);
+            self.ui.panel_shown = true;
+            return;
+        }
+        let directory = self
+            .scene_path
+            .as_deref()
+            .map(recent::absolute)
+            .and_then(|p| p.parent().map(Path::to_path_buf))
+            .or_else(|| std::env::current_dir().ok());
+        let file_name = (kind == FileDialogKind::SaveAs).then(|| {
+            self.scene_path.as_ref().and_then(|p| p.file_name()).map_or_else(
+                || format!("{}.toml", file_stem_for(&self.scene.name)),
+                |n| n.to_string_lossy().into_owned(),
+            )
+        });
+        self.files.dialog_open = true;
+        changes.file_dialog = Some(FileDialogRequest { kind, directory, file_name });
+    }
+
+    /// Opens a scene file, or the scene inside a PNG that nlifs wrote; anything else, or a file
+    /// that does not read, is an error over the view and the scene stays.
+    pub(super) fn open_file(&mut self, path: &Path, changes: &mut Changes) {
+        if !path.is_file() {
+            let what = if path.exists() { "is not a file" } else { "does not exist" };
+            let pruned = if self.files.recent.remove(path) {
+                self.save_recent();
+                " (removed from the recent files)"
+            } else {
+                ""
+            };
+            self.set_view_error(format!("cannot open {}: it {what}{pruned}", path.display()));
+            return;
+        }
+        if crate::output::png::is_png(path) {
+            // As `nlifs view IMAGE.png`: the scene goes to a TOML copy in the temporary folder,
+            // so that a save never writes over the image.
+            match crate::output::png::extract_scene(path, &std::env::temp_dir()) {
+                Ok((toml, _t_secs)) => {
+                    self.request_open(&toml, changes);
+                    if self.scene_path.as_deref() == Some(toml.as_path()) {
+                        self.remember_recent(path);
+                        self.message = Some(format!("opened the scene inside {}", path.display()));
+                    }
+                }
+                Err(e) => self.set_view_error(e.to_string()),
+            }
+        } else if path.extension().is_some_and(|e| e.eq_ignore_ascii_case("toml")) {
+            self.request_open(path, changes);
+        } else {
+            self.set_view_error(format!(
+                "cannot open {}: not a scene file (.toml) or a PNG that nlifs wrote",
+                path.display()
+            ));
+        }
+    }
+
+    /// Opens `path` now, or, over unsaved edits, once the Save / Discard / Cancel dialog is
+    /// answered.
+    fn request_open(&mut self, path: &Path, changes: &mut Changes) {
+        if self.modified() {
+            self.end_gesture();
+            self.ui.close_dialog = true;
+            self.ui.pending_open = Some(path.to_path_buf());
+        } else {
+            self.open_scene(path, changes);
+        }
+    }
+
+    /// An error over the view (and in the panel).
+    pub(super) fn set_view_error(&mut self, error: String) {
+        self.error = Some(error.clone());
+        self.files.view_error = Some(error);
+    }
+
+    /// Puts `path` first in the recent files (a scene copied out of a PNG into the temporary
+    /// folder is not worth remembering: the PNG is) and writes the list.
+    pub(super) fn remember_recent(&mut self, path: &Path) {
+        let extracted = path.parent() == Some(std::env::temp_dir().as_path())
+            && path.file_name().is_some_and(|n| n.to_string_lossy().ends_with(".scene.toml"));
+        if extracted {
+            return;
+        }
+        self.files.recent.prune_missing();
+        self.files.recent.push(path);
+        self.save_recent();
+    }
+
+    fn save_recent(&self) {
+        if let Some(dir) = &self.files.config_dir
+            && let Err(e) = self.files.recent.save(dir)
+        {
+            log::warn!("cannot write the recent files list in {}: {e}", dir.display());
+        }
+    }
+}
+
+/// A file name stem for a scene's name: letters, digits, `-` and `_`; `scene` when none is left.
+fn file_stem_for(name: &str) -> String {
+    let stem: String =
+        name.trim().chars().map(|c| if c.is_alphanumeric() || c == '-' || c == '_' { c } else { '-' }).collect();
+    let stem = stem.trim_matches('-');
+    if stem.is_empty() { "scene".into() } else { stem.to_string() }
+}
