@@ -139,7 +139,8 @@ pub fn write_glb_streamed(
         json_bytes.push(b' ');
     }
     let bin_padded = bin_len.div_ceil(4) * 4;
-    let (total, json_len, bin_chunk_len) = glb_lengths(json_bytes.len(), usize::try_from(bin_padded).unwrap_or(usize::MAX))?;
+    let (total, json_len, bin_chunk_len) =
+        glb_lengths(json_bytes.len(), usize::try_from(bin_padded).unwrap_or(usize::MAX))?;
     w.write_all(b"glTF")?;
     w.write_all(&2u32.to_le_bytes())?;
     w.write_all(&total.to_le_bytes())?;

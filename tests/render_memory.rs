@@ -97,7 +97,10 @@ fn a_render_too_large_for_memory_is_refused() {
     let stderr = String::from_utf8_lossy(&output.stderr);
     assert_eq!(output.status.code(), Some(2), "{stderr}");
     // 16384² pixels of 16 bytes: 4 GiB for the framebuffer alone.
-    assert!(stderr.contains("16384×16384 density render needs about 4.") && stderr.contains("1.00 GiB is available"), "{stderr}");
+    assert!(
+        stderr.contains("16384×16384 density render needs about 4.") && stderr.contains("1.00 GiB is available"),
+        "{stderr}"
+    );
     assert!(!out.exists(), "a refused render wrote {}", out.display());
     assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 0, "nothing written");
 }
@@ -107,11 +110,13 @@ fn a_render_too_large_for_memory_is_refused() {
 #[test]
 fn streamed_render_png_equals_the_one_shot_png() {
     let dir = common::temp_dir("render-memory-png");
-    for (scene, extra) in [("plant2", vec!["--look", "solid", "--point-radius", "1"]), ("julia", vec!["--mode", "average"])]
+    for (scene, extra) in
+        [("plant2", vec!["--look", "solid", "--point-radius", "1"]), ("julia", vec!["--mode", "average"])]
     {
         let out = dir.join(format!("{scene}.png"));
         let path = common::scene_path(scene);
-        let mut args = vec!["render", s(&path), "--width", "150", "--height", "110", "--points", "400000", "--seed", "9"];
+        let mut args =
+            vec!["render", s(&path), "--width", "150", "--height", "110", "--points", "400000", "--seed", "9"];
         args.extend(extra.iter().copied());
         args.extend(["-o", s(&out)]);
         nlifs(&args, 0);
@@ -155,7 +160,8 @@ fn streamed_point_export_equals_the_in_memory_bytes() {
         chaos_game::run_chunk(&shot.compiled, 4, shot.stream, c, shot.plan.steps(c), &mut all);
     }
     let pts = &all.points[..points as usize];
-    let colors: Vec<[f32; 3]> = all.functions[..points as usize].iter().map(|&f| shot.compiled.colors[f as usize]).collect();
+    let colors: Vec<[f32; 3]> =
+        all.functions[..points as usize].iter().map(|&f| shot.compiled.colors[f as usize]).collect();
     let mut expected = Vec::new();
     nlifs::export::write_ply(&mut expected, pts, &colors).unwrap();
     assert!(std::fs::read(&ply).unwrap() == expected, "PLY differs");

@@ -9,7 +9,8 @@ use clap::{Args, Subcommand};
 
 use nlifs::chaos_game::{self, CollectSink};
 use nlifs::export::{
-    point_bounds, write_glb_colors, write_glb_points_streamed, write_glb_positions, write_ply_header, write_ply_vertices,
+    point_bounds, write_glb_colors, write_glb_points_streamed, write_glb_positions, write_ply_header,
+    write_ply_vertices,
 };
 use nlifs::io::write_atomic;
 use nlifs::raytrace::{self, Initial, RaytraceSettings};

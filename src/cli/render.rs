@@ -184,8 +184,7 @@ pub fn render(args: RenderArgs) -> anyhow::Result<()> {
             None
         }
     };
-    if let Some(warning) =
-        image.and_then(|image| nlifs::scene::warnings::coverage_warning(&image, settings.background))
+    if let Some(warning) = image.and_then(|image| nlifs::scene::warnings::coverage_warning(&image, settings.background))
     {
         eprintln!("warning: {warning}");
     }

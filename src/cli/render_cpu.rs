@@ -35,8 +35,7 @@ impl LayerChoice {
         if options.format != Format::Exr {
             return Err(BadInput(format!("--layers applies to exr output, not {}", options.format.name())).into());
         }
-        let names: Vec<String> =
-            text.split(',').map(|n| n.trim().to_string()).filter(|n| !n.is_empty()).collect();
+        let names: Vec<String> = text.split(',').map(|n| n.trim().to_string()).filter(|n| !n.is_empty()).collect();
         for n in &names {
             if !output::LAYER_NAMES.contains(&n.as_str()) {
                 return Err(BadInput(format!(
@@ -111,7 +110,12 @@ fn accumulation_bytes(shot: &Shot, accumulation: Accumulation) -> u64 {
 
 /// Resolves `framebuffer` row by row into an 8-bit PNG at `path` (the bytes `resolve_image`
 /// and `save_rgb8` would give); returns the pixels that differ from the background.
-fn stream_png(shot: &Shot, framebuffer: &nlifs::splat::Framebuffer, path: &Path, provenance: &Provenance) -> anyhow::Result<usize> {
+fn stream_png(
+    shot: &Shot,
+    framebuffer: &nlifs::splat::Framebuffer,
+    path: &Path,
+    provenance: &Provenance,
+) -> anyhow::Result<usize> {
     let view = &framebuffer.view;
     let (width, height) = (view.width, view.height);
     let params = ResolveArgs::new(view, &shot.camera, &shot.style).params(width, height, true);

@@ -38,7 +38,8 @@ pub const STREAMED_PNG_SHARE: f64 = 0.25;
 /// as a streamed 8-bit PNG (`streamed`) or through the float layers.
 pub fn still_need(view: &SplatView, accumulation_bytes: u64, streamed: bool) -> MemoryNeed {
     let pixels = view.width as u64 * view.height as u64;
-    let output = if streamed { (pixels as f64 * 3.0 * STREAMED_PNG_SHARE) as u64 } else { pixels * LAYER_BYTES_PER_PIXEL };
+    let output =
+        if streamed { (pixels as f64 * 3.0 * STREAMED_PNG_SHARE) as u64 } else { pixels * LAYER_BYTES_PER_PIXEL };
     MemoryNeed { accumulation: accumulation_bytes, output }
 }
 
@@ -64,7 +65,7 @@ pub fn parse_bytes(text: &str) -> Option<u64> {
         _ => return None,
     };
     let value: f64 = number.trim().parse().ok()?;
-    (value.is_finite() && value >= 0.0).then(|| (value * scale as f64) as u64)
+    (value.is_finite() && value >= 0.0).then_some((value * scale as f64) as u64)
 }
 
 fn mem_available() -> Option<u64> {

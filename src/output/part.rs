@@ -13,7 +13,6 @@
 use std::ops::Range;
 use std::path::Path;
 
-
 use crate::output::{OutputError, Provenance};
 use crate::scene::Scene;
 use crate::scene::spec::{RenderSettings, SplatMode};

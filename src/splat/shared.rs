@@ -193,8 +193,10 @@ impl BandWriter<'_, '_> {
 impl Pixels for BandWriter<'_, '_> {
     #[inline(always)]
     fn min_key(&mut self, pixel: usize, key: u32) {
-        // The vector splat sends the empty key for points outside the image: nothing to do.
-        if key != EMPTY {
+        // The vector splat sends the empty key for points outside the image, and a key not
+        // below the pixel's present one cannot lower it (keys only fall): nothing to do. Once
+        // the picture converges, most points end here, with one read.
+        if key != EMPTY && key < self.target.words[pixel].load(Ordering::Relaxed) {
             self.push(pixel, |e| e[1] = key);
         }
     }
