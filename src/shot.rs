@@ -16,7 +16,7 @@ use crate::model::Ifs;
 use crate::resolve::ResolveStyle;
 use crate::scene::Scene;
 use crate::scene::spec::RenderSettings;
-use crate::splat::{Framebuffer, SplatView};
+use crate::splat::{Framebuffer, SharedFramebuffer, SplatView};
 
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum ShotError {
@@ -136,9 +136,67 @@ impl Shot {
         )
     }
 
-    /// Runs the shot's chaos game into its splat view.
+    /// Runs the shot's chaos game into its splat view, in the way [`Accumulation::for_view`]
+    /// picks for the current thread count.
     pub fn splat(&self, progress: impl Fn() + Sync) -> Framebuffer {
-        self.run(|| Framebuffer::new(self.view, self.compiled.colors.clone()), Framebuffer::merge, progress)
+        self.splat_chunks(0..self.plan.chunks(), Accumulation::for_view(&self.view), progress)
+    }
+
+    /// Runs chunks `chunks` of the shot's chaos game into its splat view with `accumulation`.
+    /// Every way gives the same framebuffer (the updates are order-independent).
+    pub fn splat_chunks(
+        &self,
+        chunks: std::ops::Range<u32>,
+        accumulation: Accumulation,
+        progress: impl Fn() + Sync,
+    ) -> Framebuffer {
+        let (ifs, seed, frame, plan) = (&self.compiled, self.settings.seed, self.stream, &self.plan);
+        match accumulation {
+            Accumulation::PerThread => {
+                let make = || Framebuffer::new(self.view, self.compiled.colors.clone());
+                chaos_game::run_per_thread(ifs, seed, frame, plan, chunks, make, progress)
+                    .into_iter()
+                    .reduce(Framebuffer::merge)
+                    .unwrap_or_else(|| Framebuffer::new(self.view, self.compiled.colors.clone()))
+            }
+            Accumulation::Shared => {
+                let mut shared = SharedFramebuffer::new(self.view, self.compiled.colors.clone());
+                let threads = rayon::current_num_threads();
+                shared.splat_with(threads, |target| {
+                    // Each writer flushes when it is dropped, inside `run_per_thread`'s return
+                    // value, so every update is in before `splat_with` returns.
+                    drop(chaos_game::run_per_thread(ifs, seed, frame, plan, chunks, || target.writer(), progress));
+                });
+                shared.into_framebuffer()
+            }
+        }
+    }
+}
+
+/// How a CPU render accumulates its points.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Accumulation {
+    /// One framebuffer per thread, merged at the end: fastest for small images, whose copies
+    /// stay in the caches.
+    PerThread,
+    /// One framebuffer shared by all threads ([`SharedFramebuffer`]): memory does not grow with
+    /// the thread count.
+    Shared,
+}
+
+impl Accumulation {
+    /// Per-thread framebuffers take at most this many bytes together; beyond, one is shared.
+    pub const PER_THREAD_BUDGET_BYTES: u64 = 64 << 20;
+
+    /// The way for a render of `view` on the current rayon pool: per thread while all the
+    /// copies fit [`Self::PER_THREAD_BUDGET_BYTES`], else shared.
+    pub fn for_view(view: &SplatView) -> Self {
+        let threads = rayon::current_num_threads().max(1) as u64;
+        if view.accumulation_bytes().saturating_mul(threads) <= Self::PER_THREAD_BUDGET_BYTES {
+            Accumulation::PerThread
+        } else {
+            Accumulation::Shared
+        }
     }
 }
 

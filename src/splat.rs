@@ -18,8 +18,11 @@ use crate::camera::OrbitCamera;
 use crate::chaos_game::{PointBatch, PointSink};
 use crate::scene::spec::SplatMode;
 
+pub mod shared;
 #[cfg(target_arch = "x86_64")]
 mod x86;
+
+pub use shared::SharedFramebuffer;
 
 /// Depth is quantized to this many bits in the closest-point key.
 pub const DEPTH_BITS: u32 = 24;
@@ -89,6 +92,13 @@ impl SplatView {
         Some((iy * self.width as usize + ix, t))
     }
 
+    /// Bytes of one framebuffer of this view: 4 per pixel in closest mode (one key), 16 in the
+    /// accumulating modes (r, g, b sums and the count).
+    pub fn accumulation_bytes(&self) -> u64 {
+        let per_pixel = if self.mode == SplatMode::Closest { 4 } else { 16 };
+        self.width as u64 * self.height as u64 * per_pixel
+    }
+
     /// A colour faded towards the background by depth fraction t.
     #[inline(always)]
     pub fn cue(&self, color: [f32; 3], t: f32) -> [f32; 3] {
@@ -146,54 +156,103 @@ impl Framebuffer {
 
 impl PointSink for Framebuffer {
     fn consume(&mut self, batch: PointBatch<'_>) {
-        #[cfg(target_arch = "x86_64")]
-        if x86::supported(self) {
-            x86::splat(self, batch);
-            return;
+        let view = self.view;
+        let mut pixels = OwnPixels { closest: &mut self.closest, accum: &mut self.accum };
+        splat_into(&view, &self.colors, batch, &mut pixels);
+    }
+}
+
+/// Where a splat's per-pixel updates go: a framebuffer's own pixels ([`OwnPixels`]) or the
+/// buffers of a shared one ([`shared::BandWriter`]). Both updates are order-independent.
+pub(crate) trait Pixels {
+    /// Closest mode: keep the smaller of the pixel's key and `key`.
+    fn min_key(&mut self, pixel: usize, key: u32);
+    /// Accumulating modes: add r, g, b and the count (saturating) to the pixel's sums.
+    fn add(&mut self, pixel: usize, add: [u32; 4]);
+}
+
+/// A framebuffer's own pixels as a [`Pixels`] target.
+pub(crate) struct OwnPixels<'a> {
+    pub closest: &'a mut [u32],
+    pub accum: &'a mut [[u32; 4]],
+}
+
+impl Pixels for OwnPixels<'_> {
+    #[inline(always)]
+    fn min_key(&mut self, pixel: usize, key: u32) {
+        let slot = &mut self.closest[pixel];
+        if key < *slot {
+            *slot = key;
         }
-        self.consume_portable(batch);
+    }
+
+    #[inline(always)]
+    fn add(&mut self, pixel: usize, add: [u32; 4]) {
+        let a = &mut self.accum[pixel];
+        // a + min(add, !a) is a.saturating_add(add), in a form that vectorizes.
+        for c in 0..4 {
+            a[c] += add[c].min(!a[c]);
+        }
+    }
+}
+
+/// Splats `batch` of a view `view` with function colours `colors` into `out`: the vector
+/// splat where the CPU has it, else the portable one; both give the same updates.
+#[inline]
+pub(crate) fn splat_into(view: &SplatView, colors: &[[f32; 3]], batch: PointBatch<'_>, out: &mut impl Pixels) {
+    #[cfg(target_arch = "x86_64")]
+    if x86::supported(view) {
+        x86::splat(view, colors, batch, out);
+        return;
+    }
+    splat_portable(view, colors, batch, out);
+}
+
+/// The splat without vector code (the reference for the vector path, which must give the
+/// same updates).
+pub(crate) fn splat_portable(view: &SplatView, colors: &[[f32; 3]], batch: PointBatch<'_>, out: &mut impl Pixels) {
+    let v = *view;
+    match v.mode {
+        SplatMode::Closest => {
+            let scale = ((1u32 << DEPTH_BITS) - 1) as f32;
+            for (p, &fi) in batch.points().zip(batch.functions) {
+                if let Some((idx, t)) = v.project(p) {
+                    // t is in [0, 1] or NaN (a non-finite point); NaN goes to 0 as
+                    // with a saturating `as u32`.
+                    let d = t * scale;
+                    let d = if d > 0.0 { d } else { 0.0 };
+                    // 0 ≤ d ≤ scale < 2^24, so the truncation is exact.
+                    out.min_key(idx, (d as u32) << 8 | fi as u32);
+                }
+            }
+        }
+        _ => {
+            let colors: Vec<[f32; 3]> = colors.iter().map(|c| c.map(|x| x * COLOR_SCALE)).collect();
+            let bg = v.background.map(|x| x * COLOR_SCALE);
+            for (p, &fi) in batch.points().zip(batch.functions) {
+                if let Some((idx, t)) = v.project(p) {
+                    let c = colors[fi as usize];
+                    let k = v.depth_cue * t;
+                    let add = [0, 1, 2].map(|ch| (c[ch] + (bg[ch] - c[ch]) * k + 0.5) as u32);
+                    out.add(idx, [add[0], add[1], add[2], 1]);
+                }
+            }
+        }
     }
 }
 
 impl Framebuffer {
-    /// The splat of [`PointSink::consume`] without vector code (the reference for the
-    /// vector path, which must give the same framebuffer).
+    /// The splat of [`PointSink::consume`] without vector code.
+    #[cfg(test)]
     fn consume_portable(&mut self, batch: PointBatch<'_>) {
-        let v = self.view;
-        match v.mode {
-            SplatMode::Closest => {
-                let scale = ((1u32 << DEPTH_BITS) - 1) as f32;
-                for (p, &fi) in batch.points().zip(batch.functions) {
-                    if let Some((idx, t)) = v.project(p) {
-                        // t is in [0, 1] or NaN (a non-finite point); NaN goes to 0 as
-                        // with a saturating `as u32`.
-                        let d = t * scale;
-                        let d = if d > 0.0 { d } else { 0.0 };
-                        // 0 ≤ d ≤ scale < 2^24, so the truncation is exact.
-                        let key = (d as u32) << 8 | fi as u32;
-                        let slot = &mut self.closest[idx];
-                        if key < *slot {
-                            *slot = key;
-                        }
-                    }
-                }
-            }
-            _ => {
-                let colors: Vec<[f32; 3]> = self.colors.iter().map(|c| c.map(|x| x * COLOR_SCALE)).collect();
-                let bg = v.background.map(|x| x * COLOR_SCALE);
-                for (p, &fi) in batch.points().zip(batch.functions) {
-                    if let Some((idx, t)) = v.project(p) {
-                        let c = colors[fi as usize];
-                        let k = v.depth_cue * t;
-                        let a = &mut self.accum[idx];
-                        for ch in 0..3 {
-                            a[ch] = a[ch].saturating_add((c[ch] + (bg[ch] - c[ch]) * k + 0.5) as u32);
-                        }
-                        a[3] = a[3].saturating_add(1);
-                    }
-                }
-            }
-        }
+        let view = self.view;
+        let mut pixels = OwnPixels { closest: &mut self.closest, accum: &mut self.accum };
+        splat_portable(&view, &self.colors, batch, &mut pixels);
+    }
+
+    /// Bytes of this view's accumulation (see [`SplatView::accumulation_bytes`]).
+    pub fn bytes(&self) -> u64 {
+        self.view.accumulation_bytes()
     }
 }
 
@@ -245,14 +304,16 @@ mod tests {
             portable.consume_portable(batch);
             fastest.consume(batch);
             #[cfg(target_arch = "x86_64")]
-            if x86::supported(&narrow) {
-                x86::splat_with(&mut narrow, batch, false);
+            if x86::supported(&narrow.view) {
+                let view = narrow.view;
+                let mut pixels = OwnPixels { closest: &mut narrow.closest, accum: &mut narrow.accum };
+                x86::splat_with(&view, &portable.colors, batch, &mut pixels, false);
             }
         }
         // Where the CPU has AVX-512, `fastest` took the 16-wide closest splat and `narrow` the
         // 8-wide one; both must match.
         #[cfg(target_arch = "x86_64")]
-        if x86::supported(&narrow) {
+        if x86::supported(&narrow.view) {
             assert_eq!(portable.closest, narrow.closest, "{mode:?}");
             assert_eq!(portable.accum, narrow.accum, "{mode:?}");
         }

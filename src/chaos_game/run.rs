@@ -122,9 +122,9 @@ impl Orbits<'_> {
     }
 }
 
-/// Runs the chaos game of `plan` in parallel: every chunk into its own sink made by `make_sink`,
-/// the sinks merged with `merge` (which must be order-independent for determinism). `progress`
-/// is called once per finished chunk.
+/// Runs the chaos game of `plan` in parallel: one sink per worker thread made by `make_sink`
+/// ([`run_per_thread`]), the sinks merged with `merge` (which must be order-independent for
+/// determinism). `progress` is called once per finished chunk.
 pub fn run_parallel<S: PointSink + Send>(
     ifs: &CompiledIfs,
     seed: u32,
@@ -134,14 +134,39 @@ pub fn run_parallel<S: PointSink + Send>(
     merge: impl Fn(S, S) -> S + Sync + Send,
     progress: impl Fn() + Sync,
 ) -> S {
-    (0..plan.chunks())
-        .into_par_iter()
-        .fold(&make_sink, |mut sink, c| {
-            run_chunk(ifs, seed, frame, c, plan.steps(c), &mut sink);
-            progress();
-            sink
-        })
-        .reduce(&make_sink, &merge)
+    run_per_thread(ifs, seed, frame, plan, 0..plan.chunks(), &make_sink, progress)
+        .into_iter()
+        .reduce(merge)
+        .unwrap_or_else(make_sink)
+}
+
+/// Runs chunks `chunks` of `plan` in parallel on the current rayon pool, each worker thread into
+/// its own sink, made by `make_sink` when the thread takes its first chunk: at most one sink per
+/// thread lives at a time (a fold would make one per split of the work), so memory is bounded by
+/// the thread count. Returns the sinks, in thread order. `progress` is called once per finished
+/// chunk.
+pub fn run_per_thread<S: PointSink + Send>(
+    ifs: &CompiledIfs,
+    seed: u32,
+    frame: u32,
+    plan: &ChunkPlan,
+    chunks: std::ops::Range<u32>,
+    make_sink: impl Fn() -> S + Sync,
+    progress: impl Fn() + Sync,
+) -> Vec<S> {
+    let threads = rayon::current_num_threads().max(1);
+    let slots: Vec<std::sync::Mutex<Option<S>>> = (0..threads).map(|_| std::sync::Mutex::new(None)).collect();
+    chunks.into_par_iter().for_each(|c| {
+        // Inside the pool's workers the index is below the thread count; a thread's slot is
+        // only ever taken by that thread, so the lock never waits.
+        let slot = rayon::current_thread_index().unwrap_or(0) % threads;
+        let mut guard = slots[slot].lock().unwrap_or_else(|e| e.into_inner());
+        let sink = guard.get_or_insert_with(&make_sink);
+        run_chunk(ifs, seed, frame, c, plan.steps(c), sink);
+        drop(guard);
+        progress();
+    });
+    slots.into_iter().filter_map(|s| s.into_inner().unwrap_or_else(|e| e.into_inner())).collect()
 }
 
 /// A short deterministic sample of the attractor (16,384 points), for framing and bounds.

@@ -93,6 +93,9 @@ pub enum BenchCommand {
         #[arg(long, default_value_t = 512)]
         size: u32,
     },
+    /// CPU render accumulation on all threads: per-thread framebuffers against one shared
+    /// framebuffer, points/s per splat mode, side by side.
+    Render(super::bench_render::BenchRenderArgs),
 }
 
 pub fn run(command: BenchCommand) -> anyhow::Result<()> {
@@ -110,6 +113,7 @@ pub fn run(command: BenchCommand) -> anyhow::Result<()> {
         BenchCommand::Record { scene, frames, width, height, points_per_frame, out } => {
             record(&scene, frames, width, height, points_per_frame, &out)
         }
+        BenchCommand::Render(args) => super::bench_render::run(args),
         BenchCommand::Coverage { scene, budget, reference, size } => {
             let s = load(&scene)?;
             println!("{}: share of the attractor's {size}x{size} pixels lit by {budget} points", s.name);

@@ -8,7 +8,10 @@ use anyhow::Context;
 use clap::{Args, Subcommand};
 
 use nlifs::chaos_game::{self, CollectSink};
-use nlifs::export::{write_glb_points, write_ply};
+use nlifs::export::{
+    point_bounds, write_glb_colors, write_glb_points_streamed, write_glb_positions, write_ply_header,
+    write_ply_vertices,
+};
 use nlifs::io::write_atomic;
 use nlifs::raytrace::{self, Initial, RaytraceSettings};
 use nlifs::scene::Scene;
@@ -88,35 +91,60 @@ fn export_points(path: &Path, output: &Path, points: u64, seed: Option<u32>, tim
     let settings = RenderSettings { points, seed: seed.unwrap_or(scene.render.seed), ..scene.render_at(time) };
     let shot = Shot::prepare(&scene, time, &settings, Framing::Scene, None).map_err(|e| BadInput(e.to_string()))?;
     let (compiled, plan, seed) = (&shot.compiled, &shot.plan, settings.seed);
-    let bar = progress_bar(plan.chunks() as u64, "points");
-    let done = std::sync::atomic::AtomicU64::new(0);
-    // Chunks are collected in index order so the file is deterministic.
-    let sinks: Vec<CollectSink> = {
+    let passes = if glb { 3 } else { 1 };
+    let bar = progress_bar(passes * plan.chunks() as u64, "points");
+    // The points in chunk order, window by window (each window's chunks in parallel), cut at
+    // `points`: what the file holds, made again for each pass instead of held.
+    let for_each_batch = |f: &mut dyn FnMut(&CollectSink, usize) -> std::io::Result<()>| -> std::io::Result<()> {
         use rayon::prelude::*;
-        (0..plan.chunks())
-            .into_par_iter()
-            .map(|c| {
-                let mut s = CollectSink::default();
-                chaos_game::run_chunk(compiled, seed, shot.stream, c, plan.steps(c), &mut s);
-                bar.set_position(done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1);
-                s
-            })
-            .collect()
-    };
-    bar.finish_and_clear();
-    let mut pts = Vec::new();
-    let mut colors = Vec::new();
-    for s in sinks {
-        for (p, f) in s.points.iter().zip(&s.functions) {
-            pts.push(*p);
-            colors.push(compiled.colors[*f as usize]);
+        let window = (2 * rayon::current_num_threads()).max(4) as u32;
+        let mut left = points as usize;
+        let mut start = 0;
+        while start < plan.chunks() && left > 0 {
+            let end = (start + window).min(plan.chunks());
+            let sinks: Vec<CollectSink> = (start..end)
+                .into_par_iter()
+                .map(|c| {
+                    let mut s = CollectSink::default();
+                    chaos_game::run_chunk(compiled, seed, shot.stream, c, plan.steps(c), &mut s);
+                    bar.inc(1);
+                    s
+                })
+                .collect();
+            for s in &sinks {
+                let n = s.points.len().min(left);
+                f(s, n)?;
+                left -= n;
+            }
+            start = end;
         }
-    }
-    pts.truncate(points as usize);
-    colors.truncate(points as usize);
-    write_atomic(output, |w| if glb { write_glb_points(w, &pts, &colors) } else { write_ply(w, &pts, &colors) })
-        .with_context(|| format!("cannot write {}", output.display()))?;
-    eprintln!("wrote {} ({} points)", output.display(), pts.len());
+        Ok(())
+    };
+    let colors_of = |s: &CollectSink, n: usize| -> Vec<[f32; 3]> {
+        s.functions[..n].iter().map(|&f| compiled.colors[f as usize]).collect()
+    };
+    let written = write_atomic(output, |w| {
+        if glb {
+            let mut bounds = None;
+            for_each_batch(&mut |s, n| {
+                bounds = s.points[..n].iter().fold(bounds, |b, p| Some(point_bounds(b, *p)));
+                Ok(())
+            })?;
+            write_glb_points_streamed(
+                w,
+                points,
+                bounds,
+                |w| for_each_batch(&mut |s, n| write_glb_positions(w, &s.points[..n])),
+                |w| for_each_batch(&mut |s, n| write_glb_colors(w, &colors_of(s, n))),
+            )
+        } else {
+            write_ply_header(w, points)?;
+            for_each_batch(&mut |s, n| write_ply_vertices(w, &s.points[..n], &colors_of(s, n)))
+        }
+    });
+    bar.finish_and_clear();
+    written.with_context(|| format!("cannot write {}", output.display()))?;
+    eprintln!("wrote {} ({} points)", output.display(), points);
     Ok(())
 }
 

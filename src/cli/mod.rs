@@ -8,12 +8,14 @@
 
 mod args;
 mod bench;
+mod bench_render;
 mod export;
 mod image_args;
 mod info;
 mod merge;
 mod record;
 mod render;
+mod render_cpu;
 mod snapshot;
 mod view;
 

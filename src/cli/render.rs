@@ -6,7 +6,6 @@ use clap::{Args, ValueEnum};
 
 use nlifs::output::Provenance;
 use nlifs::output::part::PartSpec;
-use nlifs::render::render_cpu;
 use nlifs::resolve::{MAX_POINT_RADIUS_PX, ResolveStyle};
 use nlifs::scene::spec::{Look, SplatMode};
 use nlifs::shot::{Framing, Shot};
@@ -61,6 +60,11 @@ pub struct RenderArgs {
     #[arg(long, value_name = "PX", default_value_t = 0,
           value_parser = clap::value_parser!(u32).range(0..=MAX_POINT_RADIUS_PX as i64))]
     point_radius: u32,
+    /// EXR: the layers to write besides R G B A, comma-separated: Z and id (closest mode), count
+    /// (average and density modes), N (the shading normal: closest mode with shading or
+    /// occlusion). Default: all the mode has. A layer the mode lacks is an error.
+    #[arg(long, value_name = "LIST")]
+    layers: Option<String>,
     /// Where the chaos game runs: gpu, cpu, or auto (gpu when a hardware adapter exists).
     #[arg(long, value_enum, default_value_t = RenderBackend::Cpu)]
     backend: RenderBackend,
@@ -134,6 +138,7 @@ pub fn render(args: RenderArgs) -> anyhow::Result<()> {
     }
     let output = args.output.clone().expect("clap requires --output without --raw");
     let options = args.image.for_file(&output)?;
+    let layers = super::render_cpu::LayerChoice::parse(args.layers.as_deref(), &options)?;
     let provenance = Provenance::for_render(&scene, args.time, &settings);
     let start = std::time::Instant::now();
     settings.look = args.look.map(Look::from).or(settings.look);
@@ -152,6 +157,10 @@ pub fn render(args: RenderArgs) -> anyhow::Result<()> {
             nlifs::gpu::GpuContext::headless().ok().filter(|ctx| !nlifs::gpu::batch::is_software(ctx))
         }
     };
+    if gpu.is_some() && args.layers.is_some() {
+        // The GPU still writes every layer the mode has; choosing them is the CPU writer's.
+        return Err(BadInput("--layers needs --backend cpu (the GPU route writes all the mode's layers)".into()).into());
+    }
     for warning in nlifs::scene::warnings::scene_warnings(&scene, args.time) {
         bar.suspend(|| eprintln!("warning: {warning}"));
     }
@@ -168,16 +177,23 @@ pub fn render(args: RenderArgs) -> anyhow::Result<()> {
                 1e3 * r.stats.longest_batch_secs
             );
             write_still(&output, &options, &r.framebuffer, &shot.camera, Some(&r.image), &provenance)?;
-            r.image
+            Some(r.image)
         }
         None => {
-            let r = render_cpu(&shot, &|d, _| bar.set_position(d));
-            bar.finish_and_clear();
-            write_still(&output, &options, &r.framebuffer, &shot.camera, Some(&r.image), &provenance)?;
-            r.image
+            let covered = super::render_cpu::render_still(&shot, &output, &options, &layers, &provenance, &bar)?;
+            if covered == 0 {
+                // The warning's own test, on an image with nothing drawn.
+                if let Some(warning) =
+                    nlifs::scene::warnings::coverage_warning(&image::RgbImage::new(0, 0), settings.background)
+                {
+                    eprintln!("warning: {warning}");
+                }
+            }
+            None
         }
     };
-    if let Some(warning) = nlifs::scene::warnings::coverage_warning(&image, settings.background) {
+    if let Some(warning) = image.and_then(|image| nlifs::scene::warnings::coverage_warning(&image, settings.background))
+    {
         eprintln!("warning: {warning}");
     }
     eprintln!(

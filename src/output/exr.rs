@@ -2,7 +2,8 @@
 //! premultiplied where the background is transparent; f32, or f16 with `half`), and the layers
 //! the splat mode has, always f32: `Z` (view distance in scene units, +inf where empty) and
 //! `id` (the nearest point's function, -1 where empty) in closest mode, `count` (points on the
-//! pixel) in average and density modes. ZIP-compressed scan lines, which every reader knows.
+//! pixel) in average and density modes, and `N.x N.y N.z` (the shading normal in view space) in
+//! closest mode with the solid look. ZIP-compressed scan lines, which every reader knows.
 
 use std::path::Path;
 
@@ -27,6 +28,11 @@ pub fn write(path: &Path, layers: &ImageLayers, options: &OutputOptions) -> Resu
     for (name, values) in [("Z", &layers.depth), ("id", &layers.function_id), ("count", &layers.count)] {
         if let Some(v) = values {
             channels.push(AnyChannel::new(name, FlatSamples::F32(v.clone())));
+        }
+    }
+    if let Some(normal) = &layers.normal {
+        for (c, name) in ["N.x", "N.y", "N.z"].into_iter().enumerate() {
+            channels.push(AnyChannel::new(name, FlatSamples::F32(normal.iter().map(|n| n[c]).collect())));
         }
     }
     let layer = Layer::new(

@@ -16,8 +16,10 @@ use crate::scene::spec::{RenderSettings, SplatMode};
 use crate::splat::{EMPTY, Framebuffer};
 
 pub mod exr;
+pub mod memory;
 pub mod part;
 pub mod png;
+pub mod png_rows;
 
 /// An output file format.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -171,6 +173,57 @@ pub struct ImageLayers {
     pub function_id: Option<Vec<f32>>,
     /// Average and density modes: points that landed on the pixel.
     pub count: Option<Vec<f32>>,
+    /// Closest mode with the solid look: the shading normal in view space (x right, y up, z
+    /// towards the viewer), unit length; 0 where empty ([`normals`]).
+    pub normal: Option<Vec<[f32; 3]>>,
+}
+
+/// Names of the layers an EXR can hold besides `R G B A`: `Z` and `id` (closest mode), `count`
+/// (average and density modes), `N` (the shading normal, closest mode with the solid look:
+/// channels `N.x N.y N.z`).
+pub const LAYER_NAMES: [&str; 4] = ["Z", "id", "count", "N"];
+
+/// The layers (of [`LAYER_NAMES`]) a render in `mode` drawn with `style` has.
+pub fn layer_names_of(mode: SplatMode, style: &ResolveStyle) -> Vec<&'static str> {
+    match mode {
+        SplatMode::Closest if style.shading > 0.0 || style.occlusion > 0.0 => vec!["Z", "id", "N"],
+        SplatMode::Closest => vec!["Z", "id"],
+        SplatMode::Average | SplatMode::Density => vec!["count"],
+    }
+}
+
+/// The shading normals of `framebuffer` (closest mode) seen by `camera` with `style`: per pixel
+/// the normal the solid look lights ([`resolve::fitted_slopes`], [`resolve::normal_and_eye`]) at
+/// the key it draws (the nearest within the point radius), in view space; 0 where empty.
+pub fn normals(framebuffer: &Framebuffer, camera: &OrbitCamera, style: &ResolveStyle) -> Vec<[f32; 3]> {
+    let view = &framebuffer.view;
+    let p = resolve::ResolveArgs::new(view, camera, style).params(view.width, view.height, false);
+    let keys = &framebuffer.closest;
+    let (w, h) = (view.width as i32, view.height as i32);
+    let key_at = |x: i32, y: i32| if x < 0 || y < 0 || x >= w || y >= h { EMPTY } else { keys[(y * w + x) as usize] };
+    let r = p.point_radius_px as i32;
+    let mut out = Vec::with_capacity(keys.len());
+    for y in 0..h {
+        for x in 0..w {
+            // The nearest key within the radius, as the resolve's fragment picks it.
+            let (mut key, mut at) = (key_at(x, y), (x, y));
+            for dy in -r..=r {
+                for dx in -r..=r {
+                    let k = key_at(x + dx, y + dy);
+                    if r > 0 && dx * dx + dy * dy <= r * r && k < key {
+                        (key, at) = (k, (x + dx, y + dy));
+                    }
+                }
+            }
+            if key == EMPTY {
+                out.push([0.0; 3]);
+            } else {
+                let slopes = resolve::fitted_slopes(&p, keys, at.0, at.1, key);
+                out.push(resolve::normal_and_eye(&p, at.0, at.1, slopes).0.to_array());
+            }
+        }
+    }
+    out
 }
 
 impl ImageLayers {
@@ -203,7 +256,24 @@ impl ImageLayers {
                 count = Some(framebuffer.accum.iter().map(|a| a[3] as f32).collect());
             }
         }
-        Self { color, depth, function_id, count }
+        Self { color, depth, function_id, count, normal: None }
+    }
+
+    /// Keeps the layers named in `names` (of [`LAYER_NAMES`]) and drops the others.
+    pub fn keep_only(&mut self, names: &[String]) {
+        let keep = |n: &str| names.iter().any(|m| m == n);
+        if !keep("Z") {
+            self.depth = None;
+        }
+        if !keep("id") {
+            self.function_id = None;
+        }
+        if !keep("count") {
+            self.count = None;
+        }
+        if !keep("N") {
+            self.normal = None;
+        }
     }
 
     pub fn width(&self) -> u32 {
@@ -236,6 +306,9 @@ impl ImageLayers {
                     if sd[i] < d[i] {
                         d[i] = sd[i];
                         id[i] = sid[i];
+                        if let (Some(n), Some(sn)) = (&mut out.normal, &s.normal) {
+                            n[i] = sn[i];
+                        }
                     }
                 }
             }

@@ -13,9 +13,6 @@
 use std::ops::Range;
 use std::path::Path;
 
-use rayon::prelude::*;
-
-use crate::chaos_game;
 use crate::output::{OutputError, Provenance};
 use crate::scene::Scene;
 use crate::scene::spec::{RenderSettings, SplatMode};
@@ -105,18 +102,12 @@ pub fn render_part(
     let shot = shot_of(scene, t_secs, settings, &scene.name)?;
     let total_chunks = shot.plan.chunks();
     let chunks = spec.chunk_range(total_chunks);
-    let make = || Framebuffer::new(shot.view, shot.compiled.colors.clone());
     let done = std::sync::atomic::AtomicU64::new(0);
     let todo = chunks.len() as u64;
-    let framebuffer = chunks
-        .clone()
-        .into_par_iter()
-        .fold(make, |mut sink, c| {
-            chaos_game::run_chunk(&shot.compiled, settings.seed, shot.stream, c, shot.plan.steps(c), &mut sink);
-            progress(done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1, todo);
-            sink
-        })
-        .reduce(make, Framebuffer::merge);
+    let accumulation = crate::shot::Accumulation::for_view(&shot.view);
+    let framebuffer = shot.splat_chunks(chunks.clone(), accumulation, || {
+        progress(done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1, todo)
+    });
     let provenance = Provenance::for_render(scene, t_secs, settings);
     Ok(Part { spec, provenance, chunks, total_chunks, framebuffer })
 }

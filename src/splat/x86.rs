@@ -15,37 +15,43 @@
 
 use std::arch::x86_64::*;
 
-use super::{COLOR_SCALE, DEPTH_BITS, EMPTY, Framebuffer, SplatMode, SplatView};
+use super::{COLOR_SCALE, DEPTH_BITS, EMPTY, Pixels, SplatMode, SplatView, splat_portable};
 use crate::chaos_game::PointBatch;
 use crate::simd::SimdLevel;
 
 const LANES: usize = 8;
 
-/// Whether [`splat`] can run for this framebuffer on this CPU.
-pub(super) fn supported(fb: &Framebuffer) -> bool {
-    let view = &fb.view;
+/// Whether [`splat`] can run for this view on this CPU.
+pub(super) fn supported(view: &SplatView) -> bool {
     let (w, h) = (view.width as usize, view.height as usize);
-    let len = if view.mode == SplatMode::Closest { fb.closest.len() } else { fb.accum.len() };
+    let len = w * h;
     // Pixel indices are computed in i32; sizes up to 2^24 keep `width as f32` exact.
-    SimdLevel::detect().avx2() && len == w * h && len > 0 && len <= i32::MAX as usize && w <= 1 << 24 && h <= 1 << 24
+    SimdLevel::detect().avx2() && len > 0 && len <= i32::MAX as usize && w <= 1 << 24 && h <= 1 << 24
 }
 
-/// Splats `batch` into `fb`, exactly as the portable splat does.
-pub(super) fn splat(fb: &mut Framebuffer, batch: PointBatch<'_>) {
-    splat_with(fb, batch, SimdLevel::detect().avx512());
+/// Splats `batch` of `view` into `out`, exactly as the portable splat does. Outside lanes of
+/// closest mode send the empty key (a no-op under min) to pixel 0.
+pub(super) fn splat(view: &SplatView, colors: &[[f32; 3]], batch: PointBatch<'_>, out: &mut impl Pixels) {
+    splat_with(view, colors, batch, out, SimdLevel::detect().avx512());
 }
 
 /// [`splat`], with the closest mode's 16-wide AVX-512F projection if `wide` (for tests).
-pub(super) fn splat_with(fb: &mut Framebuffer, batch: PointBatch<'_>, wide: bool) {
-    assert!(supported(fb) && (!wide || SimdLevel::detect().avx512()));
+pub(super) fn splat_with(
+    view: &SplatView,
+    colors: &[[f32; 3]],
+    batch: PointBatch<'_>,
+    out: &mut impl Pixels,
+    wide: bool,
+) {
+    assert!(supported(view) && (!wide || SimdLevel::detect().avx512()));
     assert!(batch.x.len() == batch.len() && batch.y.len() == batch.len() && batch.z.len() == batch.len());
-    // SAFETY: the CPU has AVX2 (and AVX-512F if wide), and the mode's buffer has
-    // width · height > 0 pixels (asserted); the batch's slices have equal lengths (asserted).
+    // SAFETY: the CPU has AVX2 (and AVX-512F if wide), and the view has width · height > 0
+    // pixels (asserted); the batch's slices have equal lengths (asserted).
     unsafe {
-        match fb.view.mode {
-            SplatMode::Closest if wide => splat_closest_avx512(&fb.view, &mut fb.closest, batch),
-            SplatMode::Closest => splat_closest_avx2(&fb.view, &mut fb.closest, batch),
-            SplatMode::Average | SplatMode::Density => splat_accumulate_avx2(fb, batch),
+        match view.mode {
+            SplatMode::Closest if wide => splat_closest_avx512(view, out, batch),
+            SplatMode::Closest => splat_closest_avx2(view, out, batch),
+            SplatMode::Average | SplatMode::Density => splat_accumulate_avx2(view, colors, out, batch),
         }
     }
 }
@@ -102,7 +108,7 @@ unsafe fn project8(view: &SplatView, x: __m256, y: __m256, z: __m256) -> (__m256
 }
 
 #[target_feature(enable = "avx2")]
-unsafe fn splat_closest_avx2(view: &SplatView, closest: &mut [u32], batch: PointBatch<'_>) {
+unsafe fn splat_closest_avx2(view: &SplatView, out: &mut impl Pixels, batch: PointBatch<'_>) {
     let n = batch.len();
     let scale = ((1u32 << DEPTH_BITS) - 1) as f32;
     let vectors = n / LANES;
@@ -127,19 +133,16 @@ unsafe fn splat_closest_avx2(view: &SplatView, closest: &mut [u32], batch: Point
             _mm256_storeu_si256(pixels.as_mut_ptr().cast(), pixel);
         }
         for l in 0..LANES {
-            // SAFETY: an inside lane's pixel is iy · width + ix with 0 ≤ ix < width and
-            // 0 ≤ iy < height (exact truncations of the checked coordinates), below
-            // width · height = closest.len(); an outside lane's is 0 < closest.len().
-            let slot = unsafe { closest.get_unchecked_mut(pixels[l] as usize) };
-            *slot = (*slot).min(keys[l]);
+            // An inside lane's pixel is iy · width + ix with 0 ≤ ix < width and 0 ≤ iy < height
+            // (exact truncations of the checked coordinates); an outside lane's is 0.
+            out.min_key(pixels[l] as usize, keys[l]);
         }
     }
     for i in vectors * LANES..n {
         if let Some((idx, t)) = view.project(batch.point(i)) {
             let d = t * scale;
             let d = if d > 0.0 { d } else { 0.0 };
-            let key = (d as u32) << 8 | batch.functions[i] as u32;
-            closest[idx] = closest[idx].min(key);
+            out.min_key(idx, (d as u32) << 8 | batch.functions[i] as u32);
         }
     }
 }
@@ -147,7 +150,7 @@ unsafe fn splat_closest_avx2(view: &SplatView, closest: &mut [u32], batch: Point
 /// The closest-mode splat with 16 points per vector: [`project8`] and [`splat_closest_avx2`]
 /// with AVX-512F, the same operations in the same order.
 #[target_feature(enable = "avx2,avx512f")]
-unsafe fn splat_closest_avx512(view: &SplatView, closest: &mut [u32], batch: PointBatch<'_>) {
+unsafe fn splat_closest_avx512(view: &SplatView, out: &mut impl Pixels, batch: PointBatch<'_>) {
     const WIDE: usize = 16;
     let n = batch.len();
     let scale = ((1u32 << DEPTH_BITS) - 1) as f32;
@@ -206,9 +209,8 @@ unsafe fn splat_closest_avx512(view: &SplatView, closest: &mut [u32], batch: Poi
             _mm512_storeu_si512(pixels.as_mut_ptr().cast(), pixel);
         }
         for l in 0..WIDE {
-            // SAFETY: as in splat_closest_avx2.
-            let slot = unsafe { closest.get_unchecked_mut(pixels[l] as usize) };
-            *slot = (*slot).min(keys[l]);
+            // As in splat_closest_avx2.
+            out.min_key(pixels[l] as usize, keys[l]);
         }
     }
     let rest = vectors * WIDE;
@@ -216,7 +218,7 @@ unsafe fn splat_closest_avx512(view: &SplatView, closest: &mut [u32], batch: Poi
     unsafe {
         splat_closest_avx2(
             view,
-            closest,
+            out,
             PointBatch {
                 x: &batch.x[rest..],
                 y: &batch.y[rest..],
@@ -228,10 +230,15 @@ unsafe fn splat_closest_avx512(view: &SplatView, closest: &mut [u32], batch: Poi
 }
 
 #[target_feature(enable = "avx2")]
-unsafe fn splat_accumulate_avx2(fb: &mut Framebuffer, batch: PointBatch<'_>) {
-    let view = fb.view;
+unsafe fn splat_accumulate_avx2(
+    view: &SplatView,
+    function_colors: &[[f32; 3]],
+    out: &mut impl Pixels,
+    batch: PointBatch<'_>,
+) {
+    let view = *view;
     let n = batch.len();
-    let colors: Vec<[f32; 3]> = fb.colors.iter().map(|c| c.map(|x| x * COLOR_SCALE)).collect();
+    let colors: Vec<[f32; 3]> = function_colors.iter().map(|c| c.map(|x| x * COLOR_SCALE)).collect();
     let bg = view.background.map(|x| x * COLOR_SCALE);
     // Per channel, the colours as an 8-entry table by function (up to 8 functions; more take
     // the scalar colour arithmetic of the portable splat, lane by lane).
@@ -294,24 +301,14 @@ unsafe fn splat_accumulate_avx2(fb: &mut Framebuffer, batch: PointBatch<'_>) {
         while inside != 0 {
             let l = inside.trailing_zeros() as usize;
             inside &= inside - 1;
-            let a = &mut fb.accum[pixels[l] as usize];
             if vector {
-                // a + min(add, !a) = a.saturating_add(add), per channel and the count.
-                // SAFETY: 16-byte loads and stores of a [u32; 4] and a local [u32; 4].
-                unsafe {
-                    let acc = _mm_loadu_si128(a.as_ptr().cast());
-                    let add = _mm_loadu_si128(adds[l].as_ptr().cast());
-                    let sum = _mm_add_epi32(acc, _mm_min_epu32(add, _mm_xor_si128(acc, _mm_set1_epi32(-1))));
-                    _mm_storeu_si128(a.as_mut_ptr().cast(), sum);
-                }
+                out.add(pixels[l] as usize, adds[l]);
             } else {
                 // The portable splat's arithmetic for one point.
                 let c = colors[batch.functions[o + l] as usize];
                 let k = view.depth_cue * ts[l];
-                for ch in 0..3 {
-                    a[ch] = a[ch].saturating_add((c[ch] + (bg[ch] - c[ch]) * k + 0.5) as u32);
-                }
-                a[3] = a[3].saturating_add(1);
+                let add = [0, 1, 2].map(|ch| (c[ch] + (bg[ch] - c[ch]) * k + 0.5) as u32);
+                out.add(pixels[l] as usize, [add[0], add[1], add[2], 1]);
             }
         }
     }
@@ -321,5 +318,5 @@ unsafe fn splat_accumulate_avx2(fb: &mut Framebuffer, batch: PointBatch<'_>) {
         z: &batch.z[vectors * LANES..],
         functions: &batch.functions[vectors * LANES..],
     };
-    fb.consume_portable(tail);
+    splat_portable(&view, function_colors, tail, out);
 }

@@ -1,0 +1,156 @@
+//! `nlifs render` on the CPU, in bounded memory: the memory check before anything is
+//! allocated, the chaos game into one framebuffer (shared by the threads when per-thread copies
+//! would be large, `Accumulation`), and the resolve streamed row by row into the PNG, so that a
+//! 16384² still holds its framebuffer and little more. Other formats go through the float layers
+//! (`ImageLayers`), with the EXR layers chosen by `--layers`.
+
+use std::path::Path;
+
+use indicatif::ProgressBar;
+use rayon::prelude::*;
+
+use nlifs::color::linear_to_srgb8;
+use nlifs::output::memory;
+use nlifs::output::png_rows::{RowLayout, write_rows};
+use nlifs::output::{self, Format, ImageLayers, OutputOptions, Provenance};
+use nlifs::resolve::{ResolveArgs, ResolveInputs, resolve_fragment};
+use nlifs::scene::spec::SplatMode;
+use nlifs::shot::{Accumulation, Shot};
+
+use super::BadInput;
+use super::image_args::bad;
+
+/// Rows resolved together (in parallel) before they go to the PNG encoder.
+const ROWS_PER_BLOCK: u32 = 64;
+
+/// The EXR layers `--layers` asks for (None: all the mode has).
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct LayerChoice(pub Option<Vec<String>>);
+
+impl LayerChoice {
+    /// `--layers` for an output written with `options`: names from [`output::LAYER_NAMES`],
+    /// EXR only.
+    pub fn parse(text: Option<&str>, options: &OutputOptions) -> anyhow::Result<Self> {
+        let Some(text) = text else { return Ok(Self(None)) };
+        if options.format != Format::Exr {
+            return Err(BadInput(format!("--layers applies to exr output, not {}", options.format.name())).into());
+        }
+        let names: Vec<String> = text.split(',').map(|n| n.trim().to_string()).filter(|n| !n.is_empty()).collect();
+        for n in &names {
+            if !output::LAYER_NAMES.contains(&n.as_str()) {
+                return Err(BadInput(format!(
+                    "--layers: `{n}` is not a layer; the layers are {}",
+                    output::LAYER_NAMES.join(", ")
+                ))
+                .into());
+            }
+        }
+        Ok(Self(Some(names)))
+    }
+}
+
+/// Renders `shot` on the CPU and writes it to `path` as `options` say; returns how many pixels
+/// the attractor covers. `bar` (over chunks) follows the chaos game.
+pub fn render_still(
+    shot: &Shot,
+    path: &Path,
+    options: &OutputOptions,
+    layers: &LayerChoice,
+    provenance: &Provenance,
+    bar: &ProgressBar,
+) -> anyhow::Result<usize> {
+    let view = &shot.view;
+    // A layer the mode lacks is refused before the render, so nothing is written.
+    if let Some(names) = &layers.0 {
+        let have = output::layer_names_of(view.mode, &shot.style);
+        if let Some(missing) = names.iter().find(|n| !have.contains(&n.as_str())) {
+            return Err(BadInput(format!(
+                "--layers: {} mode{} has no `{missing}` layer; it has {}",
+                view.mode.name(),
+                if view.mode == SplatMode::Closest { " with this look" } else { "" },
+                have.join(", ")
+            ))
+            .into());
+        }
+    }
+    let accumulation = Accumulation::for_view(view);
+    let streamed = options.is_plain_png();
+    let need = memory::still_need(view, accumulation_bytes(shot, accumulation), streamed);
+    let what = format!("a {}×{} {} render", view.width, view.height, view.mode.name());
+    memory::check(&what, need, memory::available_bytes()).map_err(|e| BadInput(e.to_string()))?;
+
+    let framebuffer = shot.splat_chunks(0..shot.plan.chunks(), accumulation, || bar.inc(1));
+    bar.finish_and_clear();
+    if streamed {
+        return stream_png(shot, &framebuffer, path, provenance);
+    }
+    let mut image = ImageLayers::of(&framebuffer, &shot.camera, &shot.style);
+    if output::layer_names_of(view.mode, &shot.style).contains(&"N") {
+        image.normal = Some(output::normals(&framebuffer, &shot.camera, &shot.style));
+    }
+    if let Some(names) = &layers.0 {
+        image.keep_only(names);
+    }
+    let covered = framebuffer.covered_pixels();
+    drop(framebuffer);
+    output::write_image(path, &image, options, Some(provenance)).map_err(bad)?;
+    Ok(covered)
+}
+
+/// Bytes the accumulation takes: the framebuffer, and per-thread copies or buffers.
+fn accumulation_bytes(shot: &Shot, accumulation: Accumulation) -> u64 {
+    let one = shot.view.accumulation_bytes();
+    let threads = rayon::current_num_threads() as u64;
+    match accumulation {
+        // The copies and their merge.
+        Accumulation::PerThread => one * (threads + 1),
+        Accumulation::Shared => one + threads * nlifs::splat::shared::writer_bytes(&shot.view, threads as usize),
+    }
+}
+
+/// Resolves `framebuffer` row by row into an 8-bit PNG at `path` (the bytes `resolve_image`
+/// and `save_rgb8` would give); returns the pixels that differ from the background.
+fn stream_png(
+    shot: &Shot,
+    framebuffer: &nlifs::splat::Framebuffer,
+    path: &Path,
+    provenance: &Provenance,
+) -> anyhow::Result<usize> {
+    let view = &framebuffer.view;
+    let (width, height) = (view.width, view.height);
+    let params = ResolveArgs::new(view, &shot.camera, &shot.style).params(width, height, true);
+    let inputs = ResolveInputs::of(framebuffer);
+    let background = view.background.map(linear_to_srgb8);
+    let bar = super::progress_bar(height as u64, "write");
+    let row_bytes = width as usize * 3;
+    let mut block = vec![0u8; row_bytes * ROWS_PER_BLOCK as usize];
+    let mut block_start = u32::MAX;
+    let mut covered = 0usize;
+    let mut counting = true;
+    write_rows(path, width, height, RowLayout::Rgb8, Some(provenance), |y, out| {
+        let start = y / ROWS_PER_BLOCK * ROWS_PER_BLOCK;
+        if start != block_start {
+            let rows = ROWS_PER_BLOCK.min(height - start);
+            block[..rows as usize * row_bytes].par_chunks_mut(row_bytes).enumerate().for_each(|(i, row)| {
+                let y = start + i as u32;
+                for (x, px) in row.chunks_exact_mut(3).enumerate() {
+                    // What an 8-bit unorm target stores (the resolve's `unorm8`).
+                    let c = resolve_fragment(&params, &inputs, x as u32, y).map(|v| (v * 255.0 + 0.5) as u8);
+                    px.copy_from_slice(&c);
+                }
+            });
+            block_start = start;
+        }
+        let i = (y - start) as usize;
+        out.copy_from_slice(&block[i * row_bytes..(i + 1) * row_bytes]);
+        if counting {
+            covered += out.chunks_exact(3).filter(|p| **p != background).count();
+            bar.set_position(y as u64 + 1);
+            // A second pass (stored blocks) sends the rows again: count them once.
+            counting = y + 1 < height;
+        }
+    })
+    .map_err(bad)?;
+    bar.finish_and_clear();
+    Ok(covered)
+}
