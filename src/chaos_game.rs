@@ -45,7 +45,7 @@ mod x86;
 
 pub use compile::SelectionTable;
 pub use plan::{ChunkPlan, PlanError};
-pub use run::{attractor_bounds, attractor_sample, run_chunk, run_parallel};
+pub use run::{ChunkChains, attractor_bounds, attractor_sample, continue_chunk, run_chunk, run_parallel};
 pub use sink::{CollectSink, PointBatch, PointSink};
 
 use compile::{compile_map, selection_table};
