@@ -45,7 +45,9 @@ mod x86;
 
 pub use compile::SelectionTable;
 pub use plan::{ChunkPlan, PlanError};
-pub use run::{attractor_bounds, attractor_sample, run_chunk, run_parallel, run_per_thread};
+pub use run::{
+    ChunkChains, attractor_bounds, attractor_sample, continue_chunk, run_chunk, run_parallel, run_per_thread,
+};
 pub use sink::{CollectSink, PointBatch, PointSink};
 
 use compile::{compile_map, selection_table};

@@ -30,6 +30,7 @@
 //! The depth cue applies after the light, as in the paper's look.
 
 use glam::Vec3;
+use rayon::prelude::*;
 
 use crate::camera::{OrbitCamera, Projection};
 use crate::color::linear_to_srgb;
@@ -523,13 +524,20 @@ fn unorm8(v: f32) -> u8 {
 
 /// Resolves `framebuffer` (seen by `camera`, for the normals of the shading) with `style` to an
 /// 8-bit sRGB image, as the GPU resolve draws it into an RGBA8 unorm target.
+/// Rows are resolved in parallel (every pixel is a pure function of the accumulation).
 pub fn resolve_image(framebuffer: &Framebuffer, camera: &OrbitCamera, style: &ResolveStyle) -> image::RgbImage {
     let view = &framebuffer.view;
     let params = ResolveArgs::new(view, camera, style).params(view.width, view.height, true);
     let inputs = ResolveInputs::of(framebuffer);
-    image::RgbImage::from_fn(view.width, view.height, |x, y| {
-        image::Rgb(resolve_fragment(&params, &inputs, x, y).map(unorm8))
-    })
+    let width_px = view.width as usize;
+    let mut bytes = vec![0u8; 3 * width_px * view.height as usize];
+    bytes.par_chunks_mut(3 * width_px.max(1)).enumerate().for_each(|(y, row)| {
+        for (x, pixel) in row.chunks_exact_mut(3).enumerate() {
+            let c = resolve_fragment(&params, &inputs, x as u32, y as u32).map(unorm8);
+            pixel.copy_from_slice(&c);
+        }
+    });
+    image::RgbImage::from_raw(view.width, view.height, bytes).expect("3 bytes for each of width × height pixels")
 }
 
 /// A resolve in linear light with its coverage: what the float and alpha outputs write
@@ -551,20 +559,23 @@ pub struct LinearImage {
 }
 
 /// Resolves `framebuffer` like [`resolve_image`] but keeps linear floats (no 8-bit
-/// quantisation) and the coverage of every pixel.
+/// quantisation) and the coverage of every pixel; rows in parallel.
 pub fn resolve_linear(framebuffer: &Framebuffer, camera: &OrbitCamera, style: &ResolveStyle) -> LinearImage {
     let view = &framebuffer.view;
     let params = ResolveArgs::new(view, camera, style).params(view.width, view.height, false);
     let inputs = ResolveInputs::of(framebuffer);
-    let pixels = view.width as usize * view.height as usize;
-    let mut rgb = Vec::with_capacity(pixels);
-    let mut alpha = Vec::with_capacity(pixels);
-    for y in 0..view.height {
-        for x in 0..view.width {
-            rgb.push(resolve_fragment(&params, &inputs, x, y));
-            alpha.push(coverage(&params, &inputs, x, y));
-        }
-    }
+    let width_px = view.width as usize;
+    let pixels = width_px * view.height as usize;
+    let mut rgb = vec![[0f32; 3]; pixels];
+    let mut alpha = vec![0f32; pixels];
+    rgb.par_chunks_mut(width_px.max(1)).zip(alpha.par_chunks_mut(width_px.max(1))).enumerate().for_each(
+        |(y, (rgb, alpha))| {
+            for (x, (rgb, alpha)) in rgb.iter_mut().zip(alpha).enumerate() {
+                *rgb = resolve_fragment(&params, &inputs, x as u32, y as u32);
+                *alpha = coverage(&params, &inputs, x as u32, y as u32);
+            }
+        },
+    );
     LinearImage { width: view.width, height: view.height, rgb, alpha, background: view.background }
 }
 

@@ -35,6 +35,11 @@ impl Pcg32 {
         self.state
     }
 
+    /// The generator whose [`Self::state`] is `state` (kernels hand their generators back).
+    pub(crate) fn from_state(state: u32) -> Self {
+        Self { state }
+    }
+
     #[inline(always)]
     pub fn next_u32(&mut self) -> u32 {
         let old = self.state;

@@ -12,9 +12,10 @@ mod common;
 
 use common::{Density, assert_densities_agree, coarse_density, gpu};
 use glam::Vec3;
-use nlifs::chaos_game::{self, CompiledIfs, ORBITS_PER_CHUNK, run_chunk};
+use nlifs::chaos_game::{self, ChunkChains, CompiledIfs, ORBITS_PER_CHUNK, continue_chunk, run_chunk};
 use nlifs::gpu::chaos_game::{FrameArgs, GpuChaosGame};
 use nlifs::gpu::readback::read_buffer;
+use nlifs::live::cpu_source::frame_layout;
 use nlifs::live::{ChaosBackend, LiveSettings, LiveView};
 use nlifs::resolve::{ResolveStyle, resolve_image};
 use nlifs::rng::Pcg32;
@@ -167,9 +168,10 @@ fn route_settings(backend: ChaosBackend, mode: SplatMode, points: u32, steps: u3
 }
 
 /// The CPU route (`chaos_backend = cpu`) uploads exactly the framebuffer that the CPU chaos
-/// game of its frames gives (frame f: chunks 0..n of stream (seed, f), recomputed here into one
-/// framebuffer), frame after frame (progressive), in the GPU's accumulation layout; the
-/// resolved image shows the attractor. Closest and density modes.
+/// game of its frames gives (persistent chains: chunks 0..n started from the streams (seed, 0)
+/// and continued every frame, recomputed here into one framebuffer), frame after frame
+/// (progressive), in the GPU's accumulation layout; the resolved image shows the attractor.
+/// Closest and density modes.
 #[test]
 fn cpu_route_uploads_the_cpu_framebuffer() {
     let Some(ctx) = gpu() else { return };
@@ -187,16 +189,19 @@ fn cpu_route_uploads_the_cpu_framebuffer() {
         let view = SplatView::new(&camera, width, height, bounds, mode, settings.depth_cue, settings.background);
         let mut expected = Framebuffer::new(view, compiled.colors.clone());
         let points = settings.point_count as u64 * settings.steps_per_frame as u64;
-        let plan = nlifs::chaos_game::ChunkPlan::even(points, rayon::current_num_threads()).unwrap();
+        let (chunks, steps) = frame_layout(points, rayon::current_num_threads());
+        let mut chains: Vec<ChunkChains> =
+            (0..chunks).map(|c| ChunkChains::start(&compiled, settings.seed, 0, c)).collect();
         let mut previous_covered = 0;
         for frame in 0..3u32 {
             let mut encoder = ctx.device.create_command_encoder(&Default::default());
             let splats = live.advance(&ctx, &mut encoder);
             ctx.queue.submit([encoder.finish()]);
-            assert_eq!(splats, plan.splats());
+            assert_eq!(splats, chunks as u64 * ORBITS_PER_CHUNK as u64 * steps as u64);
             assert!(splats >= points);
-            for chunk in plan.iter() {
-                run_chunk(&compiled, settings.seed, frame, chunk.index, chunk.steps, &mut expected);
+            let skip = if frame == 0 { compiled.transient } else { 0 };
+            for chains in &mut chains {
+                continue_chunk(&compiled, chains, skip, steps, &mut expected);
             }
             let uploaded = live.read_accum(&ctx).unwrap();
             let cpu = live.cpu_accum().expect("the CPU route runs");
@@ -253,9 +258,10 @@ fn cpu_route_densities_match_gpu_route() {
     };
     // GPU route: one frame, 2^18 orbits of 4 steps after the transient.
     let (gpu_counts, _) = counts(ChaosBackend::Gpu, 1);
-    // CPU route: 8 frames of 2^20 points in orbits of `cpu_k` steps.
+    // CPU route: 8 frames of 2^20 points from persistent chains, each advancing `cpu_k` steps
+    // over the 8 frames.
     let (cpu_counts, splats) = counts(ChaosBackend::Cpu, 8);
-    let cpu_k = nlifs::chaos_game::ChunkPlan::even(1 << 20, rayon::current_num_threads()).unwrap().steps(0);
+    let cpu_k = 8 * frame_layout(1 << 20, rayon::current_num_threads()).1;
     let gpu_k = 4.0;
     let n_gpu: f64 = gpu_counts.iter().map(|&c| c as f64).sum();
     let n_cpu: f64 = cpu_counts.iter().map(|&c| c as f64).sum();

@@ -1,9 +1,11 @@
 //! Playback through a key as the viewer does it: each frame scene time advances by `dt`, the
 //! IFS at the new time goes to the live view as an edit (points kept, accumulation cleared,
-//! `settle_steps` not splatted) and one frame is drawn. Measures, in density mode on a coarse
-//! grid as `nlifs bench gpu` does, (1) how far each playback frame is from the converged image
-//! of its time, against a fresh fully settled run with as many splats, and (2) after pausing
-//! just past the key, how many frames until the accumulation is within noise of converged.
+//! `settle_steps` not splatted) and one frame is drawn. Measures, on both chaos-game routes
+//! (GPU, and the CPU route with its persistent chains), in density mode on a coarse grid as
+//! `nlifs bench gpu` does, (1) how far each playback frame is from the converged image of its
+//! time, against a fresh fully settled run with as many splats, (2) after pausing just past the
+//! key, and (3) after an edit (a grid point of plant2 moved), how many frames until the
+//! accumulation is within noise of converged.
 //! A measurement for docs/performance.md (playback re-convergence): `cargo test --release --test viewer_playback --
 //! --ignored --nocapture` (needs a GPU adapter; lavapipe will do).
 
@@ -11,7 +13,7 @@ mod common;
 
 use nlifs::chaos_game::CompiledIfs;
 use nlifs::gpu::GpuContext;
-use nlifs::live::{LiveSettings, LiveView};
+use nlifs::live::{ChaosBackend, LiveSettings, LiveView};
 use nlifs::scene::spec::SplatMode;
 
 const W: u32 = 320;
@@ -35,69 +37,139 @@ fn frame(ctx: &GpuContext, live: &mut LiveView) -> Vec<f64> {
     coarse_density(&live.read_accum(ctx).unwrap())
 }
 
+/// A converged image: 8 frames of 2^17 × 16 points on the CPU route from a fresh start.
+fn reference(ctx: &GpuContext, settings: LiveSettings, ifs: &CompiledIfs, view: &View) -> Vec<f64> {
+    let settings = LiveSettings { steps_per_frame: 16, seed: 99, chaos_backend: ChaosBackend::Cpu, ..settings };
+    let mut r = LiveView::new(ctx, settings, W, H).unwrap();
+    r.set_ifs(ctx, ifs, view.bounds, true);
+    r.set_camera(&view.camera);
+    let mut d = Vec::new();
+    for _ in 0..8 {
+        d = frame(ctx, &mut r);
+    }
+    d
+}
+
+/// `frames` frames of a fresh, fully settled run with `settings` (another seed).
+fn fresh(ctx: &GpuContext, settings: LiveSettings, ifs: &CompiledIfs, view: &View, frames: usize) -> Vec<Vec<f64>> {
+    let mut f = LiveView::new(ctx, LiveSettings { seed: 7, ..settings }, W, H).unwrap();
+    f.set_ifs(ctx, ifs, view.bounds, true);
+    f.set_camera(&view.camera);
+    (0..frames).map(|_| frame(ctx, &mut f)).collect()
+}
+
+struct View {
+    bounds: (glam::DVec3, glam::DVec3),
+    camera: nlifs::camera::OrbitCamera,
+}
+
+/// Frames (1..=12) after which `live` (just cleared) is within noise of converged on `ifs`.
+fn frames_to_converge(
+    ctx: &GpuContext,
+    live: &mut LiveView,
+    settings: LiveSettings,
+    ifs: &CompiledIfs,
+    view: &View,
+) -> Option<usize> {
+    let reference = reference(ctx, settings, ifs, view);
+    let fresh = fresh(ctx, settings, ifs, view, 12);
+    let mut converged = None;
+    for (k, fresh) in fresh.iter().enumerate() {
+        let d_live = l1(&frame(ctx, live), &reference);
+        let d_fresh = l1(fresh, &reference);
+        if converged.is_none() && d_live <= 1.2 * d_fresh {
+            converged = Some(k + 1);
+        }
+    }
+    converged
+}
+
 #[test]
 #[ignore = "measurement for docs/performance.md (playback re-convergence); run with --ignored --nocapture"]
 fn playback_through_a_key_reconverges() {
     let Some(ctx) = common::gpu() else { return };
     let scene = common::load_scene("twist-anim");
     let bounds = nlifs::record::timeline_bounds(&scene).unwrap();
-    let camera = scene.camera_for_at(0.0, bounds);
-    let settings = LiveSettings {
-        point_count: 1 << 17,
-        mode: SplatMode::Density,
-        max_splats: u64::MAX,
-        ..LiveSettings::default()
-    };
+    let view = View { bounds, camera: scene.camera_for_at(0.0, bounds) };
     let compiled = |t: f64| CompiledIfs::new(&scene.at(t)).unwrap();
-    let reference = |t: f64| {
-        let mut r = LiveView::new(&ctx, LiveSettings { steps_per_frame: 16, seed: 99, ..settings }, W, H).unwrap();
-        r.set_ifs(&ctx, &compiled(t), bounds, true);
-        r.set_camera(&camera);
-        let mut d = Vec::new();
-        for _ in 0..8 {
-            d = frame(&ctx, &mut r);
-        }
-        d
-    };
-    let fresh = |t: f64, frames: usize| {
-        let mut f = LiveView::new(&ctx, LiveSettings { seed: 7, ..settings }, W, H).unwrap();
-        f.set_ifs(&ctx, &compiled(t), bounds, true);
-        f.set_camera(&camera);
-        (0..frames).map(|_| frame(&ctx, &mut f)).collect::<Vec<_>>()
-    };
     // The key at t = 2 s (twist 0° → 120° → 0°, taper 0 → 0.7 → 0; Catmull-Rom, loop).
     for dt in [1.0 / 24.0, 1.0 / 6.0] {
-        let mut live = LiveView::new(&ctx, settings, W, H).unwrap();
         let t0 = 2.0 - 6.0 * dt;
-        live.set_ifs(&ctx, &compiled(t0), bounds, true);
-        live.set_camera(&camera);
-        for _ in 0..4 {
-            frame(&ctx, &mut live);
-        }
-        println!("playback dt = {dt:.4} s (frames before/after the key at 2 s): d_play / d_fresh");
-        let mut t = t0;
-        let mut worst: f64 = 0.0;
-        for k in 0..12 {
-            t += dt;
-            live.set_ifs(&ctx, &compiled(t), bounds, false);
-            let d_play = l1(&frame(&ctx, &mut live), &reference(t));
-            let d_fresh = l1(&fresh(t, 1)[0], &reference(t));
-            worst = worst.max(d_play / d_fresh);
-            println!("  frame {k:2} t = {t:.3}: d_play {d_play:.4} d_fresh {d_fresh:.4} ratio {:.2}", d_play / d_fresh);
-        }
-        // Pause just past the key: frames until within noise of converged.
-        let reference_t = reference(t);
-        let fresh_t = fresh(t, 12);
-        let mut converged = None;
-        for k in 1..=12 {
-            let d_edit = l1(&frame(&ctx, &mut live), &reference_t);
-            let d_fresh = l1(&fresh_t[k - 1], &reference_t);
-            if converged.is_none() && d_edit <= 1.2 * d_fresh {
-                converged = Some(k);
+        let times: Vec<f64> = (1..=12).map(|k| t0 + k as f64 * dt).collect();
+        let base = LiveSettings {
+            point_count: 1 << 17,
+            mode: SplatMode::Density,
+            max_splats: u64::MAX,
+            ..LiveSettings::default()
+        };
+        let references: Vec<Vec<f64>> = times.iter().map(|&t| reference(&ctx, base, &compiled(t), &view)).collect();
+        for backend in [ChaosBackend::Gpu, ChaosBackend::Cpu] {
+            let settings = LiveSettings { chaos_backend: backend, ..base };
+            let mut live = LiveView::new(&ctx, settings, W, H).unwrap();
+            live.set_ifs(&ctx, &compiled(t0), bounds, true);
+            live.set_camera(&view.camera);
+            for _ in 0..4 {
+                frame(&ctx, &mut live);
             }
+            println!(
+                "{} route, playback dt = {dt:.4} s (frames before/after the key at 2 s): d_play / d_fresh",
+                backend.name()
+            );
+            let mut worst: f64 = 0.0;
+            for (k, (&t, reference)) in times.iter().zip(&references).enumerate() {
+                live.set_ifs(&ctx, &compiled(t), bounds, false);
+                let d_play = l1(&frame(&ctx, &mut live), reference);
+                let d_fresh = l1(&fresh(&ctx, settings, &compiled(t), &view, 1)[0], reference);
+                worst = worst.max(d_play / d_fresh);
+                println!(
+                    "  frame {k:2} t = {t:.3}: d_play {d_play:.4} d_fresh {d_fresh:.4} ratio {:.2}",
+                    d_play / d_fresh
+                );
+            }
+            // Pause just past the key: frames until within noise of converged.
+            let t = times[times.len() - 1];
+            let converged = frames_to_converge(&ctx, &mut live, settings, &compiled(t), &view);
+            println!(
+                "  worst playback ratio {worst:.2}; after pausing at t = {t:.3}: within noise after {converged:?} frame(s)"
+            );
         }
-        println!(
-            "  worst playback ratio {worst:.2}; after pausing at t = {t:.3}: within noise after {converged:?} frame(s)"
-        );
+    }
+}
+
+#[test]
+#[ignore = "measurement for docs/performance.md (re-convergence after an edit); run with --ignored --nocapture"]
+fn an_edit_reconverges() {
+    let Some(ctx) = common::gpu() else { return };
+    let path = common::scene_path("plant2");
+    let text = std::fs::read_to_string(&path).unwrap();
+    let parse = |text: &str| nlifs::scene::Scene::parse(text, &path.display().to_string()).unwrap();
+    let scene = parse(&text);
+    let ifs = CompiledIfs::new(&scene.at(0.0)).unwrap();
+    let bounds = nlifs::chaos_game::attractor_bounds(&ifs, 1);
+    let view = View { bounds, camera: scene.camera_for(bounds) };
+    // A drag of one grid point of f1 by 3 units (7 % of the grid's width), and a small one.
+    for (what, moved) in [("3 units", "[3.9, -13.33, -0.1]"), ("0.3 units", "[1.2, -13.33, -0.1]")] {
+        let edited = CompiledIfs::new(&parse(&text.replacen("[0.9, -13.33, -0.1]", moved, 1)).at(0.0)).unwrap();
+        for backend in [ChaosBackend::Gpu, ChaosBackend::Cpu] {
+            let settings = LiveSettings {
+                point_count: 1 << 17,
+                mode: SplatMode::Density,
+                max_splats: u64::MAX,
+                chaos_backend: backend,
+                ..LiveSettings::default()
+            };
+            let mut live = LiveView::new(&ctx, settings, W, H).unwrap();
+            live.set_ifs(&ctx, &ifs, bounds, true);
+            live.set_camera(&view.camera);
+            for _ in 0..4 {
+                frame(&ctx, &mut live);
+            }
+            live.set_ifs(&ctx, &edited, bounds, false);
+            let converged = frames_to_converge(&ctx, &mut live, settings, &edited, &view);
+            println!(
+                "{} route, plant2 grid point moved by {what}: within noise after {converged:?} frame(s)",
+                backend.name()
+            );
+        }
     }
 }

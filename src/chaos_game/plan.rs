@@ -61,8 +61,8 @@ impl ChunkPlan {
 
     /// A plan of equal chunks for `workers` workers taking every `workers`-th chunk: the chunk
     /// count is a multiple of `workers` (each runs the same number), every chunk runs the same
-    /// steps, at most [`STEPS_PER_ORBIT`], and the run makes at least `points` points. This is the
-    /// live view's frame (`live::cpu_source::frame_chunks`).
+    /// steps, at most [`STEPS_PER_ORBIT`], and the run makes at least `points` points. (The live
+    /// view's CPU route keeps persistent chains instead: `live::cpu_source::frame_layout`.)
     pub fn even(points: u64, workers: usize) -> Result<Self, PlanError> {
         let workers = workers.max(1) as u64;
         let chunks = points.div_ceil(POINTS_PER_CHUNK).max(1).next_multiple_of(workers);
@@ -163,7 +163,7 @@ mod tests {
         assert!(ChunkPlan::new(u64::MAX).unwrap_err().to_string().contains("random streams"));
     }
 
-    /// The live view's frame plan, as `live::cpu_source::frame_chunks` computes it.
+    /// Equal plans split over workers.
     #[test]
     fn even_plans_split_over_workers() {
         for n in counts() {

@@ -223,3 +223,73 @@ fn run_lanes_for<const MX: bool, const MY: bool, const MZ: bool>(
         (lanes.map::<MX, MY, MZ>(fi, p), fi)
     })
 }
+
+/// The orbits of one chunk kept between runs (the live view's persistent points on the CPU):
+/// lane k's generator and position, as [`continue_chunk`] leaves them. Lane k of chunk c is
+/// chain c · [`ORBITS_PER_CHUNK`] + k, seeded as [`run_chunk`] seeds it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ChunkChains {
+    pub rngs: [Pcg32; ORBITS_PER_CHUNK],
+    pub pos: [Vec3A; ORBITS_PER_CHUNK],
+}
+
+impl ChunkChains {
+    /// Chunk `chunk`'s orbits as [`run_chunk`] starts them: lane k draws from the stream
+    /// (seed, frame, chunk · 64 + k) and sits at its start point in the domain, its transient
+    /// still to run.
+    pub fn start(ifs: &CompiledIfs, seed: u32, frame: u32, chunk: u32) -> Self {
+        let first_chain = chunk.wrapping_mul(ORBITS_PER_CHUNK as u32);
+        let mut rngs: [Pcg32; ORBITS_PER_CHUNK] =
+            std::array::from_fn(|k| Pcg32::for_stream(seed, frame, first_chain.wrapping_add(k as u32)));
+        let pos = std::array::from_fn(|k| ifs.start_point(&mut rngs[k]).into());
+        Self { rngs, pos }
+    }
+
+    /// Restarts lane `lane` of chunk `chunk` as [`Self::start`] starts it for `frame` and runs
+    /// its transient at once (not splatted, on the general path: the same points as every
+    /// other path), so that it continues on the attractor with the other lanes.
+    pub fn restart_lane(&mut self, ifs: &CompiledIfs, seed: u32, frame: u32, chunk: u32, lane: usize) {
+        let chain = chunk.wrapping_mul(ORBITS_PER_CHUNK as u32).wrapping_add(lane as u32);
+        let mut rng = Pcg32::for_stream(seed, frame, chain);
+        let mut p = ifs.start_point(&mut rng);
+        let sel = &ifs.selection;
+        let adaptive = sel.cells != [1, 1, 1];
+        for _ in 0..ifs.transient {
+            let cell = if adaptive { sel.cell_of(p) } else { 0 };
+            let fi = sel.select(cell, rng.next_u32());
+            p = ifs.map_fast(fi, p);
+        }
+        self.rngs[lane] = rng;
+        self.pos[lane] = p.into();
+    }
+}
+
+/// Continues the orbits of `chains` (from [`ChunkChains::start`] or an earlier call): `skip`
+/// steps not splatted, then `steps` steps into `sink`, on the fastest path; `chains` is left
+/// where the orbits end. From `ChunkChains::start(ifs, seed, frame, c)` with `skip` =
+/// `ifs.transient` this makes exactly the points of `run_chunk(ifs, seed, frame, c, steps, _)`,
+/// and two calls of s₁ and s₂ steps make those of one call of s₁ + s₂.
+pub fn continue_chunk(ifs: &CompiledIfs, chains: &mut ChunkChains, skip: u32, steps: usize, sink: &mut impl PointSink) {
+    #[cfg(target_arch = "x86_64")]
+    if let Some(simd) = &ifs.simd {
+        let mut rngs = chains.rngs.map(Pcg32::state);
+        let mut pos = chains.pos.map(|p| p.to_array());
+        simd.run_kept(simd.lookup, &mut rngs, &mut pos, skip, steps, sink);
+        chains.rngs = rngs.map(Pcg32::from_state);
+        chains.pos = pos.map(Vec3A::from_array);
+        return;
+    }
+    let orbits = Orbits { rngs: &mut chains.rngs, pos: &mut chains.pos, transient: skip, steps };
+    match &ifs.lanes {
+        Some(lanes) => run_lanes(lanes, orbits, sink),
+        None => {
+            let sel = &ifs.selection;
+            let adaptive = sel.cells != [1, 1, 1];
+            orbits.run(sink, |rng, p| {
+                let cell = if adaptive { sel.cell_of(p.into()) } else { 0 };
+                let fi = sel.select(cell, rng.next_u32());
+                (ifs.map_fast(fi, p.into()).into(), fi)
+            })
+        }
+    }
+}

@@ -231,6 +231,21 @@ impl SimdKernel {
         steps: usize,
         sink: &mut impl PointSink,
     ) {
+        let (mut rngs, mut pos) = (*rngs, *pos);
+        self.run_kept(lookup, &mut rngs, &mut pos, transient, steps, sink);
+    }
+
+    /// [`Self::run`] that leaves the generators and positions where the orbits end (the live
+    /// view's persistent chains, `continue_chunk`).
+    pub(super) fn run_kept(
+        &self,
+        lookup: Lookup,
+        rngs: &mut [u32; ORBITS_PER_CHUNK],
+        pos: &mut [[f32; 3]; ORBITS_PER_CHUNK],
+        transient: u32,
+        steps: usize,
+        sink: &mut impl PointSink,
+    ) {
         assert!(lookup.supported() && self.has_tables(lookup));
         let mut state = Lanes { rng: *rngs, x: pos.map(|p| p[0]), y: pos.map(|p| p[1]), z: pos.map(|p| p[2]) };
         // SAFETY: the CPU has the features each entry point enables (asserted above), and the
@@ -244,6 +259,8 @@ impl SimdKernel {
                 Lookup::WideGather => run_avx512::<GATHER>(self, &mut state, transient, steps, sink),
             }
         }
+        *rngs = state.rng;
+        *pos = std::array::from_fn(|k| [state.x[k], state.y[k], state.z[k]]);
     }
 
     /// Maps points `p[i]` by functions `fi[i]` with `lookup` (for tests); the count must be a

@@ -82,6 +82,22 @@ pub enum BenchCommand {
         #[arg(long, default_value_t = 3)]
         repeats: usize,
     },
+    /// The solid look's cost in `nlifs render`: a still's chaos game + splat (closest mode, all
+    /// threads), then its resolve in the paper look, with shading only and in the solid look
+    /// (shading + occlusion); of each part the best wall time of R runs and the mean process CPU
+    /// time.
+    Look {
+        #[arg(default_value = "scenes/plant2.toml")]
+        scene: PathBuf,
+        #[arg(long, default_value_t = 1920)]
+        width: u32,
+        #[arg(long, default_value_t = 1080)]
+        height: u32,
+        #[arg(long, default_value_t = 4_000_000)]
+        points: u64,
+        #[arg(long, default_value_t = 3)]
+        repeats: usize,
+    },
     /// How much of the attractor a fixed budget of points covers under uniform, contractivity
     /// and locally adaptive probabilities.
     Coverage {
@@ -114,6 +130,7 @@ pub fn run(command: BenchCommand) -> anyhow::Result<()> {
             record(&scene, frames, width, height, points_per_frame, &out)
         }
         BenchCommand::Render(args) => super::bench_render::run(args),
+        BenchCommand::Look { scene, width, height, points, repeats } => look(&scene, width, height, points, repeats),
         BenchCommand::Coverage { scene, budget, reference, size } => {
             let s = load(&scene)?;
             println!("{}: share of the attractor's {size}x{size} pixels lit by {budget} points", s.name);
@@ -178,6 +195,61 @@ fn cpu(path: &Path, points: u64, repeats: usize) -> anyhow::Result<()> {
     println!("map only:                 {:8.1} M points/s", r.map_points_per_sec / 1e6);
     for (mode, rate) in r.splat_points_per_sec {
         println!("map + splat 1920x1080 {:<8} {:8.1} M points/s", mode.name(), rate / 1e6);
+    }
+    Ok(())
+}
+
+/// `nlifs bench look`: see [`BenchCommand::Look`].
+fn look(path: &Path, width: u32, height: u32, points: u64, repeats: usize) -> anyhow::Result<()> {
+    use nlifs::resolve::{ResolveStyle, resolve_image};
+    use nlifs::scene::spec::SplatMode;
+    use nlifs::shot::{Framing, Shot};
+
+    let scene = load(path)?;
+    let mut settings = scene.render_at(0.0);
+    (settings.width, settings.height, settings.points, settings.mode) = (width, height, points, SplatMode::Closest);
+    let shot = Shot::prepare(&scene, 0.0, &settings, Framing::Fit, None).map_err(|e| BadInput(e.to_string()))?;
+    // The best wall seconds of `repeats` runs of `f`, and their mean process CPU seconds (the
+    // CPU clock ticks at 10 ms: a mean over many runs resolves finer).
+    let repeats = repeats.max(1);
+    let best = |f: &mut dyn FnMut()| {
+        let mut wall = f64::INFINITY;
+        let c = cpu_secs().0;
+        for _ in 0..repeats {
+            let t = Instant::now();
+            f();
+            wall = wall.min(t.elapsed().as_secs_f64());
+        }
+        (wall, (cpu_secs().0 - c) / repeats as f64)
+    };
+    let mut framebuffer = None;
+    let splat = best(&mut || framebuffer = Some(shot.splat(|| {})));
+    let Some(framebuffer) = framebuffer else { return Ok(()) };
+    println!(
+        "{}: {width}×{height}, {points} points, closest mode, {} threads; best wall time of {repeats} runs, mean process CPU",
+        scene.name,
+        rayon::current_num_threads()
+    );
+    println!("  chaos game + splat       {:8.1} ms wall {:8.1} ms CPU", 1e3 * splat.0, 1e3 * splat.1);
+    let shading_only = ResolveStyle { occlusion: 0.0, ..ResolveStyle::SOLID };
+    let mut paper = (0.0, 0.0);
+    for (name, style) in
+        [("paper", ResolveStyle::PAPER), ("shading only", shading_only), ("solid", ResolveStyle::SOLID)]
+    {
+        let r = best(&mut || drop(resolve_image(&framebuffer, &shot.camera, &style)));
+        if name == "paper" {
+            paper = r;
+        }
+        let look = (r.0 - paper.0, r.1 - paper.1);
+        println!(
+            "  resolve, {name:<14} {:8.1} ms wall {:8.1} ms CPU; over paper {:7.1} ms wall ({:4.1} % of the render) {:7.1} ms CPU ({:4.1} %)",
+            1e3 * r.0,
+            1e3 * r.1,
+            1e3 * look.0,
+            100.0 * look.0 / (splat.0 + r.0),
+            1e3 * look.1,
+            100.0 * look.1 / (splat.1 + r.1).max(1e-9),
+        );
     }
     Ok(())
 }

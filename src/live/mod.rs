@@ -10,9 +10,9 @@
 //!   the route the backend takes on the adapter at hand.
 //!
 //! With [`LiveSettings::chaos_backend`] taking the CPU route (`cpu`, or `auto` on a software
-//! adapter) the chaos game runs on the CPU: fresh orbits every frame into CPU framebuffers,
-//! uploaded into the same accumulation buffer and resolved by the same pass; clears happen at
-//! the same moments.
+//! adapter) the chaos game runs on the CPU: persistent chains advanced every frame into CPU
+//! framebuffers, uploaded into the same accumulation buffer and resolved by the same pass;
+//! clears, restarts and the settling after an edit happen at the same moments.
 
 pub mod cpu_source;
 pub mod settings;
@@ -84,7 +84,7 @@ impl LiveView {
     /// kept and skip `settle_steps`).
     pub fn set_ifs(&mut self, ctx: &GpuContext, ifs: &CompiledIfs, bounds: (DVec3, DVec3), restart: bool) {
         self.gpu.set_ifs(ctx, ifs, bounds, restart);
-        self.cpu.set_ifs(ifs);
+        self.cpu.set_ifs(ifs, restart, self.settings.settle_steps);
     }
 
     pub fn set_camera(&mut self, camera: &OrbitCamera) {
@@ -95,8 +95,9 @@ impl LiveView {
         self.gpu.set_settings(ctx, (&settings).into())?;
         let route = settings.chaos_backend.route(self.software_adapter);
         if route.cpu != self.route.cpu {
-            // The GPU points did not move while the CPU ran: restart them.
+            // The points of the route that did not run did not follow the edits: restart them.
             self.gpu.restart_points();
+            self.cpu.restart();
         }
         self.route = route;
         self.settings = settings;
@@ -115,6 +116,11 @@ impl LiveView {
     /// The CPU route's merged accumulation as last uploaded (GPU layout), if it runs.
     pub fn cpu_accum(&self) -> Option<&[u32]> {
         self.route.cpu.then(|| self.cpu.merged())
+    }
+
+    /// The CPU route's point source (its persistent chains), whichever route runs.
+    pub fn cpu_source(&self) -> &CpuChaosGame {
+        &self.cpu
     }
 
     /// Pixels hit by at least one point since the last clear, where it is known without a GPU
