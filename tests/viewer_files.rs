@@ -286,6 +286,8 @@ fn the_dialogs_ask_the_event_loop_and_their_answers_open_and_save() {
     assert!(!s.modified());
     assert!(!Scene::load(&saved).unwrap().functions[0].enabled);
     assert!(s.ui.toast.as_deref().is_some_and(|t| t.contains("saved-as.toml")), "{:?}", s.ui.toast);
+    // The title names the new file (the scene keeps its name).
+    assert_eq!(s.window_title(), "plant1 (saved-as.toml) — nlifs");
     assert!(!s.files.dialog_open);
 
     // Open: the answer opens like a drop; a cancel changes nothing.

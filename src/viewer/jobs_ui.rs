@@ -15,10 +15,12 @@ use super::state::ViewerState;
 
 const ERROR_COLOR: Color32 = Color32::from_rgb(255, 110, 90);
 
-/// "37 % · 12 s left" with a Cancel button, while a job runs; then its last message.
+/// "37 % · 12 s left" with a Cancel button, while a job runs (`preparing` before its units are
+/// counted); then its last message.
 fn progress_ui(
     ui: &mut egui::Ui,
     progress: Option<JobProgress>,
+    preparing: &str,
     message: &Option<String>,
     cancel: Command,
     commands: &mut Vec<Command>,
@@ -27,7 +29,7 @@ fn progress_ui(
         ui.horizontal(|ui| {
             let text = match (p.cancelling, p.eta_secs) {
                 (true, _) => "cancelling…".to_string(),
-                (false, _) if p.total == 0 => "preparing…".to_string(),
+                (false, _) if p.total == 0 => preparing.to_string(),
                 (false, Some(eta)) => {
                     format!("{:.0} % · {} left", 100.0 * p.fraction(), format_secs(eta))
                 }
@@ -79,7 +81,14 @@ pub fn raytrace_ui(ui: &mut egui::Ui, state: &ViewerState, jobs: &JobView, comma
         if ui.add_enabled(can_start, egui::Button::new("Ray-trace this view")).clicked() {
             commands.push(Command::StartRaytrace);
         }
-        progress_ui(ui, jobs.raytrace, &jobs.raytrace_message, Command::CancelRaytrace, commands);
+        progress_ui(
+            ui,
+            jobs.raytrace,
+            "building the hierarchy…",
+            &jobs.raytrace_message,
+            Command::CancelRaytrace,
+            commands,
+        );
     });
 }
 
@@ -138,7 +147,7 @@ pub fn record_ui(ui: &mut egui::Ui, state: &ViewerState, jobs: &JobView, command
         if ui.add_enabled(can_start, egui::Button::new("Record timeline")).clicked() {
             commands.push(Command::StartRecord);
         }
-        progress_ui(ui, jobs.record, &jobs.record_message, Command::CancelRecord, commands);
+        progress_ui(ui, jobs.record, "framing the timeline…", &jobs.record_message, Command::CancelRecord, commands);
     });
 }
 

@@ -264,17 +264,21 @@ impl ViewerState {
         self.scene != self.scene_as_saved
     }
 
-    /// The window's title: the scene's name, `*` when modified, the program.
+    /// The window's title: the scene's name, `*` when modified, the file's name where it is not
+    /// the scene's (after Save As to another name), the program.
     pub fn window_title(&self) -> String {
+        let file_name = self.scene_path.as_ref().and_then(|p| p.file_name()).map(|n| n.to_string_lossy().into_owned());
         let name = if self.scene.name.trim().is_empty() {
-            self.scene_path
-                .as_ref()
-                .and_then(|p| p.file_name())
-                .map_or("untitled".into(), |n| n.to_string_lossy().into_owned())
+            file_name.clone().unwrap_or_else(|| "untitled".into())
         } else {
             self.scene.name.clone()
         };
-        format!("{name}{} — nlifs", if self.modified() { "*" } else { "" })
+        let stem = self.scene_path.as_ref().and_then(|p| p.file_stem()).map(|s| s.to_string_lossy().into_owned());
+        let file = match file_name {
+            Some(f) if stem.as_deref() != Some(name.as_str()) && f != name => format!(" ({f})"),
+            _ => String::new(),
+        };
+        format!("{name}{}{file} — nlifs", if self.modified() { "*" } else { "" })
     }
 
     /// Functions that may not be contractive or that leave the grid, for the warning banner:

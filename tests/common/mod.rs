@@ -30,8 +30,12 @@ pub fn load_scene(name: &str) -> Scene {
 }
 
 /// The `nlifs` binary that cargo built for this test run, as a command to add arguments to.
+/// Its config folder (the viewer's recent files) is one of this test process's in the
+/// temporary directory, so that no test writes into the user's (a test may set its own).
 pub fn nlifs_command() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_nlifs"))
+    let mut command = Command::new(env!("CARGO_BIN_EXE_nlifs"));
+    command.env("NLIFS_CONFIG_DIR", std::env::temp_dir().join(format!("nlifs-config-{}", std::process::id())));
+    command
 }
 
 /// Runs `nlifs` with `args` to completion and returns its exit status and output.
