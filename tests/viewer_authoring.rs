@@ -253,6 +253,12 @@ fn a_typed_probability_makes_the_scene_explicit_and_auto_goes_back() {
     for (a, b) in shares.iter().zip(&auto_shares) {
         assert!((a - b).abs() < 2e-3, "explicit shares {shares:?} vs automatic {auto_shares:?}");
     }
+    // A function added to an explicit scene gets a weight (the mean of the others), so that
+    // the file still loads.
+    s.apply([Command::AddFunction]);
+    let n = s.scene.functions.len();
+    let mean = s.scene.functions[..n - 1].iter().map(|f| f.probability.unwrap()).sum::<f64>() / (n - 1) as f64;
+    assert_eq!(s.scene.functions[n - 1].probability, Some(mean));
     save_reload_info(&mut s, "explicit-menu");
 }
 
