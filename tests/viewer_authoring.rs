@@ -9,7 +9,7 @@ use glam::DVec3;
 use nlifs::color::{linear_to_srgb8, srgb8_to_linear};
 use nlifs::edit::{Edit, FunctionKind, MIN_KEY_GAP_SECS};
 use nlifs::live::LiveSettings;
-use nlifs::model::builder::{Step, StepKind};
+use nlifs::model::builder::{Axis, Step, StepKind};
 use nlifs::model::{Map, ProbabilityMode, RectGrid};
 use nlifs::scene::Scene;
 use nlifs::scene::spec::{FunctionDef, flatten};
@@ -126,6 +126,7 @@ fn grid_to_affine_says_when_it_is_only_a_fit() {
             let message = s.message.clone().unwrap_or_default();
             assert_eq!(message.contains("approximate"), misses, "{file} f{f}: {message}");
             assert_eq!(message.contains("the same map"), !misses, "{file} f{f}: {message}");
+            assert_eq!(s.ui.toast.as_deref(), Some(message.as_str()), "said over the view too");
             approximate += usize::from(misses);
             // The fit is the least-squares one: no affine map in a small neighbourhood comes
             // closer to the grid points (a convex problem, so a local test suffices).
@@ -252,6 +253,12 @@ fn a_typed_probability_makes_the_scene_explicit_and_auto_goes_back() {
     for (a, b) in shares.iter().zip(&auto_shares) {
         assert!((a - b).abs() < 2e-3, "explicit shares {shares:?} vs automatic {auto_shares:?}");
     }
+    // A function added to an explicit scene gets a weight (the mean of the others), so that
+    // the file still loads.
+    s.apply([Command::AddFunction]);
+    let n = s.scene.functions.len();
+    let mean = s.scene.functions[..n - 1].iter().map(|f| f.probability.unwrap()).sum::<f64>() / (n - 1) as f64;
+    assert_eq!(s.scene.functions[n - 1].probability, Some(mean));
     save_reload_info(&mut s, "explicit-menu");
 }
 
@@ -268,7 +275,16 @@ fn builder_steps_are_added_removed_and_reordered_in_every_key() {
         let n = steps_of(&s).len();
         let ifs_before = s.scene.at(0.3);
         // An added step is the identity: the IFS at any time is unchanged (to rounding).
-        s.apply([Command::InsertBuilderStep { function: f, index: n, kind: StepKind::Twist }]);
+        // A twist about x (not the format's default axis), its range the grid's x extent.
+        let (lo, hi) = (s.scene.domain.min(), s.scene.domain.max());
+        let twist = Step::identity(StepKind::Twist, 3, lo, hi).with_axes((Axis::X, Axis::X), lo, hi);
+        // A bend towards its own axis does not exist: refused, nothing changes.
+        let bad = Step::identity(StepKind::Bend, 3, lo, hi).with_axes((Axis::Y, Axis::Y), lo, hi);
+        s.apply([Command::InsertBuilderStep { function: f, index: 0, step: bad }]);
+        assert_eq!(s.scene, original);
+        assert!(s.error.is_some());
+        s.apply([Command::InsertBuilderStep { function: f, index: n, step: twist.clone() }]);
+        assert_eq!(steps_of(&s)[n], twist);
         assert_eq!(steps_of(&s).len(), n + 1, "{file}: {:?}", s.error);
         assert_eq!(steps_of(&s)[n].kind(), StepKind::Twist);
         let ifs_after = s.scene.at(0.3);

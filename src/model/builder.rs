@@ -190,6 +190,46 @@ impl Step {
         }
     }
 
+    /// The step's axes: (`axis`, the second axis: `along` for a twist, `toward` for a bend, else
+    /// `axis` again); None for the steps without an axis.
+    pub fn axes(&self) -> Option<(Axis, Axis)> {
+        match *self {
+            Step::Rotate { axis, .. } | Step::Taper { axis, .. } => Some((axis, axis)),
+            Step::Twist { axis, along, .. } => Some((axis, along)),
+            Step::Bend { axis, toward, .. } => Some((axis, toward)),
+            _ => None,
+        }
+    }
+
+    /// The axes a step of `kind` may have in `dim` dimensions, as the scene format accepts them
+    /// (in 2D rotations and twists turn about z, tapers and bends stay in the x-y plane).
+    pub fn axis_choices(kind: StepKind, dim: usize) -> Vec<(Axis, Axis)> {
+        let plane: &[Axis] = if dim == 2 { &[Axis::X, Axis::Y] } else { &[Axis::X, Axis::Y, Axis::Z] };
+        match kind {
+            StepKind::Rotate if dim == 2 => vec![(Axis::Z, Axis::Z)],
+            StepKind::Twist if dim == 2 => plane.iter().map(|&a| (Axis::Z, a)).collect(),
+            StepKind::Rotate | StepKind::Taper | StepKind::Twist => plane.iter().map(|&a| (a, a)).collect(),
+            StepKind::Bend => {
+                plane.iter().flat_map(|&a| plane.iter().filter(move |&&t| t != a).map(move |&t| (a, t))).collect()
+            }
+            _ => Vec::new(),
+        }
+    }
+
+    /// The step with axes `axes` (see [`Step::axes`]) and its range the grid box [`lo`, `hi`]'s
+    /// extent along the axis it varies along; unchanged for a step without axes.
+    pub fn with_axes(mut self, axes: (Axis, Axis), lo: DVec3, hi: DVec3) -> Step {
+        let extent = |a: Axis| [lo[a.index()], hi[a.index()]];
+        match &mut self {
+            Step::Rotate { axis, .. } => *axis = axes.0,
+            Step::Taper { axis, range, .. } => (*axis, *range) = (axes.0, extent(axes.0)),
+            Step::Twist { axis, along, range, .. } => (*axis, *along, *range) = (axes.0, axes.1, extent(axes.1)),
+            Step::Bend { axis, toward, range, .. } => (*axis, *toward, *range) = (axes.0, axes.1, extent(axes.0)),
+            _ => {}
+        }
+        self
+    }
+
     pub fn apply(&self, p: DVec3) -> DVec3 {
         match *self {
             Step::Scale { by, center } => center + (p - center) * by,
@@ -270,6 +310,28 @@ mod tests {
                     }
                     assert!(step.apply(p).distance(p) < 1e-12, "{kind:?} in {dim}D moved {p}");
                 }
+            }
+        }
+    }
+
+    #[test]
+    fn every_axis_choice_keeps_the_identity_and_reads_back() {
+        let (lo, hi) = (DVec3::new(-1.0, 0.0, 2.0), DVec3::new(3.0, 5.0, 4.0));
+        for dim in [2usize, 3] {
+            for kind in StepKind::ALL {
+                for axes in Step::axis_choices(kind, dim) {
+                    let step = Step::identity(kind, dim, lo, hi).with_axes(axes, lo, hi);
+                    assert_eq!(step.axes(), Some(axes), "{kind:?} {dim}D");
+                    let p = DVec3::new(0.5, 1.5, if dim == 3 { 3.0 } else { 0.0 });
+                    assert!(step.apply(p).distance(p) < 1e-12, "{kind:?} {axes:?} moved {p}");
+                }
+            }
+        }
+        // The format's defaults are among the choices.
+        for dim in [2usize, 3] {
+            for kind in [StepKind::Rotate, StepKind::Taper, StepKind::Twist, StepKind::Bend] {
+                let default = Step::identity(kind, dim, lo, hi).axes().unwrap();
+                assert!(Step::axis_choices(kind, dim).contains(&default), "{kind:?} {dim}D");
             }
         }
     }

@@ -314,10 +314,13 @@ impl ViewerState {
                 let offset = if dim == 2 { DVec3::new(offset.x, offset.y, 0.0) } else { offset };
                 let name =
                     (n + 1..).map(|k| format!("f{k}")).find(|name| after.functions.iter().all(|f| &f.name != name));
+                // Explicit probabilities need a weight on every function: the mean of the others.
+                let explicit = after.probability_mode == crate::model::ProbabilityMode::Explicit;
+                let mean_weight = after.functions.iter().filter_map(|f| f.probability).sum::<f64>() / n.max(1) as f64;
                 after.functions.push(crate::scene::spec::FunctionSpec {
                     name: name.unwrap_or_default(),
                     color: crate::color::palette_color(n),
-                    probability: None,
+                    probability: explicit.then_some(mean_weight),
                     enabled: true,
                     def: FunctionDef::Affine(crate::model::AffineMap { matrix, offset }),
                 });

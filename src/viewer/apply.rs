@@ -374,8 +374,8 @@ impl ViewerState {
                 // Authoring (`authoring.rs`).
                 Command::SetFunctionKind { function, kind } => edited |= self.set_function_kind(function, kind),
                 Command::SetProbabilityMode(mode) => edited |= self.set_probability_mode(mode),
-                Command::InsertBuilderStep { function, index, kind } => {
-                    edited |= self.insert_builder_step(function, index, kind)
+                Command::InsertBuilderStep { function, index, step } => {
+                    edited |= self.insert_builder_step(function, index, step)
                 }
                 Command::RemoveBuilderStep { function, step } => edited |= self.remove_builder_step(function, step),
                 Command::MoveBuilderStep { function, from, to } => edited |= self.move_builder_step(function, from, to),

@@ -16,7 +16,7 @@
 use crate::color;
 use crate::edit::{Edit, FunctionKind};
 use crate::model::ProbabilityMode;
-use crate::model::builder::{Step, StepKind};
+use crate::model::builder::Step;
 use crate::scene::Scene;
 
 use super::state::{Gesture, ViewerState};
@@ -50,6 +50,8 @@ impl ViewerState {
         }
         let article = if kind == FunctionKind::Affine { "an" } else { "a" };
         self.message = Some(format!("{name} is now {article} {} function: {how}", kind.name()));
+        // Over the view too, where the eye is: an approximate change must not pass unseen.
+        self.ui.toast = self.message.clone();
         true
     }
 
@@ -153,10 +155,16 @@ impl ViewerState {
         true
     }
 
-    /// Inserts an identity step of `kind` at `index` of builder `function` (one undo step).
-    pub(super) fn insert_builder_step(&mut self, function: usize, index: usize, kind: StepKind) -> bool {
-        let (lo, hi) = (self.scene.domain.min(), self.scene.domain.max());
-        let step = Step::identity(kind, self.scene.domain.dimension(), lo, hi);
+    /// Inserts `step` at `index` of builder `function` (one undo step); its axes must be ones
+    /// the scene's dimension allows, so that the saved file reads back.
+    pub(super) fn insert_builder_step(&mut self, function: usize, index: usize, step: Step) -> bool {
+        let dim = self.scene.domain.dimension();
+        if let Some(axes) = step.axes()
+            && !Step::axis_choices(step.kind(), dim).contains(&axes)
+        {
+            self.error = Some(format!("a {dim}D scene has no {} step with these axes", step.kind().name()));
+            return false;
+        }
         let edit = Edit::insert_step(&self.scene, function, index, step);
         self.apply_or_report(edit)
     }

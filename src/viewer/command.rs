@@ -10,7 +10,7 @@ use crate::camera::{OrbitCamera, Projection};
 use crate::edit::FunctionKind;
 use crate::live::LiveSettings;
 use crate::model::ProbabilityMode;
-use crate::model::builder::{Step, StepKind};
+use crate::model::builder::Step;
 use crate::scene::Scene;
 use crate::scene::timeline::{Ease, Interpolation, LoopMode};
 
@@ -184,12 +184,13 @@ pub enum Command {
     /// How the chaos game picks functions. Explicit fills every function's weight with its
     /// current share; back to an automatic mode clears the weights.
     SetProbabilityMode(ProbabilityMode),
-    /// Inserts an identity step of `kind` (it changes nothing until its parameters are set) at
-    /// position `index` of a builder's steps.
+    /// Inserts `step` at position `index` of a builder's steps (the panel offers identity
+    /// steps, [`Step::identity`], which change nothing until their parameters are set). A step
+    /// whose axes the scene's dimension does not allow is refused.
     InsertBuilderStep {
         function: usize,
         index: usize,
-        kind: StepKind,
+        step: Step,
     },
     RemoveBuilderStep {
         function: usize,

@@ -177,17 +177,42 @@ pub fn builder_ui(ui: &mut egui::Ui, state: &ViewerState, commands: &mut Vec<Com
                     commands.push(Command::SetBuilderStep { function, step: k, value });
                 }
             }
-            ui.menu_button("Add step", |ui| {
-                for kind in StepKind::ALL {
-                    if ui.button(kind.name()).on_hover_text("added last; it changes nothing until you set it").clicked()
-                    {
-                        commands.push(Command::InsertBuilderStep { function, index: count, kind });
-                    }
-                }
-            });
+            ui.menu_button("Add step", |ui| add_step_menu_ui(ui, state, function, count, commands));
             ui.separator();
         }
     });
+}
+
+/// The kinds of step, each with its axes where it has a choice; the step goes last and
+/// changes nothing until its numbers are set.
+fn add_step_menu_ui(
+    ui: &mut egui::Ui,
+    state: &ViewerState,
+    function: usize,
+    index: usize,
+    commands: &mut Vec<Command>,
+) {
+    let dim = state.scene.domain.dimension();
+    let (lo, hi) = (state.scene.domain.min(), state.scene.domain.max());
+    let mut add = |step: Step| commands.push(Command::InsertBuilderStep { function, index, step });
+    for kind in StepKind::ALL {
+        let identity = Step::identity(kind, dim, lo, hi);
+        let choices = Step::axis_choices(kind, dim);
+        if choices.len() <= 1 {
+            if ui.button(kind.name()).on_hover_text("added last; it changes nothing until you set it").clicked() {
+                add(identity);
+            }
+            continue;
+        }
+        ui.menu_button(kind.name(), |ui| {
+            for axes in choices {
+                let step = identity.clone().with_axes(axes, lo, hi);
+                if ui.button(step_title(&step)).clicked() {
+                    add(step);
+                }
+            }
+        });
+    }
 }
 
 /// "twist about y", "scale", …: the step's op and axes.
@@ -196,7 +221,7 @@ fn step_title(step: &Step) -> String {
         Step::Rotate { axis, .. } => format!("rotate about {}", axis.name()),
         Step::Taper { axis, .. } => format!("taper along {}", axis.name()),
         Step::Twist { axis, along, .. } if axis == along => format!("twist about {}", axis.name()),
-        Step::Twist { axis, along, .. } => format!("twist about {}, along {}", axis.name(), along.name()),
+        Step::Twist { along, .. } => format!("twist along {}", along.name()),
         Step::Bend { axis, toward, .. } => format!("bend {} towards {}", axis.name(), toward.name()),
         _ => step.kind().name().to_string(),
     }
