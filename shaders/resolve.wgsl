@@ -47,6 +47,9 @@ struct ResolveParams {
 override RESOLVE_MODE: u32 = 0u;
 override SHADED: bool = false;
 override ENCODE_SRGB: bool = false;
+// The light (normals, occlusion) comes from `light_cache`, which the `light` pass fills (the
+// live view refreshes it a band of rows per frame at rest, see src/gpu/resolve.rs).
+override LIGHT_CACHED: bool = false;
 
 const MODE_CLOSEST: u32 = 0u;
 const MODE_AVERAGE: u32 = 1u;
@@ -84,6 +87,10 @@ const OCCLUSION_GAIN: f32 = 2.0;
 @group(0) @binding(2) var<uniform> colors: array<vec4<f32>, 256>;
 // [0]: the maximum count over the pixels (written by `max_count`).
 @group(0) @binding(3) var<storage, read> stats: array<u32>;
+
+// Per pixel the bits of the light factors (factor · visible, specular · shading · visible) of
+// its key, as the `light` pass wrote them (exact f32 through a Rg32Uint texture).
+@group(0) @binding(4) var light_cache: texture_2d<u32>;
 
 @group(1) @binding(0) var<storage, read_write> stats_out: array<atomic<u32>>;
 
@@ -238,8 +245,8 @@ fn occlusion_at(x: i32, y: i32, key: u32, slopes: vec2<f32>) -> f32 {
     return 0.0;
 }
 
-// The solid look's colour of `key` with colour `albedo` at (x, y), before the depth cue.
-fn light(x: i32, y: i32, key: u32, albedo: vec3<f32>) -> vec3<f32> {
+// The solid look's light on `key` at (x, y): the factor of the albedo and the white added.
+fn light_factors(x: i32, y: i32, key: u32) -> vec2<f32> {
     let slopes = fitted_slopes(x, y, key);
     let sx_screen = (f32(x) + 0.5 - 0.5 * f32(params.width)) * params.pixel_size;
     let sy_screen = (0.5 * f32(params.height) - (f32(y) + 0.5)) * params.pixel_size;
@@ -263,7 +270,32 @@ fn light(x: i32, y: i32, key: u32, albedo: vec3<f32>) -> vec3<f32> {
         visible = 1.0 - params.occlusion * occlusion_at(x, y, key, slopes);
     }
     let factor = (1.0 - params.shading) + diffuse * params.shading;
-    return albedo * (factor * visible) + vec3<f32>(specular * params.shading * visible);
+    return vec2<f32>(factor * visible, specular * params.shading * visible);
+}
+
+// The solid look's colour of `key` with colour `albedo` at (x, y), before the depth cue.
+fn light(x: i32, y: i32, key: u32, albedo: vec3<f32>) -> vec3<f32> {
+    var f = vec2<f32>(0.0);
+    if LIGHT_CACHED {
+        f = bitcast<vec2<f32>>(textureLoad(light_cache, vec2<i32>(x, y), 0).xy);
+    } else {
+        f = light_factors(x, y, key);
+    }
+    return albedo * f.x + vec3<f32>(f.y);
+}
+
+// The light pass: the light factors of each pixel's key (the nearest within the point radius),
+// at the key's own pixel, as `light` reads them back (target: Rg32Uint, the accumulation's size).
+@fragment
+fn light_pass(in: VertexOutput) -> @location(0) vec4<u32> {
+    let x = i32(in.position.x);
+    let y = i32(in.position.y);
+    let key = key_at(x, y);
+    var f = vec2<f32>(1.0, 0.0);
+    if key != EMPTY {
+        f = light_factors(x, y, key);
+    }
+    return vec4<u32>(bitcast<vec2<u32>>(f), 0u, 0u);
 }
 
 @fragment

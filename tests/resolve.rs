@@ -2,14 +2,15 @@
 //! (`src/resolve.rs`): the same accumulation goes through both, for every splat mode, every look
 //! term (paper; lights only; occlusion only; the solid look; a half-strength mix) and point
 //! radius 0, 1 and 2, and the 8-bit images must agree within the tolerance derived at
-//! [`Tolerance`]. Runs on any adapter (lavapipe in CI); without one it skips loudly,
+//! [`Tolerance`]; with the solid look the GPU's light cache (refreshed whole or in bands) must
+//! give the inline light's bytes. Runs on any adapter (lavapipe in CI); without one it skips loudly,
 //! unless NLIFS_REQUIRE_GPU=1, in which case it fails.
 
 use nlifs::camera::Projection;
 use nlifs::chaos_game::{self, CompiledIfs, run_chunk};
 use nlifs::gpu::GpuContext;
 use nlifs::gpu::chaos_game::GpuChaosGame;
-use nlifs::gpu::resolve::GpuResolve;
+use nlifs::gpu::resolve::{GpuResolve, LightRows};
 use nlifs::resolve::{
     DEPTH_SCALE, EMPTY, ResolveArgs, ResolveInputs, ResolveParams, ResolveStyle, max_count, resolve_fragment,
     resolve_fragment_perturbed,
@@ -121,7 +122,7 @@ struct Gpu {
 impl Gpu {
     /// The GPU resolve of `acc` with `args` into an RGBA8 unorm target (the format `render
     /// --backend gpu` reads back) of the accumulation's size grown by `args.origin_px`.
-    fn image(&mut self, acc: &Accumulation, args: &ResolveArgs) -> image::RgbImage {
+    fn image(&mut self, acc: &Accumulation, args: &ResolveArgs, light: LightRows) -> image::RgbImage {
         let ctx = &self.ctx;
         let mut game = GpuChaosGame::new(&ctx.device, 1, acc.width, acc.height);
         ctx.queue.write_buffer(&game.accum, 0, bytemuck::cast_slice(&acc.words));
@@ -133,7 +134,7 @@ impl Gpu {
         let (width, height) = (acc.width + args.origin_px[0], acc.height + args.origin_px[1]);
         // The library's offscreen target and readback (RGBA8, rows padded), as the live view uses.
         nlifs::gpu::readback::draw_offscreen(ctx, width, height, |encoder, target, format| {
-            self.resolve.draw(ctx, encoder, &game, args, target, format)
+            self.resolve.draw(ctx, encoder, &game, args, target, format, light)
         })
         .unwrap()
     }
@@ -210,7 +211,17 @@ fn compare(gpu: &mut Gpu, acc: &Accumulation, args: &ResolveArgs) -> u8 {
     let tolerance = Tolerance::of(&p);
     assert!(tolerance.levels < 0.1, "{}: the derived tolerance {} levels is too loose", acc.name, tolerance.levels);
     let lit = p.mode == 0 && (p.shading > 0.0 || p.occlusion > 0.0);
-    let image = gpu.image(acc, args);
+    let image = gpu.image(acc, args, LightRows::Inline);
+    if lit {
+        // The light cache (the live view's) gives the same bytes once every row is refreshed,
+        // in one draw or in bands over several draws of the same accumulation.
+        let h = acc.height;
+        let whole = gpu.image(acc, args, LightRows::Refresh { start: 0, end: h });
+        assert!(whole == image, "{}: light cache refreshed whole differs from the inline light", acc.name);
+        gpu.image(acc, args, LightRows::Refresh { start: 0, end: h / 3 });
+        let banded = gpu.image(acc, args, LightRows::Refresh { start: h / 3, end: h });
+        assert!(banded == image, "{}: light cache refreshed in bands differs from the inline light", acc.name);
+    }
     let [ox, oy] = args.origin_px;
     // Outside the accumulation's rectangle the target is cleared to black.
     for (x, y, px) in image.enumerate_pixels() {

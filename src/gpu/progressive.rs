@@ -18,7 +18,7 @@ use crate::scene::spec::SplatMode;
 use crate::splat::SplatView;
 
 use super::chaos_game::{FrameArgs, GpuChaosGame};
-use super::resolve::GpuResolve;
+use super::resolve::{GpuResolve, LightRows};
 use super::{GpuContext, GpuError};
 use crate::resolve::ResolveArgs;
 
@@ -89,7 +89,19 @@ pub struct Progressive {
     pub frames_since_clear: u32,
     pub splats_since_clear: u64,
     has_ifs: bool,
+    /// The solid look's light (normals, occlusion) refreshed in this many bands of rows, one
+    /// per draw, while the view rests (0 or 1: computed in every draw for every pixel). The
+    /// first [`LIGHT_FULL_FRAMES`] frames after a clear and any change of the resolve's
+    /// arguments refresh it whole. Snapshots always compute it whole.
+    pub light_bands: u32,
+    /// The next band to refresh, and the arguments the light cache was last refreshed with.
+    light_band: u32,
+    light_args: Option<ResolveArgs>,
 }
+
+/// Frames after a clear whose draws refresh the whole light cache (a cloud filling in changes
+/// its normals fast; after these frames a band that is a few frames old looks the same).
+pub const LIGHT_FULL_FRAMES: u32 = 8;
 
 fn same_view(a: &SplatView, b: &SplatView) -> bool {
     a.width == b.width
@@ -122,6 +134,9 @@ impl Progressive {
             frames_since_clear: 0,
             splats_since_clear: 0,
             has_ifs: false,
+            light_bands: 0,
+            light_band: 0,
+            light_args: None,
         })
     }
 
@@ -305,15 +320,35 @@ impl Progressive {
             perspective,
             origin_px,
         };
-        self.resolve.draw(ctx, encoder, &self.game, &args, target, format);
+        let light = self.light_rows(&args);
+        self.resolve.draw(ctx, encoder, &self.game, &args, target, format, light);
+    }
+
+    /// Which rows of the light cache this draw refreshes (see [`Self::light_bands`]).
+    fn light_rows(&mut self, args: &ResolveArgs) -> LightRows {
+        if self.light_bands <= 1 {
+            return LightRows::Inline;
+        }
+        let height = self.game.height;
+        let same_args = self.light_args.is_some_and(|a| ResolveArgs { origin_px: a.origin_px, ..*args } == a);
+        if !same_args || self.frames_since_clear <= LIGHT_FULL_FRAMES {
+            self.light_args = Some(*args);
+            return LightRows::Refresh { start: 0, end: height };
+        }
+        let (band, bands) = (self.light_band % self.light_bands, self.light_bands);
+        self.light_band = self.light_band.wrapping_add(1);
+        LightRows::Refresh { start: band * height / bands, end: (band + 1) * height / bands }
     }
 
     /// Resolves into an offscreen texture of [`Self::size`] and reads it back.
     pub fn snapshot(&mut self, ctx: &GpuContext) -> Result<image::RgbImage, GpuError> {
         let (width, height) = self.size();
-        super::readback::draw_offscreen(ctx, width, height, |encoder, target, format| {
+        let bands = std::mem::replace(&mut self.light_bands, 0);
+        let image = super::readback::draw_offscreen(ctx, width, height, |encoder, target, format| {
             self.draw(ctx, encoder, target, format, [0, 0])
-        })
+        });
+        self.light_bands = bands;
+        image
     }
 
     /// Reads the accumulation buffer back (four u32 per pixel, as `Framebuffer` after a

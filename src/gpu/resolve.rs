@@ -18,10 +18,28 @@ fn entry(binding: u32, buffer: &wgpu::Buffer) -> wgpu::BindGroupEntry<'_> {
 const COLORS_BYTES: u64 = 256 * 16;
 
 /// What a draw pipeline is specialized for: target format, splat mode, lighting (shading or
-/// occlusion) on.
-type DrawKey = (wgpu::TextureFormat, SplatMode, bool);
-/// A bind group with the generation of the chaos game's buffers it binds.
-type Bound = Option<(u64, wgpu::BindGroup)>;
+/// occlusion) on, light read from the light cache.
+type DrawKey = (wgpu::TextureFormat, SplatMode, bool, bool);
+/// A bind group with the generation of the chaos game's buffers and of the light cache it binds.
+type Bound = Option<((u64, u64), wgpu::BindGroup)>;
+
+/// Which rows of the light cache a draw refreshes before it reads the light from the cache
+/// (see [`GpuResolve::draw`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum LightRows {
+    /// No cache: every pixel's light is computed in the resolve (exactly what the CPU twin does).
+    Inline,
+    /// Refresh rows `start..end` of the cache, then resolve with the cached light of all rows.
+    Refresh { start: u32, end: u32 },
+}
+
+/// The light cache: per pixel the bits of its light factors (Rg32Uint), the accumulation's size.
+struct LightCache {
+    width: u32,
+    height: u32,
+    generation: u64,
+    view: wgpu::TextureView,
+}
 
 pub struct GpuResolve {
     module: wgpu::ShaderModule,
@@ -34,6 +52,10 @@ pub struct GpuResolve {
     stats: wgpu::Buffer,
     /// Generation of the chaos game's buffers and the max-count pass's two bind groups.
     bound: Option<(u64, wgpu::BindGroup, wgpu::BindGroup)>,
+    light: Option<LightCache>,
+    light_generations: u64,
+    /// The light pass's pipeline and its bind group (with the chaos game's generation).
+    light_pipeline: Option<(wgpu::RenderPipeline, Bound)>,
 }
 
 impl GpuResolve {
@@ -59,18 +81,49 @@ impl GpuResolve {
             usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        Self { module, max_pipeline, draw_pipelines: Vec::new(), params, stats, bound: None }
+        Self {
+            module,
+            max_pipeline,
+            draw_pipelines: Vec::new(),
+            params,
+            stats,
+            bound: None,
+            light: None,
+            light_generations: 0,
+            light_pipeline: None,
+        }
+    }
+
+    /// The light cache for an accumulation of `width`×`height` (re-created on a size change).
+    fn light_cache(&mut self, device: &wgpu::Device, width: u32, height: u32) -> &LightCache {
+        if self.light.as_ref().is_none_or(|l| l.width != width || l.height != height) {
+            let texture = device.create_texture(&wgpu::TextureDescriptor {
+                label: Some("resolve_light"),
+                size: wgpu::Extent3d { width, height, depth_or_array_layers: 1 },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format: wgpu::TextureFormat::Rg32Uint,
+                usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
+                view_formats: &[],
+            });
+            self.light_generations += 1;
+            let view = texture.create_view(&Default::default());
+            self.light = Some(LightCache { width, height, generation: self.light_generations, view });
+        }
+        self.light.as_ref().expect("made above")
     }
 
     fn draw_pipeline(&mut self, device: &wgpu::Device, key: DrawKey) -> usize {
         if let Some(i) = self.draw_pipelines.iter().position(|(k, _, _)| *k == key) {
             return i;
         }
-        let (format, mode, shaded) = key;
+        let (format, mode, shaded, cached) = key;
         let constants = [
             ("RESOLVE_MODE", mode.index() as f64),
             ("SHADED", shaded as u32 as f64),
             ("ENCODE_SRGB", !format.is_srgb() as u32 as f64),
+            ("LIGHT_CACHED", cached as u32 as f64),
         ];
         let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
             label: Some("resolve"),
@@ -97,7 +150,84 @@ impl GpuResolve {
         self.draw_pipelines.len() - 1
     }
 
-    /// Records the resolve of `game`'s accumulation buffer onto `target` (of `format`).
+    /// Records the light pass over rows `rows` of the light cache (the params are written).
+    fn refresh_light(
+        &mut self,
+        device: &wgpu::Device,
+        encoder: &mut wgpu::CommandEncoder,
+        game: &GpuChaosGame,
+        rows: (u32, u32),
+    ) {
+        if rows.0 >= rows.1 {
+            return;
+        }
+        if self.light_pipeline.is_none() {
+            let constants = [("RESOLVE_MODE", SplatMode::Closest.index() as f64), ("SHADED", 1.0)];
+            let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                label: Some("resolve_light"),
+                layout: None,
+                vertex: wgpu::VertexState {
+                    module: &self.module,
+                    entry_point: Some("fullscreen"),
+                    compilation_options: Default::default(),
+                    buffers: &[],
+                },
+                primitive: wgpu::PrimitiveState::default(),
+                depth_stencil: None,
+                multisample: wgpu::MultisampleState::default(),
+                fragment: Some(wgpu::FragmentState {
+                    module: &self.module,
+                    entry_point: Some("light_pass"),
+                    compilation_options: wgpu::PipelineCompilationOptions {
+                        constants: &constants,
+                        ..Default::default()
+                    },
+                    targets: &[Some(wgpu::ColorTargetState {
+                        format: wgpu::TextureFormat::Rg32Uint,
+                        blend: None,
+                        write_mask: wgpu::ColorWrites::ALL,
+                    })],
+                }),
+                multiview_mask: None,
+                cache: None,
+            });
+            self.light_pipeline = Some((pipeline, None));
+        }
+        let Some((pipeline, bound)) = &mut self.light_pipeline else { return };
+        if bound.as_ref().is_none_or(|b| b.0.0 != game.generation) {
+            let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("resolve_light"),
+                layout: &pipeline.get_bind_group_layout(0),
+                entries: &[entry(0, &self.params), entry(1, &game.accum)],
+            });
+            *bound = Some(((game.generation, 0), group));
+        }
+        let (Some(light), Some((_, group))) = (&self.light, bound.as_ref()) else { return };
+        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("resolve_light"),
+            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                view: &light.view,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations { load: wgpu::LoadOp::Load, store: wgpu::StoreOp::Store },
+            })],
+            depth_stencil_attachment: None,
+            timestamp_writes: None,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        pass.set_scissor_rect(0, rows.0, game.width, rows.1 - rows.0);
+        pass.set_pipeline(pipeline);
+        pass.set_bind_group(0, group, &[]);
+        pass.draw(0..3, 0..1);
+    }
+
+    /// Records the resolve of `game`'s accumulation buffer onto `target` (of `format`). With
+    /// the solid look (shading or occlusion on), `light` may refresh some rows of the light
+    /// cache and read every pixel's light from it: a cache refreshed in full gives the same
+    /// image as [`LightRows::Inline`], bit for bit; rows not refreshed keep the light of an
+    /// earlier draw (the live view refreshes a band of rows per frame while the view rests).
+    #[expect(clippy::too_many_arguments, reason = "the draw's inputs, each a different kind")]
     pub fn draw(
         &mut self,
         ctx: &GpuContext,
@@ -106,12 +236,20 @@ impl GpuResolve {
         args: &ResolveArgs,
         target: &wgpu::TextureView,
         format: wgpu::TextureFormat,
+        light: LightRows,
     ) {
         let (device, queue) = (&ctx.device, &ctx.queue);
         let params = args.params(game.width, game.height, !format.is_srgb());
         queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
-        let pipeline_index =
-            self.draw_pipeline(device, (format, args.mode, params.shading > 0.0 || params.occlusion > 0.0));
+        let shaded = params.shading > 0.0 || params.occlusion > 0.0;
+        let cached = shaded && matches!(light, LightRows::Refresh { .. });
+        let light_generation = self.light_cache(device, game.width, game.height).generation;
+        if let LightRows::Refresh { start, end } = light
+            && cached
+        {
+            self.refresh_light(device, encoder, game, (start.min(game.height), end.min(game.height)));
+        }
+        let pipeline_index = self.draw_pipeline(device, (format, args.mode, shaded, cached));
         if self.bound.as_ref().is_none_or(|b| b.0 != game.generation) {
             let max_layout = self.max_pipeline.get_bind_group_layout(0);
             let max_input = device.create_bind_group(&wgpu::BindGroupDescriptor {
@@ -126,8 +264,10 @@ impl GpuResolve {
             });
             self.bound = Some((game.generation, max_input, max_output));
         }
+        let light_view = &self.light.as_ref().expect("made above").view;
         let (_, pipeline, draw_bound) = &mut self.draw_pipelines[pipeline_index];
-        if draw_bound.as_ref().is_none_or(|b| b.0 != game.generation) {
+        let generations = (game.generation, light_generation);
+        if draw_bound.as_ref().is_none_or(|b| b.0 != generations) {
             let draw = device.create_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some("resolve"),
                 layout: &pipeline.get_bind_group_layout(0),
@@ -143,9 +283,10 @@ impl GpuResolve {
                         }),
                     },
                     entry(3, &self.stats),
+                    wgpu::BindGroupEntry { binding: 4, resource: wgpu::BindingResource::TextureView(light_view) },
                 ],
             });
-            *draw_bound = Some((game.generation, draw));
+            *draw_bound = Some((generations, draw));
         }
         let (_, pipeline, Some((_, draw))) = &self.draw_pipelines[pipeline_index] else { return };
         let Some((_, max_input, max_output)) = &self.bound else { return };
