@@ -187,6 +187,32 @@ fn the_record_form_says_what_is_wrong_and_does_not_start() {
         &["PNG frames"],
     );
 
+    // Ray-traced frames: PNG only, and each frame's hierarchy within the ray-trace budget.
+    check(
+        &mut s,
+        &|f| {
+            f.ray_traced = true;
+            f.format = Format::Png16;
+        },
+        &["8-bit PNG"],
+    );
+    check(
+        &mut s,
+        &|f| {
+            f.ray_traced = true;
+            f.trace_depth = 12;
+        },
+        &["nodes"],
+    );
+    let mut form = s.record_form.clone();
+    (form.ray_traced, form.trace_depth, form.trace_spp) = (true, 3, 4);
+    s.apply([Command::SetRecordForm(form)]);
+    match s.record_plan().unwrap().settings.renderer {
+        nlifs::record::Renderer::Raytrace(trace) => assert_eq!((trace.depth, trace.spp), (3, 4)),
+        other => panic!("the form asked for traced frames, the plan has {other:?}"),
+    }
+    s.apply([Command::SetRecordForm(Default::default())]);
+
     // A good form: frames 10..20 as 16-bit PNG, with a video; it starts.
     let mut form = s.record_form.clone();
     form.frame_range = Some((10, 20));

@@ -328,6 +328,13 @@ pub struct RecordForm {
     /// Encode the frames into a video with ffmpeg afterwards.
     pub video: bool,
     pub video_text: String,
+    /// Frames ray-traced (the snapshot's tracer at `trace_depth` and `trace_spp`) instead of
+    /// splatted by the chaos game.
+    pub ray_traced: bool,
+    /// n of W^n(A) for traced frames.
+    pub trace_depth: u32,
+    /// Samples per pixel for traced frames.
+    pub trace_spp: u32,
 }
 
 impl Default for RecordForm {
@@ -342,6 +349,9 @@ impl Default for RecordForm {
             format: crate::output::Format::Png,
             video: false,
             video_text: "nlifs-record.mp4".into(),
+            ray_traced: false,
+            trace_depth: 5,
+            trace_spp: 2,
         }
     }
 }

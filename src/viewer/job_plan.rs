@@ -158,6 +158,25 @@ pub fn plan_record(form: &RecordForm, scene: &Scene, ffmpeg: bool) -> Result<Rec
     if frames.len() > MAX_FRAMES_PER_RUN as usize {
         return Err(format!("{} frames are more than the {MAX_FRAMES_PER_RUN} one recording makes", frames.len()));
     }
+    let renderer = if form.ray_traced {
+        // Traced frames are 8-bit PNG (the snapshot's output), and their hierarchy is built per
+        // frame: the ray-trace form's budget holds for each.
+        if form.format != Format::Png {
+            return Err("ray-traced frames are 8-bit PNG: choose png, or the chaos game".into());
+        }
+        let functions = scene.functions.iter().filter(|f| f.enabled).count();
+        if let Some(why) = RaytraceEstimate::new(functions, form.trace_depth).refusal() {
+            return Err(why);
+        }
+        let trace = crate::record::TraceOptions {
+            depth: form.trace_depth,
+            spp: form.trace_spp.max(1),
+            ..crate::record::TraceOptions::default()
+        };
+        crate::record::Renderer::Raytrace(trace)
+    } else {
+        crate::record::Renderer::Chaos
+    };
     let video = if form.video {
         let path = PathBuf::from(form.video_text.trim());
         if form.format == Format::Exr {
@@ -183,7 +202,7 @@ pub fn plan_record(form: &RecordForm, scene: &Scene, ffmpeg: bool) -> Result<Rec
             points_per_frame: Some(form.points_per_frame),
             motion_blur_samples: 1,
             shutter: 0.5,
-            renderer: crate::record::Renderer::Chaos,
+            renderer,
         },
         frames,
         frame_count: count,

@@ -100,12 +100,25 @@ pub fn record_ui(ui: &mut egui::Ui, state: &ViewerState, jobs: &JobView, command
             ui.add(egui::DragValue::new(&mut form.height).range(16..=4096).prefix("h "));
             ui.add(egui::DragValue::new(&mut form.fps).range(1.0..=240.0).prefix("fps "));
         });
-        ui.add(
-            egui::DragValue::new(&mut form.points_per_frame)
-                .range(1000..=100_000_000)
-                .speed(1000.0)
-                .prefix("points / frame "),
-        );
+        ui.horizontal(|ui| {
+            ui.selectable_value(&mut form.ray_traced, false, "chaos game");
+            ui.selectable_value(&mut form.ray_traced, true, "ray-traced").on_hover_text(
+                "each frame traced as \"Ray-trace this view\" traces a still: W^depth(A) of spheres, shadows, ground",
+            );
+        });
+        if form.ray_traced {
+            ui.horizontal(|ui| {
+                ui.add(egui::DragValue::new(&mut form.trace_depth).range(0..=12).prefix("depth "));
+                ui.add(egui::DragValue::new(&mut form.trace_spp).range(1..=64).prefix("spp "));
+            });
+        } else {
+            ui.add(
+                egui::DragValue::new(&mut form.points_per_frame)
+                    .range(1000..=100_000_000)
+                    .speed(1000.0)
+                    .prefix("points / frame "),
+            );
+        }
         let count = job_plan::frame_count(&state.scene, form.fps);
         ui.horizontal(|ui| {
             let mut all = form.frame_range.is_none();
@@ -138,7 +151,11 @@ pub fn record_ui(ui: &mut egui::Ui, state: &ViewerState, jobs: &JobView, command
         if !state.files.ffmpeg {
             ui.small("ffmpeg was not found: a video needs it (the frames do not).");
         }
-        ui.small("CPU, deterministic; the viewer's camera and splat settings.");
+        ui.small(if state.record_form.ray_traced {
+            "CPU, deterministic; the viewer's camera, the scene's timeline."
+        } else {
+            "CPU, deterministic; the viewer's camera and splat settings."
+        });
         let plan = state.record_plan();
         if let Err(why) = &plan {
             ui.colored_label(ERROR_COLOR, why);
