@@ -7,6 +7,8 @@
 // The solid look (closest mode; `src/resolve.rs` explains it): normals from a weighted plane
 // fit to the depths around each key, ambient + key light (Lambert and a Blinn-Phong highlight)
 // + fill light fixed to the camera, and ambient occlusion from 16 samples in a fixed pattern.
+// The light factors can instead come from `light_cache`, which the `light_pass` entry point
+// fills (exact f32 bits), so that the live view recomputes them a band of rows per frame.
 
 // Mirrors `ResolveParams` in src/resolve.rs (one mirror, used by both resolves): keep in sync.
 struct ResolveParams {

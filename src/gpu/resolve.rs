@@ -2,7 +2,9 @@
 //! full-screen draw that turns the accumulation buffer into colours on any render target, the
 //! window's surface or an offscreen texture alike (`draw(&TextureView)`). Its parameters
 //! ([`ResolveArgs`], [`ResolveParams`]) and its CPU twin live in `src/resolve.rs`; keep the
-//! three in sync.
+//! three in sync. With the solid look a draw may take the light (normals, occlusion) from a
+//! per-pixel cache that a light pass refreshes for some rows ([`LightRows`]; the live view
+//! refreshes a band per frame at rest); refreshed whole, it gives the inline light's bytes.
 
 use crate::resolve::{ResolveArgs, ResolveParams};
 use crate::scene::spec::SplatMode;
