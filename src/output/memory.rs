@@ -89,7 +89,7 @@ fn cgroup_room() -> Option<u64> {
 #[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
 #[error(
     "{what} needs about {} ({} for the accumulation, {} to write it) but only {} is available; \
-     ask for a smaller image, or split the points with --part and merge them on a machine that has the memory",
+     ask for a smaller image, closest mode (4 bytes a pixel against 16) or a machine with more memory",
     gib(need.total()), gib(need.accumulation), gib(need.output), gib(*available)
 )]
 pub struct TooLarge {
