@@ -38,8 +38,9 @@ pub fn functions_ui(ui: &mut egui::Ui, state: &ViewerState, commands: &mut Vec<C
         let shares: Vec<f64> =
             state.report.as_ref().map(|r| r.functions.iter().map(|f| f.probability).collect()).unwrap_or_default();
         let explicit = state.scene.probability_mode == ProbabilityMode::Explicit;
-        for (i, f) in state.scene.functions.iter().enumerate() {
-            ui.horizontal(|ui| {
+        // A grid, so that the columns line up whatever the names' lengths.
+        egui::Grid::new("functions").num_columns(5).spacing([6.0, 4.0]).show(ui, |ui| {
+            for (i, f) in state.scene.functions.iter().enumerate() {
                 let mut enabled = f.enabled;
                 if ui
                     .checkbox(&mut enabled, &f.name)
@@ -53,32 +54,37 @@ pub fn functions_ui(ui: &mut egui::Ui, state: &ViewerState, commands: &mut Vec<C
                     commands.push(Command::SetFunctionColor { function: i, color });
                 }
                 let share = shares.get(i).copied().unwrap_or(0.0);
-                // Explicit: the weight, then its share; automatic: the share, which a drag turns
-                // into a weight.
-                let mut p = if explicit { f.probability.unwrap_or(0.0) } else { share };
-                let drag = ui
-                    .add(egui::DragValue::new(&mut p).speed(0.005).range(0.0..=1e6).max_decimals(3).prefix("p "))
-                    .on_hover_text(PROBABILITY_HELP);
-                if drag.changed() && p.is_finite() {
-                    commands.push(Command::SetFunctionProbability { function: i, probability: Some(p) });
-                }
-                if explicit {
-                    ui.small(format!("{:.0} %", 100.0 * share)).on_hover_text(PROBABILITY_HELP);
-                }
+                ui.horizontal(|ui| {
+                    // Explicit: the weight, then its share; automatic: the share, which a drag
+                    // turns into a weight.
+                    let mut p = if explicit { f.probability.unwrap_or(0.0) } else { share };
+                    let drag = ui
+                        .add(egui::DragValue::new(&mut p).speed(0.005).range(0.0..=1e6).max_decimals(3).prefix("p "))
+                        .on_hover_text(PROBABILITY_HELP);
+                    if drag.changed() && p.is_finite() {
+                        commands.push(Command::SetFunctionProbability { function: i, probability: Some(p) });
+                    }
+                    if explicit {
+                        ui.small(format!("{:.0} %", 100.0 * share)).on_hover_text(PROBABILITY_HELP);
+                    }
+                });
                 kind_ui(ui, i, &f.def, commands);
-                if ui.small_button("copy").on_hover_text("duplicate (Shift+D with it selected)").clicked() {
-                    commands.push(Command::DuplicateFunction(i));
-                }
-                let deletable = state.scene.functions.len() > 1;
-                if ui
-                    .add_enabled(deletable, egui::Button::new("×").small())
-                    .on_hover_text("delete (Delete with it selected)")
-                    .clicked()
-                {
-                    commands.push(Command::DeleteFunction(i));
-                }
-            });
-        }
+                ui.horizontal(|ui| {
+                    if ui.small_button("copy").on_hover_text("duplicate (Shift+D with it selected)").clicked() {
+                        commands.push(Command::DuplicateFunction(i));
+                    }
+                    let deletable = state.scene.functions.len() > 1;
+                    if ui
+                        .add_enabled(deletable, egui::Button::new("×").small())
+                        .on_hover_text("delete (Delete with it selected)")
+                        .clicked()
+                    {
+                        commands.push(Command::DeleteFunction(i));
+                    }
+                });
+                ui.end_row();
+            }
+        });
         if ui.button("Add function").on_hover_text("an affine map halving the grid (Shift+A)").clicked() {
             commands.push(Command::AddFunction);
         }
