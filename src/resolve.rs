@@ -92,9 +92,10 @@ pub const OCCLUSION_BIAS: f32 = 0.1;
 pub const OCCLUSION_GAIN: f32 = 2.0;
 /// Occlusion strength of the solid look.
 pub const SOLID_OCCLUSION: f32 = 0.6;
-/// The look of 3D scenes that do not name one: switch to [`Look::Solid`] to make the solid
-/// look the default of `render`, `record` and the viewer (2D scenes stay paper).
-pub const DEFAULT_LOOK_3D: Look = Look::Paper;
+/// The look of 3D scenes that do not name one, in `render`, `record` and the viewer (2D scenes
+/// stay paper; `look = "paper"` or `--look paper` gives the paper's depth-cued flat colour).
+/// The viewer keeps ≥ 20 fps with it on lavapipe (docs/performance.md, "The solid look's cost").
+pub const DEFAULT_LOOK_3D: Look = Look::Solid;
 
 const _: () = assert!(EMPTY == crate::splat::EMPTY);
 const _: () = assert!(DEPTH_SCALE == ((1u32 << crate::splat::DEPTH_BITS) - 1) as f32);

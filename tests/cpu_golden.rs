@@ -37,10 +37,18 @@ fn check_render(golden: &str, scene: &str, extra_args: &[&str]) {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
-/// Plant 2 of the paper (3D, closest point, depth cue).
+/// Plant 2 of the paper (3D, closest point) in the paper's look: depth-cued flat colour, one
+/// setting away from the default.
 #[test]
 fn plant2_closest_matches_golden() {
-    check_render("plant2_160x120", "plant2", &["--mode", "closest"]);
+    check_render("plant2_160x120", "plant2", &["--mode", "closest", "--look", "paper"]);
+}
+
+/// Plant 2 in the default look of 3D scenes (the solid look: normals from the depth buffer,
+/// key and fill light, occlusion).
+#[test]
+fn plant2_default_solid_look_matches_golden() {
+    check_render("plant2_solid_160x120", "plant2", &["--mode", "closest"]);
 }
 
 /// The Julia set scene (2D) in density mode: the log-density tone curve and per-function colour.
