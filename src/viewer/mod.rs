@@ -14,12 +14,14 @@
 //! drag instead of an orbit. Ray-tracing and recording run on threads (`jobs.rs`).
 //!
 //! The files: `state.rs` (plain data), `command.rs` (what can change it), `apply.rs` (the
-//! command logic), `picking.rs` (projection, picking and drag maths on a `SplatView`), the UI
-//! files that read the state and emit commands (`ui.rs` with the side panel, `grid_edit_ui.rs`,
-//! `jobs_ui.rs`, `timeline_ui.rs`), `ui_layer.rs` (egui on wgpu) and `jobs.rs`. State, command
-//! and apply import no UI file. Files: `files.rs` (open, save, drops, as commands; its state in `files_state.rs`), `recent.rs`
-//! (the recent files list), `dialogs.rs` (native dialogs on a thread of their own); the job
-//! forms' checks are in `job_plan.rs`.
+//! command logic, with `authoring.rs` for kinds, probabilities, builder steps and key times,
+//! and `files.rs` for open, save and drops), `picking.rs` (projection, picking and drag maths on
+//! a `SplatView`), the UI files that read the state and emit commands (`ui.rs` with the side
+//! panel, `functions_ui.rs`, `grid_edit_ui.rs`, `nesting_ui.rs`, `jobs_ui.rs`, `timeline_ui.rs`,
+//! `overlay_ui.rs`), `ui_layer.rs` (egui on wgpu), `jobs.rs` with the forms' checks in
+//! `job_plan.rs`, `recent.rs` (the recent files list, its state in `files_state.rs`) and
+//! `dialogs.rs` (native dialogs on a thread of their own). State, command and apply import no
+//! UI file.
 
 pub mod actions;
 pub mod apply;
