@@ -233,7 +233,11 @@ fn recorded_frames_in_exr_and_resume() {
 
 /// Renders part k/4 of a 4-chunk still (1.1 M points at 64 points × 4096 steps per chunk).
 fn part_args(scene: &Path, k: u32, raw: &Path, seed: &str) -> Vec<String> {
-    ["render", s(scene), "--width", "80", "--height", "60", "--points", "1100000", "--seed", seed, "--mode", "density"]
+    part_args_in(scene, k, raw, seed, "density")
+}
+
+fn part_args_in(scene: &Path, k: u32, raw: &Path, seed: &str, mode: &str) -> Vec<String> {
+    ["render", s(scene), "--width", "80", "--height", "60", "--points", "1100000", "--seed", seed, "--mode", mode]
         .into_iter()
         .map(String::from)
         .chain(["--part".into(), format!("{k}/4"), "--raw".into(), s(raw).into()])
@@ -244,33 +248,43 @@ fn part_args(scene: &Path, k: u32, raw: &Path, seed: &str) -> Vec<String> {
 fn four_parts_merge_to_the_bytes_of_one_render() {
     let dir = common::temp_dir("outputs-parts");
     let scene = common::scene_path("plant2");
+    // Density, and closest mode in plant2's default (solid) look and in the paper look: the
+    // merge resolves with the look the parts were rendered with.
+    for (mode, look) in [("density", None), ("closest", None), ("closest", Some("paper"))] {
+        let look_args: Vec<&str> = look.map_or(vec![], |l| vec!["--look", l]);
+        let parts: Vec<PathBuf> = (1..=4).map(|k| dir.join(format!("p{k}.part"))).collect();
+        for (k, part) in (1..=4).zip(&parts) {
+            let args = part_args_in(&scene, k, part, "3", mode);
+            nlifs(&[args.iter().map(String::as_str).collect::<Vec<_>>(), look_args.clone()].concat(), 0);
+        }
+        let full = [
+            "render",
+            s(&scene),
+            "--width",
+            "80",
+            "--height",
+            "60",
+            "--points",
+            "1100000",
+            "--seed",
+            "3",
+            "--mode",
+            mode,
+        ];
+        for ext in ["png", "exr"] {
+            let (one, merged) = (dir.join(format!("one.{ext}")), dir.join(format!("merged.{ext}")));
+            nlifs(&[&full[..], &look_args, &["-o", s(&one)]].concat(), 0);
+            // Any order of the parts.
+            nlifs(&["merge", s(&parts[2]), s(&parts[0]), s(&parts[3]), s(&parts[1]), "-o", s(&merged)], 0);
+            assert!(
+                std::fs::read(&one).unwrap() == std::fs::read(&merged).unwrap(),
+                "merged {ext} ({mode}, look {look:?}) differs from one render"
+            );
+        }
+    }
     let parts: Vec<PathBuf> = (1..=4).map(|k| dir.join(format!("p{k}.part"))).collect();
     for (k, part) in (1..=4).zip(&parts) {
         nlifs(&part_args(&scene, k, part, "3").iter().map(String::as_str).collect::<Vec<_>>(), 0);
-    }
-    let full = [
-        "render",
-        s(&scene),
-        "--width",
-        "80",
-        "--height",
-        "60",
-        "--points",
-        "1100000",
-        "--seed",
-        "3",
-        "--mode",
-        "density",
-    ];
-    for ext in ["png", "exr"] {
-        let (one, merged) = (dir.join(format!("one.{ext}")), dir.join(format!("merged.{ext}")));
-        nlifs(&[&full[..], &["-o", s(&one)]].concat(), 0);
-        // Any order of the parts.
-        nlifs(&["merge", s(&parts[2]), s(&parts[0]), s(&parts[3]), s(&parts[1]), "-o", s(&merged)], 0);
-        assert!(
-            std::fs::read(&one).unwrap() == std::fs::read(&merged).unwrap(),
-            "merged {ext} differs from one render"
-        );
     }
 
     // Bad input: exit 2 and nothing written.

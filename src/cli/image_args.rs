@@ -56,14 +56,15 @@ pub fn bad(e: OutputError) -> anyhow::Error {
     if e.is_bad_input() { BadInput(e.to_string()).into() } else { e.into() }
 }
 
-/// Writes the still of `framebuffer`: the plain 8-bit PNG from `resolved` (the image
-/// `resolve_image` made, when already at hand), any other format from the framebuffer's
-/// layers; PNGs carry `provenance`.
+/// Writes the still of `framebuffer` in the look `style`: the plain 8-bit PNG from `resolved`
+/// (the image `resolve_image` made, when already at hand), any other format from the
+/// framebuffer's layers; PNGs carry `provenance`.
 pub fn write_still(
     path: &Path,
     options: &OutputOptions,
     framebuffer: &Framebuffer,
     camera: &OrbitCamera,
+    style: &ResolveStyle,
     resolved: Option<&image::RgbImage>,
     provenance: &Provenance,
 ) -> anyhow::Result<()> {
@@ -72,13 +73,13 @@ pub fn write_still(
         let image = match resolved {
             Some(image) => image,
             None => {
-                made = resolve_image(framebuffer, camera, &ResolveStyle::default());
+                made = resolve_image(framebuffer, camera, style);
                 &made
             }
         };
         output::png::save_rgb8(path, image, Some(provenance)).map_err(bad)
     } else {
-        let layers = ImageLayers::of(framebuffer, camera, &ResolveStyle::default());
+        let layers = ImageLayers::of(framebuffer, camera, style);
         output::write_image(path, &layers, options, Some(provenance)).map_err(bad)
     }
 }

@@ -127,7 +127,17 @@ pub fn render(args: RenderArgs) -> anyhow::Result<()> {
     if let Some(m) = args.mode {
         settings.mode = m.into();
     }
+    // The look is part of the settings, so that parts, merges and the PNG's own scene keep it.
+    settings.look = args.look.map(Look::from).or(settings.look);
+    settings.shading = args.shading.or(settings.shading);
+    settings.occlusion = args.occlusion.or(settings.occlusion);
     if let (Some(spec), Some(raw)) = (args.part, &args.raw) {
+        if args.point_radius != 0 {
+            return Err(BadInput(
+                "--point-radius is not kept in part files: give it to a whole render, not to --part".into(),
+            )
+            .into());
+        }
         if args.backend == RenderBackend::Gpu {
             return Err(BadInput(
                 "--part renders on the CPU (its chunks are the CPU chaos game's); leave out --backend gpu".into(),
@@ -141,9 +151,6 @@ pub fn render(args: RenderArgs) -> anyhow::Result<()> {
     let layers = super::render_cpu::LayerChoice::parse(args.layers.as_deref(), &options)?;
     let provenance = Provenance::for_render(&scene, args.time, &settings);
     let start = std::time::Instant::now();
-    settings.look = args.look.map(Look::from).or(settings.look);
-    settings.shading = args.shading.or(settings.shading);
-    settings.occlusion = args.occlusion.or(settings.occlusion);
     let shot = Shot::prepare(&scene, args.time, &settings, Framing::Fit, None).map_err(|e| BadInput(e.to_string()))?;
     let style = ResolveStyle { point_radius_px: args.point_radius, ..shot.style };
     let shot = shot.with_style(style);
@@ -176,7 +183,7 @@ pub fn render(args: RenderArgs) -> anyhow::Result<()> {
                 r.stats.batches,
                 1e3 * r.stats.longest_batch_secs
             );
-            write_still(&output, &options, &r.framebuffer, &shot.camera, Some(&r.image), &provenance)?;
+            write_still(&output, &options, &r.framebuffer, &shot.camera, &shot.style, Some(&r.image), &provenance)?;
             Some(r.image)
         }
         None => {

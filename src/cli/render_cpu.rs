@@ -85,9 +85,6 @@ pub fn render_still(
         return stream_png(shot, &framebuffer, path, provenance);
     }
     let mut image = ImageLayers::of(&framebuffer, &shot.camera, &shot.style);
-    if output::layer_names_of(view.mode, &shot.style).contains(&"N") {
-        image.normal = Some(output::normals(&framebuffer, &shot.camera, &shot.style));
-    }
     if let Some(names) = &layers.0 {
         image.keep_only(names);
     }

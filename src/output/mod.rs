@@ -227,7 +227,8 @@ pub fn normals(framebuffer: &Framebuffer, camera: &OrbitCamera, style: &ResolveS
 }
 
 impl ImageLayers {
-    /// The layers of `framebuffer` seen by `camera`, resolved with `style`.
+    /// The layers of `framebuffer` seen by `camera`, resolved with `style`: every layer the mode
+    /// and look have ([`layer_names_of`]), the shading normal included with the solid look.
     pub fn of(framebuffer: &Framebuffer, camera: &OrbitCamera, style: &ResolveStyle) -> Self {
         let color = resolve::resolve_linear(framebuffer, camera, style);
         let view = &framebuffer.view;
@@ -256,7 +257,8 @@ impl ImageLayers {
                 count = Some(framebuffer.accum.iter().map(|a| a[3] as f32).collect());
             }
         }
-        Self { color, depth, function_id, count, normal: None }
+        let normal = layer_names_of(view.mode, style).contains(&"N").then(|| normals(framebuffer, camera, style));
+        Self { color, depth, function_id, count, normal }
     }
 
     /// Keeps the layers named in `names` (of [`LAYER_NAMES`]) and drops the others.

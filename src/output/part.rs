@@ -241,6 +241,8 @@ pub struct Merged {
     pub framebuffer: Framebuffer,
     pub camera: crate::camera::OrbitCamera,
     pub provenance: Provenance,
+    /// The look the settings ask for (what a render of all the points resolves with).
+    pub style: crate::resolve::ResolveStyle,
 }
 
 /// Reads, checks and merges the part files `paths`: all parts of one still (same fingerprint,
@@ -313,7 +315,7 @@ pub fn merge_parts(paths: &[std::path::PathBuf]) -> Result<Merged, OutputError> 
             message: format!("missing parts {} of this still", missing.join(", ")),
         });
     }
-    Ok(Merged { framebuffer, camera: s.camera, provenance: first.provenance })
+    Ok(Merged { framebuffer, camera: s.camera, style: s.style, provenance: first.provenance })
 }
 
 fn payload_len(view: &crate::splat::SplatView) -> usize {
