@@ -141,6 +141,8 @@ pub struct RenderKey {
     /// Linear RGB.
     pub background: Option<[f32; 3]>,
     pub points: Option<u64>,
+    /// The tone controls, in the order of `spec::TONE_FIELDS`.
+    pub tone: [Option<f32>; 5],
 }
 
 #[derive(Clone, Debug, PartialEq)]
