@@ -48,7 +48,7 @@ impl ToneArgs {
         self.apply(&mut scene.render);
         if let Some(timeline) = &mut scene.timeline {
             for key in &mut timeline.keys {
-                for (value, keyed) in self.values().into_iter().zip(&mut key.render.tone) {
+                for (value, keyed) in self.values().into_iter().zip(key.render.tone.iter_mut()) {
                     if value.is_some() {
                         *keyed = None;
                     }

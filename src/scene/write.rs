@@ -264,7 +264,7 @@ impl Scene {
                     if let Some(d) = kr.depth_cue {
                         let _ = writeln!(out, "depth_cue = {d:?}");
                     }
-                    for ((name, _, _), v) in TONE_FIELDS.into_iter().zip(kr.tone) {
+                    for ((name, _, _), v) in TONE_FIELDS.into_iter().zip(kr.tone.iter()) {
                         if let Some(v) = v {
                             let _ = writeln!(out, "{name} = {v:?}");
                         }

@@ -247,7 +247,7 @@ impl Checker<'_> {
                 render.depth_cue = Some(v as f32);
             }
             // The tone controls.
-            for ((value, (name, lo, hi)), slot) in r.tone().into_iter().zip(TONE_FIELDS).zip(&mut render.tone) {
+            for ((value, (name, lo, hi)), slot) in r.tone().into_iter().zip(TONE_FIELDS).zip(render.tone.iter_mut()) {
                 if let Some(v) = value {
                     *slot = Some(self.in_range(v, &field(&format!("render.{name}")), lo, hi)? as f32);
                 }
