@@ -3,6 +3,7 @@
 // `tests/resolve.rs` compares the two. Closest keys become depth-cued function colours, sums
 // become average colours, and density mode scales the average by log(1 + count) / log(1 + max
 // count). The max count comes from `max_count`, a workgroup reduction run before the draw.
+// Sums then go through flam3's tone map (`toned`, formula in src/resolve/tone.rs).
 //
 // The solid look (closest mode; `src/resolve.rs` explains it): normals from a weighted plane
 // fit to the depths around each key, ambient + key light (Lambert and a Blinn-Phong highlight)
@@ -37,8 +38,14 @@ struct ResolveParams {
     occlusion: f32,
     // Pixels per unit of the occlusion samples' offsets.
     occlusion_step_px: u32,
+    // The tone map (average and density modes; `toned` below): 2^exposure, 1 / gamma, the
+    // gamma's linear threshold, vibrancy and highlight power.
+    brightness: f32,
+    inv_gamma: f32,
+    gamma_threshold: f32,
+    vibrancy: f32,
+    highlight_power: f32,
     _pad0: u32,
-    _pad1: u32,
 }
 
 // Pipeline constants (src/gpu/resolve.rs makes one pipeline per target format, mode and
@@ -300,6 +307,54 @@ fn light_pass(in: VertexOutput) -> @location(0) vec4<u32> {
     return vec4<u32>(bitcast<vec2<u32>>(f), 0u, 0u);
 }
 
+// x^g for x > 0 (0 otherwise); x itself when g = 1.
+fn power(x: f32, g: f32) -> f32 {
+    if g == 1.0 {
+        return x;
+    }
+    if x > 0.0 {
+        return pow(x, g);
+    }
+    return 0.0;
+}
+
+// The gamma with flam3's linear ramp below the threshold.
+fn gamma_ramp(x: f32) -> f32 {
+    let g = params.inv_gamma;
+    let tau = params.gamma_threshold;
+    if g == 1.0 {
+        return x;
+    }
+    if x < tau {
+        let frac = x / tau;
+        return (1.0 - frac) * x * (power(tau, g) / tau) + frac * power(x, g);
+    }
+    return power(x, g);
+}
+
+// The toned colour of average colour `avg` and linear density `a0` (src/resolve/tone.rs).
+fn toned(avg: vec3<f32>, a0: f32, density: bool) -> vec3<f32> {
+    let a = a0 * params.brightness;
+    let alpha = gamma_ramp(a);
+    let m = max(max(avg.x, avg.y), avg.z);
+    var c = avg;
+    if params.highlight_power >= 0.0 && m * alpha > 1.0 {
+        let r = pow(1.0 / (m * alpha), params.highlight_power);
+        c = (vec3<f32>(1.0) - (vec3<f32>(1.0) - avg / m) * r) / alpha;
+    }
+    var out = c * alpha;
+    if density && alpha <= 1.0 {
+        out = params.background.rgb + (c - params.background.rgb) * alpha;
+    }
+    if params.vibrancy != 1.0 {
+        let t = avg * a;
+        let g = params.inv_gamma;
+        let per_channel = vec3<f32>(power(t.x, g), power(t.y, g), power(t.z, g));
+        out += (1.0 - params.vibrancy) * (per_channel - c * alpha);
+    }
+    return clamp(out, vec3<f32>(0.0), vec3<f32>(1.0));
+}
+
 @fragment
 fn resolve(in: VertexOutput) -> @location(0) vec4<f32> {
     // Outside the viewport nothing is rasterized, so the subtraction does not wrap in practice;
@@ -340,11 +395,11 @@ fn resolve(in: VertexOutput) -> @location(0) vec4<f32> {
                 let n = f32(count) * COLOR_SCALE;
                 let avg = vec3<f32>(f32(accum[slot]), f32(accum[slot + 1u]), f32(accum[slot + 2u])) / n;
                 if RESOLVE_MODE == MODE_AVERAGE {
-                    c = avg;
+                    c = toned(avg, 1.0, false);
                 } else {
                     let log_max = log(1.0 + f32(max(stats[0], 1u)));
                     let b = log(1.0 + f32(count)) / log_max;
-                    c = params.background.rgb + (avg - params.background.rgb) * b;
+                    c = toned(avg, b, true);
                 }
             }
         }

@@ -28,6 +28,10 @@
 //!   darkens, a plane or a convex bump does not. `occlusion` scales how much light it takes.
 //!
 //! The depth cue applies after the light, as in the paper's look.
+//!
+//! The average and density modes take flam3's tone controls (exposure, gamma with a linear
+//! threshold, vibrancy, highlight power; [`Tone`], formula in `resolve/tone.rs`); their defaults
+//! leave the image as it was.
 
 use glam::Vec3;
 use rayon::prelude::*;
@@ -36,6 +40,9 @@ use crate::camera::{OrbitCamera, Projection};
 use crate::color::linear_to_srgb;
 use crate::scene::spec::{Look, RenderSettings, SplatMode};
 use crate::splat::{Framebuffer, SplatView};
+
+mod tone;
+pub use tone::{HIGHLIGHT_OFF, Tone, ToneUniforms, gamma_ramp, toned};
 
 /// The closest mode's number in `ResolveParams::mode` ([`SplatMode::index`]).
 pub const MODE_CLOSEST: u32 = 0;
@@ -129,14 +136,21 @@ pub struct ResolveParams {
     pub occlusion: f32,
     /// Pixels per unit of the occlusion samples' offsets.
     pub occlusion_step_px: u32,
-    pub _pad: [u32; 2],
+    /// The tone map (average and density modes, [`ToneUniforms`]): 2^exposure, 1 / gamma, the
+    /// gamma's linear threshold, vibrancy and highlight power.
+    pub brightness: f32,
+    pub inv_gamma: f32,
+    pub gamma_threshold: f32,
+    pub vibrancy: f32,
+    pub highlight_power: f32,
+    pub _pad: u32,
 }
-const _: () = assert!(std::mem::size_of::<ResolveParams>() == 80);
+const _: () = assert!(std::mem::size_of::<ResolveParams>() == 96);
 
 /// How the resolve draws, beyond the splat's own settings (mode, background, depth cue). The
 /// default is the paper look: flat colours, one pixel per key, the bytes `nlifs render` has
 /// always written.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ResolveStyle {
     /// Lighting strength in [0, 1] (closest mode): 0 flat, 1 fully lit.
     pub shading: f32,
@@ -145,13 +159,21 @@ pub struct ResolveStyle {
     /// Closest mode: each pixel shows the nearest key within this radius (at most
     /// [`MAX_POINT_RADIUS_PX`]).
     pub point_radius_px: u32,
+    /// The tone map of the average and density modes.
+    pub tone: Tone,
+}
+
+impl Default for ResolveStyle {
+    fn default() -> Self {
+        Self::PAPER
+    }
 }
 
 impl ResolveStyle {
     /// The paper's look: depth-cued flat colour.
-    pub const PAPER: Self = Self { shading: 0.0, occlusion: 0.0, point_radius_px: 0 };
+    pub const PAPER: Self = Self { shading: 0.0, occlusion: 0.0, point_radius_px: 0, tone: Tone::NEUTRAL };
     /// The solid look: lit, with ambient occlusion.
-    pub const SOLID: Self = Self { shading: 1.0, occlusion: SOLID_OCCLUSION, point_radius_px: 0 };
+    pub const SOLID: Self = Self { shading: 1.0, occlusion: SOLID_OCCLUSION, point_radius_px: 0, tone: Tone::NEUTRAL };
 
     pub fn of_look(look: Look) -> Self {
         match look {
@@ -162,7 +184,7 @@ impl ResolveStyle {
 
     /// The style a scene's render settings ask for, for a scene of `dimension` (2 or 3): its
     /// look (unnamed: [`DEFAULT_LOOK_3D`] in 3D, paper in 2D, where depth is flat), with the
-    /// scene's `shading` and `occlusion` over the look's.
+    /// scene's `shading` and `occlusion` over the look's, and the scene's tone.
     pub fn of(settings: &RenderSettings, dimension: usize) -> Self {
         let default_look = if dimension >= 3 { DEFAULT_LOOK_3D } else { Look::Paper };
         let look = Self::of_look(settings.look.unwrap_or(default_look));
@@ -170,6 +192,7 @@ impl ResolveStyle {
             shading: settings.shading.unwrap_or(look.shading),
             occlusion: settings.occlusion.unwrap_or(look.occlusion),
             point_radius_px: look.point_radius_px,
+            tone: Tone::of(settings),
         }
     }
 }
@@ -196,6 +219,8 @@ pub struct ResolveArgs {
     /// rectangle of the accumulation's size there (the rest of the target is cleared to black).
     /// The CPU resolve writes the accumulation's rectangle only and takes (0, 0).
     pub origin_px: [u32; 2],
+    /// The tone map (average and density modes only).
+    pub tone: Tone,
 }
 
 /// View-space size of one of `height_px` pixel rows at unit distance (perspective) or
@@ -223,6 +248,7 @@ impl ResolveArgs {
             pixel_size,
             perspective,
             origin_px: [0, 0],
+            tone: style.tone,
         }
     }
 
@@ -232,6 +258,7 @@ impl ResolveArgs {
     /// strengths to [0, 1]. The occlusion samples reach 3 and 6.7 pixels per 480 rows.
     pub fn params(&self, width: u32, height: u32, encode_srgb: bool) -> ResolveParams {
         let closest = self.mode == SplatMode::Closest;
+        let tone = ToneUniforms::of(&self.tone);
         ResolveParams {
             background: [self.background[0], self.background[1], self.background[2], self.depth_cue],
             width,
@@ -248,7 +275,12 @@ impl ResolveArgs {
             origin_y: self.origin_px[1],
             occlusion: if closest { self.occlusion.clamp(0.0, 1.0) } else { 0.0 },
             occlusion_step_px: ((height + 240) / 480).max(1),
-            _pad: [0; 2],
+            brightness: tone.brightness,
+            inv_gamma: tone.inv_gamma,
+            gamma_threshold: tone.gamma_threshold,
+            vibrancy: tone.vibrancy,
+            highlight_power: tone.highlight_power,
+            _pad: 0,
         }
     }
 }
@@ -505,17 +537,36 @@ pub fn resolve_fragment_perturbed(
             if count > 0 {
                 let n = count as f32 * COLOR_SCALE;
                 let avg = [accum[slot] as f32 / n, accum[slot + 1] as f32 / n, accum[slot + 2] as f32 / n];
-                if p.mode == MODE_AVERAGE {
-                    c = avg;
-                } else {
-                    let log_max = (1.0 + inputs.max_count.max(1) as f32).ln();
-                    let b = (1.0 + count as f32).ln() / log_max;
-                    c = [0, 1, 2].map(|k| p.background[k] + (avg[k] - p.background[k]) * b);
-                }
+                c = toned(&tone_uniforms(p), avg, density_of(p, inputs, count), background(p), p.mode != MODE_AVERAGE)
+                    .0;
             }
         }
     }
     if p.encode_srgb != 0 { encode(c) } else { c }
+}
+
+/// The linear density of a pixel with `count` points: 1 in average mode, else
+/// log(1 + count) / log(1 + max count).
+fn density_of(p: &ResolveParams, inputs: &ResolveInputs<'_>, count: u32) -> f32 {
+    if p.mode == MODE_AVERAGE {
+        return 1.0;
+    }
+    let log_max = (1.0 + inputs.max_count.max(1) as f32).ln();
+    (1.0 + count as f32).ln() / log_max
+}
+
+fn background(p: &ResolveParams) -> [f32; 3] {
+    [p.background[0], p.background[1], p.background[2]]
+}
+
+fn tone_uniforms(p: &ResolveParams) -> ToneUniforms {
+    ToneUniforms {
+        brightness: p.brightness,
+        inv_gamma: p.inv_gamma,
+        gamma_threshold: p.gamma_threshold,
+        vibrancy: p.vibrancy,
+        highlight_power: p.highlight_power,
+    }
 }
 
 /// What an 8-bit unorm target stores for a fragment value: round to nearest.
@@ -551,9 +602,9 @@ pub struct LinearImage {
     /// Linear RGB over the background, row-major.
     pub rgb: Vec<[f32; 3]>,
     /// How much of each pixel the attractor covers: 1 where a point lies (closest mode: within
-    /// the point radius), 0 where none does; in density mode the brightness
-    /// log(1 + count) / log(1 + max count) with which the average colour is laid over the
-    /// background.
+    /// the point radius), 0 where none does; in density mode the toned alpha (by default the
+    /// brightness log(1 + count) / log(1 + max count)) with which the average colour is laid over
+    /// the background.
     pub alpha: Vec<f32>,
     /// The background the colours were drawn over (linear RGB).
     pub background: [f32; 3],
@@ -593,12 +644,12 @@ fn coverage(p: &ResolveParams, inputs: &ResolveInputs<'_>, x: u32, y: u32) -> f3
     }
     let count = accum[4 * pixel + 3];
     if count == 0 {
-        0.0
-    } else if p.mode == MODE_AVERAGE {
-        1.0
-    } else {
-        (1.0 + count as f32).ln() / (1.0 + inputs.max_count.max(1) as f32).ln()
+        return 0.0;
     }
+    let slot = 4 * pixel;
+    let n = count as f32 * COLOR_SCALE;
+    let avg = [accum[slot] as f32 / n, accum[slot + 1] as f32 / n, accum[slot + 2] as f32 / n];
+    toned(&tone_uniforms(p), avg, density_of(p, inputs, count), background(p), p.mode != MODE_AVERAGE).1
 }
 
 #[cfg(test)]

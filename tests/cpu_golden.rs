@@ -10,7 +10,8 @@ mod common;
 /// Renders `scene` through the binary at 160×120 with a fixed seed and point count and compares
 /// the result with the golden image `golden`.
 fn check_render(golden: &str, scene: &str, extra_args: &[&str]) {
-    let dir = common::temp_dir(&format!("golden-{golden}"));
+    // One directory per golden and argument list: tests of one golden run in parallel.
+    let dir = common::temp_dir(&format!("golden-{golden}-{}", extra_args.join("").replace('-', "")));
     let png = dir.join("render.png");
     let scene_path = common::scene_path(scene);
     let mut args = vec![
@@ -55,4 +56,15 @@ fn plant2_default_solid_look_matches_golden() {
 #[test]
 fn julia_density_matches_golden() {
     check_render("julia_density_160x120", "julia", &["--mode", "density"]);
+}
+
+/// flam3's tone controls at their neutral values (gamma 1, exposure 0, vibrancy 1, highlight
+/// power off) give the density image of the code before them: the golden above, byte for byte.
+#[test]
+fn julia_density_neutral_tone_matches_golden() {
+    check_render(
+        "julia_density_160x120",
+        "julia",
+        &["--mode", "density", "--gamma", "1", "--exposure", "0", "--vibrancy", "1", "--highlight-power", "-1"],
+    );
 }

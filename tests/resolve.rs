@@ -12,7 +12,7 @@ use nlifs::gpu::GpuContext;
 use nlifs::gpu::chaos_game::GpuChaosGame;
 use nlifs::gpu::resolve::{GpuResolve, LightRows};
 use nlifs::resolve::{
-    DEPTH_SCALE, EMPTY, ResolveArgs, ResolveInputs, ResolveParams, ResolveStyle, max_count, resolve_fragment,
+    DEPTH_SCALE, EMPTY, ResolveArgs, ResolveInputs, ResolveParams, ResolveStyle, Tone, max_count, resolve_fragment,
     resolve_fragment_perturbed,
 };
 use nlifs::scene::Scene;
@@ -108,6 +108,7 @@ fn depth_field(perspective: bool) -> Accumulation {
             pixel_size,
             perspective,
             origin_px: [0, 0],
+            tone: Tone::NEUTRAL,
         },
     }
 }
@@ -181,6 +182,14 @@ impl Gpu {
 ///    occlusion takes nearly all light (1 − occlusion · ao cancels); the absolute part moves
 ///    the encoded value by ≤ 12.92 · 2^-18 (the encode's steepest slope).
 ///
+///
+/// Toned pixels (average and density modes with a tone other than the neutral one):
+/// 8. The tone map's powers (WGSL's pow is exp2 of y · log2 x: log2 off by ≤ 3 ULP of its
+///    value, ≤ 2^-19.4 absolute for x ≥ 0.01, times |y| ≤ 3 for the exponents tested, then
+///    exp2's 3 ULP) are off by ≤ 2^-16 relative, the ramp and the highlight's divisions add a few
+///    ULP: ρ ≤ 2^-14 of c relative, generously; the vibrancy term t^g − c · α cancels, which
+///    adds ≤ 2^-18 absolute (terms ≤ 4, 2^-20 each). E as in 7.
+///
 /// A GPU channel must lie within the rounding of [lo − E, hi + E], lo..hi the range of 6. (a
 /// single value for flat pixels) and E from 3. or 7.: where that interval does not reach a
 /// rounding boundary (k + ½ levels) the GPU must give the CPU's byte.
@@ -196,7 +205,9 @@ const SLOPE_REL: f32 = 1.0 / 2048.0;
 impl Tolerance {
     fn of(p: &ResolveParams) -> Self {
         let lit = p.mode == 0 && (p.shading > 0.0 || p.occlusion > 0.0);
-        let (relative, absolute) = if lit { (2f32.powi(-14), 2f32.powi(-18)) } else { (2f32.powi(-16), 0.0) };
+        let toned =
+            p.mode != 0 && (p.brightness != 1.0 || p.inv_gamma != 1.0 || p.vibrancy != 1.0 || p.highlight_power >= 0.0);
+        let (relative, absolute) = if lit || toned { (2f32.powi(-14), 2f32.powi(-18)) } else { (2f32.powi(-16), 0.0) };
         Self { levels: 255.0 * (1.055 / 2.4 * relative + 12.92 * absolute + 1.055 * 2e-6) }
     }
 }
@@ -272,9 +283,16 @@ fn compare(gpu: &mut Gpu, acc: &Accumulation, args: &ResolveArgs) -> u8 {
         }
     }
     eprintln!(
-        "{}, shading {} (drawn {}), occlusion {} (drawn {}), radius {} (drawn {}): {differing} channels differ, by \
-         ≤ {max_diff} levels; widest allowed interval {widest:.3} levels",
-        acc.name, args.shading, p.shading, args.occlusion, p.occlusion, args.point_radius_px, p.point_radius_px,
+        "{}, shading {} (drawn {}), occlusion {} (drawn {}), radius {} (drawn {}), {:?}: {differing} channels \
+         differ, by ≤ {max_diff} levels; widest allowed interval {widest:.3} levels",
+        acc.name,
+        args.shading,
+        p.shading,
+        args.occlusion,
+        p.occlusion,
+        args.point_radius_px,
+        p.point_radius_px,
+        args.tone,
     );
     max_diff
 }
@@ -291,7 +309,7 @@ fn resolve_matches_cpu() {
         ResolveStyle { shading: 1.0, ..ResolveStyle::PAPER },
         ResolveStyle { occlusion: 1.0, ..ResolveStyle::PAPER },
         ResolveStyle::SOLID,
-        ResolveStyle { shading: 0.5, occlusion: 0.5, point_radius_px: 0 },
+        ResolveStyle { shading: 0.5, occlusion: 0.5, ..ResolveStyle::PAPER },
     ];
     for acc in &accumulations {
         for style in styles {
@@ -300,6 +318,20 @@ fn resolve_matches_cpu() {
                     ResolveArgs { shading: style.shading, occlusion: style.occlusion, point_radius_px, ..acc.args };
                 compare(&mut gpu, acc, &args);
             }
+        }
+    }
+    // flam3's tone controls on the average and density accumulations: a brighter gamma with
+    // the default threshold, a wide linear ramp with per-channel gamma, half vibrancy with
+    // highlights fading to white, and a darker exposure with a gamma below 1 keeping the hue.
+    let tones = [
+        Tone { exposure: 1.0, gamma: 2.2, ..Tone::NEUTRAL },
+        Tone { exposure: 0.5, gamma: 3.0, gamma_threshold: 0.2, vibrancy: 0.0, ..Tone::NEUTRAL },
+        Tone { exposure: 2.0, gamma: 1.5, vibrancy: 0.5, highlight_power: 1.0, ..Tone::NEUTRAL },
+        Tone { exposure: -1.0, gamma: 0.5, highlight_power: 0.0, ..Tone::NEUTRAL },
+    ];
+    for acc in accumulations.iter().filter(|a| a.args.mode != SplatMode::Closest) {
+        for tone in tones {
+            compare(&mut gpu, acc, &ResolveArgs { tone, ..acc.args });
         }
     }
     // A draw placed off the target's origin (the viewer draws right of its side panel) reads the

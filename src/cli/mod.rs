@@ -17,6 +17,7 @@ mod record;
 mod render;
 mod render_cpu;
 mod snapshot;
+mod tone_args;
 mod view;
 
 use std::path::Path;

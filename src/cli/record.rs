@@ -67,6 +67,9 @@ pub struct RecordArgs {
     image: ImageArgs,
     #[command(flatten)]
     trace: TraceArgs,
+    /// flam3's tone controls (average and density modes) over the scene's and its keys'.
+    #[command(flatten)]
+    tone: super::tone_args::ToneArgs,
 }
 
 /// `nlifs snapshot`'s options, for `--renderer raytrace` (its defaults where left out).
@@ -168,7 +171,8 @@ enum RendererArg {
 }
 
 pub fn record(args: RecordArgs) -> anyhow::Result<()> {
-    let scene = load(&args.scene)?;
+    let mut scene = load(&args.scene)?;
+    args.tone.apply_to_scene(&mut scene);
     let options = args.image.for_frames()?;
     let renderer = match args.renderer {
         RendererArg::Chaos => {

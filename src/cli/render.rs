@@ -56,6 +56,9 @@ pub struct RenderArgs {
     /// Ambient occlusion strength, 0 (none) to 1, over the look's; closest mode.
     #[arg(long, value_parser = parse_unit)]
     occlusion: Option<f32>,
+    /// flam3's tone controls (average and density modes) over the scene's.
+    #[command(flatten)]
+    tone: super::tone_args::ToneArgs,
     /// Drawn point radius in pixels: each pixel shows the nearest point within it (closest mode).
     #[arg(long, value_name = "PX", default_value_t = 0,
           value_parser = clap::value_parser!(u32).range(0..=MAX_POINT_RADIUS_PX as i64))]
@@ -131,6 +134,7 @@ pub fn render(args: RenderArgs) -> anyhow::Result<()> {
     settings.look = args.look.map(Look::from).or(settings.look);
     settings.shading = args.shading.or(settings.shading);
     settings.occlusion = args.occlusion.or(settings.occlusion);
+    args.tone.apply(&mut settings);
     if let (Some(spec), Some(raw)) = (args.part, &args.raw) {
         if args.point_radius != 0 {
             return Err(BadInput(

@@ -319,6 +319,7 @@ impl Progressive {
             pixel_size,
             perspective,
             origin_px,
+            tone: crate::resolve::Tone::NEUTRAL,
         };
         let light = self.light_rows(&args);
         self.resolve.draw(ctx, encoder, &self.game, &args, target, format, light);

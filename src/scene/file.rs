@@ -68,6 +68,19 @@ pub(super) struct KeyRenderToml {
     pub(super) points: Option<Spanned<i64>>,
     pub(super) background: Option<Spanned<ColorToml>>,
     pub(super) depth_cue: Option<Spanned<f64>>,
+    // The tone controls (`spec::TONE_FIELDS`).
+    pub(super) exposure: Option<Spanned<f64>>,
+    pub(super) gamma: Option<Spanned<f64>>,
+    pub(super) gamma_threshold: Option<Spanned<f64>>,
+    pub(super) vibrancy: Option<Spanned<f64>>,
+    pub(super) highlight_power: Option<Spanned<f64>>,
+}
+
+impl KeyRenderToml {
+    /// The tone fields in the order of `spec::TONE_FIELDS`.
+    pub(super) fn tone(&self) -> [&Option<Spanned<f64>>; 5] {
+        [&self.exposure, &self.gamma, &self.gamma_threshold, &self.vibrancy, &self.highlight_power]
+    }
 }
 
 #[derive(Deserialize)]
@@ -200,4 +213,17 @@ pub(super) struct RenderToml {
     pub(super) look: Option<Spanned<String>>,
     pub(super) shading: Option<Spanned<f64>>,
     pub(super) occlusion: Option<Spanned<f64>>,
+    // The tone controls (`spec::TONE_FIELDS`).
+    pub(super) exposure: Option<Spanned<f64>>,
+    pub(super) gamma: Option<Spanned<f64>>,
+    pub(super) gamma_threshold: Option<Spanned<f64>>,
+    pub(super) vibrancy: Option<Spanned<f64>>,
+    pub(super) highlight_power: Option<Spanned<f64>>,
+}
+
+impl RenderToml {
+    /// The tone fields in the order of `spec::TONE_FIELDS`.
+    pub(super) fn tone(&self) -> [&Option<Spanned<f64>>; 5] {
+        [&self.exposure, &self.gamma, &self.gamma_threshold, &self.vibrancy, &self.highlight_power]
+    }
 }

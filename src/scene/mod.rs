@@ -122,8 +122,8 @@ impl Scene {
         out
     }
 
-    /// The render settings at scene time `t_secs` (depth cue, background and point count may be
-    /// keyed).
+    /// The render settings at scene time `t_secs` (depth cue, background, point count and the
+    /// tone controls may be keyed).
     pub fn render_at(&self, t_secs: f64) -> RenderSettings {
         let mut out = self.render.clone();
         let Some(tl) = &self.timeline else { return out };
@@ -135,6 +135,12 @@ impl Scene {
         }
         if let Some(v) = tl.channel_at(t_secs, |k| k.render.points.map(|n| vec![n as f64])) {
             out.points = v[0].round().max(1.0) as u64;
+        }
+        // The tone controls, each within its range.
+        for (i, ((_, lo, hi), slot)) in spec::TONE_FIELDS.into_iter().zip(out.tone_mut()).enumerate() {
+            if let Some(v) = tl.channel_at(t_secs, |k| k.render.tone[i].map(|v| vec![v as f64])) {
+                *slot = v[0].clamp(lo, hi) as f32;
+            }
         }
         out
     }

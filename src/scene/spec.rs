@@ -166,6 +166,40 @@ pub struct RenderSettings {
     pub shading: Option<f32>,
     /// Ambient occlusion strength in [0, 1] (closest mode); None: the look's.
     pub occlusion: Option<f32>,
+    // flam3's tone controls, average and density modes (`crate::resolve::Tone`; the defaults
+    // change nothing).
+    /// Stops: the brightness is 2^exposure.
+    pub exposure: f32,
+    /// The density's alpha is raised to 1 / gamma.
+    pub gamma: f32,
+    /// Below this alpha the gamma curve blends into a straight line.
+    pub gamma_threshold: f32,
+    /// 1: gamma on the alpha; 0: gamma per channel.
+    pub vibrancy: f32,
+    /// Negative: highlights clip per channel; ≥ 0: they keep their hue (0) or fade to white.
+    pub highlight_power: f32,
+}
+
+/// flam3's tone controls in `[render]` (and `[key.render]`): name and range, in the order of
+/// [`RenderSettings::tone`]. A highlight power below 0 is off (per-channel clipping).
+pub const TONE_FIELDS: [(&str, f64, f64); 5] = [
+    ("exposure", -10.0, 10.0),
+    ("gamma", 0.1, 10.0),
+    ("gamma_threshold", 0.0, 1.0),
+    ("vibrancy", 0.0, 1.0),
+    ("highlight_power", -1.0, 16.0),
+];
+
+impl RenderSettings {
+    /// The tone settings in the order of [`TONE_FIELDS`].
+    pub fn tone(&self) -> [f32; 5] {
+        [self.exposure, self.gamma, self.gamma_threshold, self.vibrancy, self.highlight_power]
+    }
+
+    /// The tone settings in the order of [`TONE_FIELDS`], to set.
+    pub fn tone_mut(&mut self) -> [&mut f32; 5] {
+        [&mut self.exposure, &mut self.gamma, &mut self.gamma_threshold, &mut self.vibrancy, &mut self.highlight_power]
+    }
 }
 
 impl Default for RenderSettings {
@@ -181,6 +215,11 @@ impl Default for RenderSettings {
             look: None,
             shading: None,
             occlusion: None,
+            exposure: 0.0,
+            gamma: 1.0,
+            gamma_threshold: 0.01,
+            vibrancy: 1.0,
+            highlight_power: -1.0,
         }
     }
 }

@@ -141,6 +141,9 @@ pub struct RenderKey {
     /// Linear RGB.
     pub background: Option<[f32; 3]>,
     pub points: Option<u64>,
+    /// The tone controls, in the order of `spec::TONE_FIELDS` (boxed: keys stay small enough to
+    /// be held two to an undoable edit).
+    pub tone: Box<[Option<f32>; 5]>,
 }
 
 #[derive(Clone, Debug, PartialEq)]

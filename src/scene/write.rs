@@ -11,7 +11,7 @@ use crate::color;
 use crate::model::builder::Step;
 use crate::scene::Scene;
 use crate::scene::file::FORMAT_VERSION;
-use crate::scene::spec::{CameraSpec, FunctionDef};
+use crate::scene::spec::{CameraSpec, FunctionDef, RenderSettings, TONE_FIELDS};
 use crate::scene::timeline::RenderKey;
 
 /// TOML text of a number that reads back to the same f64 (Rust's shortest round-trip form).
@@ -222,6 +222,14 @@ impl Scene {
         if let Some(v) = r.occlusion {
             let _ = writeln!(out, "occlusion = {v:?}");
         }
+        // The tone controls, written where they differ from the default.
+        for ((name, _, _), (v, default)) in
+            TONE_FIELDS.into_iter().zip(r.tone().into_iter().zip(RenderSettings::default().tone()))
+        {
+            if v != default {
+                let _ = writeln!(out, "{name} = {v:?}");
+            }
+        }
         if let Some(tl) = &self.timeline {
             out += "\n[timeline]\n";
             let _ = writeln!(out, "loop = \"{}\"\nduration_secs = {}", tl.loop_mode.name(), num(tl.duration_secs));
@@ -255,6 +263,11 @@ impl Scene {
                     }
                     if let Some(d) = kr.depth_cue {
                         let _ = writeln!(out, "depth_cue = {d:?}");
+                    }
+                    for ((name, _, _), v) in TONE_FIELDS.into_iter().zip(kr.tone.iter()) {
+                        if let Some(v) = v {
+                            let _ = writeln!(out, "{name} = {v:?}");
+                        }
                     }
                 }
             }

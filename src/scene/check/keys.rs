@@ -9,7 +9,7 @@ use toml::Spanned;
 use crate::model::builder::Builder;
 use crate::model::{AffineMap, JuliaMap, RectGrid};
 use crate::scene::file::{KeyToml, TimelineToml};
-use crate::scene::spec::{self, CameraSpec, FunctionDef, FunctionSpec, MAX_POINTS, MAX_TIME_SECS};
+use crate::scene::spec::{self, CameraSpec, FunctionDef, FunctionSpec, MAX_POINTS, MAX_TIME_SECS, TONE_FIELDS};
 use crate::scene::timeline::{Ease, FunctionKey, Interpolation, Key, LoopMode, RenderKey, Timeline};
 
 use super::{Checker, Res};
@@ -245,6 +245,12 @@ impl Checker<'_> {
                     return Err(self.err(d.span(), &field("render.depth_cue"), "must lie in 0..1"));
                 }
                 render.depth_cue = Some(v as f32);
+            }
+            // The tone controls.
+            for ((value, (name, lo, hi)), slot) in r.tone().into_iter().zip(TONE_FIELDS).zip(render.tone.iter_mut()) {
+                if let Some(v) = value {
+                    *slot = Some(self.in_range(v, &field(&format!("render.{name}")), lo, hi)? as f32);
+                }
             }
         }
         Ok(Key { t_secs, interpolation, ease, functions: keyed, camera, render })

@@ -17,7 +17,7 @@ use crate::scene::file::{
     CameraToml, ColorToml, FORMAT_VERSION, FunctionToml, RenderToml, SceneToml, StepToml, VectorToml,
 };
 use crate::scene::spec::{
-    CameraSpec, FunctionDef, FunctionSpec, Look, MAX_COORDINATE, MAX_POINTS, RenderSettings, SplatMode,
+    CameraSpec, FunctionDef, FunctionSpec, Look, MAX_COORDINATE, MAX_POINTS, RenderSettings, SplatMode, TONE_FIELDS,
 };
 use crate::scene::{Scene, SceneError};
 
@@ -655,6 +655,12 @@ impl Checker<'_> {
                     return Err(self.err(s.span(), field, "must lie in 0..1"));
                 }
                 *slot = Some(v as f32);
+            }
+        }
+        // The tone controls.
+        for ((value, (name, lo, hi)), slot) in r.tone().into_iter().zip(TONE_FIELDS).zip(out.tone_mut()) {
+            if let Some(v) = value {
+                *slot = self.in_range(v, &format!("render.{name}"), lo, hi)? as f32;
             }
         }
         Ok(out)

@@ -1,0 +1,69 @@
+//! The tone overrides `nlifs render` and `nlifs record` share: `--exposure`, `--gamma`,
+//! `--gamma-threshold`, `--vibrancy`, `--highlight-power` over the scene's `[render]` values
+//! (flam3's tone controls of the average and density modes, `nlifs::resolve::Tone`), each
+//! checked against the scene format's range (`TONE_FIELDS`).
+
+use clap::Args;
+
+use nlifs::scene::Scene;
+use nlifs::scene::spec::{RenderSettings, TONE_FIELDS};
+
+#[derive(Args, Clone, Debug, Default)]
+pub struct ToneArgs {
+    /// Brightness in stops (2^EXPOSURE), average and density modes: -10..10.
+    #[arg(long, allow_hyphen_values = true, value_parser = |s: &str| in_range(s, 0))]
+    exposure: Option<f32>,
+    /// Gamma of the density's alpha (raised to 1 / GAMMA), average and density modes: 0.1..10.
+    #[arg(long, value_parser = |s: &str| in_range(s, 1))]
+    gamma: Option<f32>,
+    /// Below this alpha the gamma curve blends into a straight line: 0..1.
+    #[arg(long, value_parser = |s: &str| in_range(s, 2))]
+    gamma_threshold: Option<f32>,
+    /// 1: gamma on the alpha (saturated colours); 0: gamma per channel: 0..1.
+    #[arg(long, value_parser = |s: &str| in_range(s, 3))]
+    vibrancy: Option<f32>,
+    /// Highlights past white: negative clips per channel, 0 keeps the hue, larger fades to
+    /// white: -1..16.
+    #[arg(long, allow_hyphen_values = true, value_parser = |s: &str| in_range(s, 4))]
+    highlight_power: Option<f32>,
+}
+
+impl ToneArgs {
+    fn values(&self) -> [Option<f32>; 5] {
+        [self.exposure, self.gamma, self.gamma_threshold, self.vibrancy, self.highlight_power]
+    }
+
+    /// Sets the given tone values in `settings`.
+    pub fn apply(&self, settings: &mut RenderSettings) {
+        for (value, slot) in self.values().into_iter().zip(settings.tone_mut()) {
+            if let Some(v) = value {
+                *slot = v;
+            }
+        }
+    }
+
+    /// Sets the given tone values in the scene's render settings and drops the keys' values of
+    /// the same settings, so that the override holds over the whole animation.
+    pub fn apply_to_scene(&self, scene: &mut Scene) {
+        self.apply(&mut scene.render);
+        if let Some(timeline) = &mut scene.timeline {
+            for key in &mut timeline.keys {
+                for (value, keyed) in self.values().into_iter().zip(key.render.tone.iter_mut()) {
+                    if value.is_some() {
+                        *keyed = None;
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// A number within the range of tone field `field` of [`TONE_FIELDS`].
+fn in_range(s: &str, field: usize) -> Result<f32, String> {
+    let (_, lo, hi) = TONE_FIELDS[field];
+    let v: f64 = s.trim().parse().map_err(|_| format!("`{s}` is not a number"))?;
+    if !(lo..=hi).contains(&v) {
+        return Err(format!("{v} is not in {lo}..={hi}"));
+    }
+    Ok(v as f32)
+}
