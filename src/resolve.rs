@@ -601,5 +601,7 @@ fn coverage(p: &ResolveParams, inputs: &ResolveInputs<'_>, x: u32, y: u32) -> f3
     }
 }
 
+pub mod density_estimation;
+
 #[cfg(test)]
 mod tests;

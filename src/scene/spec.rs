@@ -166,6 +166,26 @@ pub struct RenderSettings {
     pub shading: Option<f32>,
     /// Ambient occlusion strength in [0, 1] (closest mode); None: the look's.
     pub occlusion: Option<f32>,
+    /// flam3's adaptive density estimation (density mode; `src/resolve/density_estimation.rs`);
+    /// None: off.
+    pub density_estimation: Option<DensityEstimation>,
+}
+
+/// flam3's adaptive density estimation filter: each pixel's sums are spread by a kernel whose
+/// radius is `max_radius_px / count^curve`, clamped to [`min_radius_px`, `max_radius_px`].
+/// Scene fields `estimator_radius`, `estimator_minimum`, `estimator_curve` (flam3's names).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DensityEstimation {
+    pub max_radius_px: f32,
+    pub min_radius_px: f32,
+    pub curve: f32,
+}
+
+impl DensityEstimation {
+    /// flam3's default curve.
+    pub const DEFAULT_CURVE: f32 = 0.4;
+    /// Largest `estimator_radius` (the kernel is (2r + 1)² taps).
+    pub const MAX_RADIUS_PX: f32 = 32.0;
 }
 
 impl Default for RenderSettings {
@@ -181,6 +201,7 @@ impl Default for RenderSettings {
             look: None,
             shading: None,
             occlusion: None,
+            density_estimation: None,
         }
     }
 }
