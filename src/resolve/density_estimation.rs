@@ -157,6 +157,63 @@ impl Estimated {
     }
 }
 
+/// [`crate::resolve::resolve_image`] with density estimation `de` where it applies (density
+/// mode): the 8-bit sRGB image of `framebuffer` seen by `camera`, drawn with `style`.
+pub fn resolve_image(
+    framebuffer: &crate::splat::Framebuffer,
+    camera: &crate::camera::OrbitCamera,
+    style: &super::ResolveStyle,
+    de: Option<&DensityEstimation>,
+) -> image::RgbImage {
+    let view = &framebuffer.view;
+    let Some(de) = applies(de, view.mode) else { return super::resolve_image(framebuffer, camera, style) };
+    let params = super::ResolveArgs::new(view, camera, style).params(view.width, view.height, true);
+    let e = estimate(&framebuffer.accum, view.width, view.height, &de);
+    let width_px = view.width as usize;
+    let mut bytes = vec![0u8; 3 * width_px * view.height as usize];
+    bytes.par_chunks_mut(3 * width_px.max(1)).enumerate().for_each(|(y, row)| {
+        for (x, pixel) in row.chunks_exact_mut(3).enumerate() {
+            let c = e.fragment(&params, x as u32, y as u32).map(|v| (v * 255.0 + 0.5) as u8);
+            pixel.copy_from_slice(&c);
+        }
+    });
+    image::RgbImage::from_raw(view.width, view.height, bytes).expect("3 bytes for each of width × height pixels")
+}
+
+/// The CLI's `--density-estimation MAX_RADIUS[,MIN_RADIUS[,CURVE]]` (pixels, pixels, exponent),
+/// checked as the scene's `estimator_*` fields are; `0` is off (None).
+pub fn parse_flag(text: &str) -> Result<DensityFlag, String> {
+    let parts: Vec<&str> = text.split(',').map(str::trim).collect();
+    if parts.len() > 3 {
+        return Err(format!("`{text}`: give MAX_RADIUS[,MIN_RADIUS[,CURVE]]"));
+    }
+    let number = |s: &str, what: &str| -> Result<f32, String> {
+        s.parse::<f32>().ok().filter(|v| v.is_finite()).ok_or_else(|| format!("{what} `{s}` is not a number"))
+    };
+    let max = number(parts[0], "MAX_RADIUS")?;
+    if !(0.0..=DensityEstimation::MAX_RADIUS_PX).contains(&max) {
+        return Err(format!("MAX_RADIUS {max} is not in 0..={}", DensityEstimation::MAX_RADIUS_PX));
+    }
+    let min = parts.get(1).map(|s| number(s, "MIN_RADIUS")).transpose()?.unwrap_or(0.0);
+    if !(0.0..=max).contains(&min) {
+        return Err(format!("MIN_RADIUS {min} is not in 0..={max}"));
+    }
+    let curve = parts.get(2).map(|s| number(s, "CURVE")).transpose()?.unwrap_or(DensityEstimation::DEFAULT_CURVE);
+    if !(0.01..=10.0).contains(&curve) {
+        return Err(format!("CURVE {curve} is not in 0.01..=10"));
+    }
+    Ok(DensityFlag((max > 0.0).then_some(DensityEstimation { max_radius_px: max, min_radius_px: min, curve })))
+}
+
+/// A parsed `--density-estimation`: the setting, None for off.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DensityFlag(pub Option<DensityEstimation>);
+
+/// Whether `de` changes a render of `mode` (density mode only; other modes ignore it).
+pub fn applies(de: Option<&DensityEstimation>, mode: crate::scene::spec::SplatMode) -> Option<DensityEstimation> {
+    de.copied().filter(|_| mode == crate::scene::spec::SplatMode::Density)
+}
+
 #[cfg(test)]
 #[path = "density_estimation_tests.rs"]
 mod tests;

@@ -200,4 +200,7 @@ pub(super) struct RenderToml {
     pub(super) look: Option<Spanned<String>>,
     pub(super) shading: Option<Spanned<f64>>,
     pub(super) occlusion: Option<Spanned<f64>>,
+    pub(super) estimator_radius: Option<Spanned<f64>>,
+    pub(super) estimator_minimum: Option<Spanned<f64>>,
+    pub(super) estimator_curve: Option<Spanned<f64>>,
 }

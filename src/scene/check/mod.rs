@@ -657,6 +657,7 @@ impl Checker<'_> {
                 *slot = Some(v as f32);
             }
         }
+        out.density_estimation = self.density_estimation(r)?;
         Ok(out)
     }
 }
