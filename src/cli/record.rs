@@ -179,7 +179,8 @@ pub fn record(args: RecordArgs) -> anyhow::Result<()> {
         scene.render.density_estimation = de.0;
     }
     let options = args.image.for_frames()?;
-    if nlifs::resolve::density_estimation::applies(scene.render.density_estimation.as_ref(), scene.render.mode).is_some()
+    if nlifs::resolve::density_estimation::applies(scene.render.density_estimation.as_ref(), scene.render.mode)
+        .is_some()
         && !options.is_plain_png()
     {
         return Err(BadInput(record::RecordError::EstimationLayers.to_string()).into());

@@ -86,7 +86,8 @@ pub fn render_still(
         ))
         .into());
     }
-    let estimation_bytes = if estimation.is_some() { view.accumulation_bytes() + view.accumulation_bytes() / 8 } else { 0 };
+    let estimation_bytes =
+        if estimation.is_some() { view.accumulation_bytes() + view.accumulation_bytes() / 8 } else { 0 };
     let need = memory::still_need(view, accumulation_bytes(shot, accumulation) + estimation_bytes, streamed);
     let what = format!("a {}×{} {} render", view.width, view.height, view.mode.name());
     memory::check(&what, need, memory::available_bytes()).map_err(|e| BadInput(e.to_string()))?;

@@ -82,7 +82,9 @@ pub enum RecordError {
         "ray-traced frames are 8-bit PNG only (the tracer makes no depth or count layers); leave out --format and --transparent"
     )]
     RaytraceLayers,
-    #[error("density estimation writes 8-bit PNG frames only; leave out --format and --transparent, or estimator_radius")]
+    #[error(
+        "density estimation writes 8-bit PNG frames only; leave out --format and --transparent, or estimator_radius"
+    )]
     EstimationLayers,
 }
 
@@ -256,7 +258,8 @@ impl<'a> Recorder<'a> {
         if self.settings.renderer != Renderer::Chaos {
             return Err(RecordError::RaytraceLayers);
         }
-        if density_estimation::applies(self.scene.render.density_estimation.as_ref(), self.scene.render.mode).is_some() {
+        if density_estimation::applies(self.scene.render.density_estimation.as_ref(), self.scene.render.mode).is_some()
+        {
             return Err(RecordError::EstimationLayers);
         }
         let mut samples = Vec::new();

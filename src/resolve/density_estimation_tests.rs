@@ -22,7 +22,13 @@ fn total_brightness_is_kept() {
     let accum: Vec<[u32; 4]> = (0..w * h)
         .map(|i| {
             let (x, y) = (i % w, i / w);
-            let n = if (x / 10 + y / 10) % 5 == 0 { r.next_u32() % 4000 } else if r.next_u32() % 9 == 0 { 1 } else { 0 };
+            let n = if (x / 10 + y / 10) % 5 == 0 {
+                r.next_u32() % 4000
+            } else if r.next_u32().is_multiple_of(9) {
+                1
+            } else {
+                0
+            };
             [n * (r.next_u32() % 256), n * (r.next_u32() % 256), n * 255, n]
         })
         .collect();

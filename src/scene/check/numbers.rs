@@ -104,7 +104,11 @@ impl Checker<'_> {
                 [(&r.estimator_minimum, "render.estimator_minimum"), (&r.estimator_curve, "render.estimator_curve")]
             {
                 if let Some(v) = v {
-                    return Err(self.err(v.span(), field, "needs `estimator_radius` above 0 (density estimation is off)"));
+                    return Err(self.err(
+                        v.span(),
+                        field,
+                        "needs `estimator_radius` above 0 (density estimation is off)",
+                    ));
                 }
             }
             return Ok(None);
