@@ -11,16 +11,16 @@ use nlifs::scene::spec::DensityEstimation;
 
 const BASE: &str = "version = 1\n[grid]\nx = [0, 1]\ny = [0, 1]\n[[function]]\nkind = \"affine\"\nmatrix = [[0.5, 0], [0, 0.5]]\n[render]\n";
 
-/// Bad values give an error naming the field at its line (line 10: the field after `[render]`).
+/// Bad values give an error naming the field at its line (line 9: the field after `[render]`).
 #[test]
 fn bad_fields_give_located_errors() {
     let cases = [
-        ("estimator_radius = -1\n", "`render.estimator_radius`", 10),
-        ("estimator_radius = 40\n", "`render.estimator_radius`", 10),
-        ("estimator_radius = nan\n", "`render.estimator_radius`", 10),
-        ("estimator_radius = 4\nestimator_minimum = 5\n", "`render.estimator_minimum`", 11),
-        ("estimator_radius = 4\nestimator_curve = 0\n", "`render.estimator_curve`", 11),
-        ("estimator_curve = 0.5\n", "needs `estimator_radius` above 0", 10),
+        ("estimator_radius = -1\n", "`render.estimator_radius`", 9),
+        ("estimator_radius = 40\n", "`render.estimator_radius`", 9),
+        ("estimator_radius = nan\n", "`render.estimator_radius`", 9),
+        ("estimator_radius = 4\nestimator_minimum = 5\n", "`render.estimator_minimum`", 10),
+        ("estimator_radius = 4\nestimator_curve = 0\n", "`render.estimator_curve`", 10),
+        ("estimator_curve = 0.5\n", "needs `estimator_radius` above 0", 9),
     ];
     for (fields, expected, line) in cases {
         let text = format!("{BASE}{fields}");
