@@ -41,7 +41,10 @@ fn fields_read_and_write_back() {
     let again = Scene::parse(&scene.to_toml(), "again.toml").unwrap();
     assert_eq!(again.render.density_estimation, Some(de));
     assert_eq!(Scene::parse(BASE, "off.toml").unwrap().render.density_estimation, None);
-    assert_eq!(Scene::parse(&format!("{BASE}estimator_radius = 0\n"), "o.toml").unwrap().render.density_estimation, None);
+    assert_eq!(
+        Scene::parse(&format!("{BASE}estimator_radius = 0\n"), "o.toml").unwrap().render.density_estimation,
+        None
+    );
 }
 
 /// `--density-estimation 0` writes the same bytes as no flag; radius 6 on a sparse render

@@ -163,6 +163,13 @@ pub fn render(args: RenderArgs) -> anyhow::Result<()> {
     let gpu = match args.backend {
         RenderBackend::Cpu => None,
         RenderBackend::Gpu => Some(nlifs::gpu::GpuContext::headless().map_err(gpu_error)?),
+        // Density estimation runs on the CPU: `auto` takes the CPU with it.
+        RenderBackend::Auto
+            if nlifs::resolve::density_estimation::applies(settings.density_estimation.as_ref(), settings.mode)
+                .is_some() =>
+        {
+            None
+        }
         RenderBackend::Auto => {
             nlifs::gpu::GpuContext::headless().ok().filter(|ctx| !nlifs::gpu::batch::is_software(ctx))
         }
