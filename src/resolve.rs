@@ -652,5 +652,7 @@ fn coverage(p: &ResolveParams, inputs: &ResolveInputs<'_>, x: u32, y: u32) -> f3
     toned(&tone_uniforms(p), avg, density_of(p, inputs, count), background(p), p.mode != MODE_AVERAGE).1
 }
 
+pub mod density_estimation;
+
 #[cfg(test)]
 mod tests;

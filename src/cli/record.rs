@@ -54,6 +54,12 @@ pub struct RecordArgs {
     /// Also encode the frames into this video with the system ffmpeg.
     #[arg(long)]
     video: Option<PathBuf>,
+    /// flam3's adaptive density estimation (density mode, 8-bit PNG frames): each pixel's points
+    /// spread over a disc of radius MAX_RADIUS / count^CURVE pixels, at least MIN_RADIUS
+    /// (defaults 0 and 0.4); 0: off. Default: the scene's `estimator_*` fields.
+    #[arg(long, value_name = "MAX_RADIUS[,MIN[,CURVE]]",
+          value_parser = nlifs::resolve::density_estimation::parse_flag)]
+    density_estimation: Option<nlifs::resolve::density_estimation::DensityFlag>,
     /// Average this many temporal samples within each frame's shutter (1: no blur).
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=64))]
     motion_blur: u32,
@@ -173,7 +179,16 @@ enum RendererArg {
 pub fn record(args: RecordArgs) -> anyhow::Result<()> {
     let mut scene = load(&args.scene)?;
     args.tone.apply_to_scene(&mut scene);
+    if let Some(de) = args.density_estimation {
+        scene.render.density_estimation = de.0;
+    }
     let options = args.image.for_frames()?;
+    if nlifs::resolve::density_estimation::applies(scene.render.density_estimation.as_ref(), scene.render.mode)
+        .is_some()
+        && !options.is_plain_png()
+    {
+        return Err(BadInput(record::RecordError::EstimationLayers.to_string()).into());
+    }
     let renderer = match args.renderer {
         RendererArg::Chaos => {
             if let Some(flag) = args.trace.given().first() {

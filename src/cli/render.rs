@@ -63,6 +63,13 @@ pub struct RenderArgs {
     #[arg(long, value_name = "PX", default_value_t = 0,
           value_parser = clap::value_parser!(u32).range(0..=MAX_POINT_RADIUS_PX as i64))]
     point_radius: u32,
+    /// flam3's adaptive density estimation (density mode, CPU, 8-bit PNG): each pixel's points
+    /// spread over a disc of radius MAX_RADIUS / count^CURVE pixels, at least MIN_RADIUS
+    /// (defaults 0 and 0.4), so sparse regions turn smooth and dense ones stay sharp; 0: off.
+    /// Default: the scene's `estimator_radius`, `estimator_minimum`, `estimator_curve`.
+    #[arg(long, value_name = "MAX_RADIUS[,MIN[,CURVE]]",
+          value_parser = nlifs::resolve::density_estimation::parse_flag)]
+    density_estimation: Option<nlifs::resolve::density_estimation::DensityFlag>,
     /// EXR: the layers to write besides R G B A, comma-separated: Z and id (closest mode), count
     /// (average and density modes), N (the shading normal: closest mode with shading or
     /// occlusion). Default: all the mode has. A layer the mode lacks is an error.
@@ -135,6 +142,9 @@ pub fn render(args: RenderArgs) -> anyhow::Result<()> {
     settings.shading = args.shading.or(settings.shading);
     settings.occlusion = args.occlusion.or(settings.occlusion);
     args.tone.apply(&mut settings);
+    if let Some(de) = args.density_estimation {
+        settings.density_estimation = de.0;
+    }
     if let (Some(spec), Some(raw)) = (args.part, &args.raw) {
         if args.point_radius != 0 {
             return Err(BadInput(
@@ -164,10 +174,22 @@ pub fn render(args: RenderArgs) -> anyhow::Result<()> {
     let gpu = match args.backend {
         RenderBackend::Cpu => None,
         RenderBackend::Gpu => Some(nlifs::gpu::GpuContext::headless().map_err(gpu_error)?),
+        // Density estimation runs on the CPU: `auto` takes the CPU with it.
+        RenderBackend::Auto
+            if nlifs::resolve::density_estimation::applies(settings.density_estimation.as_ref(), settings.mode)
+                .is_some() =>
+        {
+            None
+        }
         RenderBackend::Auto => {
             nlifs::gpu::GpuContext::headless().ok().filter(|ctx| !nlifs::gpu::batch::is_software(ctx))
         }
     };
+    if gpu.is_some()
+        && nlifs::resolve::density_estimation::applies(settings.density_estimation.as_ref(), settings.mode).is_some()
+    {
+        return Err(BadInput("density estimation runs on the CPU; use --backend cpu".into()).into());
+    }
     if gpu.is_some() && args.layers.is_some() {
         // The GPU still writes every layer the mode has; choosing them is the CPU writer's.
         return Err(BadInput("--layers needs --backend cpu (the GPU route writes all the mode's layers)".into()).into());

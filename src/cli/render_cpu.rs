@@ -13,6 +13,7 @@ use nlifs::color::linear_to_srgb8;
 use nlifs::output::memory;
 use nlifs::output::png_rows::{RowLayout, write_rows};
 use nlifs::output::{self, Format, ImageLayers, OutputOptions, Provenance};
+use nlifs::resolve::density_estimation::{self, Estimated};
 use nlifs::resolve::{ResolveArgs, ResolveInputs, resolve_fragment};
 use nlifs::scene::spec::SplatMode;
 use nlifs::shot::{Accumulation, Shot};
@@ -75,7 +76,19 @@ pub fn render_still(
     }
     let accumulation = Accumulation::for_view(view);
     let streamed = options.is_plain_png();
-    let need = memory::still_need(view, accumulation_bytes(shot, accumulation), streamed);
+    // Density estimation (`src/resolve/density_estimation.rs`): 8-bit PNG only, and its float
+    // copy of the accumulation counts in the memory check.
+    let estimation = density_estimation::applies(shot.settings.density_estimation.as_ref(), view.mode);
+    if estimation.is_some() && !streamed {
+        return Err(BadInput(format!(
+            "density estimation writes 8-bit PNG only, not {}; leave out estimator_radius / --density-estimation",
+            options.format.name()
+        ))
+        .into());
+    }
+    let estimation_bytes =
+        if estimation.is_some() { view.accumulation_bytes() + view.accumulation_bytes() / 8 } else { 0 };
+    let need = memory::still_need(view, accumulation_bytes(shot, accumulation) + estimation_bytes, streamed);
     let what = format!("a {}×{} {} render", view.width, view.height, view.mode.name());
     memory::check(&what, need, memory::available_bytes()).map_err(|e| BadInput(e.to_string()))?;
 
@@ -117,6 +130,13 @@ fn stream_png(
     let (width, height) = (view.width, view.height);
     let params = ResolveArgs::new(view, &shot.camera, &shot.style).params(width, height, true);
     let inputs = ResolveInputs::of(framebuffer);
+    let estimated: Option<Estimated> =
+        density_estimation::applies(shot.settings.density_estimation.as_ref(), view.mode)
+            .map(|de| density_estimation::estimate(&framebuffer.accum, width, height, &de));
+    let fragment = |x: u32, y: u32| match &estimated {
+        Some(e) => e.fragment(&params, x, y),
+        None => resolve_fragment(&params, &inputs, x, y),
+    };
     let background = view.background.map(linear_to_srgb8);
     let bar = super::progress_bar(height as u64, "write");
     let row_bytes = width as usize * 3;
@@ -132,7 +152,7 @@ fn stream_png(
                 let y = start + i as u32;
                 for (x, px) in row.chunks_exact_mut(3).enumerate() {
                     // What an 8-bit unorm target stores (the resolve's `unorm8`).
-                    let c = resolve_fragment(&params, &inputs, x as u32, y).map(|v| (v * 255.0 + 0.5) as u8);
+                    let c = fragment(x as u32, y).map(|v| (v * 255.0 + 0.5) as u8);
                     px.copy_from_slice(&c);
                 }
             });

@@ -108,7 +108,8 @@ pub struct Provenance {
 
 impl Provenance {
     /// A still rendered by `nlifs render`.
-    pub fn for_render(scene: &Scene, t_secs: f64, settings: &RenderSettings) -> Self {
+    pub fn for_render(scene: &Scene, t_secs: f64, r: &RenderSettings) -> Self {
+        let settings = r;
         let settings = serde_json::json!({
             "command": "render",
             "t_secs": t_secs,
@@ -120,6 +121,28 @@ impl Provenance {
             "depth_cue": settings.depth_cue,
             "background": settings.background,
         });
+        // What the command line set over the scene's own `[render]` (look, tone, density
+        // estimation), so that a merge of parts resolves as the render would; named only where
+        // it differs from the scene's, so that other images keep their bytes.
+        let mut settings = settings;
+        let own = scene.render_at(t_secs);
+        let extra = settings.as_object_mut().expect("an object");
+        if r.look != own.look {
+            extra.insert("look".into(), r.look.map(|l| l.name()).into());
+        }
+        if r.shading != own.shading {
+            extra.insert("shading".into(), r.shading.into());
+        }
+        if r.occlusion != own.occlusion {
+            extra.insert("occlusion".into(), r.occlusion.into());
+        }
+        if r.tone() != own.tone() {
+            extra.insert("tone".into(), r.tone().to_vec().into());
+        }
+        if r.density_estimation != own.density_estimation {
+            let de = r.density_estimation.map(|d| vec![d.max_radius_px, d.min_radius_px, d.curve]);
+            extra.insert("density_estimation".into(), de.into());
+        }
         Self { scene_toml: scene.to_toml(), t_secs, settings }
     }
 

@@ -15,7 +15,7 @@ use std::path::Path;
 
 use crate::output::{OutputError, Provenance};
 use crate::scene::Scene;
-use crate::scene::spec::{RenderSettings, SplatMode};
+use crate::scene::spec::{DensityEstimation, Look, RenderSettings, SplatMode};
 use crate::shot::{Framing, Shot};
 use crate::splat::Framebuffer;
 
@@ -346,6 +346,34 @@ fn settings_of(p: &Provenance, origin: &str) -> Result<RenderSettings, OutputErr
     settings.points = s["points"].as_u64().ok_or_else(|| bad("points"))?;
     settings.seed = s["seed"].as_u64().ok_or_else(|| bad("seed"))? as u32;
     settings.mode = s["mode"].as_str().and_then(SplatMode::parse).ok_or_else(|| bad("mode"))?;
+    // Overrides of the scene's look, tone and density estimation (`Provenance::for_render`).
+    let floats = |v: &serde_json::Value| -> Option<Vec<f32>> {
+        v.as_array()?.iter().map(|x| x.as_f64().map(|x| x as f32)).collect()
+    };
+    if let Some(v) = s.get("look") {
+        settings.look =
+            if v.is_null() { None } else { Some(v.as_str().and_then(Look::parse).ok_or_else(|| bad("look"))?) };
+    }
+    if let Some(v) = s.get("shading") {
+        settings.shading = v.as_f64().map(|x| x as f32);
+    }
+    if let Some(v) = s.get("occlusion") {
+        settings.occlusion = v.as_f64().map(|x| x as f32);
+    }
+    if let Some(v) = s.get("tone") {
+        let tone = floats(v).filter(|t| t.len() == 5).ok_or_else(|| bad("tone"))?;
+        for (slot, x) in settings.tone_mut().into_iter().zip(tone) {
+            *slot = x;
+        }
+    }
+    if let Some(v) = s.get("density_estimation") {
+        settings.density_estimation = if v.is_null() {
+            None
+        } else {
+            let d = floats(v).filter(|d| d.len() == 3).ok_or_else(|| bad("density_estimation"))?;
+            Some(DensityEstimation { max_radius_px: d[0], min_radius_px: d[1], curve: d[2] })
+        };
+    }
     Ok(settings)
 }
 

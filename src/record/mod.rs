@@ -33,7 +33,7 @@ use crate::gpu::batch::{BatchSizing, GpuSplatter};
 use crate::gpu::{GpuContext, GpuError};
 use crate::output::{ImageLayers, Provenance};
 use crate::raytrace::RaytraceError;
-use crate::resolve::resolve_image;
+use crate::resolve::density_estimation;
 use crate::scene::Scene;
 use crate::scene::spec::RenderSettings;
 use crate::scene::timeline::LoopMode;
@@ -82,6 +82,10 @@ pub enum RecordError {
         "ray-traced frames are 8-bit PNG only (the tracer makes no depth or count layers); leave out --format and --transparent"
     )]
     RaytraceLayers,
+    #[error(
+        "density estimation writes 8-bit PNG frames only; leave out --format and --transparent, or estimator_radius"
+    )]
+    EstimationLayers,
 }
 
 /// What draws a recording's frames.
@@ -241,7 +245,10 @@ impl<'a> Recorder<'a> {
             return raytrace::frame(self, options, frame);
         }
         let mut images = Vec::new();
-        self.for_each_sample(frame, &mut |fb, shot| images.push(resolve_image(fb, &shot.camera, &shot.style)))?;
+        self.for_each_sample(frame, &mut |fb, shot| {
+            let de = shot.settings.density_estimation.as_ref();
+            images.push(density_estimation::resolve_image(fb, &shot.camera, &shot.style, de))
+        })?;
         Ok(if images.len() == 1 { images.remove(0) } else { average_linear(&images) })
     }
 
@@ -250,6 +257,10 @@ impl<'a> Recorder<'a> {
     pub fn frame_layers(&self, frame: u32) -> Result<ImageLayers, RecordError> {
         if self.settings.renderer != Renderer::Chaos {
             return Err(RecordError::RaytraceLayers);
+        }
+        if density_estimation::applies(self.scene.render.density_estimation.as_ref(), self.scene.render.mode).is_some()
+        {
+            return Err(RecordError::EstimationLayers);
         }
         let mut samples = Vec::new();
         self.for_each_sample(frame, &mut |fb, shot| samples.push(ImageLayers::of(fb, &shot.camera, &shot.style)))?;

@@ -219,6 +219,9 @@ pub(super) struct RenderToml {
     pub(super) gamma_threshold: Option<Spanned<f64>>,
     pub(super) vibrancy: Option<Spanned<f64>>,
     pub(super) highlight_power: Option<Spanned<f64>>,
+    pub(super) estimator_radius: Option<Spanned<f64>>,
+    pub(super) estimator_minimum: Option<Spanned<f64>>,
+    pub(super) estimator_curve: Option<Spanned<f64>>,
 }
 
 impl RenderToml {

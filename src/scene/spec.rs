@@ -178,6 +178,9 @@ pub struct RenderSettings {
     pub vibrancy: f32,
     /// Negative: highlights clip per channel; ≥ 0: they keep their hue (0) or fade to white.
     pub highlight_power: f32,
+    /// flam3's adaptive density estimation (density mode; `src/resolve/density_estimation.rs`);
+    /// None: off.
+    pub density_estimation: Option<DensityEstimation>,
 }
 
 /// flam3's tone controls in `[render]` (and `[key.render]`): name and range, in the order of
@@ -202,6 +205,23 @@ impl RenderSettings {
     }
 }
 
+/// flam3's adaptive density estimation filter: each pixel's sums are spread by a kernel whose
+/// radius is `max_radius_px / count^curve`, clamped to [`min_radius_px`, `max_radius_px`].
+/// Scene fields `estimator_radius`, `estimator_minimum`, `estimator_curve` (flam3's names).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DensityEstimation {
+    pub max_radius_px: f32,
+    pub min_radius_px: f32,
+    pub curve: f32,
+}
+
+impl DensityEstimation {
+    /// flam3's default curve.
+    pub const DEFAULT_CURVE: f32 = 0.4;
+    /// Largest `estimator_radius` (the kernel is (2r + 1)² taps).
+    pub const MAX_RADIUS_PX: f32 = 32.0;
+}
+
 impl Default for RenderSettings {
     fn default() -> Self {
         Self {
@@ -220,6 +240,7 @@ impl Default for RenderSettings {
             gamma_threshold: 0.01,
             vibrancy: 1.0,
             highlight_power: -1.0,
+            density_estimation: None,
         }
     }
 }

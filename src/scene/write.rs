@@ -230,6 +230,13 @@ impl Scene {
                 let _ = writeln!(out, "{name} = {v:?}");
             }
         }
+        if let Some(de) = r.density_estimation {
+            let _ = writeln!(
+                out,
+                "estimator_radius = {:?}\nestimator_minimum = {:?}\nestimator_curve = {:?}",
+                de.max_radius_px, de.min_radius_px, de.curve
+            );
+        }
         if let Some(tl) = &self.timeline {
             out += "\n[timeline]\n";
             let _ = writeln!(out, "loop = \"{}\"\nduration_secs = {}", tl.loop_mode.name(), num(tl.duration_secs));

@@ -663,6 +663,7 @@ impl Checker<'_> {
                 *slot = self.in_range(v, &format!("render.{name}"), lo, hi)? as f32;
             }
         }
+        out.density_estimation = self.density_estimation(r)?;
         Ok(out)
     }
 }

@@ -6,7 +6,8 @@ use std::ops::Range;
 
 use toml::Spanned;
 
-use crate::scene::spec::{GRID_EXTENT_RANGE, MAX_ANGLE_DEG, MAX_COORDINATE, MAX_GRID_OFFSET_RATIO};
+use crate::scene::file::RenderToml;
+use crate::scene::spec::{DensityEstimation, GRID_EXTENT_RANGE, MAX_ANGLE_DEG, MAX_COORDINATE, MAX_GRID_OFFSET_RATIO};
 
 use super::{Checker, Res, words};
 
@@ -85,5 +86,41 @@ impl Checker<'_> {
             ));
         }
         Ok(())
+    }
+}
+
+impl Checker<'_> {
+    /// flam3's density estimation fields: `estimator_radius` in 0..=32 (0 or absent: off),
+    /// `estimator_minimum` in 0..=radius, `estimator_curve` in 0.01..=10; the last two only
+    /// with a radius.
+    pub(super) fn density_estimation(&self, r: &RenderToml) -> Res<Option<DensityEstimation>> {
+        let max = DensityEstimation::MAX_RADIUS_PX as f64;
+        let radius = match &r.estimator_radius {
+            Some(v) => self.in_range(v, "render.estimator_radius", 0.0, max)?,
+            None => 0.0,
+        };
+        if radius == 0.0 {
+            for (v, field) in
+                [(&r.estimator_minimum, "render.estimator_minimum"), (&r.estimator_curve, "render.estimator_curve")]
+            {
+                if let Some(v) = v {
+                    return Err(self.err(
+                        v.span(),
+                        field,
+                        "needs `estimator_radius` above 0 (density estimation is off)",
+                    ));
+                }
+            }
+            return Ok(None);
+        }
+        let min = match &r.estimator_minimum {
+            Some(v) => self.in_range(v, "render.estimator_minimum", 0.0, radius)?,
+            None => 0.0,
+        };
+        let curve = match &r.estimator_curve {
+            Some(v) => self.in_range(v, "render.estimator_curve", 0.01, 10.0)?,
+            None => DensityEstimation::DEFAULT_CURVE as f64,
+        };
+        Ok(Some(DensityEstimation { max_radius_px: radius as f32, min_radius_px: min as f32, curve: curve as f32 }))
     }
 }
