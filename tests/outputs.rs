@@ -250,8 +250,18 @@ fn four_parts_merge_to_the_bytes_of_one_render() {
     let scene = common::scene_path("plant2");
     // Density, and closest mode in plant2's default (solid) look and in the paper look: the
     // merge resolves with the look the parts were rendered with.
-    for (mode, look) in [("density", None), ("closest", None), ("closest", Some("paper"))] {
-        let look_args: Vec<&str> = look.map_or(vec![], |l| vec!["--look", l]);
+    // And the command line's tone and density estimation.
+    let cases: [(&str, &[&str]); 5] = [
+        ("density", &[]),
+        ("closest", &[]),
+        ("closest", &["--look", "paper"]),
+        ("density", &["--gamma", "2.2", "--exposure", "0.5"]),
+        ("density", &["--density-estimation", "4"]),
+    ];
+    for (mode, look_args) in cases {
+        let look_args = look_args.to_vec();
+        // (EXR refuses density estimation.)
+        let exts: &[&str] = if look_args.contains(&"--density-estimation") { &["png"] } else { &["png", "exr"] };
         let parts: Vec<PathBuf> = (1..=4).map(|k| dir.join(format!("p{k}.part"))).collect();
         for (k, part) in (1..=4).zip(&parts) {
             let args = part_args_in(&scene, k, part, "3", mode);
@@ -271,14 +281,14 @@ fn four_parts_merge_to_the_bytes_of_one_render() {
             "--mode",
             mode,
         ];
-        for ext in ["png", "exr"] {
+        for ext in exts {
             let (one, merged) = (dir.join(format!("one.{ext}")), dir.join(format!("merged.{ext}")));
             nlifs(&[&full[..], &look_args, &["-o", s(&one)]].concat(), 0);
             // Any order of the parts.
             nlifs(&["merge", s(&parts[2]), s(&parts[0]), s(&parts[3]), s(&parts[1]), "-o", s(&merged)], 0);
             assert!(
                 std::fs::read(&one).unwrap() == std::fs::read(&merged).unwrap(),
-                "merged {ext} ({mode}, look {look:?}) differs from one render"
+                "merged {ext} ({mode}, {look_args:?}) differs from one render"
             );
         }
     }

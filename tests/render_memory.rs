@@ -127,10 +127,11 @@ fn streamed_render_png_equals_the_one_shot_png() {
         if scene == "julia" {
             settings.mode = SplatMode::Average;
         }
-        let provenance = nlifs::output::Provenance::for_render(&scene_data, 0.0, &settings);
         if scene == "plant2" {
             settings.look = Some(nlifs::scene::spec::Look::Solid);
         }
+        // The PNG's scene names the look the command line set (so that parts merge in it).
+        let provenance = nlifs::output::Provenance::for_render(&scene_data, 0.0, &settings);
         let shot = Shot::prepare(&scene_data, 0.0, &settings, Framing::Fit, None).unwrap();
         let radius = if scene == "plant2" { 1 } else { 0 };
         let shot = shot.clone().with_style(nlifs::resolve::ResolveStyle { point_radius_px: radius, ..shot.style });

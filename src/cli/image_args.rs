@@ -8,7 +8,9 @@ use clap::Args;
 use nlifs::camera::OrbitCamera;
 use nlifs::output::part::PartSpec;
 use nlifs::output::{self, Format, ImageLayers, OutputError, OutputOptions, Provenance};
-use nlifs::resolve::{ResolveStyle, resolve_image};
+use nlifs::resolve::ResolveStyle;
+use nlifs::resolve::density_estimation;
+use nlifs::scene::spec::DensityEstimation;
 use nlifs::splat::Framebuffer;
 
 use super::BadInput;
@@ -56,15 +58,18 @@ pub fn bad(e: OutputError) -> anyhow::Error {
     if e.is_bad_input() { BadInput(e.to_string()).into() } else { e.into() }
 }
 
-/// Writes the still of `framebuffer` in the look `style`: the plain 8-bit PNG from `resolved`
-/// (the image `resolve_image` made, when already at hand), any other format from the
-/// framebuffer's layers; PNGs carry `provenance`.
+/// Writes the still of `framebuffer` in the look `style` with density estimation `de` (density
+/// mode, 8-bit PNG only): the plain 8-bit PNG from `resolved` (the image `resolve_image` made,
+/// when already at hand), any other format from the framebuffer's layers; PNGs carry
+/// `provenance`.
+#[expect(clippy::too_many_arguments, reason = "each is one part of the still, named at the call")]
 pub fn write_still(
     path: &Path,
     options: &OutputOptions,
     framebuffer: &Framebuffer,
     camera: &OrbitCamera,
     style: &ResolveStyle,
+    de: Option<&DensityEstimation>,
     resolved: Option<&image::RgbImage>,
     provenance: &Provenance,
 ) -> anyhow::Result<()> {
@@ -73,12 +78,18 @@ pub fn write_still(
         let image = match resolved {
             Some(image) => image,
             None => {
-                made = resolve_image(framebuffer, camera, style);
+                made = density_estimation::resolve_image(framebuffer, camera, style, de);
                 &made
             }
         };
         output::png::save_rgb8(path, image, Some(provenance)).map_err(bad)
     } else {
+        if density_estimation::applies(de, framebuffer.view.mode).is_some() {
+            return Err(BadInput(
+                "density estimation is drawn into 8-bit PNG only: write a .png without --format, or drop it".into(),
+            )
+            .into());
+        }
         let layers = ImageLayers::of(framebuffer, camera, style);
         output::write_image(path, &layers, options, Some(provenance)).map_err(bad)
     }

@@ -25,7 +25,16 @@ pub fn merge(args: MergeArgs) -> anyhow::Result<()> {
     let options = args.image.for_file(&args.output)?;
     let start = std::time::Instant::now();
     let merged = merge_parts(&args.parts).map_err(bad)?;
-    write_still(&args.output, &options, &merged.framebuffer, &merged.camera, &merged.style, None, &merged.provenance)?;
+    write_still(
+        &args.output,
+        &options,
+        &merged.framebuffer,
+        &merged.camera,
+        &merged.style,
+        merged.density_estimation.as_ref(),
+        None,
+        &merged.provenance,
+    )?;
     let v = &merged.framebuffer.view;
     eprintln!(
         "merged {} parts into {} ({}×{}, {:.2} s)",

@@ -209,7 +209,16 @@ pub fn render(args: RenderArgs) -> anyhow::Result<()> {
                 r.stats.batches,
                 1e3 * r.stats.longest_batch_secs
             );
-            write_still(&output, &options, &r.framebuffer, &shot.camera, &shot.style, Some(&r.image), &provenance)?;
+            write_still(
+                &output,
+                &options,
+                &r.framebuffer,
+                &shot.camera,
+                &shot.style,
+                None,
+                Some(&r.image),
+                &provenance,
+            )?;
             Some(r.image)
         }
         None => {

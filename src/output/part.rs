@@ -243,6 +243,8 @@ pub struct Merged {
     pub provenance: Provenance,
     /// The look the settings ask for (what a render of all the points resolves with).
     pub style: crate::resolve::ResolveStyle,
+    /// Density estimation, as the settings ask for it.
+    pub density_estimation: Option<DensityEstimation>,
 }
 
 /// Reads, checks and merges the part files `paths`: all parts of one still (same fingerprint,
@@ -315,7 +317,8 @@ pub fn merge_parts(paths: &[std::path::PathBuf]) -> Result<Merged, OutputError> 
             message: format!("missing parts {} of this still", missing.join(", ")),
         });
     }
-    Ok(Merged { framebuffer, camera: s.camera, style: s.style, provenance: first.provenance })
+    let density_estimation = s.settings.density_estimation;
+    Ok(Merged { framebuffer, camera: s.camera, style: s.style, density_estimation, provenance: first.provenance })
 }
 
 fn payload_len(view: &crate::splat::SplatView) -> usize {
