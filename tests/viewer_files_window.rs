@@ -11,47 +11,10 @@
 
 mod common;
 
-use std::io::{BufRead, BufReader};
-use std::path::Path;
-use std::process::{Child, Command, Stdio};
-use std::time::{Duration, Instant};
+use std::process::{Command, Stdio};
+use std::time::Duration;
 
-/// The view area: right of the egui side panel.
-const VIEW_X0: u32 = 420;
-
-fn have(tool: &str) -> bool {
-    Command::new("sh")
-        .arg("-c")
-        .arg(format!("command -v {tool}"))
-        .stdout(Stdio::null())
-        .status()
-        .is_ok_and(|s| s.success())
-}
-
-/// Kills and reaps a child we started when dropped.
-struct Guard(Child);
-impl Drop for Guard {
-    fn drop(&mut self) {
-        let _ = self.0.kill();
-        let _ = self.0.wait();
-    }
-}
-
-fn screenshot(display: &str, path: &Path) -> image::RgbImage {
-    let ok = Command::new("import")
-        .args(["-window", "root"])
-        .arg(path)
-        .env("DISPLAY", display)
-        .status()
-        .is_ok_and(|s| s.success());
-    assert!(ok, "import -window root failed");
-    image::open(path).unwrap().to_rgb8()
-}
-
-fn xdotool(display: &str, args: &[&str]) {
-    let out = Command::new("xdotool").args(args).env("DISPLAY", display).output().expect("run xdotool");
-    assert!(out.status.success(), "xdotool {args:?}: {}", String::from_utf8_lossy(&out.stderr));
-}
+use common::window::{Guard, VIEW_X0, have, screenshot, start_xvfb, wait_for, xdotool};
 
 /// Pixels of the banner's red in the top band of the view: its fill (70, 20, 10 at 86 %
 /// over a dark background) and the error text (255, 140, 120), each channel within 40 levels.
@@ -92,17 +55,6 @@ fn lit_pixels(img: &image::RgbImage) -> usize {
     n
 }
 
-fn wait_for(secs: u64, mut cond: impl FnMut() -> bool) -> bool {
-    let deadline = Instant::now() + Duration::from_secs(secs);
-    while Instant::now() < deadline {
-        if cond() {
-            return true;
-        }
-        std::thread::sleep(Duration::from_millis(500));
-    }
-    cond()
-}
-
 #[test]
 fn a_broken_reload_is_said_over_the_view_and_ctrl_o_without_a_dialog_explains() {
     for tool in ["Xvfb", "xdotool", "import"] {
@@ -114,23 +66,7 @@ fn a_broken_reload_is_said_over_the_view_and_ctrl_o_without_a_dialog_explains() 
         return common::skip("window test: no GPU adapter");
     }
     let dir = common::temp_dir("window-files");
-    let runtime = dir.join("xdg");
-    std::fs::create_dir_all(&runtime).unwrap();
-    #[cfg(unix)]
-    {
-        use std::os::unix::fs::PermissionsExt;
-        std::fs::set_permissions(&runtime, std::fs::Permissions::from_mode(0o700)).unwrap();
-    }
-    let mut xvfb = Command::new("Xvfb")
-        .args(["-displayfd", "1", "-screen", "0", "1280x720x24", "-nolisten", "tcp"])
-        .stdout(Stdio::piped())
-        .stderr(Stdio::null())
-        .spawn()
-        .expect("start Xvfb");
-    let mut line = String::new();
-    BufReader::new(xvfb.stdout.take().unwrap()).read_line(&mut line).unwrap();
-    let _xvfb = Guard(xvfb);
-    let display = format!(":{}", line.trim());
+    let (display, runtime, _xvfb) = start_xvfb(&dir);
 
     let scene = dir.join("plant1.toml");
     std::fs::copy(common::scene_path("plant1"), &scene).unwrap();
@@ -154,10 +90,10 @@ fn a_broken_reload_is_said_over_the_view_and_ctrl_o_without_a_dialog_explains() 
     let shot = |name: &str| dir.join(format!("{name}.png"));
     let up = wait_for(120, || {
         assert!(viewer.0.try_wait().unwrap().is_none(), "the viewer exited early");
-        lit_pixels(&screenshot(&display, &shot("start"))) > 2000
+        lit_pixels(&screenshot(&display, &shot("start")).expect("import -window root")) > 2000
     });
     assert!(up, "no attractor after 120 s; see {}", shot("start").display());
-    let start = screenshot(&display, &shot("start"));
+    let start = screenshot(&display, &shot("start")).expect("import -window root");
     assert!(banner_pixels(&start) < 50, "a banner before anything went wrong: {}", shot("start").display());
 
     // The scene it opened is the first recent file.
@@ -167,19 +103,20 @@ fn a_broken_reload_is_said_over_the_view_and_ctrl_o_without_a_dialog_explains() 
     // Break the file on disk: the reload fails over the view, the attractor stays.
     let good = std::fs::read_to_string(&scene).unwrap();
     std::fs::write(&scene, good.replacen("[grid]", "[grid\n", 1)).unwrap();
-    let shown = wait_for(20, || banner_pixels(&screenshot(&display, &shot("broken"))) > 500);
+    let shown =
+        wait_for(20, || banner_pixels(&screenshot(&display, &shot("broken")).expect("import -window root")) > 500);
     assert!(shown, "no error over the view after breaking the file; see {}", shot("broken").display());
-    let broken = screenshot(&display, &shot("broken"));
+    let broken = screenshot(&display, &shot("broken")).expect("import -window root");
     assert!(lit_pixels(&broken) > 2000, "the attractor went; see {}", shot("broken").display());
     assert!(viewer.0.try_wait().unwrap().is_none(), "the viewer exited");
 
     // Fix it: the banner goes.
     std::fs::write(&scene, &good).unwrap();
-    let gone = wait_for(20, || banner_pixels(&screenshot(&display, &shot("fixed"))) < 50);
+    let gone = wait_for(20, || banner_pixels(&screenshot(&display, &shot("fixed")).expect("import -window root")) < 50);
     assert!(gone, "the error stayed after the file was fixed; see {}", shot("fixed").display());
     // Whatever toast was up is gone after its 4 s.
     std::thread::sleep(Duration::from_secs(5));
-    let before = toast_pixels(&screenshot(&display, &shot("fixed")));
+    let before = toast_pixels(&screenshot(&display, &shot("fixed")).expect("import -window root"));
 
     // Ctrl+O with no dialog to show: a notice, the viewer keeps running.
     let focus = Command::new("xdotool")
@@ -190,7 +127,7 @@ fn a_broken_reload_is_said_over_the_view_and_ctrl_o_without_a_dialog_explains() 
     assert!(focus, "cannot focus the viewer window");
     xdotool(&display, &["mousemove", "850", "360", "key", "ctrl+o"]);
     std::thread::sleep(Duration::from_secs(2));
-    let notice = screenshot(&display, &shot("ctrl-o"));
+    let notice = screenshot(&display, &shot("ctrl-o")).expect("import -window root");
     assert!(viewer.0.try_wait().unwrap().is_none(), "the viewer exited after Ctrl+O");
     assert!(lit_pixels(&notice) > 2000, "see {}", shot("ctrl-o").display());
     // The notice is a toast of some 500 × 40 pixels.

@@ -14,42 +14,14 @@
 
 mod common;
 
-use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};
-use std::process::{Child, Command, Stdio};
+use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
-/// The view area: right of the egui side panel.
-const VIEW_X0: u32 = 420;
+use common::window::{Guard, VIEW_X0, have, screenshot, start_xvfb, wait_for, xdotool};
+
 /// A pixel "differs" when a channel moves by more than this (8-bit).
 const DIFF: i32 = 30;
-
-fn have(tool: &str) -> bool {
-    Command::new("sh")
-        .arg("-c")
-        .arg(format!("command -v {tool}"))
-        .stdout(Stdio::null())
-        .status()
-        .is_ok_and(|s| s.success())
-}
-
-/// Kills and reaps a child we started when dropped.
-struct Guard(Child);
-impl Drop for Guard {
-    fn drop(&mut self) {
-        let _ = self.0.kill();
-        let _ = self.0.wait();
-    }
-}
-
-fn screenshot(display: &str, path: &Path) -> Option<image::RgbImage> {
-    let ok =
-        Command::new("import").args(["-window", "root"]).arg(path).env("DISPLAY", display).status().ok()?.success();
-    if !ok {
-        return None;
-    }
-    image::open(path).ok().map(|i| i.to_rgb8())
-}
 
 /// Fraction of view-area pixels that differ from the most common colour there.
 fn non_background_fraction(img: &image::RgbImage) -> f64 {
@@ -91,33 +63,6 @@ fn viewer_on_the_gpu_route_shows_the_attractor_and_drag_orbits() {
     check_viewer(Some("gpu"));
 }
 
-/// A virtual X display on a free number, its runtime folder, and its guard.
-fn start_xvfb(dir: &Path) -> (String, PathBuf, Guard) {
-    let runtime = dir.join("xdg");
-    std::fs::create_dir_all(&runtime).unwrap();
-    #[cfg(unix)]
-    {
-        use std::os::unix::fs::PermissionsExt;
-        std::fs::set_permissions(&runtime, std::fs::Permissions::from_mode(0o700)).unwrap();
-    }
-    // Xvfb picks a free display and writes its number to stdout (-displayfd 1).
-    let mut xvfb = Command::new("Xvfb")
-        .args(["-displayfd", "1", "-screen", "0", "1280x720x24", "-nolisten", "tcp"])
-        .stdout(Stdio::piped())
-        .stderr(Stdio::null())
-        .spawn()
-        .expect("start Xvfb");
-    let mut line = String::new();
-    BufReader::new(xvfb.stdout.take().unwrap()).read_line(&mut line).unwrap();
-    (format!(":{}", line.trim()), runtime, Guard(xvfb))
-}
-
-fn xdotool(display: &str, args: &[&str]) -> String {
-    let out = Command::new("xdotool").args(args).env("DISPLAY", display).output().expect("run xdotool");
-    assert!(out.status.success(), "xdotool {args:?}: {}", String::from_utf8_lossy(&out.stderr));
-    String::from_utf8_lossy(&out.stdout).trim().to_string()
-}
-
 /// Gives the viewer window the keyboard (a virtual display has no window manager to do it).
 fn focus(display: &str) {
     xdotool(display, &["search", "--name", "nlifs", "windowfocus"]);
@@ -128,20 +73,6 @@ fn title(display: &str) -> String {
     let ids = xdotool(display, &["search", "--name", "nlifs"]);
     let id = ids.lines().last().expect("a viewer window");
     xdotool(display, &["getwindowname", id])
-}
-
-/// Waits until `cond` holds (polling every half second) or `secs` pass.
-fn wait_for(secs: u64, mut cond: impl FnMut() -> bool) -> bool {
-    let deadline = Instant::now() + Duration::from_secs(secs);
-    loop {
-        if cond() {
-            return true;
-        }
-        if Instant::now() > deadline {
-            return false;
-        }
-        std::thread::sleep(Duration::from_millis(500));
-    }
 }
 
 /// Waits for the attractor to show, then for one more frame of accumulation.

@@ -8,6 +8,8 @@
 //! lavapipe cannot pass by skipping.
 #![allow(dead_code, reason = "each suite compiles this file and uses a subset of it")]
 
+pub mod window;
+
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
