@@ -74,6 +74,18 @@ fn cli_flag_off_on_and_refusals() {
     };
     let (lit_plain, lit_on) = (lit(&plain), lit(&on));
     assert!(lit_on > 2 * lit_plain, "spread {lit_on} vs plain {lit_plain}");
+    // The filtered image goes through the tone map too: one stop more exposure doubles the
+    // linear light over the background where nothing saturates, so the summed 8-bit levels
+    // above the background grow by well over a fifth (sRGB encoding compresses the factor 2).
+    let brighter = path("brighter.png");
+    assert!(run(&["--density-estimation", "6,0,0.4", "--exposure", "1"], &brighter).status.success());
+    let above_background = |p: &str| {
+        let img = image::open(p).unwrap().to_rgb8();
+        let bg = *img.get_pixel(0, 0);
+        img.pixels().map(|px| (0..3).map(|k| px.0[k].saturating_sub(bg.0[k]) as u64).sum::<u64>()).sum::<u64>()
+    };
+    let (sum_on, sum_brighter) = (above_background(&on), above_background(&brighter));
+    assert!(sum_brighter as f64 > 1.2 * sum_on as f64, "exposure +1: {sum_brighter} vs {sum_on}");
     for (flag, out) in [("-1", "neg.png"), ("5,6", "min.png"), ("5,0,0", "curve.png"), ("x", "nan.png")] {
         let o = run(&["--density-estimation", flag], &path(out));
         assert_eq!(o.status.code(), Some(2), "{flag}: {}", String::from_utf8_lossy(&o.stderr));

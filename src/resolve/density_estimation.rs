@@ -141,17 +141,25 @@ pub fn estimate(accum: &[[u32; 4]], width: u32, height: u32, de: &DensityEstimat
 
 impl Estimated {
     /// The density-mode colour of pixel (x, y) with `p` ([`crate::resolve::ResolveArgs::params`]):
-    /// the average colour laid over the background with log(1 + count) / log(1 + max count),
-    /// as [`crate::resolve::resolve_fragment`] does with integer counts; sRGB-encoded when
-    /// `p.encode_srgb` is set.
+    /// the average colour laid over the background with log(1 + count) / log(1 + max count)
+    /// through the tone map, as [`crate::resolve::resolve_fragment`] does with integer counts;
+    /// sRGB-encoded when `p.encode_srgb` is set.
     pub fn fragment(&self, p: &ResolveParams, x: u32, y: u32) -> [f32; 3] {
         let mut c = [p.background[0], p.background[1], p.background[2]];
         let s = self.sums[(y * self.width + x) as usize];
         if s[3] > 0.0 {
             let n = s[3] * COLOR_SCALE;
             let avg = [s[0] / n, s[1] / n, s[2] / n];
-            let b = (1.0 + s[3]).ln() / (1.0 + self.max_count.max(1.0)).ln();
-            c = [0, 1, 2].map(|k| p.background[k] + (avg[k] - p.background[k]) * b);
+            let a0 = (1.0 + s[3]).ln() / (1.0 + self.max_count.max(1.0)).ln();
+            // The tone map of the unfiltered resolve (the neutral tone is the line above).
+            let tone = crate::resolve::ToneUniforms {
+                brightness: p.brightness,
+                inv_gamma: p.inv_gamma,
+                gamma_threshold: p.gamma_threshold,
+                vibrancy: p.vibrancy,
+                highlight_power: p.highlight_power,
+            };
+            c = crate::resolve::toned(&tone, avg, a0, c, true).0;
         }
         if p.encode_srgb != 0 { c.map(crate::color::linear_to_srgb) } else { c }
     }
