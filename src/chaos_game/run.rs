@@ -65,6 +65,12 @@ pub(super) fn run_chunk_on(
     assert!(!matches!(path, Path::Simd(_)), "no vector kernel for this IFS");
     let _ = path;
     let orbits = Orbits { rngs: &mut rngs, pos: &mut pos, transient: ifs.transient, steps };
+    run_orbits(ifs, orbits, sink);
+}
+
+/// The portable kernels on `orbits`: the lane kernel where the IFS has one, else the general
+/// loop (per-cell selection for adaptive probabilities).
+fn run_orbits(ifs: &CompiledIfs, orbits: Orbits<'_>, sink: &mut impl PointSink) {
     match &ifs.lanes {
         Some(lanes) => run_lanes(lanes, orbits, sink),
         None => {
@@ -280,16 +286,5 @@ pub fn continue_chunk(ifs: &CompiledIfs, chains: &mut ChunkChains, skip: u32, st
         return;
     }
     let orbits = Orbits { rngs: &mut chains.rngs, pos: &mut chains.pos, transient: skip, steps };
-    match &ifs.lanes {
-        Some(lanes) => run_lanes(lanes, orbits, sink),
-        None => {
-            let sel = &ifs.selection;
-            let adaptive = sel.cells != [1, 1, 1];
-            orbits.run(sink, |rng, p| {
-                let cell = if adaptive { sel.cell_of(p.into()) } else { 0 };
-                let fi = sel.select(cell, rng.next_u32());
-                (ifs.map_fast(fi, p.into()).into(), fi)
-            })
-        }
-    }
+    run_orbits(ifs, orbits, sink);
 }

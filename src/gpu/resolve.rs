@@ -127,27 +127,7 @@ impl GpuResolve {
             ("ENCODE_SRGB", !format.is_srgb() as u32 as f64),
             ("LIGHT_CACHED", cached as u32 as f64),
         ];
-        let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("resolve"),
-            layout: None,
-            vertex: wgpu::VertexState {
-                module: &self.module,
-                entry_point: Some("fullscreen"),
-                compilation_options: Default::default(),
-                buffers: &[],
-            },
-            primitive: wgpu::PrimitiveState::default(),
-            depth_stencil: None,
-            multisample: wgpu::MultisampleState::default(),
-            fragment: Some(wgpu::FragmentState {
-                module: &self.module,
-                entry_point: Some("resolve"),
-                compilation_options: wgpu::PipelineCompilationOptions { constants: &constants, ..Default::default() },
-                targets: &[Some(wgpu::ColorTargetState { format, blend: None, write_mask: wgpu::ColorWrites::ALL })],
-            }),
-            multiview_mask: None,
-            cache: None,
-        });
+        let pipeline = fullscreen_pipeline(device, &self.module, "resolve", &constants, format);
         self.draw_pipelines.push((key, pipeline, None));
         self.draw_pipelines.len() - 1
     }
@@ -165,34 +145,8 @@ impl GpuResolve {
         }
         if self.light_pipeline.is_none() {
             let constants = [("RESOLVE_MODE", SplatMode::Closest.index() as f64), ("SHADED", 1.0)];
-            let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                label: Some("resolve_light"),
-                layout: None,
-                vertex: wgpu::VertexState {
-                    module: &self.module,
-                    entry_point: Some("fullscreen"),
-                    compilation_options: Default::default(),
-                    buffers: &[],
-                },
-                primitive: wgpu::PrimitiveState::default(),
-                depth_stencil: None,
-                multisample: wgpu::MultisampleState::default(),
-                fragment: Some(wgpu::FragmentState {
-                    module: &self.module,
-                    entry_point: Some("light_pass"),
-                    compilation_options: wgpu::PipelineCompilationOptions {
-                        constants: &constants,
-                        ..Default::default()
-                    },
-                    targets: &[Some(wgpu::ColorTargetState {
-                        format: wgpu::TextureFormat::Rg32Uint,
-                        blend: None,
-                        write_mask: wgpu::ColorWrites::ALL,
-                    })],
-                }),
-                multiview_mask: None,
-                cache: None,
-            });
+            let pipeline =
+                fullscreen_pipeline(device, &self.module, "light_pass", &constants, wgpu::TextureFormat::Rg32Uint);
             self.light_pipeline = Some((pipeline, None));
         }
         let Some((pipeline, bound)) = &mut self.light_pipeline else { return };
@@ -328,4 +282,36 @@ impl GpuResolve {
         pass.set_bind_group(0, draw, &[]);
         pass.draw(0..3, 0..1);
     }
+}
+
+/// A full-screen triangle (`fullscreen` in the shader) whose fragment `entry` writes one
+/// `format` target, with the pipeline constants `constants`.
+fn fullscreen_pipeline(
+    device: &wgpu::Device,
+    module: &wgpu::ShaderModule,
+    entry: &str,
+    constants: &[(&str, f64)],
+    format: wgpu::TextureFormat,
+) -> wgpu::RenderPipeline {
+    device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+        label: Some(entry),
+        layout: None,
+        vertex: wgpu::VertexState {
+            module,
+            entry_point: Some("fullscreen"),
+            compilation_options: Default::default(),
+            buffers: &[],
+        },
+        primitive: wgpu::PrimitiveState::default(),
+        depth_stencil: None,
+        multisample: wgpu::MultisampleState::default(),
+        fragment: Some(wgpu::FragmentState {
+            module,
+            entry_point: Some(entry),
+            compilation_options: wgpu::PipelineCompilationOptions { constants, ..Default::default() },
+            targets: &[Some(wgpu::ColorTargetState { format, blend: None, write_mask: wgpu::ColorWrites::ALL })],
+        }),
+        multiview_mask: None,
+        cache: None,
+    })
 }

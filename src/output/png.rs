@@ -131,6 +131,12 @@ fn push_chunk(out: &mut Vec<u8>, kind: &[u8; 4], data: &[u8]) {
 
 /// The CRC-32 of PNG chunks (ISO 3309, polynomial 0xedb88320).
 pub fn crc32(bytes: &[u8]) -> u32 {
+    !crc32_continue(!0, bytes)
+}
+
+/// The CRC-32 register after `bytes`, from register `crc`: start with !0, complement at the end
+/// ([`crc32`]). Chained, so that a chunk's data need not be copied next to its type.
+pub fn crc32_continue(crc: u32, bytes: &[u8]) -> u32 {
     static TABLE: std::sync::OnceLock<[u32; 256]> = std::sync::OnceLock::new();
     let table = TABLE.get_or_init(|| {
         let mut t = [0u32; 256];
@@ -143,7 +149,7 @@ pub fn crc32(bytes: &[u8]) -> u32 {
         }
         t
     });
-    !bytes.iter().fold(!0u32, |c, &b| table[((c ^ b as u32) & 0xff) as usize] ^ (c >> 8))
+    bytes.iter().fold(crc, |c, &b| table[((c ^ b as u32) & 0xff) as usize] ^ (c >> 8))
 }
 
 /// The uncompressed iTXt and tEXt chunks of PNG bytes as (keyword, text), in file order.

@@ -98,7 +98,7 @@ fn write_chunk(w: &mut dyn Write, kind: &[u8; 4], data: &[u8]) -> std::io::Resul
     head.copy_from_slice(kind);
     w.write_all(&head)?;
     w.write_all(data)?;
-    let crc = crc32_continue(crc32_continue(!0, kind), data);
+    let crc = super::png::crc32_continue(super::png::crc32_continue(!0, kind), data);
     w.write_all(&(!crc).to_be_bytes())
 }
 
@@ -189,25 +189,6 @@ fn paeth(a: u8, b: u8, c: u8) -> u8 {
     } else {
         c
     }
-}
-
-/// The CRC-32 register of PNG chunks (ISO 3309, polynomial 0xedb88320, as
-/// [`super::png::crc32`]) after `bytes`, from register `crc`: start with !0, complement at the
-/// end. Chained, so that a chunk's data need not be copied next to its type.
-fn crc32_continue(crc: u32, bytes: &[u8]) -> u32 {
-    static TABLE: std::sync::OnceLock<[u32; 256]> = std::sync::OnceLock::new();
-    let table = TABLE.get_or_init(|| {
-        let mut t = [0u32; 256];
-        for (n, slot) in t.iter_mut().enumerate() {
-            let mut c = n as u32;
-            for _ in 0..8 {
-                c = if c & 1 != 0 { 0xedb8_8320 ^ (c >> 1) } else { c >> 1 };
-            }
-            *slot = c;
-        }
-        t
-    });
-    bytes.iter().fold(crc, |c, &b| table[((c ^ b as u32) & 0xff) as usize] ^ (c >> 8))
 }
 
 #[cfg(test)]

@@ -127,7 +127,8 @@ pub fn grid_edit_ui(ui: &mut egui::Ui, state: &ViewerState, commands: &mut Vec<C
     });
 }
 
-fn srgb(color: [f32; 3], alpha: f32) -> egui::Color32 {
+/// An egui colour of linear RGB `color` with `alpha` (also the nesting view's).
+pub(super) fn srgb(color: [f32; 3], alpha: f32) -> egui::Color32 {
     let c = color.map(|v| (crate::color::linear_to_srgb(v).clamp(0.0, 1.0) * 255.0).round() as u8);
     egui::Color32::from_rgba_unmultiplied(c[0], c[1], c[2], (alpha * 255.0).round() as u8)
 }

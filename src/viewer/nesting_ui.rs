@@ -13,6 +13,7 @@ use crate::model::nesting::{self, NestedBox};
 use crate::splat::SplatView;
 
 use super::command::{Command, NestingView};
+use super::grid_edit_ui::srgb;
 use super::picking::project;
 use super::state::ViewerState;
 
@@ -55,11 +56,6 @@ fn mapped_boxes(ctx: &egui::Context, ifs: Ifs, level: u32) -> Arc<Result<Vec<Nes
     let boxes = Arc::new(nesting::nested_boxes(&ifs, level).map_err(|e| e.to_string()));
     ctx.data_mut(|d| d.insert_temp(id, Mapped { ifs: Arc::new(ifs), level, boxes: boxes.clone() }));
     boxes
-}
-
-fn srgb(color: [f32; 3], alpha: f32) -> egui::Color32 {
-    let c = color.map(|v| (crate::color::linear_to_srgb(v).clamp(0.0, 1.0) * 255.0).round() as u8);
-    egui::Color32::from_rgba_unmultiplied(c[0], c[1], c[2], (alpha * 255.0).round() as u8)
 }
 
 /// Draws W^k over the view (clipped to `clip`); `ppp`: pixels per egui point.
