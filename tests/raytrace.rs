@@ -280,3 +280,73 @@ fn cancel_stops_the_render() {
     let r = raytrace::render(&scene("plant2"), 0.0, None, &settings, &|_, _| {}, &AtomicBool::new(true));
     assert!(matches!(r, Err(RaytraceError::Cancelled)), "expected Cancelled");
 }
+
+/// Pixels of `image` that differ from `background` (sRGB bytes) by more than `levels` in some
+/// channel, grown by `grow` pixels (the traced silhouette's edges are antialiased).
+fn covered(image: &image::RgbImage, background: [u8; 3], levels: u8, grow: i64) -> Vec<bool> {
+    let (w, h) = (image.width() as i64, image.height() as i64);
+    let hit = |x: i64, y: i64| {
+        x >= 0
+            && y >= 0
+            && x < w
+            && y < h
+            && image.get_pixel(x as u32, y as u32).0.iter().zip(background).any(|(&a, b)| a.abs_diff(b) > levels)
+    };
+    let mut out = Vec::with_capacity((w * h) as usize);
+    for y in 0..h {
+        for x in 0..w {
+            out.push((-grow..=grow).any(|dy| (-grow..=grow).any(|dx| hit(x + dx, y + dy))));
+        }
+    }
+    out
+}
+
+/// `snapshot --framing points` takes the camera `render` takes: W^n(grid box) contains the
+/// attractor (each function maps the box into itself), so every pixel the point render covers
+/// is covered by the traced surface of the same camera, to within the traced edge's
+/// antialiasing (one pixel) — at least 99.5 % of them. The default framing (on the traced
+/// geometry) is a different camera, and the same check fails for it: the test can tell.
+#[test]
+fn snapshot_framed_on_points_lines_up_with_render() {
+    let dir = common::temp_dir("snapshot-framing");
+    let points = dir.join("points.png");
+    let size = ["--width", "200", "--height", "150"];
+    let out = common::run_nlifs(
+        &[
+            &["render", common::scene_path("tapering").to_str().unwrap()][..],
+            &size,
+            &["--look", "paper", "-o"],
+            &[points.to_str().unwrap()],
+        ]
+        .concat(),
+    );
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let scene = scene("tapering");
+    let background = scene.render.background.map(|c| (nlifs::color::linear_to_srgb(c) * 255.0).round() as u8);
+    let hex = format!("#{:02x}{:02x}{:02x}", background[0], background[1], background[2]);
+    let inside = |framing: &str| {
+        let traced = dir.join(format!("traced-{framing}.png"));
+        let out = common::run_nlifs(
+            &[
+                &["snapshot", common::scene_path("tapering").to_str().unwrap()][..],
+                &size,
+                &["--framing", framing, "--initial", "grid", "--depth", "4", "--no-ground", "--background", &hex],
+                &["--spp", "1", "-o", traced.to_str().unwrap()],
+            ]
+            .concat(),
+        );
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        let point_mask = covered(&image::open(&points).unwrap().to_rgb8(), background, 2, 0);
+        let traced_mask = covered(&image::open(&traced).unwrap().to_rgb8(), background, 2, 1);
+        let drawn = point_mask.iter().filter(|&&c| c).count();
+        let contained = point_mask.iter().zip(&traced_mask).filter(|&(&p, &t)| p && t).count();
+        assert!(drawn > 2000, "the point render covers {drawn} pixels");
+        contained as f64 / drawn as f64
+    };
+    let lined_up = inside("points");
+    assert!(lined_up >= 0.995, "{:.2} % of the point render's pixels inside the traced surface", 100.0 * lined_up);
+    let other = inside("geometry");
+    eprintln!("inside the traced surface: framing points {:.3} %, geometry {:.3} %", 100.0 * lined_up, 100.0 * other);
+    assert!(other < 0.98, "the geometry framing too puts {:.2} % inside: the check cannot tell", 100.0 * other);
+    let _ = std::fs::remove_dir_all(&dir);
+}

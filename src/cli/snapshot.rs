@@ -6,9 +6,13 @@ use std::sync::atomic::AtomicBool;
 
 use clap::{Args, ValueEnum};
 
+use nlifs::camera::OrbitCamera;
 use nlifs::output::Provenance;
 use nlifs::output::png::save_rgb8;
 use nlifs::raytrace::{self, ColorMode, RaytraceSettings};
+use nlifs::scene::Scene;
+use nlifs::scene::spec::RenderSettings;
+use nlifs::shot::{Framing, Shot};
 
 use super::args::{GeometryArgs, check_png, hex_color, positive_pixels};
 use super::{load, progress_bar};
@@ -28,6 +32,18 @@ impl From<ColorArg> for ColorMode {
             ColorArg::Depth => ColorMode::Depth,
         }
     }
+}
+
+/// What the still's camera is fitted to, where the scene leaves the camera's target and distance
+/// open.
+#[derive(Clone, Copy, Debug, Default, PartialEq, ValueEnum)]
+pub(super) enum FramingArg {
+    /// The traced geometry W^n(A) (the spheres reach a little beyond the attractor).
+    #[default]
+    Geometry,
+    /// The attractor's points, as `nlifs render` frames them: a still and a point render of
+    /// the same scene and size then share the camera, pixel for pixel.
+    Points,
 }
 
 #[derive(Args)]
@@ -63,6 +79,15 @@ pub struct SnapshotArgs {
     /// Background as sRGB hex (#rrggbb); default: the scene's.
     #[arg(long, value_parser = hex_color)]
     background: Option<[f32; 3]>,
+    /// What the camera is fitted to where the scene leaves its target and distance open.
+    #[arg(long, value_enum, default_value = "geometry")]
+    framing: FramingArg,
+}
+
+/// The camera `nlifs render` of `scene` at `t_secs` uses for an image of `width`×`height`.
+fn render_camera(scene: &Scene, t_secs: f64, width: u32, height: u32) -> anyhow::Result<OrbitCamera> {
+    let settings = RenderSettings { width, height, ..scene.render.clone() };
+    Ok(Shot::prepare(scene, t_secs, &settings, Framing::Fit, None)?.camera)
 }
 
 pub fn snapshot(args: SnapshotArgs) -> anyhow::Result<()> {
@@ -87,7 +112,11 @@ pub fn snapshot(args: SnapshotArgs) -> anyhow::Result<()> {
     }
     let bar = progress_bar(args.height as u64, "trace");
     let cancel = AtomicBool::new(false);
-    let traced = raytrace::render(&scene, args.geometry.time, None, &settings, &|d, _| bar.set_position(d), &cancel)?;
+    let camera = match args.framing {
+        FramingArg::Geometry => None,
+        FramingArg::Points => Some(render_camera(&scene, args.geometry.time, args.width, args.height)?),
+    };
+    let traced = raytrace::render(&scene, args.geometry.time, camera, &settings, &|d, _| bar.set_position(d), &cancel)?;
     bar.finish_and_clear();
     // The scene and the tracer's settings ride in the PNG, as in every image nlifs writes.
     let made_of = serde_json::json!({
@@ -100,6 +129,11 @@ pub fn snapshot(args: SnapshotArgs) -> anyhow::Result<()> {
         "shadows": !args.no_shadows,
         "ground": !args.no_ground,
     });
+    // The default framing leaves the record as it was (same bytes as before the option).
+    let mut made_of = made_of;
+    if args.framing == FramingArg::Points {
+        made_of["framing"] = "points".into();
+    }
     let provenance = Provenance::for_command(&scene, args.geometry.time, "snapshot", made_of);
     save_rgb8(&args.output, &traced.image, Some(&provenance)).map_err(super::image_args::bad)?;
     if traced.stats.leaf_hits == 0 {
