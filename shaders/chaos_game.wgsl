@@ -51,7 +51,10 @@ struct ChaosParams {
     dimension: u32,
     restart: u32,
     threads_per_row: u32,
-    _pad: u32,
+    // Shadows: the shadow map's side in texels, and its projection (rows: texel x, texel y,
+    // depth fraction from the light, 1; `ShadowView::map_from_world` in src/splat/shadow.rs).
+    shadow_side: u32,
+    shadow_from_world: mat4x4<f32>,
 }
 
 // Pipeline constants (src/gpu/chaos_game.rs makes one pipeline per splat mode and per IFS
@@ -72,6 +75,9 @@ override SHARED_CELLS_Z: u32 = 0u;
 // a single coarse cell: then the threshold reads are at constant indices too.
 override FUNCTION_COUNT: u32 = 0u;
 override SINGLE_SELECTION_CELL: bool = false;
+// Every splatted point also goes into the key light's shadow map (`splat_shadow`); off, the
+// shadow map is neither read nor written.
+override SHADOWED: bool = false;
 
 const KIND_JULIA: u32 = 1u;
 const SELECT_BITS: u32 = 24u;
@@ -84,6 +90,8 @@ const COLOR_SCALE: f32 = 255.0;
 // Closest mode: one key per pixel (compact, for cache locality of the random splats);
 // average and density modes: four u32 per pixel, r, g, b sums and the count.
 @group(0) @binding(7) var<storage, read_write> accum: array<atomic<u32>>;
+// The key light's shadow map: one closest key (depth24 << 8) per texel.
+@group(0) @binding(8) var<storage, read_write> shadow_map: array<atomic<u32>>;
 
 fn complex_sqrt(re: f32, im: f32) -> vec2<f32> {
     let r = sqrt(re * re + im * im);
@@ -257,6 +265,22 @@ fn splat(p: vec3<f32>, fi: u32) {
     }
 }
 
+// The twin of `splat_shadow` in src/splat/shadow.rs: the point's key in the shadow map
+// (orthographic: no division), kept if it is the nearest to the light.
+fn splat_shadow(p: vec3<f32>) {
+    let q = params.shadow_from_world * vec4<f32>(p, 1.0);
+    let side = f32(params.shadow_side);
+    if !(q.x >= 0.0 && q.y >= 0.0 && q.x < side && q.y < side) {
+        return;
+    }
+    let t = clamp(q.z, 0.0, 1.0);
+    let texel = u32(q.y) * params.shadow_side + u32(q.x);
+    let key = u32(t * DEPTH_SCALE) << 8u;
+    if key < atomicLoad(&shadow_map[texel]) {
+        atomicMin(&shadow_map[texel], key);
+    }
+}
+
 @compute @workgroup_size(64)
 fn chaos_game(@builtin(global_invocation_id) id: vec3<u32>) {
     let thread = id.x + id.y * params.threads_per_row;
@@ -275,6 +299,9 @@ fn chaos_game(@builtin(global_invocation_id) id: vec3<u32>) {
         p = map_point(fi, p);
         if s >= params.skip_steps {
             splat(p, fi);
+            if SHADOWED {
+                splat_shadow(p);
+            }
         }
     }
     points[thread] = vec4<f32>(p, f32(fi));
@@ -289,4 +316,14 @@ fn clear(@builtin(global_invocation_id) id: vec3<u32>) {
     }
     let empty = select(0u, 0xffffffffu, params.mode == MODE_CLOSEST);
     atomicStore(&accum[slot], empty);
+}
+
+// Empties the shadow map (every key to u32::MAX).
+@compute @workgroup_size(64)
+fn clear_shadow(@builtin(global_invocation_id) id: vec3<u32>) {
+    let texel = id.x + id.y * params.threads_per_row;
+    if texel >= params.shadow_side * params.shadow_side {
+        return;
+    }
+    atomicStore(&shadow_map[texel], 0xffffffffu);
 }

@@ -45,6 +45,15 @@ struct ResolveParams {
     gamma_threshold: f32,
     vibrancy: f32,
     highlight_power: f32,
+    // Shadows (src/resolve/shadow.rs): strength (0: the map is not read), direction towards the
+    // key light (view space), the map's projection from view space, its side in texels, the
+    // world size of a texel and one over the world length of its depth range.
+    shadows: f32,
+    key_light: vec4<f32>,
+    shadow_from_view: mat4x4<f32>,
+    shadow_side_px: u32,
+    shadow_texel_world: f32,
+    shadow_inv_depth_world: f32,
     _pad0: u32,
 }
 
@@ -59,6 +68,8 @@ override ENCODE_SRGB: bool = false;
 // The light (normals, occlusion) comes from `light_cache`, which the `light` pass fills (the
 // live view refreshes it a band of rows per frame at rest, see src/gpu/resolve.rs).
 override LIGHT_CACHED: bool = false;
+// Cast shadows: the shadow map is read (`shadow_at`).
+override SHADOWS: bool = false;
 
 const MODE_CLOSEST: u32 = 0u;
 const MODE_AVERAGE: u32 = 1u;
@@ -66,7 +77,8 @@ const EMPTY: u32 = 0xffffffffu;
 const DEPTH_SCALE: f32 = 16777215.0;
 const COLOR_SCALE: f32 = 255.0;
 
-// The solid look: see the constants of the same names in src/resolve.rs.
+// The solid look: see the constants of the same names in src/resolve.rs (KEY_LIGHT is the
+// default of `params.key_light`).
 const KEY_LIGHT: vec3<f32> = vec3<f32>(-0.4511292, 0.5513802, 0.7017566);
 const FILL_LIGHT: vec3<f32> = vec3<f32>(0.6115766, -0.2038589, 0.7644708);
 const AMBIENT: f32 = 0.15;
@@ -85,6 +97,10 @@ const INV_LENGTH_6_3: f32 = 0.1490712;
 const OCCLUSION_FALLOFF: f32 = 3.0;
 const OCCLUSION_BIAS: f32 = 0.1;
 const OCCLUSION_GAIN: f32 = 2.0;
+const SHADOW_PCF_RADIUS: i32 = 1;
+const SHADOW_BIAS_TEXELS: f32 = 1.0;
+const SHADOW_BIAS_SLOPE: f32 = 1.0;
+const SHADOW_SLOPE_MAX: f32 = 4.0;
 
 @group(0) @binding(0) var<uniform> params: ResolveParams;
 // The accumulation buffer of `chaos_game.wgsl`, read-only here: one key per pixel (closest) or
@@ -100,6 +116,9 @@ const OCCLUSION_GAIN: f32 = 2.0;
 // Per pixel the bits of the light factors (factor · visible, specular · shading · visible) of
 // its key, as the `light` pass wrote them (exact f32 through a Rg32Uint texture).
 @group(0) @binding(4) var light_cache: texture_2d<u32>;
+
+// The key light's shadow map of `chaos_game.wgsl`: one closest key per texel.
+@group(0) @binding(5) var<storage, read> shadow_map: array<u32>;
 
 @group(1) @binding(0) var<storage, read_write> stats_out: array<atomic<u32>>;
 
@@ -254,6 +273,61 @@ fn occlusion_at(x: i32, y: i32, key: u32, slopes: vec2<f32>) -> f32 {
     return 0.0;
 }
 
+// The view-space position of `key` seen at (x, y): on the pixel centre's ray at its depth.
+fn view_position(x: i32, y: i32, key: u32) -> vec3<f32> {
+    let d = params.near + depth_of(key) * (params.far - params.near);
+    let sx_screen = (f32(x) + 0.5 - 0.5 * f32(params.width)) * params.pixel_size;
+    let sy_screen = (0.5 * f32(params.height) - (f32(y) + 0.5)) * params.pixel_size;
+    if params.perspective != 0u {
+        return vec3<f32>(sx_screen * d, sy_screen * d, -d);
+    }
+    return vec3<f32>(sx_screen, sy_screen, -d);
+}
+
+// The shadowed fraction of `key` at (x, y) with unit `normal`: percentage-closer filtering of
+// the (2 SHADOW_PCF_RADIUS + 1)² texels around it against the receiver's plane, less a bias.
+fn shadow_at(x: i32, y: i32, key: u32, normal: vec3<f32>) -> f32 {
+    let m = params.shadow_from_view;
+    let q = m * vec4<f32>(view_position(x, y, key), 1.0);
+    let to_light = params.key_light.xyz;
+    let cos_l = max(dot(normal, to_light), 1.0 / SHADOW_SLOPE_MAX);
+    let tan_l = min(sqrt(max(1.0 - cos_l * cos_l, 0.0)) / cos_l, SHADOW_SLOPE_MAX);
+    let texel_depth = params.shadow_texel_world * params.shadow_inv_depth_world;
+    // Rows 0 and 1 of the matrix (WGSL indexes columns).
+    let row0 = vec3<f32>(m[0].x, m[1].x, m[2].x) * params.shadow_texel_world;
+    let row1 = vec3<f32>(m[0].y, m[1].y, m[2].y) * params.shadow_texel_world;
+    let gradient_x = clamp(dot(normal, row0) / cos_l, -SHADOW_SLOPE_MAX, SHADOW_SLOPE_MAX) * texel_depth;
+    let gradient_y = clamp(dot(normal, row1) / cos_l, -SHADOW_SLOPE_MAX, SHADOW_SLOPE_MAX) * texel_depth;
+    let d = params.near + depth_of(key) * (params.far - params.near);
+    var footprint = params.pixel_size;
+    if params.perspective != 0u {
+        footprint = params.pixel_size * d;
+    }
+    let bias = (SHADOW_BIAS_TEXELS + SHADOW_BIAS_SLOPE * tan_l) * max(params.shadow_texel_world, footprint)
+        * params.shadow_inv_depth_world;
+    let side = i32(params.shadow_side_px);
+    let cx = i32(floor(q.x));
+    let cy = i32(floor(q.y));
+    let t0 = q.z + gradient_x * (f32(cx) + 0.5 - q.x) + gradient_y * (f32(cy) + 0.5 - q.y) - bias;
+    var occluded = 0.0;
+    var taps = 0.0;
+    for (var j = -SHADOW_PCF_RADIUS; j <= SHADOW_PCF_RADIUS; j += 1) {
+        for (var i = -SHADOW_PCF_RADIUS; i <= SHADOW_PCF_RADIUS; i += 1) {
+            let tx = cx + i;
+            let ty = cy + j;
+            if tx >= 0 && ty >= 0 && tx < side && ty < side {
+                let k = shadow_map[u32(ty * side + tx)];
+                let t = t0 + gradient_x * f32(i) + gradient_y * f32(j);
+                if k != EMPTY && depth_of(k) < t {
+                    occluded += 1.0;
+                }
+            }
+            taps += 1.0;
+        }
+    }
+    return occluded / taps;
+}
+
 // The solid look's light on `key` at (x, y): the factor of the albedo and the white added.
 fn light_factors(x: i32, y: i32, key: u32) -> vec2<f32> {
     let slopes = fitted_slopes(x, y, key);
@@ -267,13 +341,19 @@ fn light_factors(x: i32, y: i32, key: u32) -> vec2<f32> {
     let tangent_y = ray * slopes.y - vec3<f32>(0.0, 1.0, 0.0);
     let normal = normalize(cross(tangent_y, tangent_x));
     let to_eye = normalize(-ray);
-    let diffuse = AMBIENT + KEY * max(dot(normal, KEY_LIGHT), 0.0) + FILL * max(dot(normal, FILL_LIGHT), 0.0);
-    let s1 = max(dot(normal, normalize(KEY_LIGHT + to_eye)), 0.0);
+    let key_light = params.key_light.xyz;
+    var key_visible = 1.0;
+    if SHADOWS && params.shadows > 0.0 {
+        key_visible = 1.0 - params.shadows * shadow_at(x, y, key, normal);
+    }
+    let key_diffuse = KEY * max(dot(normal, key_light), 0.0) * key_visible;
+    let diffuse = AMBIENT + key_diffuse + FILL * max(dot(normal, FILL_LIGHT), 0.0);
+    let s1 = max(dot(normal, normalize(key_light + to_eye)), 0.0);
     let s2 = s1 * s1;
     let s4 = s2 * s2;
     let s8 = s4 * s4;
     let s16 = s8 * s8;
-    let specular = SPECULAR * (s16 * s16);
+    let specular = SPECULAR * (s16 * s16) * key_visible;
     var visible = 1.0;
     if params.occlusion > 0.0 {
         visible = 1.0 - params.occlusion * occlusion_at(x, y, key, slopes);

@@ -39,9 +39,11 @@ use rayon::prelude::*;
 use crate::camera::{OrbitCamera, Projection};
 use crate::color::linear_to_srgb;
 use crate::scene::spec::{Look, RenderSettings, SplatMode};
-use crate::splat::{Framebuffer, SplatView};
+use crate::splat::{Framebuffer, ShadowView, SplatView};
 
+pub mod shadow;
 mod tone;
+pub use shadow::{KEY_LIGHT_PITCH_DEG, KEY_LIGHT_YAW_DEG, SOLID_SHADOWS};
 pub use tone::{HIGHLIGHT_OFF, Tone, ToneUniforms, gamma_ramp, toned};
 
 /// The closest mode's number in `ResolveParams::mode` ([`SplatMode::index`]).
@@ -143,9 +145,22 @@ pub struct ResolveParams {
     pub gamma_threshold: f32,
     pub vibrancy: f32,
     pub highlight_power: f32,
+    // Shadows (`resolve/shadow.rs`).
+    /// Shadow strength (closest mode): 0 none (the shadow map is not read).
+    pub shadows: f32,
+    /// xyz: direction towards the key light (view space, unit); w: 0.
+    pub key_light: [f32; 4],
+    /// Texel x, texel y and depth fraction of the shadow map from view space (glam's column
+    /// order, WGSL's `mat4x4`).
+    pub shadow_from_view: [[f32; 4]; 4],
+    /// The shadow map is this many texels square.
+    pub shadow_side_px: u32,
+    /// World size of a texel, and one over the world length of the map's depth range.
+    pub shadow_texel_world: f32,
+    pub shadow_inv_depth_world: f32,
     pub _pad: u32,
 }
-const _: () = assert!(std::mem::size_of::<ResolveParams>() == 96);
+const _: () = assert!(std::mem::size_of::<ResolveParams>() == 192);
 
 /// How the resolve draws, beyond the splat's own settings (mode, background, depth cue). The
 /// default is the paper look: flat colours, one pixel per key, the bytes `nlifs render` has
@@ -161,6 +176,12 @@ pub struct ResolveStyle {
     pub point_radius_px: u32,
     /// The tone map of the average and density modes.
     pub tone: Tone,
+    // Shadows (`resolve/shadow.rs`).
+    /// Cast shadow strength in [0, 1] (closest mode): 0 none.
+    pub shadows: f32,
+    /// The key light's direction relative to the camera ([`shadow::key_light`]).
+    pub light_yaw_deg: f32,
+    pub light_pitch_deg: f32,
 }
 
 impl Default for ResolveStyle {
@@ -171,9 +192,25 @@ impl Default for ResolveStyle {
 
 impl ResolveStyle {
     /// The paper's look: depth-cued flat colour.
-    pub const PAPER: Self = Self { shading: 0.0, occlusion: 0.0, point_radius_px: 0, tone: Tone::NEUTRAL };
-    /// The solid look: lit, with ambient occlusion.
-    pub const SOLID: Self = Self { shading: 1.0, occlusion: SOLID_OCCLUSION, point_radius_px: 0, tone: Tone::NEUTRAL };
+    pub const PAPER: Self = Self {
+        shading: 0.0,
+        occlusion: 0.0,
+        point_radius_px: 0,
+        tone: Tone::NEUTRAL,
+        shadows: 0.0,
+        light_yaw_deg: KEY_LIGHT_YAW_DEG,
+        light_pitch_deg: KEY_LIGHT_PITCH_DEG,
+    };
+    /// The solid look: lit, with ambient occlusion and cast shadows.
+    pub const SOLID: Self = Self {
+        shading: 1.0,
+        occlusion: SOLID_OCCLUSION,
+        point_radius_px: 0,
+        tone: Tone::NEUTRAL,
+        shadows: SOLID_SHADOWS,
+        light_yaw_deg: KEY_LIGHT_YAW_DEG,
+        light_pitch_deg: KEY_LIGHT_PITCH_DEG,
+    };
 
     pub fn of_look(look: Look) -> Self {
         match look {
@@ -193,7 +230,21 @@ impl ResolveStyle {
             occlusion: settings.occlusion.unwrap_or(look.occlusion),
             point_radius_px: look.point_radius_px,
             tone: Tone::of(settings),
+            shadows: settings.shadows.unwrap_or(look.shadows),
+            light_yaw_deg: settings.light_yaw_deg,
+            light_pitch_deg: settings.light_pitch_deg,
         }
+    }
+
+    /// The key light's direction in view space (unit).
+    pub fn key_light(&self) -> Vec3 {
+        Vec3::from_array(shadow::key_light(self.light_yaw_deg, self.light_pitch_deg))
+    }
+
+    /// Whether this style draws shadows on a splat of `mode`: then the splat view needs a
+    /// shadow map ([`SplatView::with_shadow`]).
+    pub fn casts_shadows(&self, mode: SplatMode) -> bool {
+        mode == SplatMode::Closest && self.shadows > 0.0 && self.shading > 0.0
     }
 }
 
@@ -221,6 +272,13 @@ pub struct ResolveArgs {
     pub origin_px: [u32; 2],
     /// The tone map (average and density modes only).
     pub tone: Tone,
+    // Shadows (`resolve/shadow.rs`).
+    /// Cast shadow strength in [0, 1] (closest mode, with a shadow map only).
+    pub shadows: f32,
+    /// Direction towards the key light (view space, unit).
+    pub key_light: [f32; 3],
+    /// The splat's shadow map, if it has one.
+    pub shadow: Option<ShadowView>,
 }
 
 /// View-space size of one of `height_px` pixel rows at unit distance (perspective) or
@@ -249,6 +307,9 @@ impl ResolveArgs {
             perspective,
             origin_px: [0, 0],
             tone: style.tone,
+            shadows: style.shadows,
+            key_light: style.key_light().to_array(),
+            shadow: view.shadow,
         }
     }
 
@@ -280,7 +341,32 @@ impl ResolveArgs {
             gamma_threshold: tone.gamma_threshold,
             vibrancy: tone.vibrancy,
             highlight_power: tone.highlight_power,
+            shadows: 0.0,
+            key_light: [self.key_light[0], self.key_light[1], self.key_light[2], 0.0],
+            shadow_from_view: [[0.0; 4]; 4],
+            shadow_side_px: 0,
+            shadow_texel_world: 0.0,
+            shadow_inv_depth_world: 0.0,
             _pad: 0,
+        }
+        .with_shadow(self, closest)
+    }
+}
+
+impl ResolveParams {
+    /// These parameters with `args`' shadow map, where it has one and shadows are on
+    /// (closest mode and shading on only: the shadow takes away part of the key light).
+    fn with_shadow(self, args: &ResolveArgs, closest: bool) -> Self {
+        match args.shadow {
+            Some(view) if closest && self.shading > 0.0 && args.shadows > 0.0 => Self {
+                shadows: args.shadows.min(1.0),
+                shadow_from_view: view.map_from_view.to_cols_array_2d(),
+                shadow_side_px: view.side_px,
+                shadow_texel_world: view.texel_world,
+                shadow_inv_depth_world: 1.0 / view.depth_world,
+                ..self
+            },
+            _ => self,
         }
     }
 }
@@ -293,6 +379,8 @@ pub struct ResolveInputs<'a> {
     pub accum: &'a [u32],
     pub colors: &'a [[f32; 3]],
     pub max_count: u32,
+    /// The shadow map's keys (empty without one).
+    pub shadow: &'a [u32],
 }
 
 impl<'a> ResolveInputs<'a> {
@@ -307,7 +395,7 @@ impl<'a> ResolveInputs<'a> {
         let height_px = framebuffer.view.height as usize;
         let max_count =
             if framebuffer.view.mode == SplatMode::Density { max_count(accum, width_px * height_px) } else { 0 };
-        Self { accum, colors: &framebuffer.colors, max_count }
+        Self { accum, colors: &framebuffer.colors, max_count, shadow: &framebuffer.shadow }
     }
 }
 
@@ -425,16 +513,22 @@ pub fn normal_and_eye(p: &ResolveParams, x: i32, y: i32, slopes: (f32, f32)) -> 
 /// The lights on a surface of unit `normal` seen from the unit direction `to_eye`: the diffuse
 /// factor (ambient, key and fill) and the white highlight.
 pub fn lit(normal: Vec3, to_eye: Vec3) -> (f32, f32) {
-    let key_light = Vec3::from_array(KEY_LIGHT);
+    lit_by(normal, to_eye, Vec3::from_array(KEY_LIGHT), 1.0)
+}
+
+/// [`lit`] with the key light towards `key_light` (unit), of which the fraction `key_visible`
+/// reaches the surface (1 but in shadow).
+pub fn lit_by(normal: Vec3, to_eye: Vec3, key_light: Vec3, key_visible: f32) -> (f32, f32) {
     let fill_light = Vec3::from_array(FILL_LIGHT);
-    let diffuse = AMBIENT + KEY * normal.dot(key_light).max(0.0) + FILL * normal.dot(fill_light).max(0.0);
+    let key_diffuse = KEY * normal.dot(key_light).max(0.0) * key_visible;
+    let diffuse = AMBIENT + key_diffuse + FILL * normal.dot(fill_light).max(0.0);
     // Blinn-Phong with exponent 32 by five squarings (exact, and defined at 0, unlike pow).
     let s1 = normal.dot((key_light + to_eye).normalize()).max(0.0);
     let s2 = s1 * s1;
     let s4 = s2 * s2;
     let s8 = s4 * s4;
     let s16 = s8 * s8;
-    (diffuse, SPECULAR * (s16 * s16))
+    (diffuse, SPECULAR * (s16 * s16) * key_visible)
 }
 
 /// Occlusion of the key `key` at accumulation pixel (x, y) with `slopes` ([`fitted_slopes`]):
@@ -469,11 +563,25 @@ pub fn occlusion(p: &ResolveParams, accum: &[u32], x: i32, y: i32, key: u32, slo
 
 /// The solid look's colour of the key `key` with colour `albedo` at accumulation pixel (x, y),
 /// before the depth cue, with `slope_offset` added to the fitted slopes (0 but in error bounds).
-fn light(p: &ResolveParams, accum: &[u32], x: i32, y: i32, key: u32, albedo: Vec3, slope_offset: (f32, f32)) -> Vec3 {
+fn light(
+    p: &ResolveParams,
+    inputs: &ResolveInputs<'_>,
+    x: i32,
+    y: i32,
+    key: u32,
+    albedo: Vec3,
+    slope_offset: (f32, f32),
+) -> Vec3 {
+    let accum = inputs.accum;
     let fitted = fitted_slopes(p, accum, x, y, key);
     let slopes = (fitted.0 + slope_offset.0, fitted.1 + slope_offset.1);
     let (normal, to_eye) = normal_and_eye(p, x, y, slopes);
-    let (diffuse, specular) = lit(normal, to_eye);
+    let mut key_visible = 1.0f32;
+    if p.shadows > 0.0 {
+        key_visible = 1.0 - p.shadows * shadow::shadow_at(p, inputs.shadow, x, y, key, normal);
+    }
+    let key_light = Vec3::new(p.key_light[0], p.key_light[1], p.key_light[2]);
+    let (diffuse, specular) = lit_by(normal, to_eye, key_light, key_visible);
     let mut visible = 1.0f32;
     if p.occlusion > 0.0 {
         visible = 1.0 - p.occlusion * occlusion(p, accum, x, y, key, slopes);
@@ -528,7 +636,7 @@ pub fn resolve_fragment_perturbed(
                 // The GPU's table has 256 entries; keys only hold indices of compiled functions.
                 let mut base = inputs.colors[fi.min(inputs.colors.len() - 1)];
                 if p.shading > 0.0 || p.occlusion > 0.0 {
-                    base = light(p, accum, at.0, at.1, key, Vec3::from_array(base), slope_offset).to_array();
+                    base = light(p, inputs, at.0, at.1, key, Vec3::from_array(base), slope_offset).to_array();
                 }
                 c = cue(p, base, t);
             }

@@ -93,18 +93,9 @@ impl Shot {
             settings.depth_cue,
             settings.background,
         );
-        Ok(Self {
-            t_secs,
-            settings: settings.clone(),
-            ifs,
-            compiled,
-            bounds,
-            camera,
-            view,
-            plan,
-            stream: 0,
-            style: ResolveStyle::of(settings, scene.domain.dimension()),
-        })
+        let style = ResolveStyle::of(settings, scene.domain.dimension());
+        let view = with_shadow_of(view, &style, &camera, bounds);
+        Ok(Self { t_secs, settings: settings.clone(), ifs, compiled, bounds, camera, view, plan, stream: 0, style })
     }
 
     /// The shot drawing from the random streams of frame `stream`.
@@ -112,9 +103,10 @@ impl Shot {
         Self { stream, ..self }
     }
 
-    /// The shot drawn with `style`.
+    /// The shot drawn with `style` (with a shadow map where it casts shadows).
     pub fn with_style(self, style: ResolveStyle) -> Self {
-        Self { style, ..self }
+        let view = with_shadow_of(SplatView { shadow: None, ..self.view }, &style, &self.camera, self.bounds);
+        Self { style, view, ..self }
     }
 
     /// Runs the shot's chaos game in parallel (see [`chaos_game::run_parallel`]); `progress`
@@ -171,6 +163,11 @@ impl Shot {
             }
         }
     }
+}
+
+/// `view` with the shadow map that `style` needs (none where it casts no shadows).
+fn with_shadow_of(view: SplatView, style: &ResolveStyle, camera: &OrbitCamera, bounds: (DVec3, DVec3)) -> SplatView {
+    if style.casts_shadows(view.mode) { view.with_shadow(camera, bounds, style.key_light()) } else { view }
 }
 
 /// How a CPU render accumulates its points.

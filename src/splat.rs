@@ -18,10 +18,12 @@ use crate::camera::OrbitCamera;
 use crate::chaos_game::{PointBatch, PointSink};
 use crate::scene::spec::SplatMode;
 
+pub mod shadow;
 pub mod shared;
 #[cfg(target_arch = "x86_64")]
 mod x86;
 
+pub use shadow::ShadowView;
 pub use shared::SharedFramebuffer;
 
 /// Depth is quantized to this many bits in the closest-point key.
@@ -43,6 +45,9 @@ pub struct SplatView {
     pub mode: SplatMode,
     pub depth_cue: f32,
     pub background: [f32; 3],
+    // Shadows (`splat/shadow.rs`).
+    /// The key light's shadow map, splatted from the same points; None: no shadows.
+    pub shadow: Option<ShadowView>,
 }
 
 impl SplatView {
@@ -67,7 +72,28 @@ impl SplatView {
         let r2 = -row(&view_from_world, 2);
         let r3 = row(&clip_from_world, 3);
         let pixel_from_world = Mat4::from_cols(r0, r1, r2, r3).transpose();
-        Self { width, height, pixel_from_world, near, far, mode, depth_cue, background }
+        Self { width, height, pixel_from_world, near, far, mode, depth_cue, background, shadow: None }
+    }
+
+    /// This view with a shadow map of the key light in direction `to_light_view` (view space)
+    /// of `camera`, fitted to `bounds` (closest mode only: the other modes have no depth to
+    /// test against, so they keep none).
+    pub fn with_shadow(self, camera: &OrbitCamera, bounds: (glam::DVec3, glam::DVec3), to_light_view: Vec3) -> Self {
+        let side_px = ShadowView::side_for_image(self.width, self.height);
+        self.with_shadow_side(camera, bounds, to_light_view, side_px)
+    }
+
+    /// [`Self::with_shadow`] with a map of `side_px`² texels.
+    pub fn with_shadow_side(
+        self,
+        camera: &OrbitCamera,
+        bounds: (glam::DVec3, glam::DVec3),
+        to_light_view: Vec3,
+        side_px: u32,
+    ) -> Self {
+        let shadow =
+            (self.mode == SplatMode::Closest).then(|| ShadowView::new(camera, bounds, to_light_view, side_px.max(4)));
+        Self { shadow, ..self }
     }
 
     /// Pixel index and depth fraction t in [0, 1] of a world point, if it lands in the image.
@@ -93,10 +119,11 @@ impl SplatView {
     }
 
     /// Bytes of one framebuffer of this view: 4 per pixel in closest mode (one key), 16 in the
-    /// accumulating modes (r, g, b sums and the count).
+    /// accumulating modes (r, g, b sums and the count), and 4 per texel of the shadow map.
     pub fn accumulation_bytes(&self) -> u64 {
         let per_pixel = if self.mode == SplatMode::Closest { 4 } else { 16 };
-        self.width as u64 * self.height as u64 * per_pixel
+        let shadow = self.shadow.map_or(0, |s| 4 * s.texels() as u64);
+        self.width as u64 * self.height as u64 * per_pixel + shadow
     }
 
     /// A colour faded towards the background by depth fraction t.
@@ -117,6 +144,8 @@ pub struct Framebuffer {
     pub accum: Vec<[u32; 4]>,
     /// Function colours (linear RGB), indexed by compiled function.
     pub colors: Vec<[f32; 3]>,
+    /// The shadow map's keys (`view.shadow`'s texels; empty without shadows).
+    pub shadow: Vec<u32>,
 }
 
 impl Framebuffer {
@@ -126,7 +155,8 @@ impl Framebuffer {
             SplatMode::Closest => (vec![EMPTY; n], Vec::new()),
             _ => (Vec::new(), vec![[0; 4]; n]),
         };
-        Self { view, closest, accum, colors }
+        let shadow = view.shadow.map_or_else(Vec::new, |s| vec![EMPTY; s.texels()]);
+        Self { view, closest, accum, colors, shadow }
     }
 
     /// Elementwise merge (min of keys, sum of accumulators): order-independent.
@@ -141,6 +171,9 @@ impl Framebuffer {
             for c in 0..4 {
                 a[c] = a[c].saturating_add(b[c]);
             }
+        }
+        for (a, b) in self.shadow.iter_mut().zip(&other.shadow) {
+            *a = (*a).min(*b);
         }
         self
     }
@@ -159,6 +192,12 @@ impl PointSink for Framebuffer {
         let view = self.view;
         let mut pixels = OwnPixels { closest: &mut self.closest, accum: &mut self.accum };
         splat_into(&view, &self.colors, batch, &mut pixels);
+        if let Some(shadow_view) = &view.shadow {
+            let map = &mut self.shadow;
+            shadow::splat_shadow(shadow_view, batch.x, batch.y, batch.z, |texel, key| {
+                map[texel] = map[texel].min(key);
+            });
+        }
     }
 }
 

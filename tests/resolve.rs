@@ -39,6 +39,8 @@ struct Accumulation {
     colors: Vec<[f32; 3]>,
     /// The arguments with the style left at its default.
     args: ResolveArgs,
+    /// The key light's shadow map (closest mode of plant2; empty otherwise).
+    shadow: Vec<u32>,
 }
 
 /// A CPU framebuffer of plant2 (a 3D point set, so the shading has slopes in every direction)
@@ -52,6 +54,8 @@ fn plant2(mode: SplatMode) -> Accumulation {
     assert_eq!(camera.projection, Projection::Perspective);
     let (width, height) = (160, 120);
     let view = SplatView::new(&camera, width, height, bounds, mode, 0.6, [0.05, 0.04, 0.03]);
+    // The solid look's shadow map (closest mode only), of the default key light.
+    let view = view.with_shadow(&camera, bounds, ResolveStyle::SOLID.key_light());
     let mut fb = Framebuffer::new(view, compiled.colors.clone());
     for chunk in 0..512 {
         run_chunk(&compiled, 7, 0, chunk, 8, &mut fb);
@@ -65,6 +69,7 @@ fn plant2(mode: SplatMode) -> Accumulation {
         words: inputs.accum.to_vec(),
         colors: fb.colors.clone(),
         args: ResolveArgs::new(&fb.view, &camera, &ResolveStyle::default()),
+        shadow: fb.shadow.clone(),
     }
 }
 
@@ -109,7 +114,11 @@ fn depth_field(perspective: bool) -> Accumulation {
             perspective,
             origin_px: [0, 0],
             tone: Tone::NEUTRAL,
+            shadows: 0.0,
+            key_light: nlifs::resolve::KEY_LIGHT,
+            shadow: None,
         },
+        shadow: Vec::new(),
     }
 }
 
@@ -129,6 +138,10 @@ impl Gpu {
         ctx.queue.write_buffer(&game.accum, 0, bytemuck::cast_slice(&acc.words));
         let colors: Vec<[f32; 4]> = acc.colors.iter().map(|c| [c[0], c[1], c[2], 0.0]).collect();
         ctx.queue.write_buffer(&game.colors, 0, bytemuck::cast_slice(&colors));
+        if let Some(shadow) = &args.shadow {
+            game.fit_shadow(&ctx.device, Some(shadow));
+            ctx.queue.write_buffer(&game.shadow, 0, bytemuck::cast_slice(&acc.shadow));
+        }
         // A new accumulation buffer each draw: a new generation, so that the resolve rebinds.
         self.draws += 1;
         game.generation = self.draws;
@@ -190,12 +203,37 @@ impl Gpu {
 ///    ULP: ρ ≤ 2^-14 of c relative, generously; the vibrancy term t^g − c · α cancels, which
 ///    adds ≤ 2^-18 absolute (terms ≤ 4, 2^-20 each). E as in 7.
 ///
+/// Shadows (closest mode with a shadow map):
+/// 9. Each PCF tap compares the receiver's depth in the map with a texel's: where the two are
+///    closer than the receiver's float error, GPU and CPU may decide the tap differently. The
+///    receiver's depth error is bounded at [`shadow_depth_error`]; the test evaluates the CPU
+///    twin with the receiver moved by ± that bound (a shift of the matrix's depth translation),
+///    together with the slope corners of 6. (the normal enters the receiver plane and the
+///    bias), and widens lo..hi to what they span.
+///
 /// A GPU channel must lie within the rounding of [lo − E, hi + E], lo..hi the range of 6. (a
 /// single value for flat pixels) and E from 3. or 7.: where that interval does not reach a
 /// rounding boundary (k + ½ levels) the GPU must give the CPU's byte.
 struct Tolerance {
     /// E: the float error of an encoded channel beyond the slopes, in 8-bit levels.
     levels: f32,
+}
+
+/// Item 9 of [`Tolerance`]: the bound on the GPU's error in the receiver's depth fraction in the
+/// shadow map. That depth is a 4-term dot product of the shadow matrix's depth row with the
+/// view-space position (itself off by ≤ 8 u relative: the key depth's division, the ray's
+/// products), plus the receiver-plane and bias terms (a few operations on values ≤ 2 · 4 texels
+/// of depth, off by ≤ 16 u of that). Each term is off by ≤ 16 u of its magnitude, so the sum is
+/// off by ≤ 16 u · Σ|terms|, with |x|, |y| ≤ |z| · (half the image in footprints) and |z| ≤ far.
+/// Doubled for the comparison's other side (the map key's depth fraction, 2.5 ULP).
+fn shadow_depth_error(p: &ResolveParams) -> f32 {
+    let u = 2f32.powi(-24);
+    let m = p.shadow_from_view;
+    let half_extent = 0.5 * p.width.max(p.height) as f32 * p.pixel_size * if p.perspective != 0 { 1.0 } else { 0.0 };
+    let lateral = p.far * half_extent.max(1.0);
+    let terms = (m[0][2].abs() + m[1][2].abs()) * lateral + m[2][2].abs() * p.far + m[3][2].abs();
+    let receiver_plane = 2.0 * 4.0 * p.shadow_texel_world * p.shadow_inv_depth_world * 4.0;
+    2.0 * 16.0 * u * (terms + receiver_plane + 1.0)
 }
 
 /// Slope error bounds of item 5 of [`Tolerance`] (slopes in footprints per pixel).
@@ -218,7 +256,15 @@ fn compare(gpu: &mut Gpu, acc: &Accumulation, args: &ResolveArgs) -> u8 {
     let p = args.params(acc.width, acc.height, true);
     let max =
         if args.mode == SplatMode::Density { max_count(&acc.words, (acc.width * acc.height) as usize) } else { 0 };
-    let inputs = ResolveInputs { accum: &acc.words, colors: &acc.colors, max_count: max };
+    let inputs = ResolveInputs { accum: &acc.words, colors: &acc.colors, max_count: max, shadow: &acc.shadow };
+    // Item 9 of [`Tolerance`]: the receiver's depth in the shadow map moved by ± its bound.
+    let shadow_depth_error = shadow_depth_error(&p);
+    let moved = |delta: f32| {
+        let mut moved = p;
+        moved.shadow_from_view[3][2] += delta;
+        moved
+    };
+    let (p_nearer, p_farther) = (moved(-shadow_depth_error), moved(shadow_depth_error));
     let tolerance = Tolerance::of(&p);
     assert!(tolerance.levels < 0.1, "{}: the derived tolerance {} levels is too loose", acc.name, tolerance.levels);
     let lit = p.mode == 0 && (p.shading > 0.0 || p.occlusion > 0.0);
@@ -257,6 +303,17 @@ fn compare(gpu: &mut Gpu, acc: &Accumulation, args: &ResolveArgs) -> u8 {
                         hi[c] = hi[c].max(v[c]);
                     }
                 }
+                if p.shadows > 0.0 {
+                    for q in [&p_nearer, &p_farther] {
+                        for offset in [(0.0, 0.0), (-d, -d), (-d, d), (d, -d), (d, d)] {
+                            let v = levels(resolve_fragment_perturbed(q, &inputs, x, y, offset));
+                            for c in 0..3 {
+                                lo[c] = lo[c].min(v[c]);
+                                hi[c] = hi[c].max(v[c]);
+                            }
+                        }
+                    }
+                }
             }
             let gpu_px = image.get_pixel(x + ox, y + oy).0;
             for c in 0..3 {
@@ -270,11 +327,12 @@ fn compare(gpu: &mut Gpu, acc: &Accumulation, args: &ResolveArgs) -> u8 {
                 }
                 assert!(
                     allowed.contains(&gpu_px[c]),
-                    "{}, shading {}, occlusion {}, radius {}: pixel ({x}, {y}) channel {c}: GPU {} vs CPU {cpu} \
-                     (exact {:.4} levels; the tolerance allows {allowed:?})",
+                    "{}, shading {}, occlusion {}, shadows {}, radius {}: pixel ({x}, {y}) channel {c}: GPU {} vs \
+                     CPU {cpu} (exact {:.4} levels; the tolerance allows {allowed:?})",
                     acc.name,
                     p.shading,
                     p.occlusion,
+                    p.shadows,
                     p.point_radius_px,
                     gpu_px[c],
                     exact[c],
@@ -310,12 +368,19 @@ fn resolve_matches_cpu() {
         ResolveStyle { occlusion: 1.0, ..ResolveStyle::PAPER },
         ResolveStyle::SOLID,
         ResolveStyle { shading: 0.5, occlusion: 0.5, ..ResolveStyle::PAPER },
+        // Shadows alone at full strength (only plant2's closest accumulation has a map).
+        ResolveStyle { shading: 1.0, shadows: 1.0, ..ResolveStyle::PAPER },
     ];
     for acc in &accumulations {
         for style in styles {
             for point_radius_px in [0, 1, 2] {
-                let args =
-                    ResolveArgs { shading: style.shading, occlusion: style.occlusion, point_radius_px, ..acc.args };
+                let args = ResolveArgs {
+                    shading: style.shading,
+                    occlusion: style.occlusion,
+                    point_radius_px,
+                    shadows: style.shadows,
+                    ..acc.args
+                };
                 compare(&mut gpu, acc, &args);
             }
         }

@@ -76,6 +76,9 @@ pub struct RecordArgs {
     /// flam3's tone controls (average and density modes) over the scene's and its keys'.
     #[command(flatten)]
     tone: super::tone_args::ToneArgs,
+    /// The key light's shadows and direction over the scene's and its keys'.
+    #[command(flatten)]
+    light: super::light_args::LightArgs,
 }
 
 /// `nlifs snapshot`'s options, for `--renderer raytrace` (its defaults where left out).
@@ -179,6 +182,7 @@ enum RendererArg {
 pub fn record(args: RecordArgs) -> anyhow::Result<()> {
     let mut scene = load(&args.scene)?;
     args.tone.apply_to_scene(&mut scene);
+    args.light.apply_to_scene(&mut scene);
     if let Some(de) = args.density_estimation {
         scene.render.density_estimation = de.0;
     }

@@ -213,7 +213,8 @@ fn read_framebuffer(ctx: &GpuContext, game: &GpuChaosGame, shot: &Shot) -> Resul
             (Vec::new(), bytemuck::pod_collect_to_vec(&bytes))
         }
     };
-    Ok(Framebuffer { view: shot.view, closest, accum, colors: shot.compiled.colors.clone() })
+    let shadow = super::shadow::read_shadow_map(ctx, game, &shot.view)?;
+    Ok(Framebuffer { view: shot.view, closest, accum, colors: shot.compiled.colors.clone(), shadow })
 }
 
 /// Whether `ctx`'s adapter is a software rasterizer.

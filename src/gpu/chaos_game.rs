@@ -45,9 +45,13 @@ pub struct ChaosParams {
     pub dimension: u32,
     pub restart: u32,
     pub threads_per_row: u32,
-    pub _pad: u32,
+    // Shadows (`super::shadow`).
+    /// The shadow map's side in texels (0: no shadow map).
+    pub shadow_side: u32,
+    /// Rows: texel x, texel y, depth fraction, 1 (`ShadowView::map_from_world`).
+    pub shadow_from_world: [[f32; 4]; 4],
 }
-const _: () = assert!(std::mem::size_of::<ChaosParams>() == 208);
+const _: () = assert!(std::mem::size_of::<ChaosParams>() == 272);
 
 /// The shader's number for a splat mode.
 pub fn mode_index(mode: SplatMode) -> u32 {
@@ -201,11 +205,13 @@ struct Program {
     module: wgpu::ShaderModule,
     clear_pipeline: wgpu::ComputePipeline,
     chaos_pipelines: Vec<(PipelineKey, wgpu::ComputePipeline)>,
+    /// Empties the shadow map.
+    clear_shadow_pipeline: wgpu::ComputePipeline,
 }
 
 /// What a chaos-game pipeline is specialized for: splat mode (shader number), Julia functions
-/// present, IFS shape.
-type PipelineKey = (u32, bool, IfsShape);
+/// present, IFS shape, shadow map splatted.
+type PipelineKey = (u32, bool, IfsShape, bool);
 
 impl Program {
     fn new(device: &wgpu::Device, name: &str, tables: wgpu::BufferBindingType) -> Self {
@@ -227,6 +233,7 @@ impl Program {
                 entry(5, tables),
                 entry(6, write),
                 entry(7, write),
+                entry(8, write),
             ],
         });
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
@@ -243,7 +250,15 @@ impl Program {
             compilation_options: Default::default(),
             cache: None,
         });
-        Self { layout, pipeline_layout, module, clear_pipeline, chaos_pipelines: Vec::new() }
+        let clear_shadow_pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some("clear_shadow"),
+            layout: Some(&pipeline_layout),
+            module: &module,
+            entry_point: Some("clear_shadow"),
+            compilation_options: Default::default(),
+            cache: None,
+        });
+        Self { layout, pipeline_layout, module, clear_pipeline, chaos_pipelines: Vec::new(), clear_shadow_pipeline }
     }
 
     /// Index of the chaos-game pipeline for `key`.
@@ -251,10 +266,11 @@ impl Program {
         if let Some(i) = self.chaos_pipelines.iter().position(|(k, _)| *k == key) {
             return i;
         }
-        let (mode, has_julia, shape) = key;
+        let (mode, has_julia, shape, shadowed) = key;
         let constants: Vec<(&str, f64)> = [("SPLAT_MODE", mode as f64), ("HAS_JULIA", has_julia as u32 as f64)]
             .into_iter()
             .chain(shape.constants())
+            .chain([("SHADOWED", shadowed as u32 as f64)])
             .collect();
         let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
             label: Some("chaos_game"),
@@ -296,8 +312,13 @@ pub struct GpuChaosGame {
     pub point_count: u32,
     pub width: u32,
     pub height: u32,
-    /// Bumped whenever `accum` or `colors` is replaced (the resolve pass rebinds).
+    /// Bumped whenever `accum`, `colors` or `shadow` is replaced (the resolve pass rebinds).
     pub generation: u64,
+    // Shadows (`super::shadow`).
+    /// The key light's shadow map (one u32 when the view has none).
+    pub shadow: wgpu::Buffer,
+    /// The shadow map's side in texels (0: none).
+    pub shadow_side: u32,
 }
 
 impl GpuChaosGame {
@@ -334,6 +355,8 @@ impl GpuChaosGame {
             width,
             height,
             generation: 0,
+            shadow: super::shadow::shadow_buffer(device, 0),
+            shadow_side: 0,
         }
     }
 
@@ -387,6 +410,12 @@ impl GpuChaosGame {
         self.generation += 1;
     }
 
+    /// Drops the bind group and bumps the generation (a buffer was replaced).
+    pub(super) fn invalidate_bindings(&mut self) {
+        self.bind_group = None;
+        self.generation += 1;
+    }
+
     /// Changes the number of points (they must be restarted before the next splat).
     pub fn set_point_count(&mut self, device: &wgpu::Device, point_count: u32) {
         if point_count == self.point_count {
@@ -409,6 +438,7 @@ impl GpuChaosGame {
     ) {
         let Some(ifs) = self.ifs else { return };
         let v = args.view;
+        self.fit_shadow(device, v.shadow.as_ref());
         let params = ChaosParams {
             pixel_from_world: v.pixel_from_world.to_cols_array_2d(),
             background: [v.background[0], v.background[1], v.background[2], v.depth_cue],
@@ -428,11 +458,13 @@ impl GpuChaosGame {
             dimension: ifs.dimension,
             restart: args.restart as u32,
             threads_per_row: THREADS_PER_ROW,
-            _pad: 0,
+            shadow_side: v.shadow.map_or(0, |s| s.side_px),
+            shadow_from_world: v.shadow.map_or([[0.0; 4]; 4], |s| s.map_from_world.to_cols_array_2d()),
         };
         queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
         let program = if self.uniform_tables { &mut self.uniform_program } else { &mut self.storage_program };
-        let chaos_index = program.chaos_pipeline(device, (mode_index(v.mode), self.has_julia, self.shape));
+        let shadowed = v.shadow.is_some();
+        let chaos_index = program.chaos_pipeline(device, (mode_index(v.mode), self.has_julia, self.shape, shadowed));
         let program = &*program;
         if self.bind_group.is_none() {
             let buffers = [
@@ -444,6 +476,7 @@ impl GpuChaosGame {
                 &self.colors,
                 &self.points,
                 &self.accum,
+                &self.shadow,
             ];
             let entries: Vec<wgpu::BindGroupEntry> = buffers
                 .iter()
@@ -474,6 +507,11 @@ impl GpuChaosGame {
             let per_pixel = if v.mode == SplatMode::Closest { 1 } else { 4 };
             let (x, y) = dispatch_size(per_pixel * self.width as u64 * self.height as u64);
             pass.dispatch_workgroups(x, y, 1);
+            if shadowed {
+                pass.set_pipeline(&program.clear_shadow_pipeline);
+                let (x, y) = dispatch_size(self.shadow_side as u64 * self.shadow_side as u64);
+                pass.dispatch_workgroups(x, y, 1);
+            }
         }
         if args.steps > 0 {
             pass.set_pipeline(&program.chaos_pipelines[chaos_index].1);

@@ -15,6 +15,7 @@ pub mod readback;
 pub mod render;
 pub mod resolve;
 pub mod shaders;
+pub mod shadow;
 
 #[derive(Debug, thiserror::Error)]
 pub enum GpuError {

@@ -44,6 +44,12 @@ pub struct ProgressiveSettings {
     pub max_splats: u64,
     /// Steps not splatted after a scene edit while the kept points settle on the new attractor.
     pub settle_steps: u32,
+    // Shadows (`crate::resolve::shadow`).
+    /// Cast shadow strength in [0, 1] (closest mode, with shading on).
+    pub shadows: f32,
+    /// The key light's direction relative to the camera.
+    pub light_yaw_deg: f32,
+    pub light_pitch_deg: f32,
 }
 
 impl Default for ProgressiveSettings {
@@ -60,6 +66,9 @@ impl Default for ProgressiveSettings {
             point_radius_px: 0,
             max_splats: 1 << 30,
             settle_steps: 8,
+            shadows: 0.0,
+            light_yaw_deg: crate::resolve::KEY_LIGHT_YAW_DEG,
+            light_pitch_deg: crate::resolve::KEY_LIGHT_PITCH_DEG,
         }
     }
 }
@@ -112,6 +121,7 @@ fn same_view(a: &SplatView, b: &SplatView) -> bool {
         && a.mode == b.mode
         && a.depth_cue == b.depth_cue
         && a.background == b.background
+        && a.shadow == b.shadow
 }
 
 impl Progressive {
@@ -171,6 +181,7 @@ impl Progressive {
         let s = &self.settings;
         let view =
             SplatView::new(camera, self.game.width, self.game.height, self.bounds, s.mode, s.depth_cue, s.background);
+        let view = super::shadow::live_shadow(view, s, camera, self.bounds);
         if self.view.as_ref().is_none_or(|v| !same_view(v, &view)) {
             self.view = Some(view);
             self.clear = true;
@@ -259,6 +270,15 @@ impl Progressive {
     /// accumulation since the last clear, in the GPU layout of `shaders/chaos_game.wgsl`) to the
     /// start of the accumulation buffer through the queue (ordered before an encoder's resolve
     /// once both are submitted), and counts `splats`.
+    /// Uploads the shadow map of a frame from elsewhere (before [`Self::finish_uploaded_frame`]).
+    pub fn upload_shadow(&mut self, ctx: &GpuContext, shadow: &[u32]) {
+        let Some(view) = self.view else { return };
+        self.game.fit_shadow(&ctx.device, view.shadow.as_ref());
+        if view.shadow.is_some_and(|s| s.texels() == shadow.len()) {
+            ctx.queue.write_buffer(&self.game.shadow, 0, bytemuck::cast_slice(shadow));
+        }
+    }
+
     pub fn finish_uploaded_frame(&mut self, ctx: &GpuContext, accum: &[u32], splats: u64) {
         if !accum.is_empty() {
             ctx.queue.write_buffer(&self.game.accum, 0, bytemuck::cast_slice(accum));
@@ -320,6 +340,9 @@ impl Progressive {
             perspective,
             origin_px,
             tone: crate::resolve::Tone::NEUTRAL,
+            shadows: s.shadows,
+            key_light: crate::resolve::shadow::key_light(s.light_yaw_deg, s.light_pitch_deg),
+            shadow: self.view.and_then(|v| v.shadow),
         };
         let light = self.light_rows(&args);
         self.resolve.draw(ctx, encoder, &self.game, &args, target, format, light);

@@ -20,8 +20,8 @@ fn entry(binding: u32, buffer: &wgpu::Buffer) -> wgpu::BindGroupEntry<'_> {
 const COLORS_BYTES: u64 = 256 * 16;
 
 /// What a draw pipeline is specialized for: target format, splat mode, lighting (shading or
-/// occlusion) on, light read from the light cache.
-type DrawKey = (wgpu::TextureFormat, SplatMode, bool, bool);
+/// occlusion) on, light read from the light cache, shadow map read.
+type DrawKey = (wgpu::TextureFormat, SplatMode, bool, bool, bool);
 /// A bind group with the generation of the chaos game's buffers and of the light cache it binds.
 type Bound = Option<((u64, u64), wgpu::BindGroup)>;
 
@@ -56,8 +56,9 @@ pub struct GpuResolve {
     bound: Option<(u64, wgpu::BindGroup, wgpu::BindGroup)>,
     light: Option<LightCache>,
     light_generations: u64,
-    /// The light pass's pipeline and its bind group (with the chaos game's generation).
-    light_pipeline: Option<(wgpu::RenderPipeline, Bound)>,
+    /// The light pass's pipeline, its bind group (with the chaos game's generation) and
+    /// whether it reads the shadow map.
+    light_pipeline: Option<(wgpu::RenderPipeline, Bound, bool)>,
 }
 
 impl GpuResolve {
@@ -120,12 +121,13 @@ impl GpuResolve {
         if let Some(i) = self.draw_pipelines.iter().position(|(k, _, _)| *k == key) {
             return i;
         }
-        let (format, mode, shaded, cached) = key;
+        let (format, mode, shaded, cached, shadows) = key;
         let constants = [
             ("RESOLVE_MODE", mode.index() as f64),
             ("SHADED", shaded as u32 as f64),
             ("ENCODE_SRGB", !format.is_srgb() as u32 as f64),
             ("LIGHT_CACHED", cached as u32 as f64),
+            ("SHADOWS", shadows as u32 as f64),
         ];
         let pipeline = fullscreen_pipeline(device, &self.module, "resolve", &constants, format);
         self.draw_pipelines.push((key, pipeline, None));
@@ -139,22 +141,27 @@ impl GpuResolve {
         encoder: &mut wgpu::CommandEncoder,
         game: &GpuChaosGame,
         rows: (u32, u32),
+        shadows: bool,
     ) {
         if rows.0 >= rows.1 {
             return;
         }
-        if self.light_pipeline.is_none() {
-            let constants = [("RESOLVE_MODE", SplatMode::Closest.index() as f64), ("SHADED", 1.0)];
+        if self.light_pipeline.as_ref().is_none_or(|(_, _, s)| *s != shadows) {
+            let constants = [
+                ("RESOLVE_MODE", SplatMode::Closest.index() as f64),
+                ("SHADED", 1.0),
+                ("SHADOWS", shadows as u32 as f64),
+            ];
             let pipeline =
                 fullscreen_pipeline(device, &self.module, "light_pass", &constants, wgpu::TextureFormat::Rg32Uint);
-            self.light_pipeline = Some((pipeline, None));
+            self.light_pipeline = Some((pipeline, None, shadows));
         }
-        let Some((pipeline, bound)) = &mut self.light_pipeline else { return };
+        let Some((pipeline, bound, _)) = &mut self.light_pipeline else { return };
         if bound.as_ref().is_none_or(|b| b.0.0 != game.generation) {
             let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some("resolve_light"),
                 layout: &pipeline.get_bind_group_layout(0),
-                entries: &[entry(0, &self.params), entry(1, &game.accum)],
+                entries: &[entry(0, &self.params), entry(1, &game.accum), entry(5, &game.shadow)],
             });
             *bound = Some(((game.generation, 0), group));
         }
@@ -199,13 +206,15 @@ impl GpuResolve {
         queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
         let shaded = params.shading > 0.0 || params.occlusion > 0.0;
         let cached = shaded && matches!(light, LightRows::Refresh { .. });
+        // The shadow map must be the view's: the chaos game sized it (`GpuChaosGame::encode`).
+        let shadows = params.shadows > 0.0 && game.shadow_side == params.shadow_side_px;
         let light_generation = self.light_cache(device, game.width, game.height).generation;
         if let LightRows::Refresh { start, end } = light
             && cached
         {
-            self.refresh_light(device, encoder, game, (start.min(game.height), end.min(game.height)));
+            self.refresh_light(device, encoder, game, (start.min(game.height), end.min(game.height)), shadows);
         }
-        let pipeline_index = self.draw_pipeline(device, (format, args.mode, shaded, cached));
+        let pipeline_index = self.draw_pipeline(device, (format, args.mode, shaded, cached, shadows));
         if self.bound.as_ref().is_none_or(|b| b.0 != game.generation) {
             let max_layout = self.max_pipeline.get_bind_group_layout(0);
             let max_input = device.create_bind_group(&wgpu::BindGroupDescriptor {
@@ -240,6 +249,7 @@ impl GpuResolve {
                     },
                     entry(3, &self.stats),
                     wgpu::BindGroupEntry { binding: 4, resource: wgpu::BindingResource::TextureView(light_view) },
+                    entry(5, &game.shadow),
                 ],
             });
             *draw_bound = Some((generations, draw));

@@ -81,6 +81,8 @@ pub struct CpuChaosGame {
     skip_steps: u32,
     /// Chains restarted at the end of the last frame.
     restarted: u64,
+    /// The merged shadow map (empty without one).
+    merged_shadow: Vec<u32>,
 }
 
 impl CpuChaosGame {
@@ -117,7 +119,10 @@ impl CpuChaosGame {
         let colors = self.ifs.as_ref().map_or_else(Vec::new, |ifs| ifs.colors.clone());
         let n = rayon::current_num_threads().max(1);
         let fits = |fb: &Framebuffer| {
-            fb.view.width == view.width && fb.view.height == view.height && fb.view.mode == view.mode
+            fb.view.width == view.width
+                && fb.view.height == view.height
+                && fb.view.mode == view.mode
+                && fb.shadow.len() == view.shadow.map_or(0, |s| s.texels())
         };
         if self.workers.len() != n || !self.workers.iter().all(fits) {
             self.workers = (0..n).map(|_| Framebuffer::new(*view, colors.clone())).collect();
@@ -127,8 +132,10 @@ impl CpuChaosGame {
                 fb.colors.clone_from(&colors);
                 fb.closest.fill(EMPTY);
                 fb.accum.fill([0; 4]);
+                fb.shadow.fill(EMPTY);
             }
         }
+        self.merged_shadow.resize(view.shadow.map_or(0, |s| s.texels()), EMPTY);
         let words = view.width as usize * view.height as usize * if view.mode == SplatMode::Closest { 1 } else { 4 };
         self.merged.resize(words, 0);
     }
@@ -165,6 +172,7 @@ impl CpuChaosGame {
         let framebuffers = &mut self.workers;
         let chains = &mut self.chains;
         let merged = &mut self.merged;
+        let merged_shadow = &mut self.merged_shadow;
         let ifs = &*ifs;
         let mut run = || {
             framebuffers.par_iter_mut().zip(chains.par_chunks_mut(per_worker)).enumerate().for_each(
@@ -183,6 +191,7 @@ impl CpuChaosGame {
                 },
             );
             merge(framebuffers, merged);
+            merge_shadow(framebuffers, merged_shadow);
         };
         match &self.pool {
             Some(pool) => pool.install(run),
@@ -223,7 +232,26 @@ fn merge(workers: &[Framebuffer], merged: &mut [u32]) {
     }
 }
 
+/// Merges the workers' shadow maps into `merged` (min of keys), in parallel over blocks.
+fn merge_shadow(workers: &[Framebuffer], merged: &mut [u32]) {
+    const BLOCK: usize = 1 << 14;
+    merged.par_chunks_mut(BLOCK).enumerate().for_each(|(b, out)| {
+        let range = b * BLOCK..b * BLOCK + out.len();
+        out.copy_from_slice(&workers[0].shadow[range.clone()]);
+        for fb in &workers[1..] {
+            for (o, &k) in out.iter_mut().zip(&fb.shadow[range.clone()]) {
+                *o = (*o).min(k);
+            }
+        }
+    });
+}
+
 impl CpuChaosGame {
+    /// The merged shadow map (what the live view uploads with the accumulation).
+    pub fn merged_shadow(&self) -> &[u32] {
+        &self.merged_shadow
+    }
+
     /// The merged accumulation in the GPU layout (what the live view uploads).
     pub fn merged(&self) -> &[u32] {
         &self.merged

@@ -41,6 +41,9 @@ impl From<&LiveSettings> for ProgressiveSettings {
             point_radius_px: s.point_radius_px,
             max_splats: s.max_splats,
             settle_steps: s.settle_steps,
+            shadows: s.shadows,
+            light_yaw_deg: s.light_yaw_deg,
+            light_pitch_deg: s.light_pitch_deg,
         }
     }
 }
@@ -163,6 +166,9 @@ impl LiveView {
         }
         let points = self.settings.point_count as u64 * self.settings.steps_per_frame as u64;
         let splats = self.cpu.advance(self.settings.seed, frame.frame, points);
+        if frame.view.shadow.is_some() {
+            self.gpu.upload_shadow(ctx, self.cpu.merged_shadow());
+        }
         self.gpu.finish_uploaded_frame(ctx, self.cpu.merged(), splats);
         splats
     }

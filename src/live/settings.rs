@@ -30,6 +30,12 @@ pub struct LiveSettings {
     /// Where the chaos game runs (the GPU only resolves on the CPU route). The default, `gpu`,
     /// is what `render --backend gpu` and the benchmarks run; the viewer starts on `auto`.
     pub chaos_backend: ChaosBackend,
+    // Shadows (`crate::resolve::shadow`).
+    /// Cast shadow strength in [0, 1] (closest mode, with shading on).
+    pub shadows: f32,
+    /// The key light's direction relative to the camera.
+    pub light_yaw_deg: f32,
+    pub light_pitch_deg: f32,
 }
 
 impl Default for LiveSettings {
@@ -49,6 +55,9 @@ impl Default for LiveSettings {
             max_splats: 1 << 30,
             settle_steps: 8,
             chaos_backend: ChaosBackend::Gpu,
+            shadows: 0.0,
+            light_yaw_deg: crate::resolve::KEY_LIGHT_YAW_DEG,
+            light_pitch_deg: crate::resolve::KEY_LIGHT_PITCH_DEG,
         }
     }
 }

@@ -19,6 +19,9 @@ fn params(size: u32, style: ResolveStyle) -> ResolveParams {
         perspective: false,
         origin_px: [0, 0],
         tone: style.tone,
+        shadows: style.shadows,
+        key_light: style.key_light().to_array(),
+        shadow: None,
     };
     args.params(size, size, false)
 }
@@ -41,7 +44,7 @@ fn radius_fills_a_disc() {
         let p = params(9, ResolveStyle { point_radius_px: radius, ..ResolveStyle::PAPER });
         let mut accum = vec![EMPTY; 81];
         accum[4 * 9 + 4] = key(2.0, &p);
-        let inputs = ResolveInputs { accum: &accum, colors: &[[1.0; 3]], max_count: 0 };
+        let inputs = ResolveInputs { accum: &accum, colors: &[[1.0; 3]], max_count: 0, shadow: &[] };
         let lit: Vec<[f32; 3]> =
             (0..81).map(|i| resolve_fragment(&p, &inputs, i % 9, i / 9)).filter(|c| c[0] > 0.0).collect();
         assert_eq!(lit.len(), covered, "radius {radius}");
@@ -64,7 +67,7 @@ fn planes_are_lit_evenly_and_not_occluded() {
                 let hole = holes && (x as u32 * 7 + y as u32 * 3).is_multiple_of(5);
                 (!hole).then_some(2.0 + (slope_x * (x - 10.0) + slope_y * (y - 10.0)) * footprint)
             });
-            let inputs = ResolveInputs { accum: &accum, colors: &[[1.0; 3]], max_count: 0 };
+            let inputs = ResolveInputs { accum: &accum, colors: &[[1.0; 3]], max_count: 0, shadow: &[] };
             // The plane's normal: tangents (1, 0, −slope_x) and (0, −1, −slope_y) (image y down).
             let normal = Vec3::new(0.0, -1.0, -slope_y).cross(Vec3::new(1.0, 0.0, -slope_x)).normalize();
             let (diffuse, specular) = lit(normal, Vec3::Z);
@@ -105,7 +108,7 @@ fn planes_are_lit_evenly_and_not_occluded() {
     let p = params(5, ResolveStyle::SOLID);
     let mut accum = vec![EMPTY; 25];
     accum[12] = key(2.0, &p);
-    let inputs = ResolveInputs { accum: &accum, colors: &[[1.0; 3]], max_count: 0 };
+    let inputs = ResolveInputs { accum: &accum, colors: &[[1.0; 3]], max_count: 0, shadow: &[] };
     let (diffuse, specular) = lit(Vec3::Z, Vec3::Z);
     assert!((resolve_fragment(&p, &inputs, 2, 2)[0] - (diffuse + specular)).abs() < 1e-6);
 }
@@ -251,7 +254,8 @@ fn sums(pixels: &[(u32, [f32; 3])]) -> Vec<u32> {
 
 /// The linear colours of the pixels of `accum` resolved with `p`.
 fn toned_row(p: &ResolveParams, accum: &[u32]) -> Vec<[f32; 3]> {
-    let inputs = ResolveInputs { accum, colors: &[[1.0; 3]], max_count: max_count(accum, p.width as usize) };
+    let inputs =
+        ResolveInputs { accum, colors: &[[1.0; 3]], max_count: max_count(accum, p.width as usize), shadow: &[] };
     (0..p.width).map(|x| resolve_fragment(p, &inputs, x, 0)).collect()
 }
 

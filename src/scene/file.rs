@@ -74,12 +74,21 @@ pub(super) struct KeyRenderToml {
     pub(super) gamma_threshold: Option<Spanned<f64>>,
     pub(super) vibrancy: Option<Spanned<f64>>,
     pub(super) highlight_power: Option<Spanned<f64>>,
+    // The key light (`spec::LIGHT_FIELDS`).
+    pub(super) shadows: Option<Spanned<f64>>,
+    pub(super) light_yaw_deg: Option<Spanned<f64>>,
+    pub(super) light_pitch_deg: Option<Spanned<f64>>,
 }
 
 impl KeyRenderToml {
     /// The tone fields in the order of `spec::TONE_FIELDS`.
     pub(super) fn tone(&self) -> [&Option<Spanned<f64>>; 5] {
         [&self.exposure, &self.gamma, &self.gamma_threshold, &self.vibrancy, &self.highlight_power]
+    }
+
+    /// The key light's fields in the order of `spec::LIGHT_FIELDS`.
+    pub(super) fn light(&self) -> [&Option<Spanned<f64>>; 3] {
+        [&self.shadows, &self.light_yaw_deg, &self.light_pitch_deg]
     }
 }
 
@@ -222,9 +231,18 @@ pub(super) struct RenderToml {
     pub(super) estimator_radius: Option<Spanned<f64>>,
     pub(super) estimator_minimum: Option<Spanned<f64>>,
     pub(super) estimator_curve: Option<Spanned<f64>>,
+    // The key light (`spec::LIGHT_FIELDS`).
+    pub(super) shadows: Option<Spanned<f64>>,
+    pub(super) light_yaw_deg: Option<Spanned<f64>>,
+    pub(super) light_pitch_deg: Option<Spanned<f64>>,
 }
 
 impl RenderToml {
+    /// The key light's fields in the order of `spec::LIGHT_FIELDS`.
+    pub(super) fn light(&self) -> [&Option<Spanned<f64>>; 3] {
+        [&self.shadows, &self.light_yaw_deg, &self.light_pitch_deg]
+    }
+
     /// The tone fields in the order of `spec::TONE_FIELDS`.
     pub(super) fn tone(&self) -> [&Option<Spanned<f64>>; 5] {
         [&self.exposure, &self.gamma, &self.gamma_threshold, &self.vibrancy, &self.highlight_power]

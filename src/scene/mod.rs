@@ -142,6 +142,17 @@ impl Scene {
                 *slot = v[0].clamp(lo, hi) as f32;
             }
         }
+        // The key light, each within its range.
+        let channel = |i: usize| tl.channel_at(t_secs, |k| k.render.light[i].map(|v| vec![v as f64]));
+        let [(_, lo, hi), yaw_field, pitch_field] = spec::LIGHT_FIELDS;
+        if let Some(v) = channel(0) {
+            out.shadows = Some(v[0].clamp(lo, hi) as f32);
+        }
+        for (i, ((_, lo, hi), slot)) in [yaw_field, pitch_field].into_iter().zip(out.light_mut()).enumerate() {
+            if let Some(v) = channel(i + 1) {
+                *slot = v[0].clamp(lo, hi) as f32;
+            }
+        }
         out
     }
 

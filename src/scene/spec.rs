@@ -181,6 +181,25 @@ pub struct RenderSettings {
     /// flam3's adaptive density estimation (density mode; `src/resolve/density_estimation.rs`);
     /// None: off.
     pub density_estimation: Option<DensityEstimation>,
+    // Cast shadows from the key light (`crate::resolve::shadow`).
+    /// Shadow strength in [0, 1] (closest mode); None: the look's.
+    pub shadows: Option<f32>,
+    /// The key light's direction relative to the camera: degrees from the view direction
+    /// towards the right, and above the view's horizontal plane.
+    pub light_yaw_deg: f32,
+    pub light_pitch_deg: f32,
+}
+
+/// The key light's fields in `[render]` (and `[key.render]`): name and range, in the order of
+/// [`RenderSettings::light`].
+pub const LIGHT_FIELDS: [(&str, f64, f64); 3] =
+    [("shadows", 0.0, 1.0), ("light_yaw_deg", -180.0, 180.0), ("light_pitch_deg", -90.0, 90.0)];
+
+impl RenderSettings {
+    /// The key light's direction in the order of the last two [`LIGHT_FIELDS`], to set.
+    pub fn light_mut(&mut self) -> [&mut f32; 2] {
+        [&mut self.light_yaw_deg, &mut self.light_pitch_deg]
+    }
 }
 
 /// flam3's tone controls in `[render]` (and `[key.render]`): name and range, in the order of
@@ -241,6 +260,9 @@ impl Default for RenderSettings {
             vibrancy: 1.0,
             highlight_power: -1.0,
             density_estimation: None,
+            shadows: None,
+            light_yaw_deg: crate::resolve::KEY_LIGHT_YAW_DEG,
+            light_pitch_deg: crate::resolve::KEY_LIGHT_PITCH_DEG,
         }
     }
 }

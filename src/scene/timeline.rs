@@ -144,6 +144,9 @@ pub struct RenderKey {
     /// The tone controls, in the order of `spec::TONE_FIELDS` (boxed: keys stay small enough to
     /// be held two to an undoable edit).
     pub tone: Box<[Option<f32>; 5]>,
+    // Shadows (`crate::resolve::shadow`).
+    /// The key light's fields, in the order of `spec::LIGHT_FIELDS`.
+    pub light: [Option<f32>; 3],
 }
 
 #[derive(Clone, Debug, PartialEq)]

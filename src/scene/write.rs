@@ -11,7 +11,7 @@ use crate::color;
 use crate::model::builder::Step;
 use crate::scene::Scene;
 use crate::scene::file::FORMAT_VERSION;
-use crate::scene::spec::{CameraSpec, FunctionDef, RenderSettings, TONE_FIELDS};
+use crate::scene::spec::{CameraSpec, FunctionDef, LIGHT_FIELDS, RenderSettings, TONE_FIELDS};
 use crate::scene::timeline::RenderKey;
 
 /// TOML text of a number that reads back to the same f64 (Rust's shortest round-trip form).
@@ -230,6 +230,19 @@ impl Scene {
                 let _ = writeln!(out, "{name} = {v:?}");
             }
         }
+        // The key light: shadows when set, the direction where it differs from the default.
+        if let Some(v) = r.shadows {
+            let _ = writeln!(out, "shadows = {v:?}");
+        }
+        let default = RenderSettings::default();
+        for ((name, _, _), (v, d)) in LIGHT_FIELDS[1..]
+            .iter()
+            .zip([(r.light_yaw_deg, default.light_yaw_deg), (r.light_pitch_deg, default.light_pitch_deg)])
+        {
+            if v != d {
+                let _ = writeln!(out, "{name} = {v:?}");
+            }
+        }
         if let Some(de) = r.density_estimation {
             let _ = writeln!(
                 out,
@@ -272,6 +285,11 @@ impl Scene {
                         let _ = writeln!(out, "depth_cue = {d:?}");
                     }
                     for ((name, _, _), v) in TONE_FIELDS.into_iter().zip(kr.tone.iter()) {
+                        if let Some(v) = v {
+                            let _ = writeln!(out, "{name} = {v:?}");
+                        }
+                    }
+                    for ((name, _, _), v) in LIGHT_FIELDS.into_iter().zip(kr.light.iter()) {
                         if let Some(v) = v {
                             let _ = writeln!(out, "{name} = {v:?}");
                         }

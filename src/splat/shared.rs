@@ -74,7 +74,11 @@ impl SharedFramebuffer {
         // and `words` is borrowed exclusively for the target's lifetime, so nothing reads or
         // writes these u32s except through the atomics meanwhile.
         let atomics: &[AtomicU32] = unsafe { &*(words as *mut [u32] as *const [AtomicU32]) };
-        let target = SharedTarget::new(fb.view, &fb.colors, atomics, threads);
+        let shadow: &mut [u32] = &mut fb.shadow;
+        // SAFETY: as above, for the shadow map's u32s (a separate exclusive borrow).
+        let shadow: &[AtomicU32] = unsafe { &*(shadow as *mut [u32] as *const [AtomicU32]) };
+        let mut target = SharedTarget::new(fb.view, &fb.colors, atomics, threads);
+        target.shadow = shadow;
         work(&target)
     }
 
@@ -93,12 +97,15 @@ pub struct SharedTarget<'a> {
     bands: Vec<Mutex<()>>,
     /// Pixels per band: 2^band_shift.
     band_shift: u32,
+    /// The shadow map's keys (empty without shadows), lowered with `fetch_min`: no bands, as a
+    /// converged map is mostly read (a key is only written where it lowers the texel's).
+    shadow: &'a [AtomicU32],
 }
 
 impl<'a> SharedTarget<'a> {
     fn new(view: SplatView, colors: &'a [[f32; 3]], words: &'a [AtomicU32], threads: usize) -> Self {
         let (count, band_shift) = bands_of(&view, threads);
-        Self { view, colors, words, bands: (0..count).map(|_| Mutex::new(())).collect(), band_shift }
+        Self { view, colors, words, bands: (0..count).map(|_| Mutex::new(())).collect(), band_shift, shadow: &[] }
     }
 
     /// A writer for one thread.
@@ -212,6 +219,14 @@ impl PointSink for BandWriter<'_, '_> {
     fn consume(&mut self, batch: PointBatch<'_>) {
         let target = self.target;
         splat_into(&target.view, target.colors, batch, self);
+        if let Some(shadow_view) = &target.view.shadow {
+            let map = target.shadow;
+            super::shadow::splat_shadow(shadow_view, batch.x, batch.y, batch.z, |texel, key| {
+                if key < map[texel].load(Ordering::Relaxed) {
+                    map[texel].fetch_min(key, Ordering::Relaxed);
+                }
+            });
+        }
     }
 }
 

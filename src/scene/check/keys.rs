@@ -9,7 +9,9 @@ use toml::Spanned;
 use crate::model::builder::Builder;
 use crate::model::{AffineMap, JuliaMap, RectGrid};
 use crate::scene::file::{KeyToml, TimelineToml};
-use crate::scene::spec::{self, CameraSpec, FunctionDef, FunctionSpec, MAX_POINTS, MAX_TIME_SECS, TONE_FIELDS};
+use crate::scene::spec::{
+    self, CameraSpec, FunctionDef, FunctionSpec, LIGHT_FIELDS, MAX_POINTS, MAX_TIME_SECS, TONE_FIELDS,
+};
 use crate::scene::timeline::{Ease, FunctionKey, Interpolation, Key, LoopMode, RenderKey, Timeline};
 
 use super::{Checker, Res};
@@ -248,6 +250,13 @@ impl Checker<'_> {
             }
             // The tone controls.
             for ((value, (name, lo, hi)), slot) in r.tone().into_iter().zip(TONE_FIELDS).zip(render.tone.iter_mut()) {
+                if let Some(v) = value {
+                    *slot = Some(self.in_range(v, &field(&format!("render.{name}")), lo, hi)? as f32);
+                }
+            }
+            // The key light.
+            for ((value, (name, lo, hi)), slot) in r.light().into_iter().zip(LIGHT_FIELDS).zip(render.light.iter_mut())
+            {
                 if let Some(v) = value {
                     *slot = Some(self.in_range(v, &field(&format!("render.{name}")), lo, hi)? as f32);
                 }

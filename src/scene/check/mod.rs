@@ -664,6 +664,19 @@ impl Checker<'_> {
             }
         }
         out.density_estimation = self.density_estimation(r)?;
+        // The key light.
+        let [shadows, yaw, pitch] = r.light();
+        let [(_, lo, hi), yaw_field, pitch_field] = crate::scene::spec::LIGHT_FIELDS;
+        if let Some(v) = shadows {
+            out.shadows = Some(self.in_range(v, "render.shadows", lo, hi)? as f32);
+        }
+        for ((value, (name, lo, hi)), slot) in
+            [yaw, pitch].into_iter().zip([yaw_field, pitch_field]).zip(out.light_mut())
+        {
+            if let Some(v) = value {
+                *slot = self.in_range(v, &format!("render.{name}"), lo, hi)? as f32;
+            }
+        }
         Ok(out)
     }
 }

@@ -1,0 +1,122 @@
+//! The key light's shadow map: the attractor's points splatted a second time, from the key
+//! light, into a square map of closest depths (the same keys as the image's closest mode, 24 bits
+//! of depth, merged with `min`, no function bits). The resolve (`src/resolve/shadow.rs`, and
+//! `shaders/resolve.wgsl`) tests each visible pixel against it.
+//!
+//! The light is directional and fixed to the camera (`crate::resolve::KEY_LIGHT` by default),
+//! so the map's projection is orthographic, looking along the light's direction, and fitted to
+//! the attractor's bounds (the box the image's near and far come from): the bounds' eight
+//! corners, seen along the light, span the map's square and its depth range. A camera orbit
+//! moves the light with it, so the map changes whenever the image's view does.
+
+use glam::{DVec3, Mat4, Vec3, Vec4};
+
+use crate::camera::OrbitCamera;
+
+/// Smallest and largest side of the shadow map, in texels ([`ShadowView::side_for_image`]).
+pub const MIN_SIDE_PX: u32 = 256;
+pub const MAX_SIDE_PX: u32 = 2048;
+
+/// The shadow map's projection: everything the shadow splat and the shadow test need.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ShadowView {
+    /// The map is `side_px`² texels.
+    pub side_px: u32,
+    /// Rows: texel x, texel y, depth fraction from the light (0 nearest), 1 (orthographic, so
+    /// no division).
+    pub map_from_world: Mat4,
+    /// The same projection from the image's view space (the resolve reconstructs view-space
+    /// positions from the image's keys).
+    pub map_from_view: Mat4,
+    /// World size of one texel.
+    pub texel_world: f32,
+    /// World length of the depth range (depth fraction 1).
+    pub depth_world: f32,
+}
+
+impl ShadowView {
+    /// The map side for an image of `width`×`height`: one texel per image pixel along the
+    /// image's longer side (the attractor fills the image about as it fills the map, so a texel
+    /// is about a pixel and shadow edges are as sharp as the image's), within
+    /// [[`MIN_SIDE_PX`], [`MAX_SIDE_PX`]]: below 256 the PCF's soft edge is a visible blur; above
+    /// 2048 the map (16 MiB) has more texels than 4 M points fill, so it is full of holes.
+    pub fn side_for_image(width: u32, height: u32) -> u32 {
+        width.max(height).clamp(MIN_SIDE_PX, MAX_SIDE_PX)
+    }
+
+    /// The map of a key light in direction `to_light_view` (view space, towards the light) of
+    /// `camera`, fitted to `bounds`, `side_px` texels square.
+    pub fn new(camera: &OrbitCamera, bounds: (DVec3, DVec3), to_light_view: Vec3, side_px: u32) -> Self {
+        let view_from_world = camera.view_from_world();
+        let to_light = to_light_view.normalize();
+        // The light's basis in view space: `right` and `up` across the map, `to_light` along its
+        // depth (the helper axis is the view's up unless the light is nearly straight above).
+        let helper = if to_light.y.abs() < 0.99 { Vec3::Y } else { Vec3::X };
+        let right = helper.cross(to_light).normalize();
+        let up = to_light.cross(right);
+        let (lo, hi) = (bounds.0.as_vec3(), bounds.1.as_vec3());
+        let (mut min, mut max) = (Vec3::INFINITY, Vec3::NEG_INFINITY);
+        for k in 0..8 {
+            let c = Vec3::new(
+                if k & 1 == 0 { lo.x } else { hi.x },
+                if k & 2 == 0 { lo.y } else { hi.y },
+                if k & 4 == 0 { lo.z } else { hi.z },
+            );
+            let v = view_from_world.transform_point3(c);
+            let q = Vec3::new(v.dot(right), v.dot(up), v.dot(to_light));
+            min = min.min(q);
+            max = max.max(q);
+        }
+        // A square around the corners' span with a margin of one texel a side, and the depth
+        // range padded like the image's (`OrbitCamera::depth_range`).
+        let span = (max.x - min.x).max(max.y - min.y).max(1e-6);
+        let texel_world = span / (side_px as f32 - 2.0);
+        let half = 0.5 * side_px as f32 * texel_world;
+        let centre = 0.5 * (min + max);
+        let pad = 1e-3 * (max.z - min.z).max(1e-3);
+        let (depth_lo, depth_hi) = (min.z - pad, max.z + pad);
+        let depth_world = depth_hi - depth_lo;
+        // Texel x grows along `right`, texel y against `up` (rows downwards, as in an image),
+        // the depth fraction from the light's side (`depth_hi`) away from it.
+        let r0 = (right / texel_world).extend((half - centre.x) / texel_world);
+        let r1 = (-up / texel_world).extend((half + centre.y) / texel_world);
+        let r2 = (-to_light / depth_world).extend(depth_hi / depth_world);
+        let map_from_view = Mat4::from_cols(r0, r1, r2, Vec4::W).transpose();
+        Self { side_px, map_from_world: map_from_view * view_from_world, map_from_view, texel_world, depth_world }
+    }
+
+    /// Texel index and depth fraction in [0, 1] of a world point, if it lands in the map.
+    #[inline(always)]
+    pub fn project(&self, p: Vec3) -> Option<(usize, f32)> {
+        let q = self.map_from_world * p.extend(1.0);
+        let side = self.side_px as f32;
+        if !(q.x >= 0.0 && q.y >= 0.0 && q.x < side && q.y < side) {
+            return None;
+        }
+        let t = q.z.clamp(0.0, 1.0);
+        // 0 ≤ x, y < side (checked above; NaN fails the check): the truncations are exact.
+        Some((q.y as u32 as usize * self.side_px as usize + q.x as u32 as usize, t))
+    }
+
+    /// Texels of the map.
+    pub fn texels(&self) -> usize {
+        self.side_px as usize * self.side_px as usize
+    }
+}
+
+/// The closest key of a depth fraction `t` in [0, 1] (as the image's closest keys, function 0).
+#[inline(always)]
+pub fn key_of(t: f32) -> u32 {
+    let d = t * ((1u32 << super::DEPTH_BITS) - 1) as f32;
+    let d = if d > 0.0 { d } else { 0.0 };
+    (d as u32) << 8
+}
+
+/// Splats the points `(x, y, z)` into `map` (keys of `view`, merged with `min`).
+pub fn splat_shadow(view: &ShadowView, x: &[f32], y: &[f32], z: &[f32], mut min_key: impl FnMut(usize, u32)) {
+    for ((&x, &y), &z) in x.iter().zip(y).zip(z) {
+        if let Some((texel, t)) = view.project(Vec3::new(x, y, z)) {
+            min_key(texel, key_of(t));
+        }
+    }
+}
