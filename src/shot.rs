@@ -16,7 +16,7 @@ use crate::model::Ifs;
 use crate::resolve::ResolveStyle;
 use crate::scene::Scene;
 use crate::scene::spec::RenderSettings;
-use crate::splat::{Framebuffer, SharedFramebuffer, SplatView};
+use crate::splat::{Framebuffer, Lens, SharedFramebuffer, SplatView};
 
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum ShotError {
@@ -24,6 +24,8 @@ pub enum ShotError {
     NoFunctions { t_secs: f64 },
     #[error(transparent)]
     Points(#[from] PlanError),
+    #[error(transparent)]
+    Lens(#[from] crate::splat::lens::LensError),
 }
 
 /// How a shot's camera is chosen.
@@ -92,7 +94,8 @@ impl Shot {
             settings.mode,
             settings.depth_cue,
             settings.background,
-        );
+        )
+        .with_lens(lens_of(&camera, settings)?);
         Ok(Self {
             t_secs,
             settings: settings.clone(),
@@ -171,6 +174,11 @@ impl Shot {
             }
         }
     }
+}
+
+/// The depth-of-field lens of `settings` (aperture, focus distance, seed) for `camera`.
+pub fn lens_of(camera: &OrbitCamera, settings: &RenderSettings) -> Result<Lens, crate::splat::lens::LensError> {
+    Lens::new(camera, settings.height, settings.aperture, settings.focus_distance, settings.seed)
 }
 
 /// How a CPU render accumulates its points.

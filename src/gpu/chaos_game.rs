@@ -46,8 +46,11 @@ pub struct ChaosParams {
     pub restart: u32,
     pub threads_per_row: u32,
     pub _pad: u32,
+    // Depth of field.
+    /// [`crate::splat::Lens::uniform`].
+    pub lens: [f32; 4],
 }
-const _: () = assert!(std::mem::size_of::<ChaosParams>() == 208);
+const _: () = assert!(std::mem::size_of::<ChaosParams>() == 224);
 
 /// The shader's number for a splat mode.
 pub fn mode_index(mode: SplatMode) -> u32 {
@@ -204,8 +207,8 @@ struct Program {
 }
 
 /// What a chaos-game pipeline is specialized for: splat mode (shader number), Julia functions
-/// present, IFS shape.
-type PipelineKey = (u32, bool, IfsShape);
+/// present, IFS shape, depth of field on.
+type PipelineKey = (u32, bool, IfsShape, bool);
 
 impl Program {
     fn new(device: &wgpu::Device, name: &str, tables: wgpu::BufferBindingType) -> Self {
@@ -251,10 +254,11 @@ impl Program {
         if let Some(i) = self.chaos_pipelines.iter().position(|(k, _)| *k == key) {
             return i;
         }
-        let (mode, has_julia, shape) = key;
+        let (mode, has_julia, shape, lens) = key;
         let constants: Vec<(&str, f64)> = [("SPLAT_MODE", mode as f64), ("HAS_JULIA", has_julia as u32 as f64)]
             .into_iter()
             .chain(shape.constants())
+            .chain([("LENS", lens as u32 as f64)])
             .collect();
         let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
             label: Some("chaos_game"),
@@ -429,10 +433,12 @@ impl GpuChaosGame {
             restart: args.restart as u32,
             threads_per_row: THREADS_PER_ROW,
             _pad: 0,
+            lens: v.lens.uniform(),
         };
         queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
         let program = if self.uniform_tables { &mut self.uniform_program } else { &mut self.storage_program };
-        let chaos_index = program.chaos_pipeline(device, (mode_index(v.mode), self.has_julia, self.shape));
+        let chaos_index =
+            program.chaos_pipeline(device, (mode_index(v.mode), self.has_julia, self.shape, v.lens.is_on()));
         let program = &*program;
         if self.bind_group.is_none() {
             let buffers = [

@@ -15,7 +15,7 @@ use glam::DVec3;
 use crate::camera::{OrbitCamera, Projection};
 use crate::chaos_game::CompiledIfs;
 use crate::scene::spec::SplatMode;
-use crate::splat::SplatView;
+use crate::splat::{Lens, SplatView};
 
 use super::chaos_game::{FrameArgs, GpuChaosGame};
 use super::resolve::{GpuResolve, LightRows};
@@ -44,6 +44,11 @@ pub struct ProgressiveSettings {
     pub max_splats: u64,
     /// Steps not splatted after a scene edit while the kept points settle on the new attractor.
     pub settle_steps: u32,
+    // Depth of field (`crate::splat::lens`).
+    /// Thin-lens radius in scene units; 0: none.
+    pub aperture: f32,
+    /// View distance in focus; None: the camera's distance to its target.
+    pub focus_distance: Option<f32>,
 }
 
 impl Default for ProgressiveSettings {
@@ -60,6 +65,8 @@ impl Default for ProgressiveSettings {
             point_radius_px: 0,
             max_splats: 1 << 30,
             settle_steps: 8,
+            aperture: 0.0,
+            focus_distance: None,
         }
     }
 }
@@ -112,10 +119,12 @@ fn same_view(a: &SplatView, b: &SplatView) -> bool {
         && a.mode == b.mode
         && a.depth_cue == b.depth_cue
         && a.background == b.background
+        && a.lens == b.lens
 }
 
 impl Progressive {
     pub fn new(ctx: &GpuContext, settings: ProgressiveSettings, width: u32, height: u32) -> Result<Self, GpuError> {
+        crate::splat::lens::check(settings.aperture, settings.focus_distance)?;
         if settings.point_count as u64 > ctx.max_points() {
             return Err(GpuError::TooManyPoints(settings.point_count as u64));
         }
@@ -171,6 +180,9 @@ impl Progressive {
         let s = &self.settings;
         let view =
             SplatView::new(camera, self.game.width, self.game.height, self.bounds, s.mode, s.depth_cue, s.background);
+        // The settings' lens was checked when they were set.
+        let lens = Lens::new(camera, self.game.height, s.aperture, s.focus_distance, s.seed).unwrap_or(Lens::NONE);
+        let view = view.with_lens(lens);
         if self.view.as_ref().is_none_or(|v| !same_view(v, &view)) {
             self.view = Some(view);
             self.clear = true;
@@ -178,6 +190,7 @@ impl Progressive {
     }
 
     pub fn set_settings(&mut self, ctx: &GpuContext, settings: ProgressiveSettings) -> Result<(), GpuError> {
+        crate::splat::lens::check(settings.aperture, settings.focus_distance)?;
         if settings.point_count != self.settings.point_count {
             if settings.point_count as u64 > ctx.max_points() {
                 return Err(GpuError::TooManyPoints(settings.point_count as u64));

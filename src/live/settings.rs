@@ -30,6 +30,11 @@ pub struct LiveSettings {
     /// Where the chaos game runs (the GPU only resolves on the CPU route). The default, `gpu`,
     /// is what `render --backend gpu` and the benchmarks run; the viewer starts on `auto`.
     pub chaos_backend: ChaosBackend,
+    // Depth of field (`crate::splat::lens`).
+    /// Thin-lens radius in scene units; 0: none.
+    pub aperture: f32,
+    /// View distance in focus; None: the camera's distance to its target.
+    pub focus_distance: Option<f32>,
 }
 
 impl Default for LiveSettings {
@@ -49,6 +54,8 @@ impl Default for LiveSettings {
             max_splats: 1 << 30,
             settle_steps: 8,
             chaos_backend: ChaosBackend::Gpu,
+            aperture: 0.0,
+            focus_distance: None,
         }
     }
 }

@@ -74,6 +74,9 @@ pub(super) struct KeyRenderToml {
     pub(super) gamma_threshold: Option<Spanned<f64>>,
     pub(super) vibrancy: Option<Spanned<f64>>,
     pub(super) highlight_power: Option<Spanned<f64>>,
+    // Depth of field.
+    pub(super) aperture: Option<Spanned<f64>>,
+    pub(super) focus_distance: Option<Spanned<f64>>,
 }
 
 impl KeyRenderToml {
@@ -222,6 +225,9 @@ pub(super) struct RenderToml {
     pub(super) estimator_radius: Option<Spanned<f64>>,
     pub(super) estimator_minimum: Option<Spanned<f64>>,
     pub(super) estimator_curve: Option<Spanned<f64>>,
+    // Depth of field.
+    pub(super) aperture: Option<Spanned<f64>>,
+    pub(super) focus_distance: Option<Spanned<f64>>,
 }
 
 impl RenderToml {

@@ -181,6 +181,11 @@ pub struct RenderSettings {
     /// flam3's adaptive density estimation (density mode; `src/resolve/density_estimation.rs`);
     /// None: off.
     pub density_estimation: Option<DensityEstimation>,
+    // Depth of field (`crate::splat::lens`).
+    /// Thin-lens radius in scene units; 0: no depth of field.
+    pub aperture: f32,
+    /// View distance that stays sharp; None: the camera's distance to its target.
+    pub focus_distance: Option<f32>,
 }
 
 /// flam3's tone controls in `[render]` (and `[key.render]`): name and range, in the order of
@@ -241,6 +246,8 @@ impl Default for RenderSettings {
             vibrancy: 1.0,
             highlight_power: -1.0,
             density_estimation: None,
+            aperture: 0.0,
+            focus_distance: None,
         }
     }
 }

@@ -144,6 +144,9 @@ pub struct RenderKey {
     /// The tone controls, in the order of `spec::TONE_FIELDS` (boxed: keys stay small enough to
     /// be held two to an undoable edit).
     pub tone: Box<[Option<f32>; 5]>,
+    // Depth of field.
+    pub aperture: Option<f32>,
+    pub focus_distance: Option<f32>,
 }
 
 #[derive(Clone, Debug, PartialEq)]

@@ -22,6 +22,7 @@ use crate::scene::spec::{
 use crate::scene::{Scene, SceneError};
 
 mod keys;
+mod lens;
 mod numbers;
 mod read;
 mod words;
@@ -664,6 +665,9 @@ impl Checker<'_> {
             }
         }
         out.density_estimation = self.density_estimation(r)?;
+        let (aperture, focus_distance) = self.lens(&r.aperture, &r.focus_distance, "render")?;
+        out.aperture = aperture.unwrap_or(0.0);
+        out.focus_distance = focus_distance;
         Ok(out)
     }
 }
