@@ -55,6 +55,9 @@ struct ChaosParams {
     // depth fraction from the light, 1; `ShadowView::map_from_world` in src/splat/shadow.rs).
     shadow_side: u32,
     shadow_from_world: mat4x4<f32>,
+    // Depth of field (`Lens::uniform` in src/splat/lens.rs): x: lens radius in pixels, y: 1 /
+    // focus distance, z: 1 in perspective, 0 in parallel projection, w: the seed's bits.
+    lens: vec4<f32>,
 }
 
 // Pipeline constants (src/gpu/chaos_game.rs makes one pipeline per splat mode and per IFS
@@ -78,6 +81,8 @@ override SINGLE_SELECTION_CELL: bool = false;
 // Every splatted point also goes into the key light's shadow map (`splat_shadow`); off, the
 // shadow map is neither read nor written.
 override SHADOWED: bool = false;
+// Depth of field on (aperture > 0): false compiles the pinhole splat.
+override LENS: bool = false;
 
 const KIND_JULIA: u32 = 1u;
 const SELECT_BITS: u32 = 24u;
@@ -228,15 +233,48 @@ fn is_finite3(p: vec3<f32>) -> bool {
     return all(abs(p) < vec3<f32>(3.0e38));
 }
 
-// Splats one point (`Framebuffer::consume` with `SplatView::project`).
+// Depth of field, twin of src/splat/lens.rs (`lens_sample`, `project_through_lens`).
+const LENS_TRIES: u32 = 16u;
+
+// The lens sample of point `p`: a point of the unit disk drawn by rejection from a PCG seeded
+// with a hash of the point's bits and the seed.
+fn lens_sample(seed: u32, p: vec3<f32>) -> vec2<f32> {
+    var rng = pcg_hash(bitcast<u32>(p.z) ^ pcg_hash(bitcast<u32>(p.y) ^ pcg_hash(bitcast<u32>(p.x) ^ pcg_hash(seed))));
+    for (var k = 0u; k < LENS_TRIES; k += 1u) {
+        let u = 2.0 * pcg_next_f32(&rng) - 1.0;
+        let v = 2.0 * pcg_next_f32(&rng) - 1.0;
+        if u * u + v * v <= 1.0 {
+            return vec2<f32>(u, v);
+        }
+    }
+    return vec2<f32>(0.0);
+}
+
+// The pixel offset of point `p` (view depth `q_z`, 1 / w `inv_w`) seen through its lens sample.
+fn lens_offset_px(p: vec3<f32>, q_z: f32, inv_w: f32) -> vec2<f32> {
+    let lens = params.lens;
+    let defocus = select(q_z * lens.y - 1.0, lens.y - inv_w, lens.z != 0.0);
+    let r = lens.x * defocus;
+    let s = lens_sample(bitcast<u32>(lens.w), p);
+    // Pixel y grows downwards, the lens's v upwards.
+    return vec2<f32>(s.x * r, -(s.y * r));
+}
+
+// Splats one point (`Framebuffer::consume` with `SplatView::project`, or
+// `lens::project_through_lens` when LENS).
 fn splat(p: vec3<f32>, fi: u32) {
     let q = params.pixel_from_world * vec4<f32>(p, 1.0);
     if !(q.w > 0.0) {
         return;
     }
     let inv_w = 1.0 / q.w;
-    let x = q.x * inv_w;
-    let y = q.y * inv_w;
+    var x = q.x * inv_w;
+    var y = q.y * inv_w;
+    if LENS {
+        let offset = lens_offset_px(p, q.z, inv_w);
+        x += offset.x;
+        y += offset.y;
+    }
     if !(x >= 0.0 && y >= 0.0 && x < f32(params.width) && y < f32(params.height)) {
         return;
     }

@@ -16,7 +16,7 @@ use crate::model::Ifs;
 use crate::resolve::ResolveStyle;
 use crate::scene::Scene;
 use crate::scene::spec::RenderSettings;
-use crate::splat::{Framebuffer, SharedFramebuffer, SplatView};
+use crate::splat::{Framebuffer, Lens, SharedFramebuffer, SplatView};
 
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum ShotError {
@@ -24,6 +24,8 @@ pub enum ShotError {
     NoFunctions { t_secs: f64 },
     #[error(transparent)]
     Points(#[from] PlanError),
+    #[error(transparent)]
+    Lens(#[from] crate::splat::lens::LensError),
 }
 
 /// How a shot's camera is chosen.
@@ -92,7 +94,8 @@ impl Shot {
             settings.mode,
             settings.depth_cue,
             settings.background,
-        );
+        )
+        .with_lens(lens_of(&camera, settings)?);
         let style = ResolveStyle::of(settings, scene.domain.dimension());
         let view = with_shadow_of(view, &style, &camera, bounds);
         Ok(Self { t_secs, settings: settings.clone(), ifs, compiled, bounds, camera, view, plan, stream: 0, style })
@@ -168,6 +171,11 @@ impl Shot {
 /// `view` with the shadow map that `style` needs (none where it casts no shadows).
 fn with_shadow_of(view: SplatView, style: &ResolveStyle, camera: &OrbitCamera, bounds: (DVec3, DVec3)) -> SplatView {
     if style.casts_shadows(view.mode) { view.with_shadow(camera, bounds, style.key_light()) } else { view }
+}
+
+/// The depth-of-field lens of `settings` (aperture, focus distance, seed) for `camera`.
+pub fn lens_of(camera: &OrbitCamera, settings: &RenderSettings) -> Result<Lens, crate::splat::lens::LensError> {
+    Lens::new(camera, settings.height, settings.aperture, settings.focus_distance, settings.seed)
 }
 
 /// How a CPU render accumulates its points.

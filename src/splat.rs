@@ -18,11 +18,13 @@ use crate::camera::OrbitCamera;
 use crate::chaos_game::{PointBatch, PointSink};
 use crate::scene::spec::SplatMode;
 
+pub mod lens;
 pub mod shadow;
 pub mod shared;
 #[cfg(target_arch = "x86_64")]
 mod x86;
 
+pub use lens::Lens;
 pub use shadow::ShadowView;
 pub use shared::SharedFramebuffer;
 
@@ -48,6 +50,9 @@ pub struct SplatView {
     // Shadows (`splat/shadow.rs`).
     /// The key light's shadow map, splatted from the same points; None: no shadows.
     pub shadow: Option<ShadowView>,
+    // Depth of field (`lens.rs`).
+    /// The thin lens the points are seen through ([`Lens::NONE`]: a pinhole).
+    pub lens: Lens,
 }
 
 impl SplatView {
@@ -72,7 +77,7 @@ impl SplatView {
         let r2 = -row(&view_from_world, 2);
         let r3 = row(&clip_from_world, 3);
         let pixel_from_world = Mat4::from_cols(r0, r1, r2, r3).transpose();
-        Self { width, height, pixel_from_world, near, far, mode, depth_cue, background, shadow: None }
+        Self { width, height, pixel_from_world, near, far, mode, depth_cue, background, shadow: None, lens: Lens::NONE }
     }
 
     /// This view with a shadow map of the key light in direction `to_light_view` (view space)
@@ -94,6 +99,11 @@ impl SplatView {
         let shadow =
             (self.mode == SplatMode::Closest).then(|| ShadowView::new(camera, bounds, to_light_view, side_px.max(4)));
         Self { shadow, ..self }
+    }
+
+    /// This view seen through `lens` (depth of field, `lens.rs`).
+    pub fn with_lens(self, lens: Lens) -> Self {
+        Self { lens, ..self }
     }
 
     /// Pixel index and depth fraction t in [0, 1] of a world point, if it lands in the image.
@@ -239,6 +249,11 @@ impl Pixels for OwnPixels<'_> {
 /// splat where the CPU has it, else the portable one; both give the same updates.
 #[inline]
 pub(crate) fn splat_into(view: &SplatView, colors: &[[f32; 3]], batch: PointBatch<'_>, out: &mut impl Pixels) {
+    // Depth of field (aperture > 0): the scalar lens splat; otherwise untouched.
+    if view.lens.is_on() {
+        splat_projected(view, colors, batch, out, lens::project_through_lens);
+        return;
+    }
     #[cfg(target_arch = "x86_64")]
     if x86::supported(view) {
         x86::splat(view, colors, batch, out);
@@ -250,12 +265,25 @@ pub(crate) fn splat_into(view: &SplatView, colors: &[[f32; 3]], batch: PointBatc
 /// The splat without vector code (the reference for the vector path, which must give the
 /// same updates).
 pub(crate) fn splat_portable(view: &SplatView, colors: &[[f32; 3]], batch: PointBatch<'_>, out: &mut impl Pixels) {
+    splat_projected(view, colors, batch, out, SplatView::project);
+}
+
+/// The portable splat with the projection `project` (the pinhole [`SplatView::project`], or
+/// [`lens::project_through_lens`]).
+#[inline(always)]
+pub(crate) fn splat_projected(
+    view: &SplatView,
+    colors: &[[f32; 3]],
+    batch: PointBatch<'_>,
+    out: &mut impl Pixels,
+    project: impl Fn(&SplatView, Vec3) -> Option<(usize, f32)>,
+) {
     let v = *view;
     match v.mode {
         SplatMode::Closest => {
             let scale = ((1u32 << DEPTH_BITS) - 1) as f32;
             for (p, &fi) in batch.points().zip(batch.functions) {
-                if let Some((idx, t)) = v.project(p) {
+                if let Some((idx, t)) = project(&v, p) {
                     // t is in [0, 1] or NaN (a non-finite point); NaN goes to 0 as
                     // with a saturating `as u32`.
                     let d = t * scale;
@@ -269,7 +297,7 @@ pub(crate) fn splat_portable(view: &SplatView, colors: &[[f32; 3]], batch: Point
             let colors: Vec<[f32; 3]> = colors.iter().map(|c| c.map(|x| x * COLOR_SCALE)).collect();
             let bg = v.background.map(|x| x * COLOR_SCALE);
             for (p, &fi) in batch.points().zip(batch.functions) {
-                if let Some((idx, t)) = v.project(p) {
+                if let Some((idx, t)) = project(&v, p) {
                     let c = colors[fi as usize];
                     let k = v.depth_cue * t;
                     let add = [0, 1, 2].map(|ch| (c[ch] + (bg[ch] - c[ch]) * k + 0.5) as u32);

@@ -12,6 +12,7 @@ mod bench_render;
 mod export;
 mod image_args;
 mod info;
+mod lens_args;
 mod light_args;
 mod merge;
 mod record;

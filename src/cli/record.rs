@@ -79,6 +79,9 @@ pub struct RecordArgs {
     /// The key light's shadows and direction over the scene's and its keys'.
     #[command(flatten)]
     light: super::light_args::LightArgs,
+    /// Depth of field over the scene's and its keys'.
+    #[command(flatten)]
+    lens: super::lens_args::LensArgs,
 }
 
 /// `nlifs snapshot`'s options, for `--renderer raytrace` (its defaults where left out).
@@ -183,6 +186,7 @@ pub fn record(args: RecordArgs) -> anyhow::Result<()> {
     let mut scene = load(&args.scene)?;
     args.tone.apply_to_scene(&mut scene);
     args.light.apply_to_scene(&mut scene);
+    args.lens.apply_to_scene(&mut scene);
     if let Some(de) = args.density_estimation {
         scene.render.density_estimation = de.0;
     }

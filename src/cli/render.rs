@@ -62,6 +62,9 @@ pub struct RenderArgs {
     /// The key light's shadows and direction over the scene's.
     #[command(flatten)]
     light: super::light_args::LightArgs,
+    /// Depth of field over the scene's.
+    #[command(flatten)]
+    lens: super::lens_args::LensArgs,
     /// Drawn point radius in pixels: each pixel shows the nearest point within it (closest mode).
     #[arg(long, value_name = "PX", default_value_t = 0,
           value_parser = clap::value_parser!(u32).range(0..=MAX_POINT_RADIUS_PX as i64))]
@@ -146,6 +149,7 @@ pub fn render(args: RenderArgs) -> anyhow::Result<()> {
     settings.occlusion = args.occlusion.or(settings.occlusion);
     args.tone.apply(&mut settings);
     args.light.apply(&mut settings);
+    args.lens.apply(&mut settings);
     if let Some(de) = args.density_estimation {
         settings.density_estimation = de.0;
     }

@@ -161,6 +161,7 @@ pub fn run(scene: &Scene, points: u32, steps: u32, frames: u32) -> Result<BenchR
     let shot = Shot::prepare(scene, 0.0, &scene.render, Framing::Scene, None).map_err(|e| match e {
         ShotError::NoFunctions { .. } => GpuError::NoFunctions,
         ShotError::Points(PlanError::TooManyPoints { points }) => GpuError::TooManyPoints(points),
+        ShotError::Lens(e) => GpuError::Lens(e),
     })?;
     let (ifs, bounds, camera) = (&shot.compiled, shot.bounds, shot.camera);
     let (width, height) = (1280, 720);

@@ -50,8 +50,11 @@ pub struct ChaosParams {
     pub shadow_side: u32,
     /// Rows: texel x, texel y, depth fraction, 1 (`ShadowView::map_from_world`).
     pub shadow_from_world: [[f32; 4]; 4],
+    // Depth of field.
+    /// [`crate::splat::Lens::uniform`].
+    pub lens: [f32; 4],
 }
-const _: () = assert!(std::mem::size_of::<ChaosParams>() == 272);
+const _: () = assert!(std::mem::size_of::<ChaosParams>() == 288);
 
 /// The shader's number for a splat mode.
 pub fn mode_index(mode: SplatMode) -> u32 {
@@ -210,8 +213,8 @@ struct Program {
 }
 
 /// What a chaos-game pipeline is specialized for: splat mode (shader number), Julia functions
-/// present, IFS shape, shadow map splatted.
-type PipelineKey = (u32, bool, IfsShape, bool);
+/// present, IFS shape, shadow map splatted, depth of field on.
+type PipelineKey = (u32, bool, IfsShape, bool, bool);
 
 impl Program {
     fn new(device: &wgpu::Device, name: &str, tables: wgpu::BufferBindingType) -> Self {
@@ -266,11 +269,11 @@ impl Program {
         if let Some(i) = self.chaos_pipelines.iter().position(|(k, _)| *k == key) {
             return i;
         }
-        let (mode, has_julia, shape, shadowed) = key;
+        let (mode, has_julia, shape, shadowed, lens) = key;
         let constants: Vec<(&str, f64)> = [("SPLAT_MODE", mode as f64), ("HAS_JULIA", has_julia as u32 as f64)]
             .into_iter()
             .chain(shape.constants())
-            .chain([("SHADOWED", shadowed as u32 as f64)])
+            .chain([("SHADOWED", shadowed as u32 as f64), ("LENS", lens as u32 as f64)])
             .collect();
         let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
             label: Some("chaos_game"),
@@ -460,11 +463,13 @@ impl GpuChaosGame {
             threads_per_row: THREADS_PER_ROW,
             shadow_side: v.shadow.map_or(0, |s| s.side_px),
             shadow_from_world: v.shadow.map_or([[0.0; 4]; 4], |s| s.map_from_world.to_cols_array_2d()),
+            lens: v.lens.uniform(),
         };
         queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
         let program = if self.uniform_tables { &mut self.uniform_program } else { &mut self.storage_program };
         let shadowed = v.shadow.is_some();
-        let chaos_index = program.chaos_pipeline(device, (mode_index(v.mode), self.has_julia, self.shape, shadowed));
+        let key = (mode_index(v.mode), self.has_julia, self.shape, shadowed, v.lens.is_on());
+        let chaos_index = program.chaos_pipeline(device, key);
         let program = &*program;
         if self.bind_group.is_none() {
             let buffers = [

@@ -33,13 +33,19 @@ pub enum GpuError {
         "a {width}×{height} image needs a {bytes}-byte accumulation buffer on the GPU, more than the {limit} bytes {adapter} can bind; render it on the CPU (--backend cpu) or smaller"
     )]
     FramebufferTooLarge { width: u32, height: u32, bytes: u64, limit: u64, adapter: String },
+    /// Bad depth-of-field settings.
+    #[error(transparent)]
+    Lens(#[from] crate::splat::lens::LensError),
 }
 
 impl GpuError {
     /// The request cannot be met on this machine's GPU whatever is tried again (a size or a
     /// point count past its limits, no adapter): the command line's bad input, exit 2.
     pub fn is_bad_input(&self) -> bool {
-        matches!(self, GpuError::NoAdapter | GpuError::TooManyPoints(_) | GpuError::FramebufferTooLarge { .. })
+        matches!(
+            self,
+            GpuError::NoAdapter | GpuError::TooManyPoints(_) | GpuError::FramebufferTooLarge { .. } | GpuError::Lens(_)
+        )
     }
 }
 

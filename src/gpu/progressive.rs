@@ -15,7 +15,7 @@ use glam::DVec3;
 use crate::camera::{OrbitCamera, Projection};
 use crate::chaos_game::CompiledIfs;
 use crate::scene::spec::SplatMode;
-use crate::splat::SplatView;
+use crate::splat::{Lens, SplatView};
 
 use super::chaos_game::{FrameArgs, GpuChaosGame};
 use super::resolve::{GpuResolve, LightRows};
@@ -50,6 +50,11 @@ pub struct ProgressiveSettings {
     /// The key light's direction relative to the camera.
     pub light_yaw_deg: f32,
     pub light_pitch_deg: f32,
+    // Depth of field (`crate::splat::lens`).
+    /// Thin-lens radius in scene units; 0: none.
+    pub aperture: f32,
+    /// View distance in focus; None: the camera's distance to its target.
+    pub focus_distance: Option<f32>,
 }
 
 impl Default for ProgressiveSettings {
@@ -69,6 +74,8 @@ impl Default for ProgressiveSettings {
             shadows: 0.0,
             light_yaw_deg: crate::resolve::KEY_LIGHT_YAW_DEG,
             light_pitch_deg: crate::resolve::KEY_LIGHT_PITCH_DEG,
+            aperture: 0.0,
+            focus_distance: None,
         }
     }
 }
@@ -122,10 +129,12 @@ fn same_view(a: &SplatView, b: &SplatView) -> bool {
         && a.depth_cue == b.depth_cue
         && a.background == b.background
         && a.shadow == b.shadow
+        && a.lens == b.lens
 }
 
 impl Progressive {
     pub fn new(ctx: &GpuContext, settings: ProgressiveSettings, width: u32, height: u32) -> Result<Self, GpuError> {
+        crate::splat::lens::check(settings.aperture, settings.focus_distance)?;
         if settings.point_count as u64 > ctx.max_points() {
             return Err(GpuError::TooManyPoints(settings.point_count as u64));
         }
@@ -182,6 +191,9 @@ impl Progressive {
         let view =
             SplatView::new(camera, self.game.width, self.game.height, self.bounds, s.mode, s.depth_cue, s.background);
         let view = super::shadow::live_shadow(view, s, camera, self.bounds);
+        // The settings' lens was checked when they were set.
+        let lens = Lens::new(camera, self.game.height, s.aperture, s.focus_distance, s.seed).unwrap_or(Lens::NONE);
+        let view = view.with_lens(lens);
         if self.view.as_ref().is_none_or(|v| !same_view(v, &view)) {
             self.view = Some(view);
             self.clear = true;
@@ -189,6 +201,7 @@ impl Progressive {
     }
 
     pub fn set_settings(&mut self, ctx: &GpuContext, settings: ProgressiveSettings) -> Result<(), GpuError> {
+        crate::splat::lens::check(settings.aperture, settings.focus_distance)?;
         if settings.point_count != self.settings.point_count {
             if settings.point_count as u64 > ctx.max_points() {
                 return Err(GpuError::TooManyPoints(settings.point_count as u64));

@@ -44,6 +44,8 @@ impl From<&LiveSettings> for ProgressiveSettings {
             shadows: s.shadows,
             light_yaw_deg: s.light_yaw_deg,
             light_pitch_deg: s.light_pitch_deg,
+            aperture: s.aperture,
+            focus_distance: s.focus_distance,
         }
     }
 }

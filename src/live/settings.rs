@@ -36,6 +36,11 @@ pub struct LiveSettings {
     /// The key light's direction relative to the camera.
     pub light_yaw_deg: f32,
     pub light_pitch_deg: f32,
+    // Depth of field (`crate::splat::lens`).
+    /// Thin-lens radius in scene units; 0: none.
+    pub aperture: f32,
+    /// View distance in focus; None: the camera's distance to its target.
+    pub focus_distance: Option<f32>,
 }
 
 impl Default for LiveSettings {
@@ -58,6 +63,8 @@ impl Default for LiveSettings {
             shadows: 0.0,
             light_yaw_deg: crate::resolve::KEY_LIGHT_YAW_DEG,
             light_pitch_deg: crate::resolve::KEY_LIGHT_PITCH_DEG,
+            aperture: 0.0,
+            focus_distance: None,
         }
     }
 }

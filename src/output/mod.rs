@@ -143,6 +143,13 @@ impl Provenance {
             let de = r.density_estimation.map(|d| vec![d.max_radius_px, d.min_radius_px, d.curve]);
             extra.insert("density_estimation".into(), de.into());
         }
+        // Depth of field (`--aperture`, `--focus-distance`).
+        if r.aperture != own.aperture {
+            extra.insert("aperture".into(), r.aperture.into());
+        }
+        if r.focus_distance != own.focus_distance {
+            extra.insert("focus_distance".into(), r.focus_distance.into());
+        }
         Self { scene_toml: scene.to_toml(), t_secs, settings }
     }
 

@@ -377,6 +377,13 @@ fn settings_of(p: &Provenance, origin: &str) -> Result<RenderSettings, OutputErr
             Some(DensityEstimation { max_radius_px: d[0], min_radius_px: d[1], curve: d[2] })
         };
     }
+    // Depth of field.
+    if let Some(v) = s.get("aperture") {
+        settings.aperture = v.as_f64().ok_or_else(|| bad("aperture"))? as f32;
+    }
+    if let Some(v) = s.get("focus_distance") {
+        settings.focus_distance = v.as_f64().map(|x| x as f32);
+    }
     Ok(settings)
 }
 

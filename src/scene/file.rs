@@ -78,6 +78,9 @@ pub(super) struct KeyRenderToml {
     pub(super) shadows: Option<Spanned<f64>>,
     pub(super) light_yaw_deg: Option<Spanned<f64>>,
     pub(super) light_pitch_deg: Option<Spanned<f64>>,
+    // Depth of field.
+    pub(super) aperture: Option<Spanned<f64>>,
+    pub(super) focus_distance: Option<Spanned<f64>>,
 }
 
 impl KeyRenderToml {
@@ -235,6 +238,9 @@ pub(super) struct RenderToml {
     pub(super) shadows: Option<Spanned<f64>>,
     pub(super) light_yaw_deg: Option<Spanned<f64>>,
     pub(super) light_pitch_deg: Option<Spanned<f64>>,
+    // Depth of field.
+    pub(super) aperture: Option<Spanned<f64>>,
+    pub(super) focus_distance: Option<Spanned<f64>>,
 }
 
 impl RenderToml {

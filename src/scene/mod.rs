@@ -153,6 +153,13 @@ impl Scene {
                 *slot = v[0].clamp(lo, hi) as f32;
             }
         }
+        // Depth of field: aperture ≥ 0, focus distance > 0.
+        if let Some(v) = tl.channel_at(t_secs, |k| k.render.aperture.map(|v| vec![v as f64])) {
+            out.aperture = v[0].max(0.0) as f32;
+        }
+        if let Some(v) = tl.channel_at(t_secs, |k| k.render.focus_distance.map(|v| vec![v as f64])) {
+            out.focus_distance = Some((v[0] as f32).max(f32::MIN_POSITIVE));
+        }
         out
     }
 

@@ -188,6 +188,11 @@ pub struct RenderSettings {
     /// towards the right, and above the view's horizontal plane.
     pub light_yaw_deg: f32,
     pub light_pitch_deg: f32,
+    // Depth of field (`crate::splat::lens`).
+    /// Thin-lens radius in scene units; 0: no depth of field.
+    pub aperture: f32,
+    /// View distance that stays sharp; None: the camera's distance to its target.
+    pub focus_distance: Option<f32>,
 }
 
 /// The key light's fields in `[render]` (and `[key.render]`): name and range, in the order of
@@ -263,6 +268,8 @@ impl Default for RenderSettings {
             shadows: None,
             light_yaw_deg: crate::resolve::KEY_LIGHT_YAW_DEG,
             light_pitch_deg: crate::resolve::KEY_LIGHT_PITCH_DEG,
+            aperture: 0.0,
+            focus_distance: None,
         }
     }
 }

@@ -147,6 +147,9 @@ pub struct RenderKey {
     // Shadows (`crate::resolve::shadow`).
     /// The key light's fields, in the order of `spec::LIGHT_FIELDS`.
     pub light: [Option<f32>; 3],
+    // Depth of field.
+    pub aperture: Option<f32>,
+    pub focus_distance: Option<f32>,
 }
 
 #[derive(Clone, Debug, PartialEq)]

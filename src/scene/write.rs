@@ -250,6 +250,13 @@ impl Scene {
                 de.max_radius_px, de.min_radius_px, de.curve
             );
         }
+        // Depth of field, written only when on or set.
+        if r.aperture != 0.0 {
+            let _ = writeln!(out, "aperture = {:?}", r.aperture);
+        }
+        if let Some(f) = r.focus_distance {
+            let _ = writeln!(out, "focus_distance = {f:?}");
+        }
         if let Some(tl) = &self.timeline {
             out += "\n[timeline]\n";
             let _ = writeln!(out, "loop = \"{}\"\nduration_secs = {}", tl.loop_mode.name(), num(tl.duration_secs));
@@ -290,6 +297,11 @@ impl Scene {
                         }
                     }
                     for ((name, _, _), v) in LIGHT_FIELDS.into_iter().zip(kr.light.iter()) {
+                        if let Some(v) = v {
+                            let _ = writeln!(out, "{name} = {v:?}");
+                        }
+                    }
+                    for (name, v) in [("aperture", kr.aperture), ("focus_distance", kr.focus_distance)] {
                         if let Some(v) = v {
                             let _ = writeln!(out, "{name} = {v:?}");
                         }

@@ -387,7 +387,12 @@ impl ViewerState {
                 | Command::SetConfigDir(_)
                 | Command::SetToolSupport { .. }
                 | Command::DismissViewError => self.file_command(command, &mut changes),
+                Command::SetLens { aperture, focus_distance } => edited |= self.set_lens(aperture, focus_distance),
             }
+        }
+        // Depth of field follows the scene at the playhead (`lens.rs`).
+        if edited || time_moved || changes.scene_replaced || changes.scene_edited {
+            changes.live_settings |= self.take_scene_lens();
         }
         if edited {
             self.recompile();

@@ -232,6 +232,14 @@ pub enum Command {
     },
     /// Closes the error shown over the view.
     DismissViewError,
+
+    // Depth of field (`lens.rs`).
+    /// The scene's lens: aperture (scene units, 0: none) and focus distance (None: the
+    /// camera's distance to its target); one undo step.
+    SetLens {
+        aperture: f32,
+        focus_distance: Option<f32>,
+    },
 }
 
 /// What the user answered when closing with unsaved edits.

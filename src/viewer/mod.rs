@@ -39,6 +39,8 @@ mod input;
 pub mod job_plan;
 pub mod jobs;
 pub mod jobs_ui;
+pub mod lens;
+pub mod lens_ui;
 pub mod nesting_ui;
 pub mod overlay_ui;
 pub mod picking;
@@ -343,7 +345,10 @@ impl ApplicationHandler for App {
                     if pressed == ElementState::Pressed { PointerEvent::Press(b) } else { PointerEvent::Release(b) };
                 let ctx = pointer_context(&self.state, &gfx.egui_ctx, self.cursor);
                 if self.router.route(event, &ctx) == Route::Camera {
-                    if pressed == ElementState::Pressed {
+                    let ctrl = self.modifiers.control_key() && pressed == ElementState::Pressed;
+                    if let Some(c) = lens_ui::focus_click(&self.state, &gfx.live, &gfx.ctx, button, ctrl, self.cursor) {
+                        self.commands.push(c);
+                    } else if pressed == ElementState::Pressed {
                         let picked = (button == MouseButton::Left)
                             .then_some(self.cursor)
                             .flatten()

@@ -261,6 +261,7 @@ impl Checker<'_> {
                     *slot = Some(self.in_range(v, &field(&format!("render.{name}")), lo, hi)? as f32);
                 }
             }
+            (render.aperture, render.focus_distance) = self.lens(&r.aperture, &r.focus_distance, &field("render"))?;
         }
         Ok(Key { t_secs, interpolation, ease, functions: keyed, camera, render })
     }

@@ -22,6 +22,7 @@ use crate::scene::spec::{
 use crate::scene::{Scene, SceneError};
 
 mod keys;
+mod lens;
 mod numbers;
 mod read;
 mod words;
@@ -677,6 +678,9 @@ impl Checker<'_> {
                 *slot = self.in_range(v, &format!("render.{name}"), lo, hi)? as f32;
             }
         }
+        let (aperture, focus_distance) = self.lens(&r.aperture, &r.focus_distance, "render")?;
+        out.aperture = aperture.unwrap_or(0.0);
+        out.focus_distance = focus_distance;
         Ok(out)
     }
 }
