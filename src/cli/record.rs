@@ -76,6 +76,9 @@ pub struct RecordArgs {
     /// flam3's tone controls (average and density modes) over the scene's and its keys'.
     #[command(flatten)]
     tone: super::tone_args::ToneArgs,
+    /// Colour by function or by a palette (`--color`, `--palette`).
+    #[command(flatten)]
+    color: super::color_args::ColorArgs,
 }
 
 /// `nlifs snapshot`'s options, for `--renderer raytrace` (its defaults where left out).
@@ -179,6 +182,7 @@ enum RendererArg {
 pub fn record(args: RecordArgs) -> anyhow::Result<()> {
     let mut scene = load(&args.scene)?;
     args.tone.apply_to_scene(&mut scene);
+    args.color.apply(&mut scene.render)?;
     if let Some(de) = args.density_estimation {
         scene.render.density_estimation = de.0;
     }

@@ -171,6 +171,8 @@ pub(super) struct FunctionToml {
     pub(super) offset: Option<Spanned<Vec<f64>>>,
     pub(super) c: Option<Spanned<Vec<f64>>>,
     pub(super) sign: Option<Spanned<f64>>,
+    // Palette colour:
+    pub(super) palette_index: Option<Spanned<f64>>,
 }
 
 #[derive(Deserialize)]
@@ -222,6 +224,9 @@ pub(super) struct RenderToml {
     pub(super) estimator_radius: Option<Spanned<f64>>,
     pub(super) estimator_minimum: Option<Spanned<f64>>,
     pub(super) estimator_curve: Option<Spanned<f64>>,
+    // Colour by a colour coordinate:
+    pub(super) color: Option<Spanned<String>>,
+    pub(super) palette: Option<Spanned<String>>,
 }
 
 impl RenderToml {

@@ -11,6 +11,7 @@ use crate::camera::Projection;
 use crate::color;
 use crate::model::builder::{Builder, Step};
 use crate::model::{AffineMap, JuliaMap};
+use crate::palette::Palette;
 
 /// The most points one render draws, in the scene (`render.points`, `key.render.points`) and on
 /// the command line (`render --points`, `record --points-per-frame`), so that both refuse the
@@ -108,6 +109,9 @@ pub struct FunctionSpec {
     pub probability: Option<f64>,
     pub enabled: bool,
     pub def: FunctionDef,
+    // Palette colour (`src/palette.rs`):
+    /// The colour coordinate c_i in [0, 1]; None: i / (n − 1) (`palette::default_index`).
+    pub palette_index: Option<f64>,
 }
 
 /// Camera settings from the scene; unset fields are derived from the attractor's bounds.
@@ -181,6 +185,37 @@ pub struct RenderSettings {
     /// flam3's adaptive density estimation (density mode; `src/resolve/density_estimation.rs`);
     /// None: off.
     pub density_estimation: Option<DensityEstimation>,
+    // Colour by a colour coordinate (`src/palette.rs`, `src/chaos_game/color_coord.rs`):
+    /// Per-function colour or a palette indexed by the colour coordinate.
+    pub color: ColorMode,
+    /// The palette of `color = "palette"`; None: `palette::DEFAULT`.
+    pub palette: Option<Palette>,
+}
+
+/// How points are coloured (`[render] color`): by their function's colour, or by the palette
+/// entry of the colour coordinate they carry through the chaos game.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum ColorMode {
+    #[default]
+    Function,
+    Palette,
+}
+
+impl ColorMode {
+    pub fn parse(s: &str) -> Option<Self> {
+        match s {
+            "function" => Some(ColorMode::Function),
+            "palette" => Some(ColorMode::Palette),
+            _ => None,
+        }
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            ColorMode::Function => "function",
+            ColorMode::Palette => "palette",
+        }
+    }
 }
 
 /// flam3's tone controls in `[render]` (and `[key.render]`): name and range, in the order of
@@ -241,6 +276,8 @@ impl Default for RenderSettings {
             vibrancy: 1.0,
             highlight_power: -1.0,
             density_estimation: None,
+            color: ColorMode::Function,
+            palette: None,
         }
     }
 }

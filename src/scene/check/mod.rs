@@ -23,6 +23,7 @@ use crate::scene::{Scene, SceneError};
 
 mod keys;
 mod numbers;
+mod palette;
 mod read;
 mod words;
 
@@ -368,6 +369,7 @@ impl Checker<'_> {
             probability,
             enabled: f.enabled.unwrap_or(true),
             def,
+            palette_index: self.palette_index(f.palette_index.as_ref(), &field("palette_index"))?,
         })
     }
 
@@ -664,6 +666,7 @@ impl Checker<'_> {
             }
         }
         out.density_estimation = self.density_estimation(r)?;
+        self.color_fields(r, &mut out)?;
         Ok(out)
     }
 }
