@@ -387,6 +387,10 @@ impl ViewerState {
                 | Command::SetConfigDir(_)
                 | Command::SetToolSupport { .. }
                 | Command::DismissViewError => self.file_command(command, &mut changes),
+                // Palette colour, undoable, in `palette_edit.rs`.
+                Command::SetPaletteIndex { .. } | Command::SetColorMode(_) | Command::SetPalette(_) => {
+                    edited |= self.palette_command(command)
+                }
             }
         }
         if edited {

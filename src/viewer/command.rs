@@ -232,6 +232,18 @@ pub enum Command {
     },
     /// Closes the error shown over the view.
     DismissViewError,
+
+    // Palette colour (`palette_ui.rs`, applied in `palette_edit.rs`).
+    /// Function `function`'s colour coordinate c_i (None: the default spread); part of the
+    /// running gesture, so that a slider drag is one undo step.
+    SetPaletteIndex {
+        function: usize,
+        index: Option<f64>,
+    },
+    /// `[render] color` (one undo step).
+    SetColorMode(crate::scene::spec::ColorMode),
+    /// `[render] palette`: a built-in palette's name (one undo step).
+    SetPalette(String),
 }
 
 /// What the user answered when closing with unsaved edits.
