@@ -3,7 +3,8 @@
 // Prepended with `rng.wgsl` and one of `ifs_tables_uniform.wgsl` / `ifs_tables_storage.wgsl`
 // (the compiled IFS tables and their accessors) by `src/gpu/shaders.rs`.
 //
-// Every invocation owns one persistent point (xyz, w: the function that mapped it last). Per
+// Every invocation owns one persistent point (xyz, w: the function that mapped it last, or with
+// `PALETTE` its colour coordinate). Per
 // frame it draws from stream (seed, frame, thread), advances `steps` times and splats every step
 // from `skip_steps` on into the accumulation buffer: closest mode keeps the minimum of
 // (depth24 << 8) | function per pixel, average and density modes add depth-cued colour × 255 and
@@ -83,6 +84,12 @@ override SINGLE_SELECTION_CELL: bool = false;
 override SHADOWED: bool = false;
 // Depth of field on (aperture > 0): false compiles the pinhole splat.
 override LENS: bool = false;
+// Colour by the colour coordinate (`[render] color = "palette"`): the points carry c ← (c + c_i)
+// / 2 and splat the palette entry round(c · 255), the colour table being the palette; false
+// compiles to function colour.
+override PALETTE: bool = false;
+// The colour coordinate at a (re)start, `C_START` in src/chaos_game/color_coord.rs.
+const C_START: f32 = 0.5;
 
 const KIND_JULIA: u32 = 1u;
 const SELECT_BITS: u32 = 24u;
@@ -329,20 +336,26 @@ fn chaos_game(@builtin(global_invocation_id) id: vec3<u32>) {
     let stored = points[thread];
     var p = stored.xyz;
     var fi = u32(stored.w);
+    // Palette colour: w holds the colour coordinate c instead (src/chaos_game/color_coord.rs).
+    var c = select(C_START, stored.w, stored.w >= 0.0 && stored.w <= 1.0);
     if params.restart != 0u || !is_finite3(p) {
         p = start_point(&rng);
+        c = C_START;
     }
     for (var s = 0u; s < params.steps; s += 1u) {
         fi = select_function(selection_cell(p), pcg_next_u32(&rng));
         p = map_point(fi, p);
+        if PALETTE {
+            c = (c + color_coord_at(fi)) * 0.5;
+        }
         if s >= params.skip_steps {
-            splat(p, fi);
+            splat(p, select(fi, u32(c * COLOR_SCALE + 0.5), PALETTE));
             if SHADOWED {
                 splat_shadow(p);
             }
         }
     }
-    points[thread] = vec4<f32>(p, f32(fi));
+    points[thread] = vec4<f32>(p, select(f32(fi), c, PALETTE));
 }
 
 // Empties the accumulation buffer: the closest key to u32::MAX, sums to zero.

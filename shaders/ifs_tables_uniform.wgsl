@@ -41,3 +41,8 @@ fn threshold_at(i: u32) -> u32 {
 fn color_at(i: u32) -> vec3<f32> {
     return colors[i].rgb;
 }
+
+// The colour coordinate c_i of function `i` (palette colour; 0 in function colour).
+fn color_coord_at(i: u32) -> f32 {
+    return colors[i].w;
+}

@@ -32,6 +32,7 @@ use glam::Vec3;
 use crate::model::Ifs;
 use crate::rng::Pcg32;
 
+mod color_coord;
 mod compile;
 mod fast;
 mod lanes;
@@ -43,6 +44,7 @@ mod tests;
 #[cfg(target_arch = "x86_64")]
 mod x86;
 
+pub use color_coord::{C_START, step_color};
 pub use compile::SelectionTable;
 pub use plan::{ChunkPlan, PlanError};
 pub use run::{
@@ -124,6 +126,9 @@ pub struct CompiledIfs {
     /// them (see `chaos_game/x86.rs`).
     #[cfg(target_arch = "x86_64")]
     simd: Option<x86::SimdKernel>,
+    // Palette colour (`chaos_game/color_coord.rs`):
+    /// Each compiled function's colour coordinate c_i in [0, 1]; None: function colour.
+    pub color_coords: Option<Vec<f32>>,
 }
 
 impl CompiledIfs {
@@ -168,7 +173,17 @@ impl CompiledIfs {
             lanes,
             #[cfg(target_arch = "x86_64")]
             simd,
+            color_coords: None,
         })
+    }
+
+    /// The IFS coloured by a colour coordinate: `coords[i]` is compiled function i's c_i in
+    /// [0, 1] (clamped), and the colour table becomes the palette's entries; the points then
+    /// carry `palette::index_of(c)` where they carried their function.
+    pub fn with_palette(self, coords: Vec<f32>, palette: &crate::palette::Palette) -> Self {
+        assert_eq!(coords.len(), self.functions.len(), "one colour coordinate per compiled function");
+        let coords = coords.into_iter().map(|c| if c.is_finite() { c.clamp(0.0, 1.0) } else { 0.5 }).collect();
+        Self { color_coords: Some(coords), colors: palette.samples.clone(), ..self }
     }
     /// Maps `p` by compiled function `fi` (f32; the twin of `map_point` in the shader).
     #[inline(always)]

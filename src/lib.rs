@@ -14,6 +14,7 @@ pub mod io;
 pub mod live;
 pub mod model;
 pub mod output;
+pub mod palette;
 pub mod raytrace;
 pub mod record;
 pub mod render;

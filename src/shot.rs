@@ -13,9 +13,10 @@ use glam::{DVec3, Vec3};
 use crate::camera::OrbitCamera;
 use crate::chaos_game::{self, ChunkPlan, CompiledIfs, PlanError, PointSink};
 use crate::model::Ifs;
+use crate::palette::{self, Palette};
 use crate::resolve::ResolveStyle;
 use crate::scene::Scene;
-use crate::scene::spec::RenderSettings;
+use crate::scene::spec::{ColorMode, RenderSettings};
 use crate::splat::{Framebuffer, Lens, SharedFramebuffer, SplatView};
 
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
@@ -26,6 +27,31 @@ pub enum ShotError {
     Points(#[from] PlanError),
     #[error(transparent)]
     Lens(#[from] crate::splat::lens::LensError),
+}
+
+/// `compiled` (of `scene`'s functions) coloured as `settings.color` says: unchanged for
+/// function colour; for palette colour each compiled function gets its scene function's
+/// `palette_index` (default i / (n − 1) over all the scene's functions, so that disabling one
+/// keeps the others' colours) and the colour table becomes the palette.
+pub fn with_color_mode(compiled: CompiledIfs, scene: &Scene, settings: &RenderSettings) -> CompiledIfs {
+    if settings.color != ColorMode::Palette {
+        return compiled;
+    }
+    let n = scene.functions.len();
+    let coords = compiled
+        .source_index
+        .iter()
+        .map(|&i| scene.functions.get(i).and_then(|f| f.palette_index).unwrap_or(palette::default_index(i, n)) as f32)
+        .collect();
+    let fallback;
+    let palette = match &settings.palette {
+        Some(p) => p,
+        None => {
+            fallback = Palette::builtin(palette::DEFAULT).expect("the default palette is built in");
+            &fallback
+        }
+    };
+    compiled.with_palette(coords, palette)
 }
 
 /// How a shot's camera is chosen.
@@ -76,6 +102,7 @@ impl Shot {
     ) -> Result<Self, ShotError> {
         let ifs = scene.at(t_secs);
         let compiled = CompiledIfs::new(&ifs).ok_or(ShotError::NoFunctions { t_secs })?;
+        let compiled = with_color_mode(compiled, scene, settings);
         let plan = ChunkPlan::new(settings.points)?;
         let bounds = bounds.unwrap_or_else(|| chaos_game::attractor_bounds(&compiled, settings.seed));
         let camera = match framing {

@@ -43,6 +43,7 @@ const LAYERS: &[(&str, Layer)] = &[
     ("io", Layer::Base),
     ("simd", Layer::Base),
     ("camera", Layer::Base),
+    ("palette", Layer::Base),
     // The IFS: maps, grids, builders.
     ("model", Layer::Model),
     // Editable scene data and its format: the scene, its timeline, edits of it.

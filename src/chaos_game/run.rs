@@ -5,6 +5,7 @@
 use glam::{DVec3, Vec3, Vec3A};
 use rayon::prelude::*;
 
+use super::color_coord::{C_START, ColorCoordSink, step_color};
 use super::lanes::LaneKernel;
 use super::plan::ChunkPlan;
 use super::sink::{CollectSink, PointBatch, PointSink};
@@ -15,7 +16,8 @@ use crate::rng::Pcg32;
 
 /// Runs chunk `chunk` of a chaos game: [`ORBITS_PER_CHUNK`] orbits, `steps` points each after
 /// the transient, into `sink`. Orbit (lane) `k` of chunk `c` is chain `c · ORBITS_PER_CHUNK + k`
-/// and draws from the random stream (seed, frame, chain), as chain i of the GPU does.
+/// and draws from the random stream (seed, frame, chain), as chain i of the GPU does. With
+/// palette colour the points carry their quantized colour coordinate in place of the function.
 pub fn run_chunk(ifs: &CompiledIfs, seed: u32, frame: u32, chunk: u32, steps: usize, sink: &mut impl PointSink) {
     run_chunk_on(ifs, Path::Fastest, seed, frame, chunk, steps, sink)
 }
@@ -42,10 +44,46 @@ pub(super) fn run_chunk_on(
     steps: usize,
     sink: &mut impl PointSink,
 ) {
-    let first_chain = chunk.wrapping_mul(ORBITS_PER_CHUNK as u32);
-    let mut rngs: [Pcg32; ORBITS_PER_CHUNK] =
-        std::array::from_fn(|k| Pcg32::for_stream(seed, frame, first_chain.wrapping_add(k as u32)));
-    let mut pos: [Vec3A; ORBITS_PER_CHUNK] = std::array::from_fn(|k| ifs.start_point(&mut rngs[k]).into());
+    let ChunkChains { mut rngs, mut pos, mut colors } = ChunkChains::start(ifs, seed, frame, chunk);
+    run_chains(ifs, path, (&mut rngs, &mut pos, &mut colors), ifs.transient, steps, sink);
+}
+
+/// The chains of one chunk, borrowed: generators, positions and colour coordinates.
+type ChainsMut<'a> =
+    (&'a mut [Pcg32; ORBITS_PER_CHUNK], &'a mut [Vec3A; ORBITS_PER_CHUNK], &'a mut [f32; ORBITS_PER_CHUNK]);
+
+/// Advances the chains `skip` steps not emitted, then `steps` into `sink`, on `path`; with
+/// colour coordinates (palette colour) the skipped steps run through the colour sink, which
+/// carries c through them and drops their points (`chaos_game/color_coord.rs`).
+fn run_chains(
+    ifs: &CompiledIfs,
+    path: Path,
+    chains: ChainsMut<'_>,
+    skip: u32,
+    steps: usize,
+    sink: &mut impl PointSink,
+) {
+    let (rngs, pos, colors) = chains;
+    match &ifs.color_coords {
+        None => run_kernel(ifs, path, rngs, pos, skip, steps, sink),
+        Some(coords) => {
+            let mut colored = ColorCoordSink::new(coords, colors, skip as usize, sink);
+            run_kernel(ifs, path, rngs, pos, 0, skip as usize + steps, &mut colored);
+        }
+    }
+}
+
+/// The kernel of `path` on the orbits `rngs`, `pos` (left where they end): `skip` steps not
+/// emitted, then `steps` into `sink`.
+fn run_kernel(
+    ifs: &CompiledIfs,
+    path: Path,
+    rngs: &mut [Pcg32; ORBITS_PER_CHUNK],
+    pos: &mut [Vec3A; ORBITS_PER_CHUNK],
+    skip: u32,
+    steps: usize,
+    sink: &mut impl PointSink,
+) {
     #[cfg(target_arch = "x86_64")]
     if let Some(simd) = &ifs.simd {
         let lookup = match path {
@@ -56,15 +94,18 @@ pub(super) fn run_chunk_on(
             Path::Simd(lookup) => Some(lookup),
         };
         if let Some(lookup) = lookup {
-            let rngs = rngs.map(Pcg32::state);
-            simd.run(lookup, &rngs, &pos.map(|p| p.to_array()), ifs.transient, steps, sink);
+            let mut states = rngs.map(Pcg32::state);
+            let mut xyz = pos.map(|p| p.to_array());
+            simd.run_kept(lookup, &mut states, &mut xyz, skip, steps, sink);
+            *rngs = states.map(Pcg32::from_state);
+            *pos = xyz.map(Vec3A::from_array);
             return;
         }
     }
     #[cfg(all(test, target_arch = "x86_64"))]
     assert!(!matches!(path, Path::Simd(_)), "no vector kernel for this IFS");
     let _ = path;
-    let orbits = Orbits { rngs: &mut rngs, pos: &mut pos, transient: ifs.transient, steps };
+    let orbits = Orbits { rngs, pos, transient: skip, steps };
     run_orbits(ifs, orbits, sink);
 }
 
@@ -237,6 +278,9 @@ fn run_lanes_for<const MX: bool, const MY: bool, const MZ: bool>(
 pub struct ChunkChains {
     pub rngs: [Pcg32; ORBITS_PER_CHUNK],
     pub pos: [Vec3A; ORBITS_PER_CHUNK],
+    // Palette colour (`chaos_game/color_coord.rs`):
+    /// Lane k's colour coordinate (unused in function colour).
+    pub colors: [f32; ORBITS_PER_CHUNK],
 }
 
 impl ChunkChains {
@@ -248,7 +292,7 @@ impl ChunkChains {
         let mut rngs: [Pcg32; ORBITS_PER_CHUNK] =
             std::array::from_fn(|k| Pcg32::for_stream(seed, frame, first_chain.wrapping_add(k as u32)));
         let pos = std::array::from_fn(|k| ifs.start_point(&mut rngs[k]).into());
-        Self { rngs, pos }
+        Self { rngs, pos, colors: [C_START; ORBITS_PER_CHUNK] }
     }
 
     /// Restarts lane `lane` of chunk `chunk` as [`Self::start`] starts it for `frame` and runs
@@ -260,13 +304,18 @@ impl ChunkChains {
         let mut p = ifs.start_point(&mut rng);
         let sel = &ifs.selection;
         let adaptive = sel.cells != [1, 1, 1];
+        let mut c = C_START;
         for _ in 0..ifs.transient {
             let cell = if adaptive { sel.cell_of(p) } else { 0 };
             let fi = sel.select(cell, rng.next_u32());
             p = ifs.map_fast(fi, p);
+            if let Some(coords) = &ifs.color_coords {
+                c = step_color(c, coords[fi]);
+            }
         }
         self.rngs[lane] = rng;
         self.pos[lane] = p.into();
+        self.colors[lane] = c;
     }
 }
 
@@ -276,15 +325,6 @@ impl ChunkChains {
 /// `ifs.transient` this makes exactly the points of `run_chunk(ifs, seed, frame, c, steps, _)`,
 /// and two calls of s₁ and s₂ steps make those of one call of s₁ + s₂.
 pub fn continue_chunk(ifs: &CompiledIfs, chains: &mut ChunkChains, skip: u32, steps: usize, sink: &mut impl PointSink) {
-    #[cfg(target_arch = "x86_64")]
-    if let Some(simd) = &ifs.simd {
-        let mut rngs = chains.rngs.map(Pcg32::state);
-        let mut pos = chains.pos.map(|p| p.to_array());
-        simd.run_kept(simd.lookup, &mut rngs, &mut pos, skip, steps, sink);
-        chains.rngs = rngs.map(Pcg32::from_state);
-        chains.pos = pos.map(Vec3A::from_array);
-        return;
-    }
-    let orbits = Orbits { rngs: &mut chains.rngs, pos: &mut chains.pos, transient: skip, steps };
-    run_orbits(ifs, orbits, sink);
+    let ChunkChains { rngs, pos, colors } = chains;
+    run_chains(ifs, Path::Fastest, (rngs, pos, colors), skip, steps, sink);
 }

@@ -222,9 +222,35 @@ fn run_chunk_matches_reference_orbits() {
         ifs.probability_mode = mode;
         let c = CompiledIfs::new(&ifs).unwrap();
         assert_eq!(c.lanes.is_some(), mode == ProbabilityMode::Contractivity);
+        // Palette colour: the same orbits, the points carrying the colour coordinate.
+        let coords = (0..c.functions.len()).map(|i| [0.9, 0.15, 0.6, 0.35][i % 4]).collect();
+        let colored = c.clone().with_palette(coords, &crate::palette::Palette::builtin("ember").unwrap());
         for path in [Path::Fastest, Path::Portable].into_iter().chain(simd_paths(&c)) {
             check_chunk(&c, path);
+            check_chunk(&colored, path);
         }
+    }
+}
+
+/// Palette colour on the live view's persistent chains: a chunk continued in two calls from
+/// its start (skip = the transient, then the rest) makes exactly `run_chunk`'s points and
+/// colour indices, on every path `continue_chunk` takes (the fastest), for lane and general
+/// IFSs.
+#[test]
+fn continued_chunks_carry_the_colour_coordinate() {
+    for mode in [ProbabilityMode::Contractivity, ProbabilityMode::Adaptive] {
+        let mut ifs = warped_ifs();
+        ifs.probability_mode = mode;
+        let c = CompiledIfs::new(&ifs).unwrap();
+        let c = c.with_palette(vec![0.0, 1.0, 0.25, 0.7], &crate::palette::Palette::builtin("moss").unwrap());
+        let mut want = CollectSink::default();
+        run_chunk(&c, 3, 1, 7, 50, &mut want);
+        let mut chains = ChunkChains::start(&c, 3, 1, 7);
+        let mut got = CollectSink::default();
+        continue_chunk(&c, &mut chains, c.transient, 20, &mut got);
+        continue_chunk(&c, &mut chains, 0, 30, &mut got);
+        assert_eq!(got.functions, want.functions, "{mode:?}");
+        assert_eq!(got.points, want.points, "{mode:?}");
     }
 }
 
@@ -239,13 +265,20 @@ fn check_chunk(c: &CompiledIfs, path: Path) {
     for k in 0..k_n {
         let mut rng = Pcg32::for_stream(seed, frame, chunk * k_n as u32 + k as u32);
         let mut p = c.start_point(&mut rng);
+        // The colour coordinate, f64 here: every value (c + c_i) / 2 of f32s is exact in f64
+        // and rounds to f32 as the kernel's f32 sum, then halves exactly.
+        let mut color = C_START;
         for s in 0..c.transient as usize + steps {
             let fi = c.selection.select(c.selection.cell_of(p), rng.next_u32());
             p = c.map(fi, p);
+            if let Some(coords) = &c.color_coords {
+                color = ((color as f64 + coords[fi] as f64) as f32) * 0.5;
+            }
             if s >= c.transient as usize {
                 let row = s - c.transient as usize;
                 want[row * k_n + k] = p;
-                want_fn[row * k_n + k] = fi as u8;
+                want_fn[row * k_n + k] =
+                    if c.color_coords.is_some() { crate::palette::index_of(color) } else { fi as u8 };
             }
         }
     }

@@ -25,7 +25,7 @@
 //! 16-entry coefficient lookup is one instruction instead of three.
 //!
 //! Everything here requires AVX2 (the 16-wide code AVX-512F): the functions are reached only
-//! through [`SimdKernel::run`] and the test entry points, which check the CPU first. Hence the module-wide `unsafe_code` allowance: the intrinsics are `unsafe` to call
+//! through [`SimdKernel::run_kept`] and the test entry points, which check the CPU first. Hence the module-wide `unsafe_code` allowance: the intrinsics are `unsafe` to call
 //! outside a `#[target_feature]` function; the memory accesses carry their own SAFETY notes.
 #![expect(
     unsafe_code,
@@ -221,22 +221,8 @@ impl SimdKernel {
     }
 
     /// Runs the orbits of one chunk (lane k: generator `rngs[k]`, position `pos[k]`) for
-    /// `transient` discarded steps and `steps` kept ones into `sink`, as `Orbits::run` does.
-    pub(super) fn run(
-        &self,
-        lookup: Lookup,
-        rngs: &[u32; ORBITS_PER_CHUNK],
-        pos: &[[f32; 3]; ORBITS_PER_CHUNK],
-        transient: u32,
-        steps: usize,
-        sink: &mut impl PointSink,
-    ) {
-        let (mut rngs, mut pos) = (*rngs, *pos);
-        self.run_kept(lookup, &mut rngs, &mut pos, transient, steps, sink);
-    }
-
-    /// [`Self::run`] that leaves the generators and positions where the orbits end (the live
-    /// view's persistent chains, `continue_chunk`).
+    /// `transient` discarded steps and `steps` kept ones into `sink`, as `Orbits::run` does,
+    /// and leaves the generators and positions where the orbits end.
     pub(super) fn run_kept(
         &self,
         lookup: Lookup,

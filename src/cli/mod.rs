@@ -9,6 +9,7 @@
 mod args;
 mod bench;
 mod bench_render;
+mod color_args;
 mod export;
 mod image_args;
 mod info;

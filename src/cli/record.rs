@@ -82,6 +82,9 @@ pub struct RecordArgs {
     /// Depth of field over the scene's and its keys'.
     #[command(flatten)]
     lens: super::lens_args::LensArgs,
+    /// Colour by function or by a palette (`--color`, `--palette`).
+    #[command(flatten)]
+    color: super::color_args::ColorArgs,
 }
 
 /// `nlifs snapshot`'s options, for `--renderer raytrace` (its defaults where left out).
@@ -187,6 +190,7 @@ pub fn record(args: RecordArgs) -> anyhow::Result<()> {
     args.tone.apply_to_scene(&mut scene);
     args.light.apply_to_scene(&mut scene);
     args.lens.apply_to_scene(&mut scene);
+    args.color.apply(&mut scene.render)?;
     if let Some(de) = args.density_estimation {
         scene.render.density_estimation = de.0;
     }

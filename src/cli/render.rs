@@ -84,6 +84,9 @@ pub struct RenderArgs {
     /// Where the chaos game runs: gpu, cpu, or auto (gpu when a hardware adapter exists).
     #[arg(long, value_enum, default_value_t = RenderBackend::Cpu)]
     backend: RenderBackend,
+    /// Colour by function or by a palette (`--color`, `--palette`).
+    #[command(flatten)]
+    color: super::color_args::ColorArgs,
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -150,6 +153,7 @@ pub fn render(args: RenderArgs) -> anyhow::Result<()> {
     args.tone.apply(&mut settings);
     args.light.apply(&mut settings);
     args.lens.apply(&mut settings);
+    args.color.apply(&mut settings)?;
     if let Some(de) = args.density_estimation {
         settings.density_estimation = de.0;
     }

@@ -81,6 +81,9 @@ pub struct IfsShape {
     pub function_count: u32,
     /// The selection table has one coarse cell (explicit or contractivity probabilities).
     pub single_selection_cell: bool,
+    // Palette colour (`src/chaos_game/color_coord.rs`):
+    /// The points carry a colour coordinate (the shader's `PALETTE`).
+    pub palette: bool,
 }
 
 impl IfsShape {
@@ -89,11 +92,12 @@ impl IfsShape {
             shared_cells: shared_cells(ifs),
             function_count: ifs.selection.function_count,
             single_selection_cell: ifs.selection.cells == [1, 1, 1],
+            palette: ifs.color_coords.is_some(),
         }
     }
 
     /// The shader's pipeline constants for this shape.
-    fn constants(&self) -> [(&'static str, f64); 5] {
+    fn constants(&self) -> [(&'static str, f64); 6] {
         let [x, y, z] = self.shared_cells.unwrap_or([0; 3]);
         [
             ("SHARED_CELLS_X", x as f64),
@@ -101,6 +105,7 @@ impl IfsShape {
             ("SHARED_CELLS_Z", z as f64),
             ("FUNCTION_COUNT", self.function_count as f64),
             ("SINGLE_SELECTION_CELL", self.single_selection_cell as u32 as f64),
+            ("PALETTE", self.palette as u32 as f64),
         ]
     }
 }
@@ -365,7 +370,9 @@ impl GpuChaosGame {
 
     /// Uploads a compiled IFS (the points are kept).
     pub fn set_ifs(&mut self, device: &wgpu::Device, queue: &wgpu::Queue, ifs: &CompiledIfs) {
-        let colors: Vec<[f32; 4]> = ifs.colors.iter().map(|c| [c[0], c[1], c[2], 0.0]).collect();
+        // w: function i's colour coordinate c_i in palette colour (`color_coord_at`), else 0.
+        let coord = |i: usize| ifs.color_coords.as_ref().and_then(|c| c.get(i).copied()).unwrap_or(0.0);
+        let colors: Vec<[f32; 4]> = ifs.colors.iter().enumerate().map(|(i, c)| [c[0], c[1], c[2], coord(i)]).collect();
         let tables: [&[u8]; 5] = [
             bytemuck::cast_slice::<KernelFunction, u8>(&ifs.functions),
             bytemuck::cast_slice(&ifs.coords),
@@ -376,7 +383,11 @@ impl GpuChaosGame {
         let uniform_tables = !self.force_storage_tables
             && tables.iter().zip(UNIFORM_CAPACITY).all(|(t, capacity)| t.len() as u64 <= capacity);
         self.has_julia = ifs.functions.iter().any(|f| f.coord_offset[3] == crate::chaos_game::KIND_JULIA);
-        self.shape = if self.force_generic { IfsShape::default() } else { IfsShape::of(ifs) };
+        self.shape = if self.force_generic {
+            IfsShape { palette: ifs.color_coords.is_some(), ..IfsShape::default() }
+        } else {
+            IfsShape::of(ifs)
+        };
         let mut replaced = uniform_tables != self.uniform_tables;
         self.uniform_tables = uniform_tables;
         replaced |= upload(device, queue, &mut self.functions, "functions", tables[0]);
@@ -550,7 +561,7 @@ mod tests {
         // plant2: 2×4×2 grid points, 1×3×1 cells, five functions on the scene's grid.
         assert_eq!(
             shape("plant2.toml"),
-            IfsShape { shared_cells: Some([1, 3, 1]), function_count: 5, single_selection_cell: true }
+            IfsShape { shared_cells: Some([1, 3, 1]), function_count: 5, single_selection_cell: true, palette: false }
         );
         // Julia maps have no grid.
         assert_eq!(shape("julia.toml").shared_cells, None);

@@ -183,6 +183,8 @@ pub(super) struct FunctionToml {
     pub(super) offset: Option<Spanned<Vec<f64>>>,
     pub(super) c: Option<Spanned<Vec<f64>>>,
     pub(super) sign: Option<Spanned<f64>>,
+    // Palette colour:
+    pub(super) palette_index: Option<Spanned<f64>>,
 }
 
 #[derive(Deserialize)]
@@ -241,6 +243,9 @@ pub(super) struct RenderToml {
     // Depth of field.
     pub(super) aperture: Option<Spanned<f64>>,
     pub(super) focus_distance: Option<Spanned<f64>>,
+    // Colour by a colour coordinate:
+    pub(super) color: Option<Spanned<String>>,
+    pub(super) palette: Option<Spanned<String>>,
 }
 
 impl RenderToml {

@@ -11,6 +11,7 @@ use crate::camera::Projection;
 use crate::color;
 use crate::model::builder::{Builder, Step};
 use crate::model::{AffineMap, JuliaMap};
+use crate::palette::Palette;
 
 /// The most points one render draws, in the scene (`render.points`, `key.render.points`) and on
 /// the command line (`render --points`, `record --points-per-frame`), so that both refuse the
@@ -108,6 +109,9 @@ pub struct FunctionSpec {
     pub probability: Option<f64>,
     pub enabled: bool,
     pub def: FunctionDef,
+    // Palette colour (`src/palette.rs`):
+    /// The colour coordinate c_i in [0, 1]; None: i / (n − 1) (`palette::default_index`).
+    pub palette_index: Option<f64>,
 }
 
 /// Camera settings from the scene; unset fields are derived from the attractor's bounds.
@@ -193,6 +197,11 @@ pub struct RenderSettings {
     pub aperture: f32,
     /// View distance that stays sharp; None: the camera's distance to its target.
     pub focus_distance: Option<f32>,
+    // Colour by a colour coordinate (`src/palette.rs`, `src/chaos_game/color_coord.rs`):
+    /// Per-function colour or a palette indexed by the colour coordinate.
+    pub color: ColorMode,
+    /// The palette of `color = "palette"`; None: `palette::DEFAULT`.
+    pub palette: Option<Palette>,
 }
 
 /// The key light's fields in `[render]` (and `[key.render]`): name and range, in the order of
@@ -204,6 +213,32 @@ impl RenderSettings {
     /// The key light's direction in the order of the last two [`LIGHT_FIELDS`], to set.
     pub fn light_mut(&mut self) -> [&mut f32; 2] {
         [&mut self.light_yaw_deg, &mut self.light_pitch_deg]
+    }
+}
+
+/// How points are coloured (`[render] color`): by their function's colour, or by the palette
+/// entry of the colour coordinate they carry through the chaos game.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum ColorMode {
+    #[default]
+    Function,
+    Palette,
+}
+
+impl ColorMode {
+    pub fn parse(s: &str) -> Option<Self> {
+        match s {
+            "function" => Some(ColorMode::Function),
+            "palette" => Some(ColorMode::Palette),
+            _ => None,
+        }
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            ColorMode::Function => "function",
+            ColorMode::Palette => "palette",
+        }
     }
 }
 
@@ -270,6 +305,8 @@ impl Default for RenderSettings {
             light_pitch_deg: crate::resolve::KEY_LIGHT_PITCH_DEG,
             aperture: 0.0,
             focus_distance: None,
+            color: ColorMode::Function,
+            palette: None,
         }
     }
 }

@@ -11,7 +11,7 @@ use crate::color;
 use crate::model::builder::Step;
 use crate::scene::Scene;
 use crate::scene::file::FORMAT_VERSION;
-use crate::scene::spec::{CameraSpec, FunctionDef, LIGHT_FIELDS, RenderSettings, TONE_FIELDS};
+use crate::scene::spec::{CameraSpec, ColorMode, FunctionDef, LIGHT_FIELDS, RenderSettings, TONE_FIELDS};
 use crate::scene::timeline::RenderKey;
 
 /// TOML text of a number that reads back to the same f64 (Rust's shortest round-trip form).
@@ -182,6 +182,9 @@ impl Scene {
             if !f.enabled {
                 out += "enabled = false\n";
             }
+            if let Some(c) = f.palette_index {
+                let _ = writeln!(out, "palette_index = {}", num(c));
+            }
             match &f.def {
                 FunctionDef::Builder { resolution, .. } => {
                     let _ = writeln!(
@@ -256,6 +259,13 @@ impl Scene {
         }
         if let Some(f) = r.focus_distance {
             let _ = writeln!(out, "focus_distance = {f:?}");
+        }
+        // Palette colour, written where set.
+        if r.color != ColorMode::Function {
+            let _ = writeln!(out, "color = \"{}\"", r.color.name());
+        }
+        if let Some(p) = &r.palette {
+            let _ = writeln!(out, "palette = {}", toml_string(&p.source));
         }
         if let Some(tl) = &self.timeline {
             out += "\n[timeline]\n";

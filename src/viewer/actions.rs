@@ -323,6 +323,7 @@ impl ViewerState {
                     probability: explicit.then_some(mean_weight),
                     enabled: true,
                     def: FunctionDef::Affine(crate::model::AffineMap { matrix, offset }),
+                    palette_index: None,
                 });
                 Some(n)
             }

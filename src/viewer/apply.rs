@@ -388,6 +388,10 @@ impl ViewerState {
                 | Command::SetToolSupport { .. }
                 | Command::DismissViewError => self.file_command(command, &mut changes),
                 Command::SetLens { aperture, focus_distance } => edited |= self.set_lens(aperture, focus_distance),
+                // Palette colour, undoable, in `palette_edit.rs`.
+                Command::SetPaletteIndex { .. } | Command::SetColorMode(_) | Command::SetPalette(_) => {
+                    edited |= self.palette_command(command)
+                }
             }
         }
         // Depth of field follows the scene at the playhead (`lens.rs`).

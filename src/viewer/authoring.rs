@@ -138,7 +138,7 @@ impl ViewerState {
 
     /// Shows `after` now as part of the running gesture: a drag's many changes fold into one
     /// whole-scene edit (before of the first, after of the last).
-    fn preview_scene(&mut self, after: Scene) -> bool {
+    pub(super) fn preview_scene(&mut self, after: Scene) -> bool {
         if after == self.scene {
             return false;
         }

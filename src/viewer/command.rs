@@ -240,6 +240,17 @@ pub enum Command {
         aperture: f32,
         focus_distance: Option<f32>,
     },
+    // Palette colour (`palette_ui.rs`, applied in `palette_edit.rs`).
+    /// Function `function`'s colour coordinate c_i (None: the default spread); part of the
+    /// running gesture, so that a slider drag is one undo step.
+    SetPaletteIndex {
+        function: usize,
+        index: Option<f64>,
+    },
+    /// `[render] color` (one undo step).
+    SetColorMode(crate::scene::spec::ColorMode),
+    /// `[render] palette`: a built-in palette's name (one undo step).
+    SetPalette(String),
 }
 
 /// What the user answered when closing with unsaved edits.

@@ -82,6 +82,7 @@ pub fn functions_ui(ui: &mut egui::Ui, state: &ViewerState, commands: &mut Vec<C
                         commands.push(Command::DeleteFunction(i));
                     }
                 });
+                super::palette_ui::palette_index_ui(ui, state, i, commands);
                 ui.end_row();
             }
         });

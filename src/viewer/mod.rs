@@ -43,6 +43,8 @@ pub mod lens;
 pub mod lens_ui;
 pub mod nesting_ui;
 pub mod overlay_ui;
+mod palette_edit;
+pub mod palette_ui;
 pub mod picking;
 pub mod pointer;
 pub mod recent;

@@ -246,6 +246,7 @@ fn render_ui(ui: &mut egui::Ui, state: &ViewerState, commands: &mut Vec<Command>
                 commands.push(Command::KeyCamera);
             }
         });
+        super::palette_ui::color_mode_ui(ui, state, commands);
         ui.small("left-drag: orbit (pan in 2D) · right/middle-drag: pan · wheel: zoom · F1: every key");
     });
 }

@@ -24,6 +24,7 @@ use crate::scene::{Scene, SceneError};
 mod keys;
 mod lens;
 mod numbers;
+mod palette;
 mod read;
 mod words;
 
@@ -369,6 +370,7 @@ impl Checker<'_> {
             probability,
             enabled: f.enabled.unwrap_or(true),
             def,
+            palette_index: self.palette_index(f.palette_index.as_ref(), &field("palette_index"))?,
         })
     }
 
@@ -681,6 +683,7 @@ impl Checker<'_> {
         let (aperture, focus_distance) = self.lens(&r.aperture, &r.focus_distance, "render")?;
         out.aperture = aperture.unwrap_or(0.0);
         out.focus_distance = focus_distance;
+        self.color_fields(r, &mut out)?;
         Ok(out)
     }
 }

@@ -1,0 +1,74 @@
+//! The colour coordinate (`[render] color = "palette"`, flam3's rule): each compiled function
+//! i has a coordinate c_i in [0, 1] and an orbit's c becomes (c + c_i) / 2 at every step; the
+//! point is emitted with the palette entry `palette::index_of(c)` in place of its function
+//! index, so that the splats, the resolve and the exports need no change (the colour table is
+//! the palette's 256 entries).
+//!
+//! c is a function of the orbit's sequence of functions only, so it is carried here, on the
+//! batches every kernel emits (row s of a batch is step s of the chunk's 64 orbits, lane k at
+//! s · 64 + k, on every path), and not inside each kernel: the scalar, lane, AVX2 and AVX-512
+//! kernels stay as they are, function colour keeps its speed, and the coordinate is the same on
+//! every path because the function indices are. To let c forget its start the orbits' discarded
+//! steps run as emitted rows that this sink updates c with and drops: [`ColorCoordSink::new`]
+//! with `skip` rows. c starts at [`C_START`]; after the transient (≥ 24 steps) its start
+//! weighs less than 2^-24.
+//!
+//! The GPU twin is the palette branch of `shaders/chaos_game.wgsl` (the same update in f32,
+//! the same quantization).
+
+use super::sink::{PointBatch, PointSink};
+use super::{ORBITS_PER_CHUNK, STEPS_PER_BATCH};
+use crate::palette;
+
+/// The colour coordinate of an orbit at its start point.
+pub const C_START: f32 = 0.5;
+
+/// One step of the colour coordinate: (c + c_i) / 2 in f32 (the shader's expression).
+#[inline(always)]
+pub fn step_color(c: f32, c_i: f32) -> f32 {
+    (c + c_i) * 0.5
+}
+
+/// Wraps a sink: turns the function indices of a chunk's batches into quantized colour
+/// coordinates, dropping the first `skip` rows (see the module comment).
+pub(super) struct ColorCoordSink<'a, S: PointSink> {
+    coords: &'a [f32],
+    c: &'a mut [f32; ORBITS_PER_CHUNK],
+    skip: usize,
+    inner: &'a mut S,
+    indices: Vec<u8>,
+}
+
+impl<'a, S: PointSink> ColorCoordSink<'a, S> {
+    pub(super) fn new(coords: &'a [f32], c: &'a mut [f32; ORBITS_PER_CHUNK], skip: usize, inner: &'a mut S) -> Self {
+        Self { coords, c, skip, inner, indices: vec![0; ORBITS_PER_CHUNK * STEPS_PER_BATCH] }
+    }
+}
+
+impl<S: PointSink> PointSink for ColorCoordSink<'_, S> {
+    fn consume(&mut self, batch: PointBatch<'_>) {
+        const K: usize = ORBITS_PER_CHUNK;
+        let rows = batch.len() / K;
+        debug_assert_eq!(rows * K, batch.len(), "batches are whole rows of the chunk's orbits");
+        let dropped = self.skip.min(rows);
+        self.skip -= dropped;
+        if self.indices.len() < batch.len() {
+            self.indices.resize(batch.len(), 0);
+        }
+        for (fs, out) in batch.functions.chunks_exact(K).zip(self.indices.chunks_exact_mut(K)) {
+            for ((c, &f), out) in self.c.iter_mut().zip(fs).zip(out) {
+                *c = step_color(*c, self.coords[f as usize]);
+                *out = palette::index_of(*c);
+            }
+        }
+        let kept = dropped * K..batch.len();
+        if !kept.is_empty() {
+            self.inner.consume(PointBatch {
+                x: &batch.x[kept.clone()],
+                y: &batch.y[kept.clone()],
+                z: &batch.z[kept.clone()],
+                functions: &self.indices[kept],
+            });
+        }
+    }
+}

@@ -1,0 +1,201 @@
+//! Palettes for colouring by a colour coordinate (`[render] color = "palette"`): 256 linear-RGB
+//! samples indexed by the quantized coordinate [`index_of`]. A palette is one of the built-in
+//! ones ([`BUILTIN`], each a few colour stops of this program's own, blended in sRGB and sampled
+//! to 256 entries) or the middle row of a PNG or JPEG image (a strip), resampled to 256 entries
+//! and decoded from sRGB to linear.
+//!
+//! The colour coordinate itself is carried by the chaos game (`chaos_game.rs`): each function i
+//! has a coordinate c_i in [0, 1], a point's c becomes (c + c_i) / 2 at every step (flam3's
+//! rule), and the point is splatted with palette entry [`index_of`]`(c)` in place of its
+//! function's colour.
+
+use std::path::{Path, PathBuf};
+
+use crate::color;
+
+/// Entries of every palette.
+pub const SAMPLES: usize = 256;
+
+/// The palette's entry for colour coordinate `c` in [0, 1]: round(c · 255). The one
+/// quantization of the colour coordinate (the CPU kernels' and the shader's).
+#[inline(always)]
+pub fn index_of(c: f32) -> u8 {
+    (c * 255.0 + 0.5) as u8
+}
+
+/// The built-in palettes: name and colour stops (sRGB bytes), spread evenly over [0, 1].
+pub const BUILTIN: &[(&str, &[[u8; 3]])] = &[
+    ("ember", &[[0x12, 0x06, 0x10], [0x7a, 0x10, 0x1c], [0xd8, 0x4a, 0x12], [0xf6, 0xa8, 0x2e], [0xfb, 0xee, 0xb4]]),
+    ("lagoon", &[[0x0a, 0x16, 0x3a], [0x0e, 0x5c, 0x7e], [0x1f, 0xa8, 0x9c], [0x9c, 0xdc, 0xa4], [0xf2, 0xe6, 0xc0]]),
+    ("moss", &[[0x14, 0x22, 0x10], [0x3c, 0x62, 0x24], [0x8a, 0x9c, 0x30], [0xd6, 0xc0, 0x52]]),
+    ("dusk", &[[0x22, 0x14, 0x5a], [0x7c, 0x2a, 0x8c], [0xd4, 0x4c, 0x7c], [0xf6, 0x9a, 0x6c], [0xfc, 0xdc, 0xa8]]),
+    ("glacier", &[[0x08, 0x10, 0x30], [0x1c, 0x4c, 0x9c], [0x48, 0xa8, 0xdc], [0xc4, 0xec, 0xf8]]),
+    (
+        "spectrum",
+        &[
+            [0xe0, 0x3c, 0x3c],
+            [0xe8, 0xb0, 0x30],
+            [0x5c, 0xc8, 0x4c],
+            [0x2c, 0xb4, 0xc8],
+            [0x44, 0x5c, 0xe0],
+            [0xb4, 0x48, 0xd8],
+        ],
+    ),
+];
+
+/// The palette of `[render] color = "palette"` when the scene names none.
+pub const DEFAULT: &str = "dusk";
+
+/// A palette: where it came from (a built-in name or an image path, as written) and its
+/// [`SAMPLES`] linear-RGB entries.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Palette {
+    pub source: String,
+    pub samples: Vec<[f32; 3]>,
+}
+
+/// Why a palette could not be made; every message names the palette or the file.
+#[derive(Debug, thiserror::Error)]
+pub enum PaletteError {
+    #[error("unknown palette \"{name}\": not a built-in one ({known}) and no file {path}")]
+    Unknown { name: String, path: PathBuf, known: String },
+    #[error("cannot read palette image {path}: {cause}")]
+    Unreadable { path: PathBuf, cause: String },
+    #[error("palette image {path} has no pixels")]
+    Empty { path: PathBuf },
+}
+
+impl Palette {
+    /// The built-in palette `name`, or None.
+    pub fn builtin(name: &str) -> Option<Self> {
+        let (_, stops) = BUILTIN.iter().find(|(n, _)| *n == name)?;
+        let srgb = |k: usize| stops[k].map(|b| b as f32 / 255.0);
+        let samples = (0..SAMPLES)
+            .map(|i| {
+                let x = i as f32 / (SAMPLES - 1) as f32 * (stops.len() - 1) as f32;
+                let k = (x as usize).min(stops.len() - 2);
+                let t = x - k as f32;
+                let (a, b) = (srgb(k), srgb(k + 1));
+                color::srgb_to_linear([0, 1, 2].map(|j| a[j] + (b[j] - a[j]) * t))
+            })
+            .collect();
+        Some(Self { source: name.to_string(), samples })
+    }
+
+    /// The names of the built-in palettes, comma-separated (for messages and help).
+    pub fn known() -> String {
+        BUILTIN.iter().map(|(n, _)| *n).collect::<Vec<_>>().join(", ")
+    }
+
+    /// The palette `spec` names: a built-in name, else an image file, relative to `base_dir`
+    /// when it is relative (a scene's directory; None: the working directory). `source` keeps
+    /// `spec` as written.
+    pub fn resolve(spec: &str, base_dir: Option<&Path>) -> Result<Self, PaletteError> {
+        if let Some(p) = Self::builtin(spec) {
+            return Ok(p);
+        }
+        let path = match base_dir {
+            Some(dir) if Path::new(spec).is_relative() => dir.join(spec),
+            _ => PathBuf::from(spec),
+        };
+        if !path.exists() {
+            return Err(PaletteError::Unknown { name: spec.to_string(), path, known: Self::known() });
+        }
+        let samples = Self::strip_samples(&path)?;
+        Ok(Self { source: spec.to_string(), samples })
+    }
+
+    /// The middle row of the PNG or JPEG at `path`, resampled to [`SAMPLES`] entries (linear
+    /// interpolation between pixel centres, in linear light).
+    fn strip_samples(path: &Path) -> Result<Vec<[f32; 3]>, PaletteError> {
+        let unreadable = |cause: String| PaletteError::Unreadable { path: path.to_path_buf(), cause };
+        let reader = image::ImageReader::open(path).map_err(|e| unreadable(e.to_string()))?;
+        let reader = reader.with_guessed_format().map_err(|e| unreadable(e.to_string()))?;
+        let img = reader.decode().map_err(|e| unreadable(e.to_string()))?.to_rgb8();
+        let (width, height) = img.dimensions();
+        if width == 0 || height == 0 {
+            return Err(PaletteError::Empty { path: path.to_path_buf() });
+        }
+        let row: Vec<[f32; 3]> =
+            (0..width).map(|x| img.get_pixel(x, height / 2).0.map(color::srgb8_to_linear)).collect();
+        Ok((0..SAMPLES)
+            .map(|i| {
+                // Entry i samples the strip at (i + ½) / SAMPLES of its width.
+                let x = ((i as f32 + 0.5) / SAMPLES as f32 * width as f32 - 0.5).clamp(0.0, (width - 1) as f32);
+                let k = (x as usize).min(row.len() - 1);
+                let next = (k + 1).min(row.len() - 1);
+                let t = x - k as f32;
+                [0, 1, 2].map(|j| row[k][j] + (row[next][j] - row[k][j]) * t)
+            })
+            .collect())
+    }
+
+    /// The entry for colour coordinate `c` (see [`index_of`]).
+    pub fn at(&self, c: f32) -> [f32; 3] {
+        self.samples[index_of(c.clamp(0.0, 1.0)) as usize]
+    }
+}
+
+/// Function `i`'s colour coordinate of `n` functions when the scene gives none: i / (n − 1),
+/// spread evenly over [0, 1] (½ for a single function).
+pub fn default_index(i: usize, n: usize) -> f64 {
+    if n < 2 { 0.5 } else { i as f64 / (n - 1) as f64 }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn builtins_hit_their_end_stops_and_have_256_entries() {
+        for (name, stops) in BUILTIN {
+            let p = Palette::builtin(name).unwrap();
+            assert_eq!(p.samples.len(), SAMPLES);
+            // The first and last entries are the end stops exactly (t = 0 and t = 1).
+            assert_eq!(p.samples[0], stops[0].map(color::srgb8_to_linear), "{name}");
+            assert_eq!(p.samples[SAMPLES - 1], stops[stops.len() - 1].map(color::srgb8_to_linear), "{name}");
+        }
+    }
+
+    #[test]
+    fn index_rounds_to_nearest_entry() {
+        assert_eq!(index_of(0.0), 0);
+        assert_eq!(index_of(1.0), 255);
+        assert_eq!(index_of(0.5), 128);
+        assert_eq!(index_of(10.0 / 255.0), 10);
+    }
+
+    #[test]
+    fn strip_is_its_middle_row_resampled() {
+        let dir = std::env::temp_dir().join(format!("nlifs-palette-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        // 256 × 3: the middle row is a grey ramp, the other rows red; 256 wide resamples to
+        // the pixels themselves (x = i exactly).
+        let img =
+            image::RgbImage::from_fn(
+                256,
+                3,
+                |x, y| if y == 1 { image::Rgb([x as u8; 3]) } else { image::Rgb([255, 0, 0]) },
+            );
+        let path = dir.join("strip.png");
+        img.save(&path).unwrap();
+        let p = Palette::resolve("strip.png", Some(&dir)).unwrap();
+        for (i, s) in p.samples.iter().enumerate() {
+            assert_eq!(*s, [color::srgb8_to_linear(i as u8); 3], "entry {i}");
+        }
+        std::fs::remove_dir_all(&dir).ok();
+    }
+
+    #[test]
+    fn errors_name_the_palette_or_file() {
+        let e = Palette::resolve("no-such-palette", Some(Path::new("/nonexistent-dir"))).unwrap_err();
+        let text = e.to_string();
+        assert!(text.contains("no-such-palette") && text.contains("ember") && text.contains("spectrum"), "{text}");
+        let dir = std::env::temp_dir().join(format!("nlifs-palette-bad-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        std::fs::write(dir.join("bad.png"), b"not an image").unwrap();
+        let text = Palette::resolve("bad.png", Some(&dir)).unwrap_err().to_string();
+        assert!(text.contains("cannot read palette image") && text.contains("bad.png"), "{text}");
+        std::fs::remove_dir_all(&dir).ok();
+    }
+}
