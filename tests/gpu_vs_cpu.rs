@@ -118,6 +118,7 @@ fn densities_match_cpu() {
             max_splats: u64::MAX,
             settle_steps: 0,
             chaos_backend: ChaosBackend::Gpu,
+            ..LiveSettings::default()
         };
         let mut live = LiveView::new(&ctx, settings, width, height).unwrap();
         live.set_ifs(&ctx, &compiled, bounds, true);

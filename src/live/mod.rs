@@ -41,6 +41,8 @@ impl From<&LiveSettings> for ProgressiveSettings {
             point_radius_px: s.point_radius_px,
             max_splats: s.max_splats,
             settle_steps: s.settle_steps,
+            tone: s.tone,
+            density_estimation: s.density_estimation,
         }
     }
 }

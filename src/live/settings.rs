@@ -3,7 +3,8 @@
 //! boundary), with the choice of where the chaos game runs ([`ChaosBackend`]) and the route it
 //! took on the adapter at hand ([`ChaosRoute`]).
 
-use crate::scene::spec::SplatMode;
+use crate::resolve::Tone;
+use crate::scene::spec::{DensityEstimation, SplatMode};
 
 /// Settings of the live view (the viewer's render panel edits them).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -30,6 +31,11 @@ pub struct LiveSettings {
     /// Where the chaos game runs (the GPU only resolves on the CPU route). The default, `gpu`,
     /// is what `render --backend gpu` and the benchmarks run; the viewer starts on `auto`.
     pub chaos_backend: ChaosBackend,
+    /// flam3's tone map (average and density modes): the scene's `[render]` tone at the
+    /// playhead, as `render` resolves it.
+    pub tone: Tone,
+    /// flam3's density estimation (density mode): the scene's, None off.
+    pub density_estimation: Option<DensityEstimation>,
 }
 
 impl Default for LiveSettings {
@@ -49,6 +55,8 @@ impl Default for LiveSettings {
             max_splats: 1 << 30,
             settle_steps: 8,
             chaos_backend: ChaosBackend::Gpu,
+            tone: Tone::NEUTRAL,
+            density_estimation: None,
         }
     }
 }

@@ -235,8 +235,19 @@ pub fn resolve_image(
 ) -> image::RgbImage {
     let view = &framebuffer.view;
     let Some(de) = applies(de, view.mode) else { return super::resolve_image(framebuffer, camera, style) };
+    image_of(&estimate(&framebuffer.accum, view.width, view.height, &de), framebuffer, camera, style)
+}
+
+/// The 8-bit sRGB image of the estimate `e` of `framebuffer` (made here or by the GPU twin)
+/// seen by `camera`, drawn with `style`.
+pub fn image_of(
+    e: &Estimated,
+    framebuffer: &crate::splat::Framebuffer,
+    camera: &crate::camera::OrbitCamera,
+    style: &super::ResolveStyle,
+) -> image::RgbImage {
+    let view = &framebuffer.view;
     let params = super::ResolveArgs::new(view, camera, style).params(view.width, view.height, true);
-    let e = estimate(&framebuffer.accum, view.width, view.height, &de);
     let width_px = view.width as usize;
     let mut bytes = vec![0u8; 3 * width_px * view.height as usize];
     bytes.par_chunks_mut(3 * width_px.max(1)).enumerate().for_each(|(y, row)| {

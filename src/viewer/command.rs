@@ -232,6 +232,9 @@ pub enum Command {
     },
     /// Closes the error shown over the view.
     DismissViewError,
+    /// The render panel's tone and density estimation: a scene edit (`imaging.rs`), part of
+    /// the running gesture; the accumulation is kept.
+    SetImaging(super::imaging::Imaging),
 }
 
 /// What the user answered when closing with unsaved edits.

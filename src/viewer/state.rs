@@ -235,6 +235,7 @@ impl ViewerState {
         state.live.depth_cue = state.scene.render.depth_cue;
         state.live.background = state.scene.render.background;
         state.take_scene_look();
+        state.take_scene_imaging();
         state.recompile();
         state.camera = state.framed_camera();
         state
