@@ -9,7 +9,7 @@ use nlifs::resolve::ResolveParams;
 
 /// (program, WGSL struct, size of its Rust mirror). Shader-interface structs (vertex outputs)
 /// have no memory layout and no mirror.
-const MIRRORS: [(&str, &str, usize); 7] = [
+const MIRRORS: [(&str, &str, usize); 9] = [
     ("chaos_game", "KernelFunction", size_of::<KernelFunction>()),
     ("chaos_game", "Cell", size_of::<Cell>()),
     ("chaos_game", "ChaosParams", size_of::<ChaosParams>()),
@@ -17,6 +17,12 @@ const MIRRORS: [(&str, &str, usize); 7] = [
     ("chaos_game_storage", "Cell", size_of::<Cell>()),
     ("chaos_game_storage", "ChaosParams", size_of::<ChaosParams>()),
     ("resolve", "ResolveParams", size_of::<ResolveParams>()),
+    ("density_estimation", "ResolveParams", size_of::<ResolveParams>()),
+    (
+        "density_estimation",
+        "DensityEstimationParams",
+        size_of::<nlifs::gpu::density_estimation::DensityEstimationParams>(),
+    ),
 ];
 const INTERFACE_STRUCTS: [&str; 1] = ["VertexOutput"];
 

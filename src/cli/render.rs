@@ -186,22 +186,10 @@ pub fn render(args: RenderArgs) -> anyhow::Result<()> {
     let gpu = match args.backend {
         RenderBackend::Cpu => None,
         RenderBackend::Gpu => Some(nlifs::gpu::GpuContext::headless().map_err(gpu_error)?),
-        // Density estimation runs on the CPU: `auto` takes the CPU with it.
-        RenderBackend::Auto
-            if nlifs::resolve::density_estimation::applies(settings.density_estimation.as_ref(), settings.mode)
-                .is_some() =>
-        {
-            None
-        }
         RenderBackend::Auto => {
             nlifs::gpu::GpuContext::headless().ok().filter(|ctx| !nlifs::gpu::batch::is_software(ctx))
         }
     };
-    if gpu.is_some()
-        && nlifs::resolve::density_estimation::applies(settings.density_estimation.as_ref(), settings.mode).is_some()
-    {
-        return Err(BadInput("density estimation runs on the CPU; use --backend cpu".into()).into());
-    }
     if gpu.is_some() && args.layers.is_some() {
         // The GPU still writes every layer the mode has; choosing them is the CPU writer's.
         return Err(BadInput("--layers needs --backend cpu (the GPU route writes all the mode's layers)".into()).into());
@@ -227,7 +215,7 @@ pub fn render(args: RenderArgs) -> anyhow::Result<()> {
                 &r.framebuffer,
                 &shot.camera,
                 &shot.style,
-                None,
+                shot.settings.density_estimation.as_ref(),
                 Some(&r.image),
                 &provenance,
             )?;

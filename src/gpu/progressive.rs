@@ -9,6 +9,13 @@
 //! of the GPU benchmarks. A point source outside the GPU writes its frames into the same
 //! accumulation ([`Progressive::begin_uploaded_frame`], [`Progressive::finish_uploaded_frame`]),
 //! so both are resolved by the same pass and cleared at the same moments.
+//!
+//! The resolve takes the settings' tone map; in density mode with density estimation on, the
+//! draw shows the estimate of `shaders/density_estimation.wgsl` instead of the raw counts. The
+//! filter reads every pixel's neighbourhood, too costly for every frame on a software
+//! rasterizer, so it runs on frames 1, 2, 4, … after a clear and then every
+//! [`ESTIMATE_EVERY_FRAMES`] frames, and once more when accumulation stops; draws in between
+//! show the last estimate (snapshots estimate afresh).
 
 use glam::DVec3;
 
@@ -18,9 +25,12 @@ use crate::scene::spec::SplatMode;
 use crate::splat::{Lens, SplatView};
 
 use super::chaos_game::{FrameArgs, GpuChaosGame};
+use super::density_estimation::GpuDensityEstimation;
 use super::resolve::{GpuResolve, LightRows};
 use super::{GpuContext, GpuError};
-use crate::resolve::ResolveArgs;
+use crate::resolve::density_estimation;
+use crate::resolve::{ResolveArgs, Tone};
+use crate::scene::spec::DensityEstimation;
 
 /// Settings of a progressive render.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -55,7 +65,15 @@ pub struct ProgressiveSettings {
     pub aperture: f32,
     /// View distance in focus; None: the camera's distance to its target.
     pub focus_distance: Option<f32>,
+    /// The tone map of the average and density modes.
+    pub tone: Tone,
+    /// Density estimation (density mode); None: off.
+    pub density_estimation: Option<DensityEstimation>,
 }
+
+/// Frames between two density estimates once accumulation has run that long (before, the
+/// estimate is refreshed at frames 1, 2, 4, … after a clear).
+pub const ESTIMATE_EVERY_FRAMES: u32 = 32;
 
 impl Default for ProgressiveSettings {
     fn default() -> Self {
@@ -76,6 +94,8 @@ impl Default for ProgressiveSettings {
             light_pitch_deg: crate::resolve::KEY_LIGHT_PITCH_DEG,
             aperture: 0.0,
             focus_distance: None,
+            tone: Tone::NEUTRAL,
+            density_estimation: None,
         }
     }
 }
@@ -113,6 +133,12 @@ pub struct Progressive {
     /// The next band to refresh, and the arguments the light cache was last refreshed with.
     light_band: u32,
     light_args: Option<ResolveArgs>,
+    /// Clears of the accumulation so far (an estimate belongs to one accumulation).
+    clears: u64,
+    /// The density estimation pass (made on first use), and what its last estimate was made of:
+    /// the clear count, the frames since that clear and the setting.
+    estimation: Option<GpuDensityEstimation>,
+    estimated: Option<(u64, u32, DensityEstimation)>,
 }
 
 /// Frames after a clear whose draws refresh the whole light cache (a cloud filling in changes
@@ -156,6 +182,9 @@ impl Progressive {
             light_bands: 0,
             light_band: 0,
             light_args: None,
+            clears: 0,
+            estimation: None,
+            estimated: None,
         })
     }
 
@@ -253,6 +282,7 @@ impl Progressive {
         if self.clear {
             self.frames_since_clear = 0;
             self.splats_since_clear = 0;
+            self.clears += 1;
         }
         let splats = self.game.point_count as u64 * self.settings.steps_per_frame as u64;
         self.frames_since_clear += 1;
@@ -275,6 +305,7 @@ impl Progressive {
         if self.clear {
             self.frames_since_clear = 0;
             self.splats_since_clear = 0;
+            self.clears += 1;
         }
         Some(UploadedFrame { view, clear: self.clear, frame: self.frame })
     }
@@ -318,6 +349,7 @@ impl Progressive {
         self.clear = false;
         self.frames_since_clear = 0;
         self.splats_since_clear = 0;
+        self.clears += 1;
     }
 
     /// Records the resolve onto `target` (the window's surface or an offscreen texture) with
@@ -352,13 +384,45 @@ impl Progressive {
             pixel_size,
             perspective,
             origin_px,
-            tone: crate::resolve::Tone::NEUTRAL,
+            tone: s.tone,
             shadows: s.shadows,
             key_light: crate::resolve::shadow::key_light(s.light_yaw_deg, s.light_pitch_deg),
             shadow: self.view.and_then(|v| v.shadow),
         };
+        if let Some(de) = density_estimation::applies(s.density_estimation.as_ref(), s.mode) {
+            self.draw_estimated(ctx, encoder, &args, &de, target, format);
+            return;
+        }
         let light = self.light_rows(&args);
         self.resolve.draw(ctx, encoder, &self.game, &args, target, format, light);
+    }
+
+    /// Draws the density estimate of the accumulation, refreshing it first where it is due (see
+    /// the module's notes; `light_bands` 0, a snapshot's, refreshes it always).
+    fn draw_estimated(
+        &mut self,
+        ctx: &GpuContext,
+        encoder: &mut wgpu::CommandEncoder,
+        args: &ResolveArgs,
+        de: &DensityEstimation,
+        target: &wgpu::TextureView,
+        format: wgpu::TextureFormat,
+    ) {
+        let frames = self.frames_since_clear;
+        let due = match self.estimated {
+            Some((clears, at, made_with)) if clears == self.clears && made_with == *de => {
+                let next = at.saturating_add(at.clamp(1, ESTIMATE_EVERY_FRAMES));
+                frames >= next || (frames != at && self.converged()) || self.light_bands == 0
+            }
+            _ => true,
+        };
+        let (width, height) = self.size();
+        let estimation = self.estimation.get_or_insert_with(|| GpuDensityEstimation::new(&ctx.device));
+        if due {
+            estimation.encode(ctx, encoder, &self.game.accum, width, height, de);
+            self.estimated = Some((self.clears, frames, *de));
+        }
+        estimation.draw(ctx, encoder, args, target, format);
     }
 
     /// Which rows of the light cache this draw refreshes (see [`Self::light_bands`]).

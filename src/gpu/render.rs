@@ -1,12 +1,15 @@
 //! Headless GPU rendering (`render --backend gpu`): a prepared [`Shot`]'s chaos game on the GPU
 //! in timed batches ([`super::batch`]), its accumulation read back and drawn by the CPU resolve
-//! with the shot's style, so every output format of a CPU render is open to it.
+//! with the shot's style, so every output format of a CPU render is open to it. Density
+//! estimation (density mode) runs on the GPU too (`shaders/density_estimation.wgsl`), on the
+//! accumulation uploaded again after the read-back, and its estimate is resolved on the CPU.
 
-use crate::resolve::resolve_image;
+use crate::resolve::{density_estimation, resolve_image};
 use crate::shot::Shot;
 use crate::splat::Framebuffer;
 
 use super::batch::{BatchSizing, BatchStats, GpuSplatter};
+use super::density_estimation::GpuDensityEstimation;
 use super::{GpuContext, GpuError};
 
 pub struct GpuRendered {
@@ -23,6 +26,14 @@ pub struct GpuRendered {
 /// device can bind.
 pub fn render_gpu(ctx: &GpuContext, shot: &Shot) -> Result<GpuRendered, GpuError> {
     let (framebuffer, stats) = GpuSplatter::new(BatchSizing::Timed).splat(ctx, shot)?;
-    let image = resolve_image(&framebuffer, &shot.camera, &shot.style);
+    let view = &framebuffer.view;
+    let image = match density_estimation::applies(shot.settings.density_estimation.as_ref(), view.mode) {
+        Some(de) => {
+            let mut gpu = GpuDensityEstimation::new(&ctx.device);
+            let e = gpu.estimate(ctx, &framebuffer.accum, view.width, view.height, &de)?;
+            density_estimation::image_of(&e, &framebuffer, &shot.camera, &shot.style)
+        }
+        None => resolve_image(&framebuffer, &shot.camera, &shot.style),
+    };
     Ok(GpuRendered { image, framebuffer, stats })
 }

@@ -296,7 +296,7 @@ impl GpuResolve {
 
 /// A full-screen triangle (`fullscreen` in the shader) whose fragment `entry` writes one
 /// `format` target, with the pipeline constants `constants`.
-fn fullscreen_pipeline(
+pub(super) fn fullscreen_pipeline(
     device: &wgpu::Device,
     module: &wgpu::ShaderModule,
     entry: &str,

@@ -11,11 +11,12 @@ pub const CHAOS_GAME: &str = include_str!("../../shaders/chaos_game.wgsl");
 pub const FULLSCREEN: &str = include_str!("../../shaders/fullscreen.wgsl");
 pub const RESOLVE: &str = include_str!("../../shaders/resolve.wgsl");
 pub const COMPOSITE: &str = include_str!("../../shaders/composite.wgsl");
+pub const DENSITY_ESTIMATION: &str = include_str!("../../shaders/density_estimation.wgsl");
 
 /// The programs: a name and the files it is made of, in order.
 /// The chaos game comes in two programs that differ only in where the compiled IFS tables
 /// live: uniform buffers (fast on lavapipe, fixed capacities) or storage buffers (any size).
-pub const PROGRAMS: [(&str, &[(&str, &str)]); 5] = [
+pub const PROGRAMS: [(&str, &[(&str, &str)]); 6] = [
     ("rng", &[("rng.wgsl", RNG)]),
     (
         "chaos_game",
@@ -27,6 +28,11 @@ pub const PROGRAMS: [(&str, &[(&str, &str)]); 5] = [
     ),
     ("resolve", &[("fullscreen.wgsl", FULLSCREEN), ("resolve.wgsl", RESOLVE)]),
     ("composite", &[("fullscreen.wgsl", FULLSCREEN), ("composite.wgsl", COMPOSITE)]),
+    // Density estimation reads the accumulation and draws with the resolve's tone map.
+    (
+        "density_estimation",
+        &[("fullscreen.wgsl", FULLSCREEN), ("resolve.wgsl", RESOLVE), ("density_estimation.wgsl", DENSITY_ESTIMATION)],
+    ),
 ];
 
 /// The source text of program `name` (one of [`PROGRAMS`]); empty for an unknown name.

@@ -46,6 +46,8 @@ impl From<&LiveSettings> for ProgressiveSettings {
             light_pitch_deg: s.light_pitch_deg,
             aperture: s.aperture,
             focus_distance: s.focus_distance,
+            tone: s.tone,
+            density_estimation: s.density_estimation,
         }
     }
 }

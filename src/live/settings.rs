@@ -3,7 +3,8 @@
 //! boundary), with the choice of where the chaos game runs ([`ChaosBackend`]) and the route it
 //! took on the adapter at hand ([`ChaosRoute`]).
 
-use crate::scene::spec::SplatMode;
+use crate::resolve::Tone;
+use crate::scene::spec::{DensityEstimation, SplatMode};
 
 /// Settings of the live view (the viewer's render panel edits them).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -41,6 +42,11 @@ pub struct LiveSettings {
     pub aperture: f32,
     /// View distance in focus; None: the camera's distance to its target.
     pub focus_distance: Option<f32>,
+    /// flam3's tone map (average and density modes): the scene's `[render]` tone at the
+    /// playhead, as `render` resolves it.
+    pub tone: Tone,
+    /// flam3's density estimation (density mode): the scene's, None off.
+    pub density_estimation: Option<DensityEstimation>,
 }
 
 impl Default for LiveSettings {
@@ -65,6 +71,8 @@ impl Default for LiveSettings {
             light_pitch_deg: crate::resolve::KEY_LIGHT_PITCH_DEG,
             aperture: 0.0,
             focus_distance: None,
+            tone: Tone::NEUTRAL,
+            density_estimation: None,
         }
     }
 }

@@ -11,15 +11,23 @@
 //! tabulated per radius in steps of 1/8 pixel. The pass scatters in bands of output rows in
 //! parallel into a float copy of the accumulation ([`Estimated`]), which [`Estimated::fragment`]
 //! resolves like the density branch of [`crate::resolve::resolve_fragment`] with float counts.
-//! The viewer's GPU resolve does not run it; `nlifs render` (8-bit PNG) and `record` do.
+//!
+//! The GPU twin is `shaders/density_estimation.wgsl` (host side `src/gpu/density_estimation.rs`),
+//! run by the viewer and `render --backend gpu`: keep the two in sync. It gathers what this file
+//! scatters (a GPU has no float atomics): for each output pixel, every source whose reflected
+//! taps land on it, with the same kernels ([`KernelTables`], built here and uploaded, so the
+//! weights are these bytes) and the same kernel choice per count (looked up in
+//! [`KernelTables::first_count`] by [`kernel_index`], which a test holds equal to the
+//! rounding of [`radius_px`] that [`estimate`] uses). Only the order of the f32 sums differs.
 
 use rayon::prelude::*;
 
 use super::{COLOR_SCALE, ResolveParams};
 use crate::scene::spec::DensityEstimation;
 
-/// Kernel radii are tabulated in steps of 1 / RADIUS_STEPS pixel.
-const RADIUS_STEPS: f32 = 8.0;
+/// Kernel radii are tabulated in steps of 1 / RADIUS_STEPS pixel (`shaders/density_estimation.wgsl`
+/// receives the tables built with it).
+pub const RADIUS_STEPS: f32 = 8.0;
 /// Output rows one task scatters into.
 const BAND_ROWS: usize = 32;
 
@@ -55,6 +63,66 @@ pub fn radius_px(de: &DensityEstimation, count: f32) -> f32 {
     (de.max_radius_px / count.powf(de.curve)).clamp(de.min_radius_px, de.max_radius_px)
 }
 
+/// The kernel table index of a pixel with `count` ≥ 1 points (the tabulated radius in steps
+/// of 1 / [`RADIUS_STEPS`] pixel, at most `max_steps`).
+fn kernel_step(de: &DensityEstimation, count: u32, max_steps: usize) -> usize {
+    ((radius_px(de, count as f32) * RADIUS_STEPS).round() as usize).min(max_steps)
+}
+
+/// The kernels of `de` laid out for the GPU (`shaders/density_estimation.wgsl`): per kernel
+/// step its first weight's index and its reach, all weights in one array, and per step the
+/// smallest count that takes that step or a smaller one.
+pub struct KernelTables {
+    /// Per step k: the smallest count whose kernel step is ≤ k (the step falls as the count
+    /// grows, so this falls with k, and the last is 1); u32::MAX where no count reaches it
+    /// (a count of u32::MAX would be misread there: GPU counts stay far below it).
+    pub first_count: Vec<u32>,
+    /// Per step: index of its first weight in `weights`, and its reach r ((2r + 1)² weights).
+    pub kernels: Vec<[u32; 2]>,
+    pub weights: Vec<f32>,
+    /// The largest reach.
+    pub reach_max: u32,
+}
+
+impl KernelTables {
+    pub fn of(de: &DensityEstimation) -> Self {
+        let max_steps = (de.max_radius_px * RADIUS_STEPS).round() as usize;
+        let (mut kernels, mut weights) = (Vec::with_capacity(max_steps + 1), Vec::new());
+        for s in 0..=max_steps {
+            let k = kernel(s as f32 / RADIUS_STEPS);
+            kernels.push([weights.len() as u32, k.reach as u32]);
+            weights.extend_from_slice(&k.weights);
+        }
+        let reach_max = kernels.iter().map(|k| k[1]).max().unwrap_or(0);
+        let first_count = (0..=max_steps)
+            .map(|k| {
+                if kernel_step(de, u32::MAX, max_steps) > k {
+                    return u32::MAX;
+                }
+                // The step does not grow with the count: bisect for the first count at ≤ k.
+                let (mut lo, mut hi) = (1u32, u32::MAX);
+                while lo < hi {
+                    let mid = lo + (hi - lo) / 2;
+                    if kernel_step(de, mid, max_steps) <= k { hi = mid } else { lo = mid + 1 }
+                }
+                lo
+            })
+            .collect();
+        Self { first_count, kernels, weights, reach_max }
+    }
+}
+
+/// The kernel step of a pixel with `count` ≥ 1 points from [`KernelTables::first_count`]: the
+/// smallest step whose first count is ≤ `count` (bisection; `kernel_index` in the shader).
+pub fn kernel_index(first_count: &[u32], count: u32) -> usize {
+    let (mut lo, mut hi) = (0, first_count.len() - 1);
+    while lo < hi {
+        let mid = (lo + hi) / 2;
+        if first_count[mid] <= count { hi = mid } else { lo = mid + 1 }
+    }
+    lo
+}
+
 /// Index `i` reflected into 0..n (…, 1, 0 | 0, 1, …, n − 1 | n − 1, n − 2, …).
 fn reflect(mut i: i64, n: i64) -> usize {
     loop {
@@ -84,16 +152,8 @@ pub fn estimate(accum: &[[u32; 4]], width: u32, height: u32, de: &DensityEstimat
     let max_steps = (de.max_radius_px * RADIUS_STEPS).round() as usize;
     let kernels: Vec<Kernel> = (0..=max_steps).map(|s| kernel(s as f32 / RADIUS_STEPS)).collect();
     // Kernel index of every pixel (u16::MAX: empty).
-    let index: Vec<u16> = accum
-        .par_iter()
-        .map(|a| {
-            if a[3] == 0 {
-                u16::MAX
-            } else {
-                ((radius_px(de, a[3] as f32) * RADIUS_STEPS).round() as usize).min(max_steps) as u16
-            }
-        })
-        .collect();
+    let index: Vec<u16> =
+        accum.par_iter().map(|a| if a[3] == 0 { u16::MAX } else { kernel_step(de, a[3], max_steps) as u16 }).collect();
     let reach_max = kernels.iter().map(|k| k.reach).max().unwrap_or(0) as i64;
     let mut sums = vec![[0f32; 4]; w * h];
     sums.par_chunks_mut((BAND_ROWS * w).max(1)).enumerate().for_each(|(band, out)| {
@@ -175,8 +235,19 @@ pub fn resolve_image(
 ) -> image::RgbImage {
     let view = &framebuffer.view;
     let Some(de) = applies(de, view.mode) else { return super::resolve_image(framebuffer, camera, style) };
+    image_of(&estimate(&framebuffer.accum, view.width, view.height, &de), framebuffer, camera, style)
+}
+
+/// The 8-bit sRGB image of the estimate `e` of `framebuffer` (made here or by the GPU twin)
+/// seen by `camera`, drawn with `style`.
+pub fn image_of(
+    e: &Estimated,
+    framebuffer: &crate::splat::Framebuffer,
+    camera: &crate::camera::OrbitCamera,
+    style: &super::ResolveStyle,
+) -> image::RgbImage {
+    let view = &framebuffer.view;
     let params = super::ResolveArgs::new(view, camera, style).params(view.width, view.height, true);
-    let e = estimate(&framebuffer.accum, view.width, view.height, &de);
     let width_px = view.width as usize;
     let mut bytes = vec![0u8; 3 * width_px * view.height as usize];
     bytes.par_chunks_mut(3 * width_px.max(1)).enumerate().for_each(|(y, row)| {

@@ -106,3 +106,37 @@ fn radius_follows_the_curve() {
     assert!((radius_px(&d, 32.0) - 9.0 / 32f32.powf(0.4)).abs() < 1e-5);
     assert_eq!(radius_px(&d, 1e6), 1.5);
 }
+
+/// The GPU's kernel choice ([`kernel_index`] over [`KernelTables::first_count`]) is the CPU's
+/// ([`kernel_step`]) for every count up to 2^18 and for the powers of two and their neighbours
+/// beyond, in settings with and without a minimum radius and with flat and steep curves: the
+/// two sides pick the same kernel, exactly (no tolerance: the lookup is a table of integers).
+#[test]
+fn kernel_lookup_matches_the_cpu_choice() {
+    let settings = [
+        de(9.0, 0.0),
+        de(4.5, 1.0),
+        DensityEstimation { max_radius_px: 20.0, min_radius_px: 0.5, curve: 0.1 },
+        DensityEstimation { max_radius_px: 3.0, min_radius_px: 0.0, curve: 2.0 },
+        DensityEstimation { max_radius_px: 32.0, min_radius_px: 32.0, curve: 0.4 },
+    ];
+    for d in settings {
+        let tables = KernelTables::of(&d);
+        let max_steps = tables.kernels.len() - 1;
+        assert_eq!(tables.first_count[max_steps], 1, "{d:?}: the widest step takes a count of 1");
+        let powers = (18..32).flat_map(|p| [(1u32 << p) - 1, 1 << p, (1 << p) + 1]);
+        for count in (1..=1u32 << 18).chain(powers).chain([u32::MAX - 1]) {
+            assert_eq!(
+                kernel_index(&tables.first_count, count),
+                kernel_step(&d, count, max_steps),
+                "{d:?}: count {count}"
+            );
+        }
+        for (s, k) in tables.kernels.iter().enumerate() {
+            let cpu = kernel(s as f32 / RADIUS_STEPS);
+            let side = (2 * k[1] + 1) as usize;
+            assert_eq!(k[1] as i32, cpu.reach);
+            assert_eq!(&tables.weights[k[0] as usize..k[0] as usize + side * side], &cpu.weights[..]);
+        }
+    }
+}

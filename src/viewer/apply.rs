@@ -380,6 +380,7 @@ impl ViewerState {
                 Command::RemoveBuilderStep { function, step } => edited |= self.remove_builder_step(function, step),
                 Command::MoveBuilderStep { function, from, to } => edited |= self.move_builder_step(function, from, to),
                 Command::MoveKey { key, t_secs } => edited |= self.move_key(key, t_secs),
+                Command::SetImaging(imaging) => self.set_imaging(imaging),
                 Command::Save
                 | Command::ShowFileDialog(_)
                 | Command::FileDialogDone { .. }
@@ -402,6 +403,8 @@ impl ViewerState {
             self.recompile();
             changes.scene_edited = true;
         }
+        // The tone and density estimation at the current time (after edits, undo, playback).
+        changes.live_settings |= self.take_scene_imaging();
         if time_moved && self.playback.follow_camera && self.scene.timeline.is_some() {
             self.camera = self.framed_camera();
             changes.camera = true;
@@ -473,7 +476,7 @@ impl ViewerState {
     }
 
     /// Applies `edit` now as part of the running gesture (opening one if none runs).
-    fn preview(&mut self, edit: Edit) -> bool {
+    pub(super) fn preview(&mut self, edit: Edit) -> bool {
         if let Err(e) = edit.apply(&mut self.scene) {
             self.error = Some(format!("edit refused: {e}"));
             return false;
@@ -488,6 +491,11 @@ impl ViewerState {
             && f0 == function
             && k0 == key
         {
+            *a0 = after.clone();
+        } else if let (Some(Edit::ReplaceScene { after: a0, .. }), Edit::ReplaceScene { after, .. }) =
+            (edits.last_mut(), &edit)
+        {
+            // Likewise a slider's many whole-scene steps (the render panel's imaging).
             *a0 = after.clone();
         } else {
             edits.push(edit);

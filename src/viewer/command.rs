@@ -251,6 +251,9 @@ pub enum Command {
     SetColorMode(crate::scene::spec::ColorMode),
     /// `[render] palette`: a built-in palette's name (one undo step).
     SetPalette(String),
+    /// The render panel's tone and density estimation: a scene edit (`imaging.rs`), part of
+    /// the running gesture; the accumulation is kept.
+    SetImaging(super::imaging::Imaging),
 }
 
 /// What the user answered when closing with unsaved edits.

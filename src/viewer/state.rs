@@ -236,6 +236,7 @@ impl ViewerState {
         state.live.background = state.scene.render.background;
         state.take_scene_look();
         state.take_scene_lens();
+        state.take_scene_imaging();
         state.recompile();
         state.camera = state.framed_camera();
         state

@@ -217,6 +217,7 @@ fn render_ui(ui: &mut egui::Ui, state: &ViewerState, commands: &mut Vec<Command>
         if changed && live != state.live {
             commands.push(Command::SetLiveSettings(live));
         }
+        super::tone_ui::imaging_ui(ui, state, commands);
         let mut perspective = state.camera.projection == Projection::Perspective;
         ui.horizontal(|ui| {
             if ui.checkbox(&mut perspective, "perspective (P)").changed() {

@@ -1,0 +1,57 @@
+//! The render panel's imaging controls (average and density modes): flam3's tone map and, in
+//! density mode, density estimation. They read the live view's values (the scene's at the
+//! current time) and send `Command::SetImaging` (`imaging.rs` turns it into a scene edit).
+
+use crate::scene::spec::{DensityEstimation, SplatMode, TONE_FIELDS};
+
+use super::command::Command;
+use super::imaging::DEFAULT_DENSITY_ESTIMATION;
+use super::state::ViewerState;
+use super::widgets::slider;
+
+/// The labels of the tone fields, in the order of `TONE_FIELDS`.
+const TONE_LABELS: [&str; 5] = ["exposure (stops)", "gamma", "gamma threshold", "vibrancy", "highlight power (−1 off)"];
+
+pub fn imaging_ui(ui: &mut egui::Ui, state: &ViewerState, commands: &mut Vec<Command>) {
+    let mode = state.live.mode;
+    if mode == SplatMode::Closest {
+        return;
+    }
+    let before = state.imaging();
+    let mut fields = before.tone_fields();
+    let keyed = state.keyed_tone_fields();
+    let at_key = state.key_at_playhead().is_some();
+    let mut changed = false;
+    ui.separator();
+    ui.label("Tone (saved with the scene)");
+    for (i, ((_, lo, hi), label)) in TONE_FIELDS.into_iter().zip(TONE_LABELS).enumerate() {
+        let s = slider(&mut fields[i], lo as f32..=hi as f32).text(label).logarithmic(i == 1);
+        let response = ui
+            .add_enabled(!keyed[i] || at_key, s)
+            .on_disabled_hover_text("keyed in the timeline: move the playhead onto a key to edit it there");
+        changed |= response.changed();
+    }
+    let mut imaging = before.with_tone_fields(fields);
+    if mode == SplatMode::Density {
+        let mut on = imaging.density_estimation.is_some();
+        if ui
+            .checkbox(&mut on, "density estimation")
+            .on_hover_text("flam3's adaptive filter: sparse regions smooth, dense ones sharp")
+            .changed()
+        {
+            imaging.density_estimation = on.then_some(DEFAULT_DENSITY_ESTIMATION);
+            changed = true;
+        }
+        if let Some(de) = &mut imaging.density_estimation {
+            let max = DensityEstimation::MAX_RADIUS_PX;
+            changed |= ui.add(slider(&mut de.max_radius_px, 0.5..=max).text("estimator radius (px)")).changed();
+            de.min_radius_px = de.min_radius_px.min(de.max_radius_px);
+            let radius = de.max_radius_px;
+            changed |= ui.add(slider(&mut de.min_radius_px, 0.0..=radius).text("estimator minimum (px)")).changed();
+            changed |= ui.add(slider(&mut de.curve, 0.01..=10.0).logarithmic(true).text("estimator curve")).changed();
+        }
+    }
+    if changed && imaging != before {
+        commands.push(Command::SetImaging(imaging));
+    }
+}

@@ -1,0 +1,120 @@
+//! Density estimation on the GPU (`shaders/density_estimation.wgsl`, host side
+//! `src/gpu/density_estimation.rs`) against its CPU twin (`src/resolve/density_estimation.rs`):
+//! the same accumulation goes through both, and every estimated sum and count, and the largest
+//! count, must agree within the bound derived at [`summation_bound`]. Accumulations with sparse
+//! single hits, dense clusters and points on the border, in several settings, and a 5×3 image
+//! narrower than the kernel (taps reflected more than once). Runs on any adapter (lavapipe in
+//! CI); without one it skips loudly, unless NLIFS_REQUIRE_GPU=1, in which case it fails.
+
+use nlifs::gpu::GpuContext;
+use nlifs::gpu::density_estimation::GpuDensityEstimation;
+use nlifs::resolve::density_estimation::{KernelTables, estimate};
+use nlifs::rng::Pcg32;
+use nlifs::scene::spec::DensityEstimation;
+
+fn gpu() -> Option<GpuContext> {
+    match GpuContext::headless() {
+        Ok(ctx) => Some(ctx),
+        Err(e) if std::env::var("NLIFS_REQUIRE_GPU").as_deref() == Ok("1") => panic!("NLIFS_REQUIRE_GPU=1 but {e}"),
+        Err(e) => {
+            eprintln!("\n*** SKIPPING GPU TEST: {e} ***\n");
+            None
+        }
+    }
+}
+
+/// A `w`×`h` accumulation drawn from `seed`: clusters of dense pixels (counts up to 5000, none
+/// within 9 columns and 7 rows of the top left corner, so a small image is sparse),
+/// isolated single hits, and the outermost rows and columns hit, with colour sums of channels
+/// in 0..=255 per point.
+fn accumulation(w: u32, h: u32, seed: u32) -> Vec<[u32; 4]> {
+    let mut r = Pcg32::for_stream(seed, 0, 0);
+    (0..w * h)
+        .map(|i| {
+            let (x, y) = (i % w, i / w);
+            let border = x == 0 || y == 0 || x == w - 1 || y == h - 1;
+            let n = if (x / 9 + y / 7) % 4 == 1 {
+                r.next_u32() % 5000
+            } else if border || r.next_u32().is_multiple_of(7) {
+                1 + r.next_u32() % 3
+            } else {
+                0
+            };
+            [n * (r.next_u32() % 256), n * (r.next_u32() % 256), n * (r.next_u32() % 256), n]
+        })
+        .collect()
+}
+
+/// Most images (t + 2nk, −1 − t + 2nk) of any pixel of an axis of `n` pixels that lie within
+/// `reach` of the axis, i.e. in [−reach, n − 1 + reach]: the taps landing on one pixel come
+/// from at most this many positions per axis.
+fn images_per_axis(n: i64, reach: i64) -> i64 {
+    (0..n)
+        .map(|t| {
+            (-4..=4)
+                .flat_map(|k| [t + 2 * n * k, -1 - t + 2 * n * k])
+                .filter(|v| (-reach..n + reach).contains(v))
+                .count() as i64
+        })
+        .max()
+        .unwrap_or(1)
+}
+
+/// How far the GPU's estimated value V may be from the CPU's, relative to V. Both compute
+/// V = Σ w_i a_i over the same N terms (the same weights, uploaded from the CPU's tables; the
+/// same kernel per pixel, `kernel_lookup_matches_the_cpu_choice` in the CPU twin's tests; the
+/// same u32 → f32 conversions, round to nearest) in different orders, and every term is ≥ 0.
+/// With u = 2^-24, a sum of N non-negative products in any order, with or without a fused
+/// multiply-add, is within γ_N · V of the exact sum, γ_N = N u / (1 − N u) (Higham, Accuracy
+/// and Stability of Numerical Algorithms, §3.1 and §4.2); a conversion that does not round to
+/// nearest would add ≤ 2u per term, so N + 2 is used. The two results are then within
+/// 2 γ_{N+2} V of each other. N is at most the taps of one position (2 reach + 1)² times the
+/// positions per axis squared ([`images_per_axis`]).
+fn summation_bound(w: u32, h: u32, reach: u32) -> f64 {
+    let r = reach as i64;
+    let n = ((2 * r + 1).pow(2) * images_per_axis(w as i64, r) * images_per_axis(h as i64, r) + 2) as f64;
+    let u = 2f64.powi(-24);
+    2.0 * n * u / (1.0 - n * u)
+}
+
+#[test]
+fn gpu_density_estimation_matches_cpu() {
+    let Some(ctx) = gpu() else { return };
+    let mut gpu = GpuDensityEstimation::new(&ctx.device);
+    let settings = |max_radius_px, min_radius_px, curve| DensityEstimation { max_radius_px, min_radius_px, curve };
+    let cases = [
+        (83, 57, 1, settings(6.0, 0.0, 0.4)),
+        (83, 57, 2, settings(3.5, 1.0, 0.4)),
+        (64, 48, 3, settings(9.0, 0.0, 0.2)),
+        (40, 30, 4, settings(2.0, 2.0, 1.0)),
+        // Narrower than the kernel: taps reflect off both sides, several times.
+        (5, 3, 5, settings(4.0, 0.0, 0.4)),
+    ];
+    for (w, h, seed, de) in cases {
+        let accum = accumulation(w, h, seed);
+        let cpu = estimate(&accum, w, h, &de);
+        let g = gpu.estimate(&ctx, &accum, w, h, &de).unwrap();
+        let bound = summation_bound(w, h, KernelTables::of(&de).reach_max);
+        let mut worst = 0f64;
+        for (i, (c, v)) in cpu.sums.iter().zip(&g.sums).enumerate() {
+            for k in 0..4 {
+                let (c, v) = (c[k] as f64, v[k] as f64);
+                let allowed = bound * c.max(v);
+                assert!(
+                    (c - v).abs() <= allowed,
+                    "{w}×{h} {de:?}: pixel ({}, {}) channel {k}: GPU {v} vs CPU {c} (allowed ±{allowed:e})",
+                    i as u32 % w,
+                    i as u32 / w,
+                );
+                if c > 0.0 {
+                    worst = worst.max((c - v).abs() / c);
+                }
+            }
+        }
+        let (c, v) = (cpu.max_count as f64, g.max_count as f64);
+        assert!((c - v).abs() <= bound * c.max(v), "{w}×{h} {de:?}: largest count GPU {v} vs CPU {c}");
+        // The estimate is not the input: the filter ran (a sparse hit spreads).
+        assert!(g.sums.iter().zip(&accum).any(|(s, a)| s[3] != a[3] as f32), "{w}×{h} {de:?}: nothing spread");
+        eprintln!("{w}×{h} {de:?}: largest relative difference {worst:e}, bound {bound:e}");
+    }
+}
