@@ -209,6 +209,7 @@ fn render_ui(ui: &mut egui::Ui, state: &ViewerState, commands: &mut Vec<Command>
         changed |= ui.add(slider(&mut live.point_radius_px, 0..=3).text("point size (radius px)")).changed();
         changed |= ui.add(slider(&mut live.shading, 0.0..=1.0).text("shading (closest)")).changed();
         changed |= ui.add(slider(&mut live.occlusion, 0.0..=1.0).text("occlusion (closest)")).changed();
+        changed |= super::light_ui::light_ui(ui, &mut live);
         ui.horizontal(|ui| {
             changed |= ui.color_edit_button_rgb(&mut live.background).changed();
             ui.label("background");
