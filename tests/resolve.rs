@@ -341,13 +341,15 @@ fn compare(gpu: &mut Gpu, acc: &Accumulation, args: &ResolveArgs) -> u8 {
         }
     }
     eprintln!(
-        "{}, shading {} (drawn {}), occlusion {} (drawn {}), radius {} (drawn {}), {:?}: {differing} channels \
-         differ, by ≤ {max_diff} levels; widest allowed interval {widest:.3} levels",
+        "{}, shading {} (drawn {}), occlusion {} (drawn {}), shadows {} (drawn {}), radius {} (drawn {}), {:?}: \
+         {differing} channels differ, by ≤ {max_diff} levels; widest allowed interval {widest:.3} levels",
         acc.name,
         args.shading,
         p.shading,
         args.occlusion,
         p.occlusion,
+        args.shadows,
+        p.shadows,
         args.point_radius_px,
         p.point_radius_px,
         args.tone,

@@ -28,7 +28,7 @@ pub const SOLID_SHADOWS: f32 = 0.6;
 /// The PCF taps: (2 SHADOW_PCF_RADIUS + 1)² texels around the receiver's.
 pub const SHADOW_PCF_RADIUS: i32 = 1;
 /// Constant part of the bias, in texels (or image pixels, whichever is larger).
-pub const SHADOW_BIAS_TEXELS: f32 = 1.0;
+pub const SHADOW_BIAS_TEXELS: f32 = 1.5;
 /// Part of the bias per unit of the slope (tangent of the angle between normal and light).
 pub const SHADOW_BIAS_SLOPE: f32 = 1.0;
 /// The slope is clamped here (tan 76°): the receiver plane and the bias stop growing.
@@ -93,3 +93,7 @@ pub fn shadow_at(p: &ResolveParams, map: &[u32], x: i32, y: i32, key: u32, norma
     }
     occluded / taps
 }
+
+#[cfg(test)]
+#[path = "shadow_tests.rs"]
+mod tests;

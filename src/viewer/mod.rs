@@ -42,6 +42,7 @@ pub mod jobs;
 pub mod jobs_ui;
 pub mod lens;
 pub mod lens_ui;
+pub mod light_ui;
 pub mod nesting_ui;
 pub mod overlay_ui;
 mod palette_edit;
@@ -698,6 +699,7 @@ fn save_screenshot(
         "seed": live.seed,
         "shading": live.shading,
         "occlusion": live.occlusion,
+        "shadows": live.shadows,
     });
     let provenance = crate::output::Provenance::for_command(&state.scene, state.t_secs, "view", settings);
     crate::output::png::save_rgb8(path, image, Some(&provenance))

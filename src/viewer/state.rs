@@ -248,6 +248,10 @@ impl ViewerState {
         let style = crate::resolve::ResolveStyle::of(&self.scene.render, self.scene.domain.dimension());
         self.live.shading = style.shading;
         self.live.occlusion = style.occlusion;
+        // Shadows (`crate::resolve::shadow`).
+        self.live.shadows = style.shadows;
+        self.live.light_yaw_deg = style.light_yaw_deg;
+        self.live.light_pitch_deg = style.light_pitch_deg;
     }
 
     /// The scene's camera at the current time, fitted to a sample of the attractor where the

@@ -210,6 +210,7 @@ fn render_ui(ui: &mut egui::Ui, state: &ViewerState, commands: &mut Vec<Command>
         changed |= ui.add(slider(&mut live.shading, 0.0..=1.0).text("shading (closest)")).changed();
         changed |= ui.add(slider(&mut live.occlusion, 0.0..=1.0).text("occlusion (closest)")).changed();
         super::lens_ui::lens_ui(ui, state, commands);
+        changed |= super::light_ui::light_ui(ui, &mut live);
         ui.horizontal(|ui| {
             changed |= ui.color_edit_button_rgb(&mut live.background).changed();
             ui.label("background");
