@@ -25,8 +25,8 @@
 use glam::Vec3;
 
 use super::{COLOR_SCALE, DEPTH_BITS, EMPTY, Pixels, SplatMode, SplatView};
-use crate::chaos_game::PointBatch;
 use crate::camera::{OrbitCamera, Projection};
+use crate::chaos_game::PointBatch;
 use crate::rng::{Pcg32, pcg_hash};
 
 /// Draws from the square before the lens sample falls back to the lens centre: the chance that
