@@ -251,7 +251,7 @@ impl Pixels for OwnPixels<'_> {
 pub(crate) fn splat_into(view: &SplatView, colors: &[[f32; 3]], batch: PointBatch<'_>, out: &mut impl Pixels) {
     // Depth of field (aperture > 0): the scalar lens splat; otherwise untouched.
     if view.lens.is_on() {
-        splat_projected(view, colors, batch, out, lens::project_through_lens);
+        lens::splat(view, colors, batch, out);
         return;
     }
     #[cfg(target_arch = "x86_64")]
@@ -265,25 +265,12 @@ pub(crate) fn splat_into(view: &SplatView, colors: &[[f32; 3]], batch: PointBatc
 /// The splat without vector code (the reference for the vector path, which must give the
 /// same updates).
 pub(crate) fn splat_portable(view: &SplatView, colors: &[[f32; 3]], batch: PointBatch<'_>, out: &mut impl Pixels) {
-    splat_projected(view, colors, batch, out, SplatView::project);
-}
-
-/// The portable splat with the projection `project` (the pinhole [`SplatView::project`], or
-/// [`lens::project_through_lens`]).
-#[inline(always)]
-pub(crate) fn splat_projected(
-    view: &SplatView,
-    colors: &[[f32; 3]],
-    batch: PointBatch<'_>,
-    out: &mut impl Pixels,
-    project: impl Fn(&SplatView, Vec3) -> Option<(usize, f32)>,
-) {
     let v = *view;
     match v.mode {
         SplatMode::Closest => {
             let scale = ((1u32 << DEPTH_BITS) - 1) as f32;
             for (p, &fi) in batch.points().zip(batch.functions) {
-                if let Some((idx, t)) = project(&v, p) {
+                if let Some((idx, t)) = v.project(p) {
                     // t is in [0, 1] or NaN (a non-finite point); NaN goes to 0 as
                     // with a saturating `as u32`.
                     let d = t * scale;
@@ -297,7 +284,7 @@ pub(crate) fn splat_projected(
             let colors: Vec<[f32; 3]> = colors.iter().map(|c| c.map(|x| x * COLOR_SCALE)).collect();
             let bg = v.background.map(|x| x * COLOR_SCALE);
             for (p, &fi) in batch.points().zip(batch.functions) {
-                if let Some((idx, t)) = project(&v, p) {
+                if let Some((idx, t)) = v.project(p) {
                     let c = colors[fi as usize];
                     let k = v.depth_cue * t;
                     let add = [0, 1, 2].map(|ch| (c[ch] + (bg[ch] - c[ch]) * k + 0.5) as u32);

@@ -20,7 +20,7 @@ use nlifs::gpu::readback::read_buffer;
 use nlifs::rng::Pcg32;
 use nlifs::scene::Scene;
 use nlifs::scene::spec::{RenderSettings, SplatMode};
-use nlifs::shot::{Framing, Shot};
+use nlifs::shot::{Accumulation, Framing, Shot};
 use nlifs::splat::{EMPTY, Framebuffer, Lens, SplatView};
 
 /// A small render of plant2 (3D) with `aperture`, `focus` over the scene's settings.
@@ -67,6 +67,22 @@ fn aperture_zero_is_the_pinhole_render_on_the_cpu() {
     // And a lens does change it (the comparison is not vacuous).
     let blurred = shot(0.05 * pinhole.camera.distance, None).splat(|| {});
     assert_ne!(a.closest, blurred.closest);
+}
+
+/// The lens samples are a function of the point alone: per-thread framebuffers and one shared
+/// framebuffer (other batches, other order) hold the same integers (tolerance 0).
+#[test]
+fn lens_render_does_not_depend_on_the_accumulation() {
+    for mode in [SplatMode::Closest, SplatMode::Density] {
+        let (scene, mut settings) = plant2_settings(2.0, None);
+        settings.mode = mode;
+        let shot = Shot::prepare(&scene, 0.0, &settings, Framing::Scene, None).unwrap();
+        let chunks = 0..shot.plan.chunks();
+        let a = shot.splat_chunks(chunks.clone(), Accumulation::PerThread, || {});
+        let b = shot.splat_chunks(chunks, Accumulation::Shared, || {});
+        assert!(a.closest == b.closest && a.accum == b.accum, "{mode:?}");
+        assert!(a.covered_pixels() > 1000);
+    }
 }
 
 #[test]
