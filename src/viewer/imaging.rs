@@ -27,8 +27,7 @@ impl Imaging {
     }
 
     pub fn with_tone_fields(self, v: [f32; 5]) -> Self {
-        let tone =
-            Tone { exposure: v[0], gamma: v[1], gamma_threshold: v[2], vibrancy: v[3], highlight_power: v[4] };
+        let tone = Tone { exposure: v[0], gamma: v[1], gamma_threshold: v[2], vibrancy: v[3], highlight_power: v[4] };
         Self { tone, ..self }
     }
 }

@@ -48,8 +48,7 @@ pub fn imaging_ui(ui: &mut egui::Ui, state: &ViewerState, commands: &mut Vec<Com
             de.min_radius_px = de.min_radius_px.min(de.max_radius_px);
             let radius = de.max_radius_px;
             changed |= ui.add(slider(&mut de.min_radius_px, 0.0..=radius).text("estimator minimum (px)")).changed();
-            changed |=
-                ui.add(slider(&mut de.curve, 0.01..=10.0).logarithmic(true).text("estimator curve")).changed();
+            changed |= ui.add(slider(&mut de.curve, 0.01..=10.0).logarithmic(true).text("estimator curve")).changed();
         }
     }
     if changed && imaging != before {
