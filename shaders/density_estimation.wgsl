@@ -12,6 +12,11 @@
 // tables the CPU twin builds (`KernelTables`), so they are its bytes; the f32 sums differ only
 // in their order.
 //
+// Most pixels need few of the sources within reach_max: the background has none, a dense
+// region's sources reach a pixel or two. So `kernel_index` also records per tile of TILE×TILE
+// pixels the largest reach of its sources (plus one; 0: no source), and the gather visits only
+// the tiles, and within them the rows and columns, that reach the image position.
+//
 // Passes: `kernel_index` (each pixel's kernel step from its count), `estimate` (the gather,
 // and the largest estimated count as bits: for non-negative floats the u32 order of the bits
 // is the float order, so atomicMax finds it), then the full-screen `resolve_estimated`, the
@@ -28,6 +33,8 @@ struct DensityEstimationParams {
 
 // A pixel without points has no kernel.
 const NO_KERNEL: u32 = 0xffffffffu;
+// Side of the tiles whose largest reach the gather consults (`TILE` in the host side).
+const TILE: u32 = 8u;
 
 @group(1) @binding(8) var<uniform> de: DensityEstimationParams;
 // Per kernel step: the smallest count whose step is ≤ it (falls with the step).
@@ -42,6 +49,8 @@ const NO_KERNEL: u32 = 0xffffffffu;
 // The draw reads what the compute passes wrote (the same buffers, bound read-only).
 @group(1) @binding(15) var<storage, read> estimated_in: array<vec4<f32>>;
 @group(1) @binding(16) var<storage, read> estimated_max_in: array<u32>;
+// Per tile (row by row, ⌈width / TILE⌉ per row): 1 + the largest reach of its sources, 0 none.
+@group(1) @binding(17) var<storage, read_write> tile_reach: array<atomic<u32>>;
 
 // `kernel_index` in the CPU twin: the smallest step whose first count is ≤ `count`.
 fn kernel_step(count: u32) -> u32 {
@@ -65,7 +74,16 @@ fn kernel_index(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workg
         return;
     }
     let count = accum[4u * pixel + 3u];
-    kernel_of[pixel] = select(kernel_step(count), NO_KERNEL, count == 0u);
+    if count == 0u {
+        kernel_of[pixel] = NO_KERNEL;
+        return;
+    }
+    let k = kernel_step(count);
+    kernel_of[pixel] = k;
+    let x = pixel % de.width;
+    let y = pixel / de.width;
+    let tiles_x = (de.width + TILE - 1u) / TILE;
+    atomicMax(&tile_reach[(y / TILE) * tiles_x + x / TILE], kernels[k].y + 1u);
 }
 
 // The first image b + 2nk (k an integer) at or after −reach.
@@ -84,40 +102,15 @@ fn estimate(@builtin(global_invocation_id) id: vec3<u32>) {
     }
     let w = i32(de.width);
     let h = i32(de.height);
-    let reach = i32(de.reach_max);
     let t = vec2<i32>(id.xy);
     var sum = vec4<f32>(0.0);
     for (var mirror_y = 0; mirror_y < 2; mirror_y += 1) {
         let base_y = select(t.y, -1 - t.y, mirror_y == 1);
-        for (var vy = first_image(base_y, h, reach); vy <= h - 1 + reach; vy += 2 * h) {
+        for (var vy = first_image(base_y, h, i32(de.reach_max)); vy <= h - 1 + i32(de.reach_max); vy += 2 * h) {
             for (var mirror_x = 0; mirror_x < 2; mirror_x += 1) {
                 let base_x = select(t.x, -1 - t.x, mirror_x == 1);
-                for (var vx = first_image(base_x, w, reach); vx <= w - 1 + reach; vx += 2 * w) {
-                    // Sources within reach of the image (v − s is the tap's offset d).
-                    for (var sy = max(vy - reach, 0); sy <= min(vy + reach, h - 1); sy += 1) {
-                        for (var sx = max(vx - reach, 0); sx <= min(vx + reach, w - 1); sx += 1) {
-                            let s = u32(sy * w + sx);
-                            let k = kernel_of[s];
-                            if k == NO_KERNEL {
-                                continue;
-                            }
-                            let kernel = kernels[k];
-                            let r = i32(kernel.y);
-                            let dx = vx - sx;
-                            let dy = vy - sy;
-                            if abs(dx) > r || abs(dy) > r {
-                                continue;
-                            }
-                            let wgt = weights[kernel.x + u32((dy + r) * (2 * r + 1) + dx + r)];
-                            let a = vec4<f32>(
-                                f32(accum[4u * s]),
-                                f32(accum[4u * s + 1u]),
-                                f32(accum[4u * s + 2u]),
-                                f32(accum[4u * s + 3u]),
-                            );
-                            sum += wgt * a;
-                        }
-                    }
+                for (var vx = first_image(base_x, w, i32(de.reach_max)); vx <= w - 1 + i32(de.reach_max); vx += 2 * w) {
+                    sum += gather_image(vec2<i32>(vx, vy));
                 }
             }
         }
@@ -125,6 +118,52 @@ fn estimate(@builtin(global_invocation_id) id: vec3<u32>) {
     let pixel = id.y * de.width + id.x;
     estimated[pixel] = sum;
     atomicMax(&estimated_max[0], bitcast<u32>(sum.w));
+}
+
+// What lands on image position v (outside the image where it is a mirror image of the output
+// pixel): w · a of every source s with |v − s| ≤ its reach, v − s being the tap's offset d.
+// Tile by tile, within each tile's largest reach.
+fn gather_image(v: vec2<i32>) -> vec4<f32> {
+    let w = i32(de.width);
+    let h = i32(de.height);
+    let reach = i32(de.reach_max);
+    let tile = i32(TILE);
+    let tiles_x = (w + tile - 1) / tile;
+    let tile_lo = vec2<i32>(max(v.x - reach, 0), max(v.y - reach, 0)) / tile;
+    let tile_hi = vec2<i32>(min(v.x + reach, w - 1), min(v.y + reach, h - 1)) / tile;
+    var sum = vec4<f32>(0.0);
+    for (var ty = tile_lo.y; ty <= tile_hi.y; ty += 1) {
+        for (var tx = tile_lo.x; tx <= tile_hi.x; tx += 1) {
+            // −1: no source in the tile (the loops below are empty).
+            let tile_r = i32(atomicLoad(&tile_reach[u32(ty * tiles_x + tx)])) - 1;
+            let lo = max(max(vec2<i32>(tx, ty) * tile, v - vec2<i32>(tile_r)), vec2<i32>(0));
+            let hi = min(min(vec2<i32>(tx, ty) * tile + tile - 1, v + vec2<i32>(tile_r)), vec2<i32>(w - 1, h - 1));
+            for (var sy = lo.y; sy <= hi.y; sy += 1) {
+                for (var sx = lo.x; sx <= hi.x; sx += 1) {
+                    let s = u32(sy * w + sx);
+                    let k = kernel_of[s];
+                    if k == NO_KERNEL {
+                        continue;
+                    }
+                    let kernel = kernels[k];
+                    let r = i32(kernel.y);
+                    let d = v - vec2<i32>(sx, sy);
+                    if abs(d.x) > r || abs(d.y) > r {
+                        continue;
+                    }
+                    let wgt = weights[kernel.x + u32((d.y + r) * (2 * r + 1) + d.x + r)];
+                    let a = vec4<f32>(
+                        f32(accum[4u * s]),
+                        f32(accum[4u * s + 1u]),
+                        f32(accum[4u * s + 2u]),
+                        f32(accum[4u * s + 3u]),
+                    );
+                    sum += wgt * a;
+                }
+            }
+        }
+    }
+    return sum;
 }
 
 @fragment

@@ -410,3 +410,89 @@ fn resolve_matches_cpu() {
         &ResolveArgs { shading: 0.7, occlusion: 0.6, point_radius_px: 1, origin_px: [5, 3], ..field.args },
     );
 }
+
+/// Every combination of flam3's tone settings on the average and density accumulations:
+/// exposure 0 and 1.5 stops; gamma 1, and 2.2 with a wide linear threshold (0.05); vibrancy 0
+/// and 1; highlight power off (−1), 0 (hue kept) and 2 (towards white). Tolerance: item 8 of
+/// [`Tolerance`] (the exponents are ≤ 2, within its |y| ≤ 3).
+#[test]
+fn every_tone_setting_matches_cpu() {
+    let Some(ctx) = gpu() else { return };
+    let mut gpu = Gpu { resolve: GpuResolve::new(&ctx.device), ctx, draws: 0 };
+    for mode in [SplatMode::Average, SplatMode::Density] {
+        let acc = plant2(mode);
+        for exposure in [0.0, 1.5] {
+            for (gamma, gamma_threshold) in [(1.0, Tone::NEUTRAL.gamma_threshold), (2.2, 0.05)] {
+                for vibrancy in [0.0, 1.0] {
+                    for highlight_power in [-1.0, 0.0, 2.0] {
+                        let tone = Tone { exposure, gamma, gamma_threshold, vibrancy, highlight_power };
+                        compare(&mut gpu, &acc, &ResolveArgs { tone, ..acc.args });
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// The viewer's density-estimated resolve (`resolve_estimated` in
+/// `shaders/density_estimation.wgsl`, after the GPU's estimate) against the CPU twin's
+/// (`Estimated::fragment` of `estimate`), on plant2's density accumulation, neutral and toned.
+/// Tolerance: the estimated sums differ by a relative β (`summation_bound` in
+/// tests/density_estimation_gpu.rs: 2 γ_N, N ≤ 4 (2r + 1)² + 2 terms, here r = 4, so
+/// β ≈ 3.9e-5); the average colour s / n moves by ≤ 2β relative, the density ln(1 + s) /
+/// ln(1 + max) by ≤ 2β relative (ln(1 + s(1 + β)) − ln(1 + s) ≤ β · s / (1 + s) ≤ β ln(1 + s)
+/// for s ≤ 1, and ≤ β ≪ β ln(1 + s) · 3 above), and the tone map multiplies relative errors by
+/// at most 2 + g + 2 h (the colour times the gamma'd alpha; the highlight's (1 / mα)^h): a
+/// relative error ≤ (6 + 2 · 2) · 2β of the linear colour, added to item 8's; E as in 3.
+/// That is under a quarter level: the GPU must give the CPU's byte wherever the exact value
+/// lies farther than that from a rounding boundary.
+#[test]
+fn density_estimation_resolve_matches_cpu() {
+    use nlifs::gpu::density_estimation::GpuDensityEstimation;
+    use nlifs::resolve::density_estimation::estimate;
+    use nlifs::scene::spec::DensityEstimation;
+    let Some(ctx) = gpu() else { return };
+    let acc = plant2(SplatMode::Density);
+    let (w, h) = (acc.width, acc.height);
+    let accum: Vec<[u32; 4]> = bytemuck::cast_slice(&acc.words).to_vec();
+    let de = DensityEstimation { max_radius_px: 4.0, min_radius_px: 0.0, curve: 0.4 };
+    let cpu = estimate(&accum, w, h, &de);
+    let mut game = GpuChaosGame::new(&ctx.device, 1, w, h);
+    ctx.queue.write_buffer(&game.accum, 0, bytemuck::cast_slice(&acc.words));
+    game.generation = 1;
+    let mut estimation = GpuDensityEstimation::new(&ctx.device);
+    let n = (4 * (2 * 4 + 1) * (2 * 4 + 1) + 2) as f32;
+    let u = 2f32.powi(-24);
+    let beta = 2.0 * n * u / (1.0 - n * u);
+    let tones =
+        [Tone::NEUTRAL, Tone { exposure: 1.0, gamma: 2.2, vibrancy: 0.5, highlight_power: 2.0, ..Tone::NEUTRAL }];
+    for tone in tones {
+        let args = ResolveArgs { tone, ..acc.args };
+        let image = nlifs::gpu::readback::draw_offscreen(&ctx, w, h, |encoder, target, format| {
+            estimation.encode(&ctx, encoder, &game.accum, w, h, &de);
+            estimation.draw(&ctx, encoder, &args, target, format)
+        })
+        .unwrap();
+        let p = args.params(w, h, true);
+        let levels = Tolerance::of(&p).levels + 255.0 * 1.055 / 2.4 * (10.0 * 2.0 * beta);
+        assert!(levels < 0.25, "the derived tolerance {levels} levels is too loose");
+        let (mut differing, mut spread) = (0, 0);
+        for (x, y, px) in image.enumerate_pixels() {
+            let exact = cpu.fragment(&p, x, y).map(|v| v.clamp(0.0, 1.0) * 255.0);
+            for c in 0..3 {
+                let allowed = ((exact[c] - levels).max(0.0) + 0.5) as u8..=((exact[c] + levels).min(255.0) + 0.5) as u8;
+                assert!(
+                    allowed.contains(&px.0[c]),
+                    "{tone:?}: pixel ({x}, {y}) channel {c}: GPU {} vs CPU {:.3} levels (allowed {allowed:?})",
+                    px.0[c],
+                    exact[c]
+                );
+                differing += (px.0[c] != (exact[c] + 0.5) as u8) as u32;
+            }
+            let i = (y * w + x) as usize;
+            spread += (accum[i][3] == 0 && cpu.sums[i][3] > 0.0) as u32;
+        }
+        assert!(spread > 100, "the estimate spread into only {spread} empty pixels");
+        eprintln!("density estimation {de:?}, {tone:?}: {differing} channels differ by one level");
+    }
+}

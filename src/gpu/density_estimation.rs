@@ -1,8 +1,8 @@
 //! Host side of `shaders/density_estimation.wgsl`: flam3's adaptive density estimation on the
 //! GPU, the twin of `src/resolve/density_estimation.rs` (keep the three in sync). It reads an
 //! accumulation buffer in the chaos game's layout, spreads it into a float buffer of estimated
-//! sums (two compute passes: each pixel's kernel, then the gather), and draws that buffer with
-//! the resolve's density branch and tone map ([`GpuDensityEstimation::draw`]) or reads it back
+//! sums (two compute passes: each pixel's kernel and each tile's reach, then the gather), and
+//! draws that buffer with the resolve's density branch and tone map ([`GpuDensityEstimation::draw`]) or reads it back
 //! as the CPU twin's [`Estimated`] ([`GpuDensityEstimation::read`], `render --backend gpu` and
 //! the tests). The kernel tables are the CPU twin's ([`KernelTables`]), uploaded when the
 //! setting changes.
@@ -28,6 +28,8 @@ const _: () = assert!(std::mem::size_of::<DensityEstimationParams>() == 16);
 
 /// The shader's group of its own bindings (group 0 is `resolve.wgsl`'s).
 const GROUP: u32 = 1;
+/// Side of the tiles whose largest reach the gather consults (`TILE` in the shader).
+const TILE: u32 = 8;
 
 fn storage(device: &wgpu::Device, label: &str, bytes: u64, extra: wgpu::BufferUsages) -> wgpu::Buffer {
     device.create_buffer(&wgpu::BufferDescriptor {
@@ -59,6 +61,7 @@ struct Pixels {
     kernel_of: wgpu::Buffer,
     estimated: wgpu::Buffer,
     estimated_max: wgpu::Buffer,
+    tile_reach: wgpu::Buffer,
 }
 
 pub struct GpuDensityEstimation {
@@ -144,12 +147,19 @@ impl GpuDensityEstimation {
                 kernel_of: storage(device, "de_kernel_of", 4 * pixels, wgpu::BufferUsages::empty()),
                 estimated: storage(device, "de_estimated", 16 * pixels, wgpu::BufferUsages::COPY_SRC),
                 estimated_max: storage(device, "de_estimated_max", 16, wgpu::BufferUsages::COPY_SRC),
+                tile_reach: storage(
+                    device,
+                    "de_tile_reach",
+                    4 * width.div_ceil(TILE) as u64 * height.div_ceil(TILE) as u64,
+                    wgpu::BufferUsages::empty(),
+                ),
             });
         }
         let (Some(t), Some(p)) = (&self.tables, &self.pixels) else { return };
         let params = DensityEstimationParams { width, height, reach_max: t.reach_max, last_step: t.last_step };
         ctx.queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
         encoder.clear_buffer(&p.estimated_max, 0, None);
+        encoder.clear_buffer(&p.tile_reach, 0, None);
         let group = |pipeline: &wgpu::ComputePipeline, index: u32, entries: &[wgpu::BindGroupEntry]| {
             device.create_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some("density_estimation"),
@@ -161,7 +171,13 @@ impl GpuDensityEstimation {
         let index_own = group(
             &self.index_pipeline,
             GROUP,
-            &[entry(8, &self.params), entry(9, &t.first_count), entry(12, &p.kernel_of)],
+            &[
+                entry(8, &self.params),
+                entry(9, &t.first_count),
+                entry(10, &t.kernels),
+                entry(12, &p.kernel_of),
+                entry(17, &p.tile_reach),
+            ],
         );
         let estimate_accum = group(&self.estimate_pipeline, 0, &[entry(1, accum)]);
         let estimate_own = group(
@@ -174,6 +190,7 @@ impl GpuDensityEstimation {
                 entry(12, &p.kernel_of),
                 entry(13, &p.estimated),
                 entry(14, &p.estimated_max),
+                entry(17, &p.tile_reach),
             ],
         );
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {

@@ -12,10 +12,12 @@
 //!
 //! The resolve takes the settings' tone map; in density mode with density estimation on, the
 //! draw shows the estimate of `shaders/density_estimation.wgsl` instead of the raw counts. The
-//! filter reads every pixel's neighbourhood, too costly for every frame on a software
-//! rasterizer, so it runs on frames 1, 2, 4, … after a clear and then every
-//! [`ESTIMATE_EVERY_FRAMES`] frames, and once more when accumulation stops; draws in between
-//! show the last estimate (snapshots estimate afresh).
+//! filter reads every pixel's neighbourhood (about 1.3 s for 1280×720 at radius 9 on lavapipe,
+//! two busy cores), too costly for every frame on a software rasterizer, so it waits until the
+//! accumulation has rested [`ESTIMATE_FIRST_FRAMES`] frames after a clear (while the camera
+//! moves, the raw counts are drawn), runs again whenever the frames since the clear have
+//! doubled, at most [`ESTIMATE_EVERY_FRAMES`] apart, and once more when accumulation stops;
+//! draws in between show the last estimate (snapshots estimate afresh).
 
 use glam::DVec3;
 
@@ -71,9 +73,11 @@ pub struct ProgressiveSettings {
     pub density_estimation: Option<DensityEstimation>,
 }
 
-/// Frames between two density estimates once accumulation has run that long (before, the
-/// estimate is refreshed at frames 1, 2, 4, … after a clear).
-pub const ESTIMATE_EVERY_FRAMES: u32 = 32;
+/// Frames after a clear before the first density estimate (a moving camera clears every frame).
+pub const ESTIMATE_FIRST_FRAMES: u32 = 8;
+/// Most frames between two density estimates (before, the estimate is refreshed whenever the
+/// frames since the clear have doubled).
+pub const ESTIMATE_EVERY_FRAMES: u32 = 256;
 
 impl Default for ProgressiveSettings {
     fn default() -> Self {
@@ -389,8 +393,9 @@ impl Progressive {
             key_light: crate::resolve::shadow::key_light(s.light_yaw_deg, s.light_pitch_deg),
             shadow: self.view.and_then(|v| v.shadow),
         };
-        if let Some(de) = density_estimation::applies(s.density_estimation.as_ref(), s.mode) {
-            self.draw_estimated(ctx, encoder, &args, &de, target, format);
+        if let Some(de) = density_estimation::applies(s.density_estimation.as_ref(), s.mode)
+            && self.draw_estimated(ctx, encoder, &args, &de, target, format)
+        {
             return;
         }
         let light = self.light_rows(&args);
@@ -398,7 +403,8 @@ impl Progressive {
     }
 
     /// Draws the density estimate of the accumulation, refreshing it first where it is due (see
-    /// the module's notes; `light_bands` 0, a snapshot's, refreshes it always).
+    /// the module's notes; `light_bands` 0, a snapshot's, refreshes it always); false, drawing
+    /// nothing, while the accumulation is too young for one.
     fn draw_estimated(
         &mut self,
         ctx: &GpuContext,
@@ -407,13 +413,15 @@ impl Progressive {
         de: &DensityEstimation,
         target: &wgpu::TextureView,
         format: wgpu::TextureFormat,
-    ) {
+    ) -> bool {
         let frames = self.frames_since_clear;
+        let snapshot = self.light_bands == 0;
         let due = match self.estimated {
             Some((clears, at, made_with)) if clears == self.clears && made_with == *de => {
                 let next = at.saturating_add(at.clamp(1, ESTIMATE_EVERY_FRAMES));
-                frames >= next || (frames != at && self.converged()) || self.light_bands == 0
+                frames >= next || (frames != at && self.converged()) || snapshot
             }
+            _ if frames < ESTIMATE_FIRST_FRAMES && !self.converged() && !snapshot => return false,
             _ => true,
         };
         let (width, height) = self.size();
@@ -423,6 +431,7 @@ impl Progressive {
             self.estimated = Some((self.clears, frames, *de));
         }
         estimation.draw(ctx, encoder, args, target, format);
+        true
     }
 
     /// Which rows of the light cache this draw refreshes (see [`Self::light_bands`]).
