@@ -66,10 +66,11 @@ pub enum Edit {
         index: usize,
         key: Key,
     },
+    /// Key `index` replaced (boxed: two keys would make every edit twice a key's size).
     ReplaceKey {
         index: usize,
-        before: Key,
-        after: Key,
+        before: Box<Key>,
+        after: Box<Key>,
     },
     /// Key `index` moved in time from `before_secs` to `after_secs`, staying between its
     /// neighbours (keys keep their order).
@@ -198,7 +199,9 @@ impl Edit {
             }
         };
         let edit = match timeline.key_index_at(key.t_secs) {
-            Some(index) => Edit::ReplaceKey { index, before: timeline.keys[index].clone(), after: key },
+            Some(index) => {
+                Edit::ReplaceKey { index, before: Box::new(timeline.keys[index].clone()), after: Box::new(key) }
+            }
             None => {
                 // Once and ping-pong: the duration grows to cover the new key.
                 if timeline.loop_mode != timeline::LoopMode::Loop && key.t_secs > timeline.duration_secs {
@@ -284,7 +287,7 @@ impl Edit {
                 scene.timeline.as_mut().ok_or(EditError::NoTimeline)?.keys.remove(index);
             }
             Edit::ReplaceKey { index, after, .. } => {
-                scene.timeline.as_mut().ok_or(EditError::NoTimeline)?.keys[index] = after;
+                scene.timeline.as_mut().ok_or(EditError::NoTimeline)?.keys[index] = *after;
             }
             Edit::MoveKey { index, after_secs, .. } => {
                 scene.timeline.as_mut().ok_or(EditError::NoTimeline)?.keys[index].t_secs = after_secs;
@@ -343,7 +346,8 @@ impl Edit {
             Edit::DeleteKey { index, key } => (keys()?.get(*index) == Some(key)).then_some(()).ok_or(EditError::Stale),
             Edit::ReplaceKey { index, before, after } => {
                 let ks = keys()?;
-                if ks.get(*index) != Some(before) || (after.t_secs - before.t_secs).abs() > timeline::KEY_TIME_TOL_SECS
+                if ks.get(*index) != Some(&**before)
+                    || (after.t_secs - before.t_secs).abs() > timeline::KEY_TIME_TOL_SECS
                 {
                     return Err(EditError::Stale);
                 }

@@ -545,6 +545,18 @@ pub fn dispatch_size(threads: u64) -> (u32, u32) {
     (x, y)
 }
 
+impl GpuChaosGame {
+    /// Resizes the shadow map to `shadow`'s (its contents are lost: the frame must clear).
+    pub fn fit_shadow(&mut self, device: &wgpu::Device, shadow: Option<&crate::splat::ShadowView>) {
+        let side_px = shadow.map_or(0, |s| s.side_px);
+        if side_px != self.shadow_side {
+            self.shadow = super::shadow::shadow_buffer(device, side_px);
+            self.shadow_side = side_px;
+            self.invalidate_bindings();
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -19,10 +19,12 @@ use glam::{Mat4, Vec3, Vec4Swizzles};
 
 use super::{EMPTY, KEY_LIGHT, ResolveParams, depth_of};
 
-/// Yaw of [`KEY_LIGHT`]: degrees from the view direction (towards the viewer) towards the right.
-pub const KEY_LIGHT_YAW_DEG: f32 = -32.735_224;
-/// Pitch of [`KEY_LIGHT`]: degrees above the view's horizontal plane.
-pub const KEY_LIGHT_PITCH_DEG: f32 = 33.461_75;
+/// Yaw of [`KEY_LIGHT`]: degrees from the view direction (towards the viewer) towards the right
+/// (the scene format's default `light_yaw_deg`).
+pub const KEY_LIGHT_YAW_DEG: f32 = crate::scene::spec::DEFAULT_LIGHT_YAW_DEG;
+/// Pitch of [`KEY_LIGHT`]: degrees above the view's horizontal plane (the default
+/// `light_pitch_deg`).
+pub const KEY_LIGHT_PITCH_DEG: f32 = crate::scene::spec::DEFAULT_LIGHT_PITCH_DEG;
 /// Shadow strength of the solid look.
 pub const SOLID_SHADOWS: f32 = 0.6;
 /// The PCF taps: (2 SHADOW_PCF_RADIUS + 1)² texels around the receiver's.

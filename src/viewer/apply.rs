@@ -283,7 +283,11 @@ impl ViewerState {
                     if let Some(before) = self.scene.timeline.as_ref().and_then(|tl| tl.keys.get(key)).cloned() {
                         let after = Key { interpolation, ease, ..before.clone() };
                         if after != before {
-                            edited |= self.apply_edit(Edit::ReplaceKey { index: key, before, after });
+                            edited |= self.apply_edit(Edit::ReplaceKey {
+                                index: key,
+                                before: Box::new(before),
+                                after: Box::new(after),
+                            });
                         }
                     }
                 }

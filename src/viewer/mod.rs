@@ -36,6 +36,7 @@ pub mod framing;
 pub mod functions_ui;
 pub mod grid_edit_ui;
 pub mod imaging;
+mod imaging_edit;
 mod input;
 pub mod job_plan;
 pub mod jobs;
@@ -51,6 +52,7 @@ pub mod picking;
 pub mod pointer;
 pub mod recent;
 pub mod recovery;
+mod screenshot;
 pub mod state;
 pub mod timeline_ui;
 pub mod tone_ui;
@@ -424,7 +426,7 @@ impl ApplicationHandler for App {
             if let (Some(path), Some(gfx)) = (&self.options.screenshot, &mut self.gfx) {
                 match gfx.live.snapshot(&gfx.ctx) {
                     Ok(image) => {
-                        if let Err(e) = save_screenshot(&self.state, path, &image) {
+                        if let Err(e) = screenshot::save_screenshot(&self.state, path, &image) {
                             eprintln!("{e}");
                         }
                     }
@@ -549,7 +551,7 @@ impl App {
         gfx.live.set_camera(&self.state.camera);
         if let Some(path) = changes.screenshot {
             let message = match gfx.live.snapshot(&gfx.ctx) {
-                Ok(image) => match save_screenshot(&self.state, &path, &image) {
+                Ok(image) => match screenshot::save_screenshot(&self.state, &path, &image) {
                     // Where it went, in full (F12 names the file itself).
                     Ok(()) => format!("saved the screenshot {}", recent::absolute(&path).display()),
                     Err(e) => e.to_string(),
@@ -681,26 +683,4 @@ fn view_pixels(rect: egui::Rect, ppp: f32, window_px: [u32; 2]) -> ([u32; 2], [u
     let x1 = ((rect.max.x * ppp).round().max(0.0) as u32).clamp(x0 + 1, w);
     let y1 = ((rect.max.y * ppp).round().max(0.0) as u32).clamp(y0 + 1, h);
     ([x0, y0], [x1 - x0, y1 - y0])
-}
-
-/// Writes a screenshot of the view with the scene, time and live settings inside (as every PNG
-/// nlifs writes), so that `nlifs view` reopens it.
-fn save_screenshot(
-    state: &ViewerState,
-    path: &std::path::Path,
-    image: &image::RgbImage,
-) -> Result<(), crate::output::OutputError> {
-    let live = &state.live;
-    let settings = serde_json::json!({
-        "width": image.width(),
-        "height": image.height(),
-        "points_per_frame": live.point_count,
-        "steps_per_frame": live.steps_per_frame,
-        "seed": live.seed,
-        "shading": live.shading,
-        "occlusion": live.occlusion,
-        "shadows": live.shadows,
-    });
-    let provenance = crate::output::Provenance::for_command(&state.scene, state.t_secs, "view", settings);
-    crate::output::png::save_rgb8(path, image, Some(&provenance))
 }

@@ -1,0 +1,62 @@
+//! The viewer state's side of the scene's imaging (`imaging.rs`): the live view's tone and
+//! density estimation taken from the scene at the current time, and the render panel's edits
+//! (`Command::SetImaging`) applied as scene edits.
+
+use crate::edit::Edit;
+use crate::resolve::Tone;
+
+use super::imaging::Imaging;
+use super::state::ViewerState;
+
+impl ViewerState {
+    /// The imaging the live view shows.
+    pub fn imaging(&self) -> Imaging {
+        Imaging { tone: self.live.tone, density_estimation: self.live.density_estimation }
+    }
+
+    /// Which tone fields (in the order of `TONE_FIELDS`) some key of the timeline sets: those
+    /// are edited in the key at the playhead, not in `[render]`.
+    pub fn keyed_tone_fields(&self) -> [bool; 5] {
+        let keys = self.scene.timeline.as_ref().map_or(&[][..], |tl| &tl.keys[..]);
+        [0, 1, 2, 3, 4].map(|i| keys.iter().any(|k| k.render.tone[i].is_some()))
+    }
+
+    /// The live view's tone and density estimation from the scene at the current time, as
+    /// `render` takes them; true when they changed.
+    pub fn take_scene_imaging(&mut self) -> bool {
+        let render = self.scene.render_at(self.t_secs);
+        let before = self.imaging();
+        self.live.tone = Tone::of(&render);
+        self.live.density_estimation = render.density_estimation;
+        self.imaging() != before
+    }
+
+    /// The render panel's imaging edit: tone fields into `[render]`, or into the key at the
+    /// playhead where the timeline keys them (a keyed field without a key there is left as
+    /// it is; the panel does not offer it); density estimation into `[render]`. Part of the
+    /// running gesture (a slider's drag is one undo step).
+    pub(super) fn set_imaging(&mut self, imaging: Imaging) {
+        let mut after = self.scene.clone();
+        let keyed = self.keyed_tone_fields();
+        let key = self.key_at_playhead();
+        let old = self.imaging().tone_fields();
+        for (i, &value) in imaging.tone_fields().iter().enumerate() {
+            if value == old[i] {
+                continue;
+            }
+            match (keyed[i], key, after.timeline.as_mut()) {
+                (false, _, _) => *after.render.tone_mut()[i] = value,
+                (true, Some(k), Some(tl)) => {
+                    tl.keys[k].render.tone[i] = Some(value);
+                    // The edit belongs to one playhead.
+                    self.playback.playing = false;
+                }
+                (true, _, _) => {}
+            }
+        }
+        after.render.density_estimation = imaging.density_estimation;
+        if after != self.scene {
+            self.preview(Edit::ReplaceScene { before: Box::new(self.scene.clone()), after: Box::new(after) });
+        }
+    }
+}
