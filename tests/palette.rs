@@ -225,3 +225,27 @@ fn viewer_palette_edits_are_undoable() {
     assert_eq!(s.scene, scene);
     assert_eq!(coords(&s), None);
 }
+
+/// `--palette` on `render --part`: the merged parts equal one whole render byte for byte (the
+/// palette travels in the parts' provenance with its entries).
+#[test]
+fn palette_parts_merge_to_the_whole_render() {
+    let dir = common::temp_dir("palette-parts");
+    let scene = common::scene_path("plant2");
+    let base =
+        [scene.to_str().unwrap(), "--palette", "ember", "--width", "160", "--height", "120", "--points", "200000"];
+    let run = |extra: &[&str]| {
+        let out = common::run_nlifs(&[&["render"], &base[..], extra].concat());
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    };
+    let (whole, merged) = (dir.join("whole.png"), dir.join("merged.png"));
+    run(&["-o", whole.to_str().unwrap()]);
+    let parts: Vec<String> = (1..=2).map(|k| dir.join(format!("p{k}.part")).to_str().unwrap().to_string()).collect();
+    for (k, part) in parts.iter().enumerate() {
+        run(&["--part", &format!("{}/2", k + 1), "--raw", part]);
+    }
+    let out = common::run_nlifs(&["merge", &parts[0], &parts[1], "-o", merged.to_str().unwrap()]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(std::fs::read(&whole).unwrap() == std::fs::read(&merged).unwrap(), "merged parts differ from the whole");
+    let _ = std::fs::remove_dir_all(&dir);
+}

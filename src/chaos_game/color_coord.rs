@@ -32,7 +32,8 @@ pub fn step_color(c: f32, c_i: f32) -> f32 {
 /// Wraps a sink: turns the function indices of a chunk's batches into quantized colour
 /// coordinates, dropping the first `skip` rows (see the module comment).
 pub(super) struct ColorCoordSink<'a, S: PointSink> {
-    coords: &'a [f32],
+    /// c_i by function index, padded to every u8 (no bounds checks in the loop).
+    coords: Box<[f32; 256]>,
     c: &'a mut [f32; ORBITS_PER_CHUNK],
     skip: usize,
     inner: &'a mut S,
@@ -40,7 +41,8 @@ pub(super) struct ColorCoordSink<'a, S: PointSink> {
 }
 
 impl<'a, S: PointSink> ColorCoordSink<'a, S> {
-    pub(super) fn new(coords: &'a [f32], c: &'a mut [f32; ORBITS_PER_CHUNK], skip: usize, inner: &'a mut S) -> Self {
+    pub(super) fn new(coords: &[f32], c: &'a mut [f32; ORBITS_PER_CHUNK], skip: usize, inner: &'a mut S) -> Self {
+        let coords = Box::new(std::array::from_fn(|i| coords.get(i).copied().unwrap_or(0.0)));
         Self { coords, c, skip, inner, indices: vec![0; ORBITS_PER_CHUNK * STEPS_PER_BATCH] }
     }
 }
@@ -55,12 +57,15 @@ impl<S: PointSink> PointSink for ColorCoordSink<'_, S> {
         if self.indices.len() < batch.len() {
             self.indices.resize(batch.len(), 0);
         }
+        // On copies, so that the compiler sees that c, the table and the output do not alias.
+        let (mut c, coords) = (*self.c, &*self.coords);
         for (fs, out) in batch.functions.chunks_exact(K).zip(self.indices.chunks_exact_mut(K)) {
-            for ((c, &f), out) in self.c.iter_mut().zip(fs).zip(out) {
-                *c = step_color(*c, self.coords[f as usize]);
+            for ((c, &f), out) in c.iter_mut().zip(fs).zip(out) {
+                *c = step_color(*c, coords[f as usize]);
                 *out = palette::index_of(*c);
             }
         }
+        *self.c = c;
         let kept = dropped * K..batch.len();
         if !kept.is_empty() {
             self.inner.consume(PointBatch {

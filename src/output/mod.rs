@@ -150,6 +150,18 @@ impl Provenance {
         if r.focus_distance != own.focus_distance {
             extra.insert("focus_distance".into(), r.focus_distance.into());
         }
+        // Palette colour over the scene's: the mode, and the palette with its entries as f32 bit
+        // patterns (exact through JSON; an image strip need not be where the merge runs).
+        if r.color != own.color {
+            extra.insert("color".into(), r.color.name().into());
+        }
+        if r.palette != own.palette {
+            let palette = r.palette.as_ref().map(|p| {
+                let bits: Vec<[u32; 3]> = p.samples.iter().map(|c| c.map(f32::to_bits)).collect();
+                serde_json::json!({ "source": p.source, "sample_bits": bits })
+            });
+            extra.insert("palette".into(), palette.into());
+        }
         Self { scene_toml: scene.to_toml(), t_secs, settings }
     }
 

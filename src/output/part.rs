@@ -384,7 +384,34 @@ fn settings_of(p: &Provenance, origin: &str) -> Result<RenderSettings, OutputErr
     if let Some(v) = s.get("focus_distance") {
         settings.focus_distance = v.as_f64().map(|x| x as f32);
     }
+    palette_settings_of(s, &mut settings).ok_or_else(|| bad("palette"))?;
     Ok(settings)
+}
+
+/// The palette-colour overrides of `Provenance::for_render` (`color`, `palette` with its
+/// entries) set in `settings`; None when they are malformed.
+fn palette_settings_of(s: &serde_json::Value, settings: &mut RenderSettings) -> Option<()> {
+    if let Some(v) = s.get("color") {
+        settings.color = v.as_str().and_then(crate::scene::spec::ColorMode::parse)?;
+    }
+    if let Some(v) = s.get("palette") {
+        settings.palette = if v.is_null() {
+            None
+        } else {
+            let samples = v["sample_bits"]
+                .as_array()?
+                .iter()
+                .map(|c| {
+                    let c = c.as_array().filter(|c| c.len() == 3)?;
+                    let bits = |k: usize| c[k].as_u64().and_then(|b| u32::try_from(b).ok());
+                    Some([bits(0)?, bits(1)?, bits(2)?].map(f32::from_bits))
+                })
+                .collect::<Option<Vec<[f32; 3]>>>()
+                .filter(|s| s.len() == crate::palette::SAMPLES)?;
+            Some(crate::palette::Palette { source: v["source"].as_str()?.to_string(), samples })
+        };
+    }
+    Some(())
 }
 
 #[cfg(test)]
