@@ -147,6 +147,13 @@ impl Provenance {
         if r.aperture != own.aperture {
             extra.insert("aperture".into(), r.aperture.into());
         }
+        // The key light (`--shadows`, `--light-yaw-deg`, `--light-pitch-deg`).
+        if r.shadows != own.shadows {
+            extra.insert("shadows".into(), r.shadows.into());
+        }
+        if [r.light_yaw_deg, r.light_pitch_deg] != [own.light_yaw_deg, own.light_pitch_deg] {
+            extra.insert("light".into(), vec![r.light_yaw_deg, r.light_pitch_deg].into());
+        }
         if r.focus_distance != own.focus_distance {
             extra.insert("focus_distance".into(), r.focus_distance.into());
         }

@@ -7,8 +7,9 @@
 //! A part file, little-endian: the magic `NLIFSPRT`, format version, K, N, the fingerprint of
 //! scene + time + settings ([`Provenance::fingerprint`]), mode, width, height, the chunk range
 //! and total, the provenance (JSON: scene TOML, time, settings, so that `merge` can rebuild the
-//! view and embed the scene), the payload (one u32 key per pixel, or four u32 sums per pixel),
-//! and an FNV-1a checksum of everything before it. Merging checks all of it before writing.
+//! view and embed the scene), the payload (one u32 key per pixel, or four u32 sums per pixel,
+//! then the key light's shadow map where the still casts shadows), and an FNV-1a checksum of
+//! everything before it. Merging checks all of it before writing.
 
 use std::ops::Range;
 use std::path::Path;
@@ -20,7 +21,8 @@ use crate::shot::{Framing, Shot};
 use crate::splat::Framebuffer;
 
 const MAGIC: &[u8; 8] = b"NLIFSPRT";
-const VERSION: u32 = 1;
+/// 2: the payload ends with the shadow map's keys where the still casts shadows.
+const VERSION: u32 = 2;
 
 /// 64-bit FNV-1a: a stable hash for fingerprints and checksums (std's hasher may change).
 #[derive(Clone, Copy, Debug)]
@@ -119,10 +121,13 @@ fn provenance_json(p: &Provenance) -> String {
 /// Writes `part` to `path` atomically.
 pub fn write_part(path: &Path, part: &Part) -> Result<(), OutputError> {
     let fb = &part.framebuffer;
-    let payload: &[u32] = match fb.view.mode {
+    let image: &[u32] = match fb.view.mode {
         SplatMode::Closest => &fb.closest,
         _ => bytemuck::cast_slice(&fb.accum),
     };
+    // The shadow map (empty without shadows) follows the image's accumulation.
+    let payload = || image.iter().chain(&fb.shadow);
+    let payload_words = image.len() + fb.shadow.len();
     let prov = provenance_json(&part.provenance);
     let mut head = Vec::new();
     head.extend_from_slice(MAGIC);
@@ -136,15 +141,16 @@ pub fn write_part(path: &Path, part: &Part) -> Result<(), OutputError> {
     }
     head.extend_from_slice(&(prov.len() as u32).to_le_bytes());
     head.extend_from_slice(prov.as_bytes());
-    head.extend_from_slice(&(payload.len() as u64 * 4).to_le_bytes());
+    head.extend_from_slice(&(payload_words as u64 * 4).to_le_bytes());
     crate::io::write_atomic(path, |w| {
         let mut hash = Fnv::new();
         hash.write(&head);
         w.write_all(&head)?;
         let mut buf = Vec::with_capacity(1 << 16);
-        for block in payload.chunks(1 << 14) {
+        let mut words = payload().peekable();
+        while words.peek().is_some() {
             buf.clear();
-            for x in block {
+            for x in words.by_ref().take(1 << 14) {
                 buf.extend_from_slice(&x.to_le_bytes());
             }
             hash.write(&buf);
@@ -290,7 +296,7 @@ pub fn merge_parts(paths: &[std::path::PathBuf]) -> Result<Merged, OutputError> 
             return Err(mismatch(&format!("the part count ({})", part.spec.n)));
         }
         if (part.width, part.height, part.mode) != (first.width, first.height, first.mode)
-            || part.payload.len() != fb.closest.len().max(4 * fb.accum.len())
+            || part.payload.len() != payload_len(&fb.view)
         {
             return Err(mismatch("the image size or mode"));
         }
@@ -321,19 +327,27 @@ pub fn merge_parts(paths: &[std::path::PathBuf]) -> Result<Merged, OutputError> 
     Ok(Merged { framebuffer, camera: s.camera, style: s.style, density_estimation, provenance: first.provenance })
 }
 
+/// u32 words of a part's payload for `view`: the image's accumulation, then the shadow map's
+/// keys.
 fn payload_len(view: &crate::splat::SplatView) -> usize {
     let pixels = view.width as usize * view.height as usize;
-    if view.mode == SplatMode::Closest { pixels } else { 4 * pixels }
+    let image = if view.mode == SplatMode::Closest { pixels } else { 4 * pixels };
+    image + view.shadow.map_or(0, |s| s.texels())
 }
 
 /// Merges a part's payload into `fb` as [`Framebuffer::merge`] does.
 fn absorb(fb: &mut Framebuffer, payload: &[u32]) {
-    for (a, &b) in fb.closest.iter_mut().zip(payload) {
+    let image_words = fb.closest.len() + 4 * fb.accum.len();
+    let (image, shadow) = payload.split_at(image_words.min(payload.len()));
+    for (a, &b) in fb.closest.iter_mut().zip(image) {
         *a = (*a).min(b);
     }
     let sums: &mut [u32] = bytemuck::cast_slice_mut(&mut fb.accum);
-    for (a, &b) in sums.iter_mut().zip(payload) {
+    for (a, &b) in sums.iter_mut().zip(image) {
         *a = a.saturating_add(b);
+    }
+    for (a, &b) in fb.shadow.iter_mut().zip(shadow) {
+        *a = (*a).min(b);
     }
 }
 
@@ -376,6 +390,14 @@ fn settings_of(p: &Provenance, origin: &str) -> Result<RenderSettings, OutputErr
             let d = floats(v).filter(|d| d.len() == 3).ok_or_else(|| bad("density_estimation"))?;
             Some(DensityEstimation { max_radius_px: d[0], min_radius_px: d[1], curve: d[2] })
         };
+    }
+    // The key light.
+    if let Some(v) = s.get("shadows") {
+        settings.shadows = v.as_f64().map(|x| x as f32);
+    }
+    if let Some(v) = s.get("light") {
+        let light = floats(v).filter(|l| l.len() == 2).ok_or_else(|| bad("light"))?;
+        (settings.light_yaw_deg, settings.light_pitch_deg) = (light[0], light[1]);
     }
     // Depth of field.
     if let Some(v) = s.get("aperture") {
