@@ -249,7 +249,7 @@ impl Pixels for OwnPixels<'_> {
 /// splat where the CPU has it, else the portable one; both give the same updates.
 #[inline]
 pub(crate) fn splat_into(view: &SplatView, colors: &[[f32; 3]], batch: PointBatch<'_>, out: &mut impl Pixels) {
-    // Depth of field (aperture > 0): the scalar lens splat; otherwise untouched.
+    // Depth of field (aperture > 0): the lens splat (`lens.rs`); otherwise untouched.
     if view.lens.is_on() {
         lens::splat(view, colors, batch, out);
         return;

@@ -24,10 +24,13 @@
 
 use glam::Vec3;
 
-use super::{COLOR_SCALE, DEPTH_BITS, EMPTY, Pixels, SplatMode, SplatView};
+use super::{COLOR_SCALE, DEPTH_BITS, Pixels, SplatMode, SplatView};
 use crate::camera::{OrbitCamera, Projection};
 use crate::chaos_game::PointBatch;
 use crate::rng::{Pcg32, pcg_hash};
+
+#[cfg(target_arch = "x86_64")]
+mod x86;
 
 /// Draws from the square before the lens sample falls back to the lens centre: the chance that
 /// all miss the disk is (1 − π/4)^16 ≈ 2·10⁻¹¹.
@@ -129,66 +132,50 @@ pub fn lens_sample(seed: u32, p: Vec3) -> [f32; 2] {
     [0.0, 0.0]
 }
 
-/// Points per block of the lens splat: their pixels and updates are computed first, then
-/// applied in a loop of independent framebuffer accesses (the projection's hash and rejection
+/// Points per block of the lens splat: their projections are computed first, then the pixels
+/// updated in a loop of independent framebuffer accesses (the projection's hash and rejection
 /// loop between two accesses would otherwise keep the cache misses from overlapping).
 const BLOCK: usize = 64;
 
-/// The splat through the lens (scalar; `splat_portable` in `src/splat.rs` with
-/// [`project_through_lens`] for the projection, in two passes per block).
+/// The splat through the lens: per block of points their projections (8 at a time with
+/// AVX2, `lens/x86.rs`), then the pixel updates (`splat_portable` in `src/splat.rs` is the
+/// same arithmetic with the pinhole projection).
 pub(crate) fn splat(view: &SplatView, colors: &[[f32; 3]], batch: PointBatch<'_>, out: &mut impl Pixels) {
     let v = *view;
-    let mut pixels = [0usize; BLOCK];
-    match v.mode {
-        SplatMode::Closest => {
-            let scale = ((1u32 << DEPTH_BITS) - 1) as f32;
-            let mut keys = [EMPTY; BLOCK];
-            for start in (0..batch.len()).step_by(BLOCK) {
-                let n = BLOCK.min(batch.len() - start);
-                for i in 0..n {
-                    let j = start + i;
-                    (pixels[i], keys[i]) = match project_through_lens(&v, batch.point(j)) {
-                        Some((idx, t)) => {
-                            // As the portable splat: NaN and negatives to 0, exact truncation.
-                            let d = t * scale;
-                            let d = if d > 0.0 { d } else { 0.0 };
-                            (idx, (d as u32) << 8 | batch.functions[j] as u32)
-                        }
-                        None => (0, EMPTY),
-                    };
-                }
-                for i in 0..n {
-                    if keys[i] != EMPTY {
-                        out.min_key(pixels[i], keys[i]);
-                    }
-                }
+    let mut hits = [None; BLOCK];
+    let scale = ((1u32 << DEPTH_BITS) - 1) as f32;
+    let scaled: Vec<[f32; 3]> = colors.iter().map(|c| c.map(|x| x * COLOR_SCALE)).collect();
+    let bg = v.background.map(|x| x * COLOR_SCALE);
+    for start in (0..batch.len()).step_by(BLOCK) {
+        let n = BLOCK.min(batch.len() - start);
+        project_block(&v, batch, start, &mut hits[..n]);
+        for (i, hit) in hits[..n].iter().enumerate() {
+            let Some((idx, t)) = *hit else { continue };
+            let fi = batch.functions[start + i];
+            if v.mode == SplatMode::Closest {
+                // As the portable splat: NaN and negatives to 0, an exact truncation.
+                let d = t * scale;
+                let d = if d > 0.0 { d } else { 0.0 };
+                out.min_key(idx, (d as u32) << 8 | fi as u32);
+            } else {
+                let c = scaled[fi as usize];
+                let k = v.depth_cue * t;
+                let add = [0, 1, 2].map(|ch| (c[ch] + (bg[ch] - c[ch]) * k + 0.5) as u32);
+                out.add(idx, [add[0], add[1], add[2], 1]);
             }
         }
-        _ => {
-            let colors: Vec<[f32; 3]> = colors.iter().map(|c| c.map(|x| x * COLOR_SCALE)).collect();
-            let bg = v.background.map(|x| x * COLOR_SCALE);
-            let mut adds = [[0u32; 4]; BLOCK];
-            for start in (0..batch.len()).step_by(BLOCK) {
-                let n = BLOCK.min(batch.len() - start);
-                for i in 0..n {
-                    let j = start + i;
-                    (pixels[i], adds[i]) = match project_through_lens(&v, batch.point(j)) {
-                        Some((idx, t)) => {
-                            let c = colors[batch.functions[j] as usize];
-                            let k = v.depth_cue * t;
-                            let add = [0, 1, 2].map(|ch| (c[ch] + (bg[ch] - c[ch]) * k + 0.5) as u32);
-                            (idx, [add[0], add[1], add[2], 1])
-                        }
-                        None => (0, [0; 4]),
-                    };
-                }
-                for i in 0..n {
-                    if adds[i][3] != 0 {
-                        out.add(pixels[i], adds[i]);
-                    }
-                }
-            }
-        }
+    }
+}
+
+/// `out[i]` = [`project_through_lens`] of point `start + i` of `batch`.
+fn project_block(view: &SplatView, batch: PointBatch<'_>, start: usize, out: &mut [Option<(usize, f32)>]) {
+    #[cfg(target_arch = "x86_64")]
+    if x86::supported(view) {
+        x86::project_block(view, batch, start, out);
+        return;
+    }
+    for (i, slot) in out.iter_mut().enumerate() {
+        *slot = project_through_lens(view, batch.point(start + i));
     }
 }
 

@@ -23,6 +23,7 @@ pub const SHORTCUTS: &[(&str, &str)] = &[
     ("left drag", "orbit, pan in a 2D scene (a grid point with the grid overlay on: drag it)"),
     ("right / middle drag", "pan"),
     ("wheel", "zoom towards the cursor"),
+    ("Ctrl+click", "focus depth of field on the point under the cursor"),
     ("F / Shift+F", "frame the attractor / the attractor and the grid box"),
     ("1 3 7 (numpad or row)", "front, side, top view; with Ctrl the opposite side"),
     ("5, P", "perspective / parallel"),
