@@ -5,12 +5,11 @@
 
 mod common;
 
-use nlifs::live::LiveSettings;
+use nlifs::live::{Imaging, LiveSettings};
 use nlifs::resolve::{ResolveStyle, Tone};
 use nlifs::scene::Scene;
 use nlifs::scene::spec::{DensityEstimation, SplatMode};
 use nlifs::viewer::command::Command;
-use nlifs::viewer::imaging::Imaging;
 use nlifs::viewer::state::ViewerState;
 
 fn density_state() -> ViewerState {

@@ -25,7 +25,7 @@ use crate::gpu::progressive::{Progressive, ProgressiveSettings};
 use crate::gpu::{GpuContext, GpuError};
 
 use self::cpu_source::CpuChaosGame;
-pub use self::settings::{ChaosBackend, ChaosRoute, LiveSettings};
+pub use self::settings::{ChaosBackend, ChaosRoute, Imaging, LiveSettings};
 
 impl From<&LiveSettings> for ProgressiveSettings {
     fn from(s: &LiveSettings) -> Self {

@@ -6,31 +6,11 @@
 //! and saved with the scene, that do not clear the accumulation (the resolve alone changes).
 
 use crate::edit::Edit;
+use crate::live::Imaging;
 use crate::resolve::Tone;
 use crate::scene::spec::DensityEstimation;
 
 use super::state::ViewerState;
-
-/// What the render panel's imaging controls edit.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Imaging {
-    pub tone: Tone,
-    /// None: off.
-    pub density_estimation: Option<DensityEstimation>,
-}
-
-impl Imaging {
-    /// The tone fields in the order of `scene::spec::TONE_FIELDS`.
-    pub fn tone_fields(&self) -> [f32; 5] {
-        let t = &self.tone;
-        [t.exposure, t.gamma, t.gamma_threshold, t.vibrancy, t.highlight_power]
-    }
-
-    pub fn with_tone_fields(self, v: [f32; 5]) -> Self {
-        let tone = Tone { exposure: v[0], gamma: v[1], gamma_threshold: v[2], vibrancy: v[3], highlight_power: v[4] };
-        Self { tone, ..self }
-    }
-}
 
 /// flam3's density estimation defaults (`estimator_radius` 9, minimum 0, curve 0.4): what the
 /// panel's switch turns on.
