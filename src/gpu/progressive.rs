@@ -13,8 +13,8 @@
 //! The resolve takes the settings' tone map; in density mode with density estimation on, the
 //! draw shows the estimate of `shaders/density_estimation.wgsl` instead of the raw counts. The
 //! filter reads every pixel's neighbourhood (up to about a second for 1280×720 at radius 9 on
-//! lavapipe, two busy cores), too costly for every frame on a software rasterizer, so it waits until the
-//! accumulation has rested [`ESTIMATE_FIRST_FRAMES`] frames after a clear (while the camera
+//! lavapipe, two busy cores), too costly for every frame on a software rasterizer, so it waits
+//! until the accumulation has rested [`ESTIMATE_FIRST_FRAMES`] frames after a clear (while the camera
 //! moves, the raw counts are drawn), runs again whenever the frames since the clear have
 //! doubled, at most [`ESTIMATE_EVERY_FRAMES`] apart, and once more when accumulation stops;
 //! draws in between show the last estimate (snapshots estimate afresh). A point source on the
