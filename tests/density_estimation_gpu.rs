@@ -118,3 +118,56 @@ fn gpu_density_estimation_matches_cpu() {
         eprintln!("{w}×{h} {de:?}: largest relative difference {worst:e}, bound {bound:e}");
     }
 }
+
+/// The live view's CPU route makes its density estimate on the CPU and uploads it; a snapshot
+/// (which filters afresh on the GPU) of the same accumulation must show the same image. Both
+/// images resolve estimates within [`summation_bound`] of each other with the same shader, so
+/// a channel may differ only where the exact value lies within a rounding of a level boundary:
+/// at most one level, and in under 1 % of the channels.
+#[test]
+fn live_cpu_route_estimate_matches_the_gpu_estimate() {
+    use nlifs::chaos_game::{self, CompiledIfs};
+    use nlifs::live::{ChaosBackend, LiveSettings, LiveView};
+    use nlifs::resolve::Tone;
+    use nlifs::scene::Scene;
+    use nlifs::scene::spec::SplatMode;
+    let Some(ctx) = gpu() else { return };
+    let (width, height) = (160u32, 120u32);
+    let path = format!("{}/scenes/plant2.toml", env!("CARGO_MANIFEST_DIR"));
+    let scene = Scene::parse(&std::fs::read_to_string(&path).unwrap(), &path).unwrap();
+    let compiled = CompiledIfs::new(&scene.at(0.0)).unwrap();
+    let bounds = chaos_game::attractor_bounds(&compiled, 1);
+    let settings = LiveSettings {
+        point_count: 1 << 16,
+        mode: SplatMode::Density,
+        max_splats: u64::MAX,
+        chaos_backend: ChaosBackend::Cpu,
+        tone: Tone { exposure: 0.5, gamma: 2.2, ..Tone::NEUTRAL },
+        density_estimation: Some(DensityEstimation { max_radius_px: 5.0, min_radius_px: 0.0, curve: 0.4 }),
+        ..LiveSettings::default()
+    };
+    let mut live = LiveView::new(&ctx, settings, width, height).unwrap();
+    live.set_ifs(&ctx, &compiled, bounds, true);
+    live.set_camera(&scene.camera_for(bounds));
+    // Past the frames before the first estimate, so that the draw makes one.
+    for _ in 0..12 {
+        let mut encoder = ctx.device.create_command_encoder(&Default::default());
+        live.advance(&ctx, &mut encoder);
+        ctx.queue.submit([encoder.finish()]);
+    }
+    let drawn = nlifs::gpu::readback::draw_offscreen(&ctx, width, height, |encoder, target, format| {
+        live.draw(&ctx, encoder, target, format, [0, 0])
+    })
+    .unwrap();
+    let snapshot = live.snapshot(&ctx).unwrap();
+    let (mut differing, mut lit) = (0, 0);
+    for (a, b) in drawn.pixels().zip(snapshot.pixels()) {
+        for c in 0..3 {
+            assert!(a.0[c].abs_diff(b.0[c]) <= 1, "CPU-route estimate {a:?} vs GPU estimate {b:?}");
+            differing += (a.0[c] != b.0[c]) as u32;
+        }
+        lit += (a.0 != drawn.get_pixel(0, 0).0) as u32;
+    }
+    assert!(lit > 1000, "only {lit} pixels differ from the background");
+    assert!(differing * 100 < 3 * width * height, "{differing} channels differ by one level");
+}

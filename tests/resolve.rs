@@ -479,14 +479,13 @@ fn density_estimation_resolve_matches_cpu() {
         let (mut differing, mut spread) = (0, 0);
         for (x, y, px) in image.enumerate_pixels() {
             let exact = cpu.fragment(&p, x, y).map(|v| v.clamp(0.0, 1.0) * 255.0);
-            for (c, &e) in exact.iter().enumerate() {
+            for (c, (&e, &g)) in exact.iter().zip(&px.0).enumerate() {
                 let allowed = ((e - levels).max(0.0) + 0.5) as u8..=((e + levels).min(255.0) + 0.5) as u8;
                 assert!(
-                    allowed.contains(&px.0[c]),
-                    "{tone:?}: pixel ({x}, {y}) channel {c}: GPU {} vs CPU {e:.3} levels (allowed {allowed:?})",
-                    px.0[c],
+                    allowed.contains(&g),
+                    "{tone:?}: pixel ({x}, {y}) channel {c}: GPU {g} vs CPU {e:.3} levels (allowed {allowed:?})",
                 );
-                differing += (px.0[c] != (e + 0.5) as u8) as u32;
+                differing += (g != (e + 0.5) as u8) as u32;
             }
             let i = (y * w + x) as usize;
             spread += (accum[i][3] == 0 && cpu.sums[i][3] > 0.0) as u32;

@@ -139,22 +139,7 @@ impl GpuDensityEstimation {
                 weights: upload("de_weights", bytemuck::cast_slice(&t.weights)),
             });
         }
-        if self.pixels.as_ref().is_none_or(|p| p.width != width || p.height != height) {
-            let pixels = width as u64 * height as u64;
-            self.pixels = Some(Pixels {
-                width,
-                height,
-                kernel_of: storage(device, "de_kernel_of", 4 * pixels, wgpu::BufferUsages::empty()),
-                estimated: storage(device, "de_estimated", 16 * pixels, wgpu::BufferUsages::COPY_SRC),
-                estimated_max: storage(device, "de_estimated_max", 16, wgpu::BufferUsages::COPY_SRC),
-                tile_reach: storage(
-                    device,
-                    "de_tile_reach",
-                    4 * width.div_ceil(TILE) as u64 * height.div_ceil(TILE) as u64,
-                    wgpu::BufferUsages::empty(),
-                ),
-            });
-        }
+        self.size_pixels(device, width, height);
         let (Some(t), Some(p)) = (&self.tables, &self.pixels) else { return };
         let params = DensityEstimationParams { width, height, reach_max: t.reach_max, last_step: t.last_step };
         ctx.queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
@@ -207,6 +192,36 @@ impl GpuDensityEstimation {
         pass.set_bind_group(0, &estimate_accum, &[]);
         pass.set_bind_group(GROUP, &estimate_own, &[]);
         pass.dispatch_workgroups(width.div_ceil(8), height.div_ceil(8), 1);
+    }
+
+    /// Makes the per-pixel buffers for a `width`×`height` accumulation (kept while the size is).
+    fn size_pixels(&mut self, device: &wgpu::Device, width: u32, height: u32) {
+        if self.pixels.as_ref().is_none_or(|p| p.width != width || p.height != height) {
+            let pixels = width as u64 * height as u64;
+            self.pixels = Some(Pixels {
+                width,
+                height,
+                kernel_of: storage(device, "de_kernel_of", 4 * pixels, wgpu::BufferUsages::empty()),
+                estimated: storage(device, "de_estimated", 16 * pixels, wgpu::BufferUsages::COPY_SRC),
+                estimated_max: storage(device, "de_estimated_max", 16, wgpu::BufferUsages::COPY_SRC),
+                tile_reach: storage(
+                    device,
+                    "de_tile_reach",
+                    4 * width.div_ceil(TILE) as u64 * height.div_ceil(TILE) as u64,
+                    wgpu::BufferUsages::empty(),
+                ),
+            });
+        }
+    }
+
+    /// Takes `e` (the CPU twin's estimate) as the last estimate, for [`Self::draw`]: the live
+    /// view's CPU route has its accumulation on the CPU, where the twin's scatter is much
+    /// cheaper than the gather on a software rasterizer.
+    pub fn upload(&mut self, ctx: &GpuContext, e: &Estimated) {
+        self.size_pixels(&ctx.device, e.width, e.height);
+        let Some(p) = &self.pixels else { return };
+        ctx.queue.write_buffer(&p.estimated, 0, bytemuck::cast_slice(&e.sums));
+        ctx.queue.write_buffer(&p.estimated_max, 0, bytemuck::bytes_of(&[e.max_count.to_bits(), 0, 0, 0]));
     }
 
     /// Records the resolve of the last estimate (density mode, with `args`' background and

@@ -12,12 +12,14 @@
 //!
 //! The resolve takes the settings' tone map; in density mode with density estimation on, the
 //! draw shows the estimate of `shaders/density_estimation.wgsl` instead of the raw counts. The
-//! filter reads every pixel's neighbourhood (about 1.3 s for 1280×720 at radius 9 on lavapipe,
-//! two busy cores), too costly for every frame on a software rasterizer, so it waits until the
-//! accumulation has rested [`ESTIMATE_FIRST_FRAMES`] frames after a clear (while the camera
+//! filter reads every pixel's neighbourhood (up to about a second for 1280×720 at radius 9 on
+//! lavapipe, two busy cores), too costly for every frame on a software rasterizer, so it waits
+//! until the accumulation has rested [`ESTIMATE_FIRST_FRAMES`] frames after a clear (while the camera
 //! moves, the raw counts are drawn), runs again whenever the frames since the clear have
 //! doubled, at most [`ESTIMATE_EVERY_FRAMES`] apart, and once more when accumulation stops;
-//! draws in between show the last estimate (snapshots estimate afresh).
+//! draws in between show the last estimate (snapshots estimate afresh). A point source on the
+//! CPU may make the estimate itself, with the CPU twin, and hand it over
+//! ([`Progressive::upload_estimate`] when [`Progressive::estimate_due`] asks for one).
 
 use glam::DVec3;
 
@@ -30,7 +32,7 @@ use super::chaos_game::{FrameArgs, GpuChaosGame};
 use super::density_estimation::GpuDensityEstimation;
 use super::resolve::{GpuResolve, LightRows};
 use super::{GpuContext, GpuError};
-use crate::resolve::density_estimation;
+use crate::resolve::density_estimation::{self, Estimated};
 use crate::resolve::{ResolveArgs, Tone};
 use crate::scene::spec::DensityEstimation;
 
@@ -71,6 +73,19 @@ pub struct ProgressiveSettings {
     pub tone: Tone,
     /// Density estimation (density mode); None: off.
     pub density_estimation: Option<DensityEstimation>,
+}
+
+/// What a draw does about density estimation ([`Progressive::estimate_due`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum EstimateDue {
+    /// Not in use (another mode, or off): the raw resolve.
+    Off,
+    /// The accumulation is too young since its clear: the raw resolve.
+    Young,
+    /// The last estimate is recent enough: drawn again.
+    Keep,
+    /// A fresh estimate with this setting, then drawn.
+    Make(DensityEstimation),
 }
 
 /// Frames after a clear before the first density estimate (a moving camera clears every frame).
@@ -393,45 +408,49 @@ impl Progressive {
             key_light: crate::resolve::shadow::key_light(s.light_yaw_deg, s.light_pitch_deg),
             shadow: self.view.and_then(|v| v.shadow),
         };
-        if let Some(de) = density_estimation::applies(s.density_estimation.as_ref(), s.mode)
-            && self.draw_estimated(ctx, encoder, &args, &de, target, format)
-        {
+        let due = self.estimate_due();
+        if matches!(due, EstimateDue::Keep | EstimateDue::Make(_)) {
+            let (width, height) = self.size();
+            let estimation = self.estimation.get_or_insert_with(|| GpuDensityEstimation::new(&ctx.device));
+            if let EstimateDue::Make(de) = due {
+                estimation.encode(ctx, encoder, &self.game.accum, width, height, &de);
+                self.estimated = Some((self.clears, self.frames_since_clear, de));
+            }
+            estimation.draw(ctx, encoder, &args, target, format);
             return;
         }
         let light = self.light_rows(&args);
         self.resolve.draw(ctx, encoder, &self.game, &args, target, format, light);
     }
 
-    /// Draws the density estimate of the accumulation, refreshing it first where it is due (see
-    /// the module's notes; `light_bands` 0, a snapshot's, refreshes it always); false, drawing
-    /// nothing, while the accumulation is too young for one.
-    fn draw_estimated(
-        &mut self,
-        ctx: &GpuContext,
-        encoder: &mut wgpu::CommandEncoder,
-        args: &ResolveArgs,
-        de: &DensityEstimation,
-        target: &wgpu::TextureView,
-        format: wgpu::TextureFormat,
-    ) -> bool {
+    /// What the next draw does about density estimation (see the module's notes; `light_bands`
+    /// 0, a snapshot's, makes a fresh estimate always).
+    pub fn estimate_due(&self) -> EstimateDue {
+        let s = &self.settings;
+        let Some(de) = density_estimation::applies(s.density_estimation.as_ref(), s.mode) else {
+            return EstimateDue::Off;
+        };
         let frames = self.frames_since_clear;
         let snapshot = self.light_bands == 0;
-        let due = match self.estimated {
-            Some((clears, at, made_with)) if clears == self.clears && made_with == *de => {
+        match self.estimated {
+            Some((clears, at, made_with)) if clears == self.clears && made_with == de => {
                 let next = at.saturating_add(at.clamp(1, ESTIMATE_EVERY_FRAMES));
-                frames >= next || (frames != at && self.converged()) || snapshot
+                if frames >= next || (frames != at && self.converged()) || snapshot {
+                    EstimateDue::Make(de)
+                } else {
+                    EstimateDue::Keep
+                }
             }
-            _ if frames < ESTIMATE_FIRST_FRAMES && !self.converged() && !snapshot => return false,
-            _ => true,
-        };
-        let (width, height) = self.size();
-        let estimation = self.estimation.get_or_insert_with(|| GpuDensityEstimation::new(&ctx.device));
-        if due {
-            estimation.encode(ctx, encoder, &self.game.accum, width, height, de);
-            self.estimated = Some((self.clears, frames, *de));
+            _ if frames < ESTIMATE_FIRST_FRAMES && !self.converged() && !snapshot => EstimateDue::Young,
+            _ => EstimateDue::Make(de),
         }
-        estimation.draw(ctx, encoder, args, target, format);
-        true
+    }
+
+    /// Takes `e`, made with `de` on the CPU from the accumulation as it is now (the live view's
+    /// CPU route), as the estimate the next draws show.
+    pub fn upload_estimate(&mut self, ctx: &GpuContext, e: &Estimated, de: &DensityEstimation) {
+        self.estimation.get_or_insert_with(|| GpuDensityEstimation::new(&ctx.device)).upload(ctx, e);
+        self.estimated = Some((self.clears, self.frames_since_clear, *de));
     }
 
     /// Which rows of the light cache this draw refreshes (see [`Self::light_bands`]).

@@ -12,7 +12,10 @@
 //! With [`LiveSettings::chaos_backend`] taking the CPU route (`cpu`, or `auto` on a software
 //! adapter) the chaos game runs on the CPU: persistent chains advanced every frame into CPU
 //! framebuffers, uploaded into the same accumulation buffer and resolved by the same pass;
-//! clears, restarts and the settling after an edit happen at the same moments.
+//! clears, restarts and the settling after an edit happen at the same moments. Density
+//! estimation is then made on the CPU too (`src/resolve/density_estimation.rs`, from the
+//! accumulation the route uploads), where it costs milliseconds instead of the GPU gather's
+//! tenths of a second on a software rasterizer; the GPU draws it the same way.
 
 pub mod cpu_source;
 pub mod settings;
@@ -21,11 +24,12 @@ use glam::DVec3;
 
 use crate::camera::OrbitCamera;
 use crate::chaos_game::CompiledIfs;
-use crate::gpu::progressive::{Progressive, ProgressiveSettings};
+use crate::gpu::progressive::{EstimateDue, Progressive, ProgressiveSettings};
 use crate::gpu::{GpuContext, GpuError};
+use crate::resolve::density_estimation;
 
 use self::cpu_source::CpuChaosGame;
-pub use self::settings::{ChaosBackend, ChaosRoute, LiveSettings};
+pub use self::settings::{ChaosBackend, ChaosRoute, Imaging, LiveSettings};
 
 impl From<&LiveSettings> for ProgressiveSettings {
     fn from(s: &LiveSettings) -> Self {
@@ -188,6 +192,16 @@ impl LiveView {
         format: wgpu::TextureFormat,
         origin_px: [u32; 2],
     ) {
+        // The CPU route's accumulation is on the CPU, where the density estimate's scatter
+        // costs a fraction of the GPU's gather on a software rasterizer.
+        if let (true, EstimateDue::Make(de)) = (self.route.cpu, self.gpu.estimate_due()) {
+            let (width, height) = self.size();
+            let merged = self.cpu.merged();
+            if merged.len() == 4 * width as usize * height as usize {
+                let e = density_estimation::estimate(bytemuck::cast_slice(merged), width, height, &de);
+                self.gpu.upload_estimate(ctx, &e, &de);
+            }
+        }
         self.gpu.draw(ctx, encoder, target, format, origin_px);
     }
 

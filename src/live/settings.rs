@@ -77,6 +77,28 @@ impl Default for LiveSettings {
     }
 }
 
+/// The live view's imaging: its tone map and density estimation (the viewer's render panel
+/// edits them as scene edits).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Imaging {
+    pub tone: Tone,
+    /// None: off.
+    pub density_estimation: Option<DensityEstimation>,
+}
+
+impl Imaging {
+    /// The tone fields in the order of `scene::spec::TONE_FIELDS`.
+    pub fn tone_fields(&self) -> [f32; 5] {
+        let t = &self.tone;
+        [t.exposure, t.gamma, t.gamma_threshold, t.vibrancy, t.highlight_power]
+    }
+
+    pub fn with_tone_fields(self, v: [f32; 5]) -> Self {
+        let tone = Tone { exposure: v[0], gamma: v[1], gamma_threshold: v[2], vibrancy: v[3], highlight_power: v[4] };
+        Self { tone, ..self }
+    }
+}
+
 /// Which chaos game the live view runs.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum ChaosBackend {

@@ -253,7 +253,7 @@ pub enum Command {
     SetPalette(String),
     /// The render panel's tone and density estimation: a scene edit (`imaging.rs`), part of
     /// the running gesture; the accumulation is kept.
-    SetImaging(super::imaging::Imaging),
+    SetImaging(crate::live::Imaging),
 }
 
 /// What the user answered when closing with unsaved edits.

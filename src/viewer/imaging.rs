@@ -1,36 +1,71 @@
 //! The scene's imaging in the viewer: flam3's tone map and density estimation (`[render]`
 //! `exposure` … `highlight_power`, `estimator_*`). The live view takes them from the scene at
-//! the current time (`ViewerState::take_scene_imaging` in `imaging_edit.rs`, keyed
-//! `[key.render]` values included), so that it looks as `render` and `record` draw the same
-//! scene; the render panel's edits
+//! the current time ([`ViewerState::take_scene_imaging`], keyed `[key.render]` values included),
+//! so that it looks as `render` and `record` draw the same scene; the render panel's edits
 //! ([`Imaging`], sent as `Command::SetImaging`, UI in `tone_ui.rs`) are scene edits, undoable
 //! and saved with the scene, that do not clear the accumulation (the resolve alone changes).
 
+use crate::edit::Edit;
+use crate::live::Imaging;
 use crate::resolve::Tone;
 use crate::scene::spec::DensityEstimation;
 
-/// What the render panel's imaging controls edit.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Imaging {
-    pub tone: Tone,
-    /// None: off.
-    pub density_estimation: Option<DensityEstimation>,
-}
-
-impl Imaging {
-    /// The tone fields in the order of `scene::spec::TONE_FIELDS`.
-    pub fn tone_fields(&self) -> [f32; 5] {
-        let t = &self.tone;
-        [t.exposure, t.gamma, t.gamma_threshold, t.vibrancy, t.highlight_power]
-    }
-
-    pub fn with_tone_fields(self, v: [f32; 5]) -> Self {
-        let tone = Tone { exposure: v[0], gamma: v[1], gamma_threshold: v[2], vibrancy: v[3], highlight_power: v[4] };
-        Self { tone, ..self }
-    }
-}
+use super::state::ViewerState;
 
 /// flam3's density estimation defaults (`estimator_radius` 9, minimum 0, curve 0.4): what the
 /// panel's switch turns on.
 pub const DEFAULT_DENSITY_ESTIMATION: DensityEstimation =
     DensityEstimation { max_radius_px: 9.0, min_radius_px: 0.0, curve: DensityEstimation::DEFAULT_CURVE };
+
+impl ViewerState {
+    /// The imaging the live view shows.
+    pub fn imaging(&self) -> Imaging {
+        Imaging { tone: self.live.tone, density_estimation: self.live.density_estimation }
+    }
+
+    /// Which tone fields (in the order of `TONE_FIELDS`) some key of the timeline sets: those
+    /// are edited in the key at the playhead, not in `[render]`.
+    pub fn keyed_tone_fields(&self) -> [bool; 5] {
+        let keys = self.scene.timeline.as_ref().map_or(&[][..], |tl| &tl.keys[..]);
+        [0, 1, 2, 3, 4].map(|i| keys.iter().any(|k| k.render.tone[i].is_some()))
+    }
+
+    /// The live view's tone and density estimation from the scene at the current time, as
+    /// `render` takes them; true when they changed.
+    pub fn take_scene_imaging(&mut self) -> bool {
+        let render = self.scene.render_at(self.t_secs);
+        let before = self.imaging();
+        self.live.tone = Tone::of(&render);
+        self.live.density_estimation = render.density_estimation;
+        self.imaging() != before
+    }
+
+    /// The render panel's imaging edit: tone fields into `[render]`, or into the key at the
+    /// playhead where the timeline keys them (a keyed field without a key there is left as
+    /// it is; the panel does not offer it); density estimation into `[render]`. Part of the
+    /// running gesture (a slider's drag is one undo step).
+    pub(super) fn set_imaging(&mut self, imaging: Imaging) {
+        let mut after = self.scene.clone();
+        let keyed = self.keyed_tone_fields();
+        let key = self.key_at_playhead();
+        let old = self.imaging().tone_fields();
+        for (i, &value) in imaging.tone_fields().iter().enumerate() {
+            if value == old[i] {
+                continue;
+            }
+            match (keyed[i], key, after.timeline.as_mut()) {
+                (false, _, _) => *after.render.tone_mut()[i] = value,
+                (true, Some(k), Some(tl)) => {
+                    tl.keys[k].render.tone[i] = Some(value);
+                    // The edit belongs to one playhead.
+                    self.playback.playing = false;
+                }
+                (true, _, _) => {}
+            }
+        }
+        after.render.density_estimation = imaging.density_estimation;
+        if after != self.scene {
+            self.preview(Edit::ReplaceScene { before: Box::new(self.scene.clone()), after: Box::new(after) });
+        }
+    }
+}

@@ -36,7 +36,6 @@ pub mod framing;
 pub mod functions_ui;
 pub mod grid_edit_ui;
 pub mod imaging;
-mod imaging_edit;
 mod input;
 pub mod job_plan;
 pub mod jobs;

@@ -1,0 +1,94 @@
+//! The viewer's imaging (`src/viewer/imaging.rs`): the live view takes the scene's tone and
+//! density estimation at the current time, keyed values included; the render panel's edits are
+//! scene edits that keep the accumulation, one undo step per drag, saved with the scene and
+//! read back by `render` as the same style. Plain state: commands in, scene out, no GPU.
+
+mod common;
+
+use nlifs::live::{Imaging, LiveSettings};
+use nlifs::resolve::{ResolveStyle, Tone};
+use nlifs::scene::Scene;
+use nlifs::scene::spec::{DensityEstimation, SplatMode};
+use nlifs::viewer::command::Command;
+use nlifs::viewer::state::ViewerState;
+
+fn density_state() -> ViewerState {
+    let path = common::scene_path("plant2");
+    let mut scene = Scene::load(&path).unwrap();
+    scene.render.mode = SplatMode::Density;
+    ViewerState::new(scene, Some(path), LiveSettings::default())
+}
+
+/// What `render` resolves the scene at `t_secs` with: its style's tone and its density
+/// estimation.
+fn render_imaging(scene: &Scene, t_secs: f64) -> Imaging {
+    let render = scene.render_at(t_secs);
+    let tone = ResolveStyle::of(&render, scene.domain.dimension()).tone;
+    Imaging { tone, density_estimation: render.density_estimation }
+}
+
+#[test]
+fn a_tone_drag_is_one_scene_edit_that_keeps_the_accumulation_and_saves() {
+    let mut s = density_state();
+    let original = s.scene.clone();
+    assert_eq!(s.imaging(), Imaging { tone: Tone::NEUTRAL, density_estimation: None });
+    let de = DensityEstimation { max_radius_px: 6.0, min_radius_px: 0.5, curve: 0.4 };
+    // A drag: several values, then the gesture ends.
+    for k in 1..=5 {
+        let tone = Tone { exposure: 0.25 * k as f32, gamma: 2.2, highlight_power: 1.0, ..Tone::NEUTRAL };
+        let c = s.apply([Command::SetImaging(Imaging { tone, density_estimation: Some(de) })]);
+        assert!(c.live_settings && !c.scene_edited && !c.scene_replaced, "step {k}: {c:?}");
+        assert_eq!(s.live.tone.exposure, 0.25 * k as f32);
+    }
+    s.apply([Command::EndGesture]);
+    assert!(s.modified());
+    assert_eq!(s.scene.render.exposure, 1.25);
+    assert_eq!(s.scene.render.gamma, 2.2);
+    assert_eq!(s.scene.render.density_estimation, Some(de));
+    assert_eq!(s.imaging(), render_imaging(&s.scene, s.t_secs), "the view shows what render draws");
+    let edited = s.scene.clone();
+    // One undo step restores the scene and the view's imaging exactly.
+    let c = s.apply([Command::Undo]);
+    assert!(c.live_settings);
+    assert_eq!(s.scene, original);
+    assert_eq!(s.imaging(), Imaging { tone: Tone::NEUTRAL, density_estimation: None });
+    s.apply([Command::Redo]);
+    assert_eq!(s.scene, edited);
+    // Saved, the file gives render the same tone and filter.
+    let path = common::temp_dir("viewer-imaging").join("toned.toml");
+    s.apply([Command::SaveScene(path.clone())]);
+    assert!(s.error.is_none(), "{:?}", s.error);
+    let loaded = Scene::load(&path).unwrap();
+    assert_eq!(render_imaging(&loaded, 0.0), s.imaging());
+}
+
+#[test]
+fn keyed_tone_follows_time_and_is_edited_in_the_key_at_the_playhead() {
+    let mut s = density_state();
+    s.apply([Command::AddOrUpdateKey, Command::SetDuration(4.0), Command::SetTime(2.0), Command::AddOrUpdateKey]);
+    s.apply([Command::EndGesture]);
+    let keys = &mut s.scene.timeline.as_mut().unwrap().keys;
+    assert_eq!(keys.len(), 2);
+    keys[0].render.tone[0] = Some(-1.0);
+    keys[1].render.tone[0] = Some(2.0);
+    assert_eq!(s.keyed_tone_fields(), [true, false, false, false, false]);
+    for t_secs in [0.0, 0.5, 1.0, 2.0] {
+        s.apply([Command::SetTime(t_secs)]);
+        assert_eq!(s.imaging(), render_imaging(&s.scene, t_secs), "t = {t_secs}");
+    }
+    // On key 1 the keyed exposure goes into the key, the unkeyed gamma into [render].
+    let tone = Tone { exposure: 3.0, gamma: 1.8, ..s.live.tone };
+    s.apply([Command::SetImaging(Imaging { tone, density_estimation: None }), Command::EndGesture]);
+    let tl = s.scene.timeline.as_ref().unwrap();
+    assert_eq!(tl.keys[1].render.tone[0], Some(3.0));
+    assert_eq!(tl.keys[0].render.tone[0], Some(-1.0));
+    assert_eq!(s.scene.render.exposure, 0.0);
+    assert_eq!(s.scene.render.gamma, 1.8);
+    assert_eq!(s.live.tone.exposure, 3.0);
+    // Between keys a keyed field is not edited (the panel disables it).
+    s.apply([Command::SetTime(1.0)]);
+    let before = s.scene.clone();
+    let tone = Tone { exposure: 5.0, ..s.live.tone };
+    s.apply([Command::SetImaging(Imaging { tone, density_estimation: None }), Command::EndGesture]);
+    assert_eq!(s.scene, before);
+}
