@@ -209,6 +209,10 @@ fn look(path: &Path, width: u32, height: u32, points: u64, repeats: usize) -> an
     let mut settings = scene.render_at(0.0);
     (settings.width, settings.height, settings.points, settings.mode) = (width, height, points, SplatMode::Closest);
     let shot = Shot::prepare(&scene, 0.0, &settings, Framing::Fit, None).map_err(|e| BadInput(e.to_string()))?;
+    // The splat without the shadow map (the solid look without shadows), then with it.
+    let no_shadows = ResolveStyle { shadows: 0.0, ..ResolveStyle::SOLID };
+    let shot_without_shadows = shot.clone().with_style(no_shadows);
+    let shot = shot.with_style(ResolveStyle::SOLID);
     // The best wall seconds of `repeats` runs of `f`, and their mean process CPU seconds (the
     // CPU clock ticks at 10 ms: a mean over many runs resolves finer).
     let repeats = repeats.max(1);
@@ -222,6 +226,7 @@ fn look(path: &Path, width: u32, height: u32, points: u64, repeats: usize) -> an
         }
         (wall, (cpu_secs().0 - c) / repeats as f64)
     };
+    let splat_without_shadows = best(&mut || drop(shot_without_shadows.splat(|| {})));
     let mut framebuffer = None;
     let splat = best(&mut || framebuffer = Some(shot.splat(|| {})));
     let Some(framebuffer) = framebuffer else { return Ok(()) };
@@ -230,12 +235,25 @@ fn look(path: &Path, width: u32, height: u32, points: u64, repeats: usize) -> an
         scene.name,
         rayon::current_num_threads()
     );
-    println!("  chaos game + splat       {:8.1} ms wall {:8.1} ms CPU", 1e3 * splat.0, 1e3 * splat.1);
+    println!(
+        "  chaos game + splat       {:8.1} ms wall {:8.1} ms CPU",
+        1e3 * splat_without_shadows.0,
+        1e3 * splat_without_shadows.1
+    );
+    println!(
+        "  + shadow map splat       {:8.1} ms wall {:8.1} ms CPU ({}² texels)",
+        1e3 * splat.0,
+        1e3 * splat.1,
+        shot.view.shadow.map_or(0, |s| s.side_px)
+    );
     let shading_only = ResolveStyle { occlusion: 0.0, ..ResolveStyle::SOLID };
     let mut paper = (0.0, 0.0);
-    for (name, style) in
-        [("paper", ResolveStyle::PAPER), ("shading only", shading_only), ("solid", ResolveStyle::SOLID)]
-    {
+    for (name, style) in [
+        ("paper", ResolveStyle::PAPER),
+        ("shading only", shading_only),
+        ("solid, no shadow", no_shadows),
+        ("solid", ResolveStyle::SOLID),
+    ] {
         let r = best(&mut || drop(resolve_image(&framebuffer, &shot.camera, &style)));
         if name == "paper" {
             paper = r;

@@ -44,8 +44,9 @@ pub fn read_shadow_map(ctx: &GpuContext, game: &GpuChaosGame, view: &SplatView) 
     Ok(bytemuck::pod_collect_to_vec(&bytes))
 }
 
-/// The live view's shadow map has half the side of a still's (a quarter of the texels): it is
-/// cleared, splatted and, on the CPU route, merged and uploaded every frame; at the live view's
+/// The live view's shadow map has half the side of a still's (a quarter of the texels; at
+/// 1280×720, 320²), at least [`crate::splat::shadow::MIN_SIDE_PX`]: it is splatted from every
+/// frame's points and, on the CPU route, merged and uploaded every frame; at the live view's
 /// size the soft edge of the coarser map still spans only a few pixels.
 pub const LIVE_SHADOW_SIDE_DIVISOR: u32 = 2;
 
@@ -61,7 +62,8 @@ pub fn live_shadow(
     if s.mode != crate::scene::spec::SplatMode::Closest || s.shadows <= 0.0 || s.shading <= 0.0 {
         return view;
     }
-    let side_px = ShadowView::side_for_image(view.width, view.height) / LIVE_SHADOW_SIDE_DIVISOR;
+    let side_px = (ShadowView::side_for_image(view.width, view.height) / LIVE_SHADOW_SIDE_DIVISOR)
+        .max(crate::splat::shadow::MIN_SIDE_PX);
     let to_light = glam::Vec3::from_array(key_light(s.light_yaw_deg, s.light_pitch_deg));
     view.with_shadow_side(camera, bounds, to_light, side_px)
 }
