@@ -213,7 +213,7 @@ fn read_framebuffer(ctx: &GpuContext, game: &GpuChaosGame, shot: &Shot) -> Resul
             (Vec::new(), bytemuck::pod_collect_to_vec(&bytes))
         }
     };
-    let shadow = super::shadow::read_shadow_map(ctx, game, &shot.view)?;
+    let shadow = super::shadow::read_shadow_map(ctx, &game.shadow, &shot.view)?;
     Ok(Framebuffer { view: shot.view, closest, accum, colors: shot.compiled.colors.clone(), shadow })
 }
 

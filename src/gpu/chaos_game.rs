@@ -521,6 +521,19 @@ impl GpuChaosGame {
     }
 }
 
+// Shadows (`super::shadow`).
+impl GpuChaosGame {
+    /// Resizes the shadow map to `shadow`'s (its contents are lost: the frame must clear).
+    pub fn fit_shadow(&mut self, device: &wgpu::Device, shadow: Option<&crate::splat::ShadowView>) {
+        let side_px = shadow.map_or(0, |s| s.side_px);
+        if side_px != self.shadow_side {
+            self.shadow = super::shadow::shadow_buffer(device, side_px);
+            self.shadow_side = side_px;
+            self.invalidate_bindings();
+        }
+    }
+}
+
 /// Workgroups (x, y) covering `threads` with rows of [`THREADS_PER_ROW`].
 pub fn dispatch_size(threads: u64) -> (u32, u32) {
     let groups = threads.div_ceil(WORKGROUP_SIZE as u64).max(1);

@@ -181,7 +181,9 @@ impl Progressive {
         let s = &self.settings;
         let view =
             SplatView::new(camera, self.game.width, self.game.height, self.bounds, s.mode, s.depth_cue, s.background);
-        let view = super::shadow::live_shadow(view, s, camera, self.bounds);
+        let casts = s.mode == SplatMode::Closest && s.shadows > 0.0 && s.shading > 0.0;
+        let to_light = crate::resolve::shadow::key_light(s.light_yaw_deg, s.light_pitch_deg);
+        let view = super::shadow::live_shadow(view, casts, glam::Vec3::from_array(to_light), camera, self.bounds);
         if self.view.as_ref().is_none_or(|v| !same_view(v, &view)) {
             self.view = Some(view);
             self.clear = true;

@@ -1,16 +1,13 @@
 //! The GPU chaos game's shadow map (`shadow_map` in `shaders/chaos_game.wgsl`, splatted by
 //! `splat_shadow` behind the pipeline constant `SHADOWED`; CPU twin `src/splat/shadow.rs`): its
-//! buffer, sized to the view's map, and its readback into the CPU framebuffer's layout.
+//! buffer (`GpuChaosGame::fit_shadow` sizes it to the view's map), its readback into the CPU
+//! framebuffer's layout, and the live view's map size.
 
 use glam::DVec3;
 
 use crate::camera::OrbitCamera;
-use crate::resolve::shadow::key_light;
 use crate::splat::{ShadowView, SplatView};
 
-use super::progressive::ProgressiveSettings;
-
-use super::chaos_game::GpuChaosGame;
 use super::{GpuContext, GpuError};
 
 /// A shadow map buffer of `side_px`² texels (at least one u32, so that it can be bound when the
@@ -24,23 +21,11 @@ pub fn shadow_buffer(device: &wgpu::Device, side_px: u32) -> wgpu::Buffer {
     })
 }
 
-impl GpuChaosGame {
-    /// Resizes the shadow map to `shadow`'s (its contents are lost: the frame must clear).
-    pub fn fit_shadow(&mut self, device: &wgpu::Device, shadow: Option<&ShadowView>) {
-        let side_px = shadow.map_or(0, |s| s.side_px);
-        if side_px != self.shadow_side {
-            self.shadow = shadow_buffer(device, side_px);
-            self.shadow_side = side_px;
-            self.invalidate_bindings();
-        }
-    }
-}
-
-/// The shadow map of `game` as the CPU framebuffer's keys for `view` (empty where the view has
-/// none).
-pub fn read_shadow_map(ctx: &GpuContext, game: &GpuChaosGame, view: &SplatView) -> Result<Vec<u32>, GpuError> {
+/// The shadow map in `buffer` (a chaos game's) as the CPU framebuffer's keys for `view` (empty
+/// where the view has none).
+pub fn read_shadow_map(ctx: &GpuContext, buffer: &wgpu::Buffer, view: &SplatView) -> Result<Vec<u32>, GpuError> {
     let Some(shadow) = view.shadow else { return Ok(Vec::new()) };
-    let bytes = super::readback::read_buffer_prefix(ctx, &game.shadow, 4 * shadow.texels() as u64)?;
+    let bytes = super::readback::read_buffer_prefix(ctx, buffer, 4 * shadow.texels() as u64)?;
     Ok(bytemuck::pod_collect_to_vec(&bytes))
 }
 
@@ -50,20 +35,19 @@ pub fn read_shadow_map(ctx: &GpuContext, game: &GpuChaosGame, view: &SplatView) 
 /// size the soft edge of the coarser map still spans only a few pixels.
 pub const LIVE_SHADOW_SIDE_DIVISOR: u32 = 2;
 
-/// The live view `view` of `camera` with the shadow map `settings` need (none where they cast
-/// no shadows: not closest mode, shading or shadows off).
+/// The live view `view` of `camera` with the shadow map of a key light towards `to_light`
+/// (view space) where `casts` says one is needed (closest mode, shading and shadows on).
 pub fn live_shadow(
     view: SplatView,
-    settings: &ProgressiveSettings,
+    casts: bool,
+    to_light: glam::Vec3,
     camera: &OrbitCamera,
     bounds: (DVec3, DVec3),
 ) -> SplatView {
-    let s = settings;
-    if s.mode != crate::scene::spec::SplatMode::Closest || s.shadows <= 0.0 || s.shading <= 0.0 {
+    if !casts {
         return view;
     }
     let side_px = (ShadowView::side_for_image(view.width, view.height) / LIVE_SHADOW_SIDE_DIVISOR)
         .max(crate::splat::shadow::MIN_SIDE_PX);
-    let to_light = glam::Vec3::from_array(key_light(s.light_yaw_deg, s.light_pitch_deg));
     view.with_shadow_side(camera, bounds, to_light, side_px)
 }

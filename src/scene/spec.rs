@@ -190,6 +190,12 @@ pub struct RenderSettings {
     pub light_pitch_deg: f32,
 }
 
+/// The key light's default direction relative to the camera (the solid look's
+/// `crate::resolve::KEY_LIGHT`): degrees from the view direction towards the right, and above
+/// the view's horizontal plane.
+pub const KEY_LIGHT_YAW_DEG: f32 = -32.735_224;
+pub const KEY_LIGHT_PITCH_DEG: f32 = 33.461_75;
+
 /// The key light's fields in `[render]` (and `[key.render]`): name and range, in the order of
 /// [`RenderSettings::light`].
 pub const LIGHT_FIELDS: [(&str, f64, f64); 3] =
@@ -261,8 +267,8 @@ impl Default for RenderSettings {
             highlight_power: -1.0,
             density_estimation: None,
             shadows: None,
-            light_yaw_deg: crate::resolve::KEY_LIGHT_YAW_DEG,
-            light_pitch_deg: crate::resolve::KEY_LIGHT_PITCH_DEG,
+            light_yaw_deg: KEY_LIGHT_YAW_DEG,
+            light_pitch_deg: KEY_LIGHT_PITCH_DEG,
         }
     }
 }
