@@ -119,7 +119,13 @@ fn provenance_json(p: &Provenance) -> String {
 /// Writes `part` to `path` atomically.
 pub fn write_part(path: &Path, part: &Part) -> Result<(), OutputError> {
     let fb = &part.framebuffer;
+    let with_shadow: Vec<u32>;
     let payload: &[u32] = match fb.view.mode {
+        // The shadow map's keys follow the closest keys (`payload_len`).
+        SplatMode::Closest if !fb.shadow.is_empty() => {
+            with_shadow = fb.closest.iter().chain(&fb.shadow).copied().collect();
+            &with_shadow
+        }
         SplatMode::Closest => &fb.closest,
         _ => bytemuck::cast_slice(&fb.accum),
     };
@@ -290,7 +296,7 @@ pub fn merge_parts(paths: &[std::path::PathBuf]) -> Result<Merged, OutputError> 
             return Err(mismatch(&format!("the part count ({})", part.spec.n)));
         }
         if (part.width, part.height, part.mode) != (first.width, first.height, first.mode)
-            || part.payload.len() != fb.closest.len().max(4 * fb.accum.len())
+            || part.payload.len() != payload_len(&fb.view)
         {
             return Err(mismatch("the image size or mode"));
         }
@@ -323,12 +329,18 @@ pub fn merge_parts(paths: &[std::path::PathBuf]) -> Result<Merged, OutputError> 
 
 fn payload_len(view: &crate::splat::SplatView) -> usize {
     let pixels = view.width as usize * view.height as usize;
-    if view.mode == SplatMode::Closest { pixels } else { 4 * pixels }
+    // Shadows: the closest keys are followed by the shadow map's.
+    let shadow = view.shadow.map_or(0, |s| s.texels());
+    if view.mode == SplatMode::Closest { pixels + shadow } else { 4 * pixels }
 }
 
 /// Merges a part's payload into `fb` as [`Framebuffer::merge`] does.
 fn absorb(fb: &mut Framebuffer, payload: &[u32]) {
     for (a, &b) in fb.closest.iter_mut().zip(payload) {
+        *a = (*a).min(b);
+    }
+    // Shadows: the shadow map's keys after the closest keys.
+    for (a, &b) in fb.shadow.iter_mut().zip(payload.get(fb.closest.len()..).unwrap_or(&[])) {
         *a = (*a).min(b);
     }
     let sums: &mut [u32] = bytemuck::cast_slice_mut(&mut fb.accum);
