@@ -27,6 +27,10 @@
 //!   blur is needed) measure how far the neighbourhood rises above the fitted plane; a crease
 //!   darkens, a plane or a convex bump does not. `occlusion` scales how much light it takes.
 //!
+//! - Cast shadows: the points splatted again from the key light into a shadow map, each visible
+//!   pixel tested against it with percentage-closer filtering (`resolve/shadow.rs`); the shadow
+//!   takes away the key light's diffuse and highlight. `shadows` scales it.
+//!
 //! The depth cue applies after the light, as in the paper's look.
 //!
 //! The average and density modes take flam3's tone controls (exposure, gamma with a linear
@@ -41,9 +45,11 @@ use crate::color::linear_to_srgb;
 use crate::scene::spec::{Look, RenderSettings, SplatMode};
 use crate::splat::{Framebuffer, ShadowView, SplatView};
 
+mod linear;
 pub mod shadow;
 mod solid;
 mod tone;
+pub use linear::{LinearImage, resolve_linear};
 pub use shadow::{KEY_LIGHT_PITCH_DEG, KEY_LIGHT_YAW_DEG, SOLID_SHADOWS};
 pub use solid::{fitted_slopes, lit, lit_by, normal_and_eye, occlusion};
 pub use tone::{HIGHLIGHT_OFF, Tone, ToneUniforms, gamma_ramp, toned};
@@ -237,17 +243,6 @@ impl ResolveStyle {
             light_pitch_deg: settings.light_pitch_deg,
         }
     }
-
-    /// The key light's direction in view space (unit).
-    pub fn key_light(&self) -> Vec3 {
-        Vec3::from_array(shadow::key_light(self.light_yaw_deg, self.light_pitch_deg))
-    }
-
-    /// Whether this style draws shadows on a splat of `mode`: then the splat view needs a
-    /// shadow map ([`SplatView::with_shadow`]).
-    pub fn casts_shadows(&self, mode: SplatMode) -> bool {
-        mode == SplatMode::Closest && self.shadows > 0.0 && self.shading > 0.0
-    }
 }
 
 /// What the resolve needs besides the accumulation: the splat's colour settings, the style and
@@ -352,24 +347,6 @@ impl ResolveArgs {
             _pad: 0,
         }
         .with_shadow(self, closest)
-    }
-}
-
-impl ResolveParams {
-    /// These parameters with `args`' shadow map, where it has one and shadows are on
-    /// (closest mode and shading on only: the shadow takes away part of the key light).
-    fn with_shadow(self, args: &ResolveArgs, closest: bool) -> Self {
-        match args.shadow {
-            Some(view) if closest && self.shading > 0.0 && args.shadows > 0.0 => Self {
-                shadows: args.shadows.min(1.0),
-                shadow_from_view: view.map_from_view.to_cols_array_2d(),
-                shadow_side_px: view.side_px,
-                shadow_texel_world: view.texel_world,
-                shadow_inv_depth_world: 1.0 / view.depth_world,
-                ..self
-            },
-            _ => self,
-        }
     }
 }
 
@@ -535,66 +512,6 @@ pub fn resolve_image(framebuffer: &Framebuffer, camera: &OrbitCamera, style: &Re
         }
     });
     image::RgbImage::from_raw(view.width, view.height, bytes).expect("3 bytes for each of width × height pixels")
-}
-
-/// A resolve in linear light with its coverage: what the float and alpha outputs write
-/// (`crate::output`). `rgb` holds the fragment values before the sRGB encode of
-/// [`resolve_image`], i.e. the attractor drawn over the background.
-#[derive(Clone, Debug, PartialEq)]
-pub struct LinearImage {
-    pub width: u32,
-    pub height: u32,
-    /// Linear RGB over the background, row-major.
-    pub rgb: Vec<[f32; 3]>,
-    /// How much of each pixel the attractor covers: 1 where a point lies (closest mode: within
-    /// the point radius), 0 where none does; in density mode the toned alpha (by default the
-    /// brightness log(1 + count) / log(1 + max count)) with which the average colour is laid over
-    /// the background.
-    pub alpha: Vec<f32>,
-    /// The background the colours were drawn over (linear RGB).
-    pub background: [f32; 3],
-}
-
-/// Resolves `framebuffer` like [`resolve_image`] but keeps linear floats (no 8-bit
-/// quantisation) and the coverage of every pixel; rows in parallel.
-pub fn resolve_linear(framebuffer: &Framebuffer, camera: &OrbitCamera, style: &ResolveStyle) -> LinearImage {
-    let view = &framebuffer.view;
-    let params = ResolveArgs::new(view, camera, style).params(view.width, view.height, false);
-    let inputs = ResolveInputs::of(framebuffer);
-    let width_px = view.width as usize;
-    let pixels = width_px * view.height as usize;
-    let mut rgb = vec![[0f32; 3]; pixels];
-    let mut alpha = vec![0f32; pixels];
-    rgb.par_chunks_mut(width_px.max(1)).zip(alpha.par_chunks_mut(width_px.max(1))).enumerate().for_each(
-        |(y, (rgb, alpha))| {
-            for (x, (rgb, alpha)) in rgb.iter_mut().zip(alpha).enumerate() {
-                *rgb = resolve_fragment(&params, &inputs, x as u32, y as u32);
-                *alpha = coverage(&params, &inputs, x as u32, y as u32);
-            }
-        },
-    );
-    LinearImage { width: view.width, height: view.height, rgb, alpha, background: view.background }
-}
-
-/// The coverage of pixel (x, y) that [`resolve_fragment`] draws over the background.
-fn coverage(p: &ResolveParams, inputs: &ResolveInputs<'_>, x: u32, y: u32) -> f32 {
-    let accum = inputs.accum;
-    let pixel = (y * p.width + x) as usize;
-    if p.mode == MODE_CLOSEST {
-        let r = p.point_radius_px as i32;
-        let hit = (-r..=r).any(|dy| {
-            (-r..=r).any(|dx| dx * dx + dy * dy <= r * r && key_at(p, accum, x as i32 + dx, y as i32 + dy) != EMPTY)
-        });
-        return if hit { 1.0 } else { 0.0 };
-    }
-    let count = accum[4 * pixel + 3];
-    if count == 0 {
-        return 0.0;
-    }
-    let slot = 4 * pixel;
-    let n = count as f32 * COLOR_SCALE;
-    let avg = [accum[slot] as f32 / n, accum[slot + 1] as f32 / n, accum[slot + 2] as f32 / n];
-    toned(&tone_uniforms(p), avg, density_of(p, inputs, count), background(p), p.mode != MODE_AVERAGE).1
 }
 
 pub mod density_estimation;

@@ -211,6 +211,10 @@ fn look(path: &Path, width: u32, height: u32, points: u64, repeats: usize) -> an
     (settings.width, settings.height, settings.points, settings.mode) = (width, height, points, SplatMode::Closest);
     let prepare = || Shot::prepare(&scene, 0.0, &settings, Framing::Fit, None).map_err(|e| BadInput(e.to_string()));
     let shot = prepare()?;
+    // The splat without the shadow map (the solid look without shadows), then with it.
+    let no_shadows = ResolveStyle { shadows: 0.0, ..ResolveStyle::SOLID };
+    let shot_without_shadows = shot.clone().with_style(no_shadows);
+    let shot = shot.with_style(ResolveStyle::SOLID);
     // The best wall seconds of `repeats` runs of `f`, and their mean process CPU seconds (the
     // CPU clock ticks at 10 ms: a mean over many runs resolves finer).
     let repeats = repeats.max(1);
@@ -226,6 +230,7 @@ fn look(path: &Path, width: u32, height: u32, points: u64, repeats: usize) -> an
     };
     // The render's preparation: the attractor's bounds and the camera fitted to a sample.
     let prepared = best(&mut || drop(prepare()));
+    let splat_without_shadows = best(&mut || drop(shot_without_shadows.splat(|| {})));
     let mut framebuffer = None;
     let splat = best(&mut || framebuffer = Some(shot.splat(|| {})));
     let Some(framebuffer) = framebuffer else { return Ok(()) };
@@ -235,7 +240,17 @@ fn look(path: &Path, width: u32, height: u32, points: u64, repeats: usize) -> an
         rayon::current_num_threads()
     );
     println!("  prepare (bounds, camera) {:8.1} ms wall {:8.1} ms CPU", 1e3 * prepared.0, 1e3 * prepared.1);
-    println!("  chaos game + splat       {:8.1} ms wall {:8.1} ms CPU", 1e3 * splat.0, 1e3 * splat.1);
+    println!(
+        "  chaos game + splat       {:8.1} ms wall {:8.1} ms CPU",
+        1e3 * splat_without_shadows.0,
+        1e3 * splat_without_shadows.1
+    );
+    println!(
+        "  + shadow map splat       {:8.1} ms wall {:8.1} ms CPU ({}² texels)",
+        1e3 * splat.0,
+        1e3 * splat.1,
+        shot.view.shadow.map_or(0, |s| s.side_px)
+    );
     // `nlifs render` also writes its picture: the PNG of the paper resolve, written as the
     // render writes it, counts in the render's time (a scratch file, removed after).
     let paper_image = resolve_image(&framebuffer, &shot.camera, &ResolveStyle::PAPER);
@@ -247,24 +262,31 @@ fn look(path: &Path, width: u32, height: u32, points: u64, repeats: usize) -> an
     });
     let _ = std::fs::remove_file(&scratch);
     println!("  write PNG                {:8.1} ms wall {:8.1} ms CPU", 1e3 * write.0, 1e3 * write.1);
-    let shading_only = ResolveStyle { occlusion: 0.0, ..ResolveStyle::SOLID };
-    let mut paper = (0.0, 0.0);
-    for (name, style) in
-        [("paper", ResolveStyle::PAPER), ("shading only", shading_only), ("solid", ResolveStyle::SOLID)]
-    {
+    let shading_only = ResolveStyle { occlusion: 0.0, shadows: 0.0, ..ResolveStyle::SOLID };
+    // Each look's render: preparation, the splat it needs (with the shadow map where it casts
+    // shadows), its resolve and the write; its cost is what it adds to the paper look's render.
+    let mut paper_render = (0.0, 0.0);
+    for (name, style) in [
+        ("paper", ResolveStyle::PAPER),
+        ("shading only", shading_only),
+        ("solid, no shadow", no_shadows),
+        ("solid", ResolveStyle::SOLID),
+    ] {
         let r = best(&mut || drop(resolve_image(&framebuffer, &shot.camera, &style)));
+        let splat = if style.shadows > 0.0 { splat } else { splat_without_shadows };
+        let render = (prepared.0 + splat.0 + r.0 + write.0, prepared.1 + splat.1 + r.1 + write.1);
         if name == "paper" {
-            paper = r;
+            paper_render = render;
         }
-        let look = (r.0 - paper.0, r.1 - paper.1);
+        let look = (render.0 - paper_render.0, render.1 - paper_render.1);
         println!(
-            "  resolve, {name:<14} {:8.1} ms wall {:8.1} ms CPU; over paper {:7.1} ms wall ({:4.1} % of the render) {:7.1} ms CPU ({:4.1} %)",
+            "  resolve, {name:<16} {:8.1} ms wall {:8.1} ms CPU; the look adds {:7.1} ms wall ({:4.1} % of its render) {:7.1} ms CPU ({:4.1} %)",
             1e3 * r.0,
             1e3 * r.1,
             1e3 * look.0,
-            100.0 * look.0 / (prepared.0 + splat.0 + r.0 + write.0),
+            100.0 * look.0 / render.0,
             1e3 * look.1,
-            100.0 * look.1 / (prepared.1 + splat.1 + r.1 + write.1).max(1e-9),
+            100.0 * look.1 / render.1.max(1e-9),
         );
     }
     Ok(())

@@ -537,14 +537,7 @@ impl GpuChaosGame {
     }
 }
 
-/// Workgroups (x, y) covering `threads` with rows of [`THREADS_PER_ROW`].
-pub fn dispatch_size(threads: u64) -> (u32, u32) {
-    let groups = threads.div_ceil(WORKGROUP_SIZE as u64).max(1);
-    let x = groups.min(GROUPS_PER_ROW as u64) as u32;
-    let y = groups.div_ceil(GROUPS_PER_ROW as u64) as u32;
-    (x, y)
-}
-
+// Shadows (`super::shadow`).
 impl GpuChaosGame {
     /// Resizes the shadow map to `shadow`'s (its contents are lost: the frame must clear).
     pub fn fit_shadow(&mut self, device: &wgpu::Device, shadow: Option<&crate::splat::ShadowView>) {
@@ -555,6 +548,14 @@ impl GpuChaosGame {
             self.invalidate_bindings();
         }
     }
+}
+
+/// Workgroups (x, y) covering `threads` with rows of [`THREADS_PER_ROW`].
+pub fn dispatch_size(threads: u64) -> (u32, u32) {
+    let groups = threads.div_ceil(WORKGROUP_SIZE as u64).max(1);
+    let x = groups.min(GROUPS_PER_ROW as u64) as u32;
+    let y = groups.div_ceil(GROUPS_PER_ROW as u64) as u32;
+    (x, y)
 }
 
 #[cfg(test)]

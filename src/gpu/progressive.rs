@@ -238,7 +238,9 @@ impl Progressive {
         let s = &self.settings;
         let view =
             SplatView::new(camera, self.game.width, self.game.height, self.bounds, s.mode, s.depth_cue, s.background);
-        let view = live_shadow(view, s, camera, self.bounds);
+        let casts = s.mode == SplatMode::Closest && s.shadows > 0.0 && s.shading > 0.0;
+        let to_light = crate::resolve::shadow::key_light(s.light_yaw_deg, s.light_pitch_deg);
+        let view = super::shadow::live_shadow(view, casts, glam::Vec3::from_array(to_light), camera, self.bounds);
         // The settings' lens was checked when they were set.
         let lens = Lens::new(camera, self.game.height, s.aperture, s.focus_distance, s.seed).unwrap_or(Lens::NONE);
         let view = view.with_lens(lens);
@@ -486,26 +488,4 @@ impl Progressive {
         let bytes = super::readback::read_buffer(ctx, &self.game.accum)?;
         Ok(bytemuck::pod_collect_to_vec(&bytes))
     }
-}
-
-/// The live view's shadow map has half the side of a still's (a quarter of the texels): it is
-/// cleared, splatted and, on the CPU route, merged and uploaded every frame; at the live view's
-/// size the soft edge of the coarser map still spans only a few pixels.
-pub const LIVE_SHADOW_SIDE_DIVISOR: u32 = 2;
-
-/// The live view `view` of `camera` with the shadow map `settings` need (none where they cast
-/// no shadows: not closest mode, shading or shadows off).
-pub fn live_shadow(
-    view: SplatView,
-    settings: &ProgressiveSettings,
-    camera: &OrbitCamera,
-    bounds: (DVec3, DVec3),
-) -> SplatView {
-    let s = settings;
-    if s.mode != crate::scene::spec::SplatMode::Closest || s.shadows <= 0.0 || s.shading <= 0.0 {
-        return view;
-    }
-    let side_px = crate::splat::ShadowView::side_for_image(view.width, view.height) / LIVE_SHADOW_SIDE_DIVISOR;
-    let to_light = glam::Vec3::from_array(crate::resolve::shadow::key_light(s.light_yaw_deg, s.light_pitch_deg));
-    view.with_shadow_side(camera, bounds, to_light, side_px)
 }

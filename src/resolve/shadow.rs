@@ -17,14 +17,11 @@
 
 use glam::{Mat4, Vec3, Vec4Swizzles};
 
-use super::{EMPTY, KEY_LIGHT, ResolveParams, depth_of};
+use super::{EMPTY, KEY_LIGHT, ResolveArgs, ResolveParams, ResolveStyle, depth_of};
+use crate::scene::spec::SplatMode;
 
-/// Yaw of [`KEY_LIGHT`]: degrees from the view direction (towards the viewer) towards the right
-/// (the scene format's default `light_yaw_deg`).
-pub const KEY_LIGHT_YAW_DEG: f32 = crate::scene::spec::DEFAULT_LIGHT_YAW_DEG;
-/// Pitch of [`KEY_LIGHT`]: degrees above the view's horizontal plane (the default
-/// `light_pitch_deg`).
-pub const KEY_LIGHT_PITCH_DEG: f32 = crate::scene::spec::DEFAULT_LIGHT_PITCH_DEG;
+/// Yaw and pitch of [`KEY_LIGHT`] (defined with the scene's fields, which default to them).
+pub use crate::scene::spec::{KEY_LIGHT_PITCH_DEG, KEY_LIGHT_YAW_DEG};
 /// Shadow strength of the solid look.
 pub const SOLID_SHADOWS: f32 = 0.6;
 /// The PCF taps: (2 SHADOW_PCF_RADIUS + 1)² texels around the receiver's.
@@ -35,6 +32,37 @@ pub const SHADOW_BIAS_TEXELS: f32 = 1.5;
 pub const SHADOW_BIAS_SLOPE: f32 = 1.0;
 /// The slope is clamped here (tan 76°): the receiver plane and the bias stop growing.
 pub const SHADOW_SLOPE_MAX: f32 = 4.0;
+
+impl ResolveStyle {
+    /// The key light's direction in view space (unit).
+    pub fn key_light(&self) -> Vec3 {
+        Vec3::from_array(key_light(self.light_yaw_deg, self.light_pitch_deg))
+    }
+
+    /// Whether this style draws shadows on a splat of `mode`: then the splat view needs a
+    /// shadow map ([`SplatView::with_shadow`]).
+    pub fn casts_shadows(&self, mode: SplatMode) -> bool {
+        mode == SplatMode::Closest && self.shadows > 0.0 && self.shading > 0.0
+    }
+}
+
+impl ResolveParams {
+    /// These parameters with `args`' shadow map, where it has one and shadows are on
+    /// (closest mode and shading on only: the shadow takes away part of the key light).
+    pub(super) fn with_shadow(self, args: &ResolveArgs, closest: bool) -> Self {
+        match args.shadow {
+            Some(view) if closest && self.shading > 0.0 && args.shadows > 0.0 => Self {
+                shadows: args.shadows.min(1.0),
+                shadow_from_view: view.map_from_view.to_cols_array_2d(),
+                shadow_side_px: view.side_px,
+                shadow_texel_world: view.texel_world,
+                shadow_inv_depth_world: 1.0 / view.depth_world,
+                ..self
+            },
+            _ => self,
+        }
+    }
+}
 
 /// Direction towards the key light in view space (unit) at `yaw_deg` and `pitch_deg`:
 /// [`KEY_LIGHT`] itself at the defaults, so that a solid image without shadows keeps its bytes.

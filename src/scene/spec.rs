@@ -204,10 +204,11 @@ pub struct RenderSettings {
     pub palette: Option<Palette>,
 }
 
-/// The key light's default direction relative to the camera (`light_yaw_deg`,
-/// `light_pitch_deg`): up, left and in front, `crate::resolve::KEY_LIGHT` to the bit.
-pub const DEFAULT_LIGHT_YAW_DEG: f32 = -32.735_224;
-pub const DEFAULT_LIGHT_PITCH_DEG: f32 = 33.461_75;
+/// The key light's default direction relative to the camera (the solid look's
+/// `crate::resolve::KEY_LIGHT`): degrees from the view direction towards the right, and above
+/// the view's horizontal plane.
+pub const KEY_LIGHT_YAW_DEG: f32 = -32.735_224;
+pub const KEY_LIGHT_PITCH_DEG: f32 = 33.461_75;
 
 /// The key light's fields in `[render]` (and `[key.render]`): name and range, in the order of
 /// [`RenderSettings::light`].
@@ -306,8 +307,8 @@ impl Default for RenderSettings {
             highlight_power: -1.0,
             density_estimation: None,
             shadows: None,
-            light_yaw_deg: DEFAULT_LIGHT_YAW_DEG,
-            light_pitch_deg: DEFAULT_LIGHT_PITCH_DEG,
+            light_yaw_deg: KEY_LIGHT_YAW_DEG,
+            light_pitch_deg: KEY_LIGHT_PITCH_DEG,
             aperture: 0.0,
             focus_distance: None,
             color: ColorMode::Function,

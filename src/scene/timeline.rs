@@ -145,8 +145,8 @@ pub struct RenderKey {
     /// be held two to an undoable edit).
     pub tone: Box<[Option<f32>; 5]>,
     // Shadows (`crate::resolve::shadow`).
-    /// The key light's fields, in the order of `spec::LIGHT_FIELDS`.
-    pub light: [Option<f32>; 3],
+    /// The key light's fields, in the order of `spec::LIGHT_FIELDS` (boxed, as the tone).
+    pub light: Box<[Option<f32>; 3]>,
     // Depth of field.
     pub aperture: Option<f32>,
     pub focus_distance: Option<f32>,

@@ -15,7 +15,7 @@ use crate::camera::OrbitCamera;
 
 /// Smallest and largest side of the shadow map, in texels ([`ShadowView::side_for_image`]).
 pub const MIN_SIDE_PX: u32 = 256;
-pub const MAX_SIDE_PX: u32 = 2048;
+pub const MAX_SIDE_PX: u32 = 1024;
 
 /// The shadow map's projection: everything the shadow splat and the shadow test need.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -35,13 +35,16 @@ pub struct ShadowView {
 }
 
 impl ShadowView {
-    /// The map side for an image of `width`×`height`: one texel per image pixel along the
-    /// image's longer side (the attractor fills the image about as it fills the map, so a texel
-    /// is about a pixel and shadow edges are as sharp as the image's), within
-    /// [[`MIN_SIDE_PX`], [`MAX_SIDE_PX`]]: below 256 the PCF's soft edge is a visible blur; above
-    /// 2048 the map (16 MiB) has more texels than 4 M points fill, so it is full of holes.
+    /// The map side for an image of `width`×`height`: half the image's longer side, within
+    /// [[`MIN_SIDE_PX`], [`MAX_SIDE_PX`]]. A texel then spans about two image pixels where the
+    /// attractor fills map and image alike, so a still's 4 M points fill the map's texels four
+    /// times as densely as the image's pixels (few holes for light to leak through), the map
+    /// (≤ 4 MiB) stays in the last-level cache while points land on it at random (a map of the
+    /// image's size cost three times the whole chaos game at 1920×1080: `nlifs bench look`), and
+    /// the PCF's 3×3 taps give a soft edge of about six pixels. Below 256 the edge turns into a
+    /// visible blur.
     pub fn side_for_image(width: u32, height: u32) -> u32 {
-        width.max(height).clamp(MIN_SIDE_PX, MAX_SIDE_PX)
+        (width.max(height) / 2).clamp(MIN_SIDE_PX, MAX_SIDE_PX)
     }
 
     /// The map of a key light in direction `to_light_view` (view space, towards the light) of
