@@ -203,10 +203,7 @@ impl PointSink for Framebuffer {
         let mut pixels = OwnPixels { closest: &mut self.closest, accum: &mut self.accum };
         splat_into(&view, &self.colors, batch, &mut pixels);
         if let Some(shadow_view) = &view.shadow {
-            let map = &mut self.shadow;
-            shadow::splat_shadow(shadow_view, batch.x, batch.y, batch.z, |texel, key| {
-                map[texel] = map[texel].min(key);
-            });
+            shadow::splat_shadow_fast(shadow_view, batch, &mut self.shadow);
         }
     }
 }
