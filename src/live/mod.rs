@@ -67,6 +67,9 @@ pub struct LiveView {
     /// The adapter rasterizes on the CPU (lavapipe, llvmpipe): `auto` takes the CPU route.
     software_adapter: bool,
     cpu: CpuChaosGame,
+    /// The camera is being dragged: the view draws without the key light's shadows
+    /// ([`Self::set_navigating`]).
+    navigating: bool,
 }
 
 impl LiveView {
@@ -80,7 +83,29 @@ impl LiveView {
             settings,
             software_adapter,
             cpu: CpuChaosGame::default(),
+            navigating: false,
         })
+    }
+
+    /// What the GPU side runs for `settings`: the same, without shadows while navigating.
+    fn progressive_settings(&self, settings: &LiveSettings) -> ProgressiveSettings {
+        let mut p = ProgressiveSettings::from(settings);
+        if self.navigating {
+            p.shadows = 0.0;
+        }
+        p
+    }
+
+    /// While the camera is dragged (orbit, pan) the view draws without the key light's shadows,
+    /// as 3D viewports lower their quality while navigating: every frame of a moving camera
+    /// starts afresh, and on lavapipe the shadow map and its lookups take it below 20 fps. They
+    /// come back, with a fresh accumulation, when the drag ends.
+    pub fn set_navigating(&mut self, ctx: &GpuContext, navigating: bool) -> Result<(), GpuError> {
+        if navigating == self.navigating {
+            return Ok(());
+        }
+        self.navigating = navigating;
+        self.gpu.set_settings(ctx, self.progressive_settings(&self.settings))
     }
 
     pub fn settings(&self) -> &LiveSettings {
@@ -109,7 +134,7 @@ impl LiveView {
     }
 
     pub fn set_settings(&mut self, ctx: &GpuContext, settings: LiveSettings) -> Result<(), GpuError> {
-        self.gpu.set_settings(ctx, (&settings).into())?;
+        self.gpu.set_settings(ctx, self.progressive_settings(&settings))?;
         let route = settings.chaos_backend.route(self.software_adapter);
         if route.cpu != self.route.cpu {
             // The points of the route that did not run did not follow the edits: restart them.

@@ -547,6 +547,9 @@ impl App {
         if !minimized && gfx.live.size() != (size_px[0], size_px[1]) {
             gfx.live.resize(&gfx.ctx, size_px[0], size_px[1]);
         }
+        if let Err(e) = gfx.live.set_navigating(&gfx.ctx, self.drag.is_some()) {
+            self.state.error = Some(e.to_string());
+        }
         gfx.live.set_camera(&self.state.camera);
         if let Some(path) = changes.screenshot {
             let message = match gfx.live.snapshot(&gfx.ctx) {
