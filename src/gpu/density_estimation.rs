@@ -257,27 +257,8 @@ impl GpuDensityEstimation {
         };
         let params_group = group(0, &[entry(0, &self.resolve_params)]);
         let own = group(GROUP, &[entry(15, &p.estimated), entry(16, &p.estimated_max)]);
-        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some("resolve_estimated"),
-            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                view: target,
-                depth_slice: None,
-                resolve_target: None,
-                ops: wgpu::Operations { load: wgpu::LoadOp::Clear(wgpu::Color::BLACK), store: wgpu::StoreOp::Store },
-            })],
-            depth_stencil_attachment: None,
-            timestamp_writes: None,
-            occlusion_query_set: None,
-            multiview_mask: None,
-        });
-        pass.set_viewport(
-            args.origin_px[0] as f32,
-            args.origin_px[1] as f32,
-            p.width as f32,
-            p.height as f32,
-            0.0,
-            1.0,
-        );
+        let mut pass =
+            super::resolve::resolve_pass(encoder, "resolve_estimated", target, args.origin_px, [p.width, p.height]);
         pass.set_pipeline(pipeline);
         pass.set_bind_group(0, &params_group, &[]);
         pass.set_bind_group(GROUP, &own, &[]);

@@ -267,31 +267,38 @@ impl GpuResolve {
             let x = groups.min(4096) as u32;
             pass.dispatch_workgroups(x, groups.div_ceil(x as u64) as u32, 1);
         }
-        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some("resolve"),
-            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                view: target,
-                depth_slice: None,
-                resolve_target: None,
-                ops: wgpu::Operations { load: wgpu::LoadOp::Clear(wgpu::Color::BLACK), store: wgpu::StoreOp::Store },
-            })],
-            depth_stencil_attachment: None,
-            timestamp_writes: None,
-            occlusion_query_set: None,
-            multiview_mask: None,
-        });
-        pass.set_viewport(
-            args.origin_px[0] as f32,
-            args.origin_px[1] as f32,
-            game.width as f32,
-            game.height as f32,
-            0.0,
-            1.0,
-        );
+        let mut pass = resolve_pass(encoder, "resolve", target, args.origin_px, [game.width, game.height]);
         pass.set_pipeline(pipeline);
         pass.set_bind_group(0, draw, &[]);
         pass.draw(0..3, 0..1);
     }
+}
+
+/// A render pass labelled `label` that clears `target` to black and draws into the viewport of
+/// `size_px` at `origin_px` (the accumulation's rectangle): the resolve's, with or without
+/// density estimation.
+pub(super) fn resolve_pass<'e>(
+    encoder: &'e mut wgpu::CommandEncoder,
+    label: &str,
+    target: &wgpu::TextureView,
+    origin_px: [u32; 2],
+    size_px: [u32; 2],
+) -> wgpu::RenderPass<'e> {
+    let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+        label: Some(label),
+        color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+            view: target,
+            depth_slice: None,
+            resolve_target: None,
+            ops: wgpu::Operations { load: wgpu::LoadOp::Clear(wgpu::Color::BLACK), store: wgpu::StoreOp::Store },
+        })],
+        depth_stencil_attachment: None,
+        timestamp_writes: None,
+        occlusion_query_set: None,
+        multiview_mask: None,
+    });
+    pass.set_viewport(origin_px[0] as f32, origin_px[1] as f32, size_px[0] as f32, size_px[1] as f32, 0.0, 1.0);
+    pass
 }
 
 /// A full-screen triangle (`fullscreen` in the shader) whose fragment `entry` writes one
