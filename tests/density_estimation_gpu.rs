@@ -6,22 +6,14 @@
 //! narrower than the kernel (taps reflected more than once). Runs on any adapter (lavapipe in
 //! CI); without one it skips loudly, unless NLIFS_REQUIRE_GPU=1, in which case it fails.
 
-use nlifs::gpu::GpuContext;
+mod common;
+
 use nlifs::gpu::density_estimation::GpuDensityEstimation;
 use nlifs::resolve::density_estimation::{KernelTables, estimate};
 use nlifs::rng::Pcg32;
 use nlifs::scene::spec::DensityEstimation;
 
-fn gpu() -> Option<GpuContext> {
-    match GpuContext::headless() {
-        Ok(ctx) => Some(ctx),
-        Err(e) if std::env::var("NLIFS_REQUIRE_GPU").as_deref() == Ok("1") => panic!("NLIFS_REQUIRE_GPU=1 but {e}"),
-        Err(e) => {
-            eprintln!("\n*** SKIPPING GPU TEST: {e} ***\n");
-            None
-        }
-    }
-}
+use common::gpu;
 
 /// A `w`×`h` accumulation drawn from `seed`: clusters of dense pixels (counts up to 5000, none
 /// within 9 columns and 7 rows of the top left corner, so a small image is sparse),

@@ -6,6 +6,8 @@
 //! give the inline light's bytes. Runs on any adapter (lavapipe in CI); without one it skips loudly,
 //! unless NLIFS_REQUIRE_GPU=1, in which case it fails.
 
+mod common;
+
 use nlifs::camera::Projection;
 use nlifs::chaos_game::{self, CompiledIfs, run_chunk};
 use nlifs::gpu::GpuContext;
@@ -19,16 +21,7 @@ use nlifs::scene::Scene;
 use nlifs::scene::spec::SplatMode;
 use nlifs::splat::{Framebuffer, SplatView};
 
-fn gpu() -> Option<GpuContext> {
-    match GpuContext::headless() {
-        Ok(ctx) => Some(ctx),
-        Err(e) if std::env::var("NLIFS_REQUIRE_GPU").as_deref() == Ok("1") => panic!("NLIFS_REQUIRE_GPU=1 but {e}"),
-        Err(e) => {
-            eprintln!("\n*** SKIPPING GPU TEST: {e} ***\n");
-            None
-        }
-    }
-}
+use common::gpu;
 
 /// One accumulation in the GPU's layout with what the resolve needs to draw it.
 struct Accumulation {
