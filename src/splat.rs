@@ -323,6 +323,42 @@ mod tests {
         }
     }
 
+    /// With more colours than the vector table holds (a palette's 256), the vector splat
+    /// gathers them and still leaves the portable splat's sums.
+    #[test]
+    fn vector_splat_matches_portable_with_a_palette() {
+        for mode in [SplatMode::Average, SplatMode::Density] {
+            let bounds = (DVec3::ZERO, DVec3::ONE);
+            let camera = OrbitCamera::framing(bounds, 3);
+            let view = SplatView::new(&camera, 64, 48, bounds, mode, 0.75, [0.1, 0.2, 0.3]);
+            let mut r = Pcg32::for_stream(23, 0, 0);
+            let n = 6007;
+            let (x, y, z): (Vec<f32>, Vec<f32>, Vec<f32>) = (
+                (0..n).map(|_| r.next_f32() * 1.4 - 0.2).collect(),
+                (0..n).map(|_| r.next_f32() * 1.4 - 0.2).collect(),
+                (0..n).map(|_| r.next_f32() * 1.4 - 0.2).collect(),
+            );
+            let functions: Vec<u8> = (0..n).map(|_| (r.next_u32() >> 24) as u8).collect();
+            let colors: Vec<[f32; 3]> =
+                (0..256).map(|i| [i as f32 / 255.0, 1.0 - i as f32 / 255.0, (i % 7) as f32 / 6.0]).collect();
+            let mut portable = Framebuffer::new(view, colors);
+            let mut fastest = portable.clone();
+            for start in (0..n).step_by(1000) {
+                let end = (start + 1000).min(n);
+                let batch = PointBatch {
+                    x: &x[start..end],
+                    y: &y[start..end],
+                    z: &z[start..end],
+                    functions: &functions[start..end],
+                };
+                portable.consume_portable(batch);
+                fastest.consume(batch);
+            }
+            assert!(portable.covered_pixels() > 1000, "{}", portable.covered_pixels());
+            assert_eq!(portable.accum, fastest.accum, "{mode:?}");
+        }
+    }
+
     fn check_vector_splat(mode: SplatMode) {
         let bounds = (DVec3::ZERO, DVec3::ONE);
         let camera = OrbitCamera::framing(bounds, 3);

@@ -240,12 +240,18 @@ unsafe fn splat_accumulate_avx2(
     let n = batch.len();
     let colors: Vec<[f32; 3]> = function_colors.iter().map(|c| c.map(|x| x * COLOR_SCALE)).collect();
     let bg = view.background.map(|x| x * COLOR_SCALE);
-    // Per channel, the colours as an 8-entry table by function (up to 8 functions; more take
-    // the scalar colour arithmetic of the portable splat, lane by lane).
-    let vector_colors = !colors.is_empty() && colors.len() <= LANES;
+    // Per channel, the colours as an 8-entry table by function, looked up with a permute (up
+    // to 8 colours), or as a column gathered by index (more: a palette's 256 entries; the
+    // index clamped to the last colour, which every valid key is within). Either way each lane
+    // gets the very colour the portable splat reads, so the arithmetic below is the same.
+    let vector_colors = !colors.is_empty();
+    let permuted = colors.len() <= LANES;
     let table: [[f32; LANES]; 3] = std::array::from_fn(|ch| {
         std::array::from_fn(|f| colors.get(f.min(colors.len().saturating_sub(1))).map_or(0.0, |c| c[ch]))
     });
+    let columns: [Vec<f32>; 3] =
+        std::array::from_fn(|ch| if permuted { Vec::new() } else { colors.iter().map(|c| c[ch]).collect() });
+    let last_color = colors.len().saturating_sub(1).min(255) as i32;
     let vectors = n / LANES;
     for g in 0..vectors {
         let o = g * LANES;
@@ -272,7 +278,12 @@ unsafe fn splat_accumulate_avx2(
             let mut big = 0;
             let mut channel = [_mm256_setzero_si256(); 3];
             for ch in 0..3 {
-                let c = _mm256_permutevar8x32_ps(_mm256_loadu_ps(table[ch].as_ptr()), fi);
+                let c = if permuted {
+                    _mm256_permutevar8x32_ps(_mm256_loadu_ps(table[ch].as_ptr()), fi)
+                } else {
+                    // SAFETY: the indices are clamped to 0..=last_color < columns[ch].len().
+                    _mm256_i32gather_ps::<4>(columns[ch].as_ptr(), _mm256_min_epi32(fi, _mm256_set1_epi32(last_color)))
+                };
                 let v = _mm256_add_ps(
                     _mm256_add_ps(c, _mm256_mul_ps(_mm256_sub_ps(_mm256_set1_ps(bg[ch]), c), k)),
                     _mm256_set1_ps(0.5),
