@@ -56,16 +56,14 @@ pub(super) fn splat_with(
     }
 }
 
-/// The projection of 8 points (as [`SplatView::project`]): a mask of the lanes that land in
-/// the image, their pixel indices (0 elsewhere) and their depth fractions t (clamped as
-/// `f32::clamp` does: a NaN stays NaN).
+/// glam's `Mat4 · Vec4` with w = 1 for 8 points: ((c0 x + c1 y) + c2 z) + c3 · 1 (and
+/// c3 · 1 = c3), the arithmetic of [`SplatView::project`]; the result's x, y, z and w rows.
+/// Inlined into its callers, which carry the target features.
 #[inline(always)]
-unsafe fn project8(view: &SplatView, x: __m256, y: __m256, z: __m256) -> (__m256i, __m256i, __m256) {
-    let m = view.pixel_from_world;
+pub(super) unsafe fn transform8(m: &glam::Mat4, x: __m256, y: __m256, z: __m256) -> [__m256; 4] {
     let (c0, c1, c2, c3) = (m.x_axis, m.y_axis, m.z_axis, m.w_axis);
     // SAFETY: the caller checked the CPU features (module doc); no memory is accessed.
     unsafe {
-        // glam's Mat4 · Vec4 with w = 1: ((c0 x + c1 y) + c2 z) + c3 · 1, and c3 · 1 = c3.
         // A macro, as closures would not have the caller's target features.
         macro_rules! row {
             ($c:ident) => {
@@ -78,7 +76,18 @@ unsafe fn project8(view: &SplatView, x: __m256, y: __m256, z: __m256) -> (__m256
                 )
             };
         }
-        let (qx, qy, qz, qw) = (row!(x), row!(y), row!(z), row!(w));
+        [row!(x), row!(y), row!(z), row!(w)]
+    }
+}
+
+/// The projection of 8 points (as [`SplatView::project`]): a mask of the lanes that land in
+/// the image, their pixel indices (0 elsewhere) and their depth fractions t (clamped as
+/// `f32::clamp` does: a NaN stays NaN).
+#[inline(always)]
+unsafe fn project8(view: &SplatView, x: __m256, y: __m256, z: __m256) -> (__m256i, __m256i, __m256) {
+    // SAFETY: the caller checked the CPU features (module doc); no memory is accessed.
+    unsafe {
+        let [qx, qy, qz, qw] = transform8(&view.pixel_from_world, x, y, z);
         let inv_w = _mm256_div_ps(_mm256_set1_ps(1.0), qw);
         let (px, py) = (_mm256_mul_ps(qx, inv_w), _mm256_mul_ps(qy, inv_w));
         // q.w > 0, 0 ≤ x < width, 0 ≤ y < height; ordered compares, so NaN fails.

@@ -105,23 +105,10 @@ unsafe fn next_signed8(state: &mut __m256i) -> __m256 {
 #[target_feature(enable = "avx2")]
 unsafe fn project8(view: &SplatView, x: __m256, y: __m256, z: __m256) -> (__m256, __m256i, __m256) {
     let lens = view.lens;
-    let m = view.pixel_from_world;
-    let (c0, c1, c2, c3) = (m.x_axis, m.y_axis, m.z_axis, m.w_axis);
     // SAFETY: this function has AVX2 (the caller checked the CPU); no memory is accessed.
     unsafe {
-        // glam's Mat4 · Vec4 with w = 1: ((c0 x + c1 y) + c2 z) + c3 · 1, as `SplatView::project`.
-        macro_rules! row {
-            ($c:ident) => {
-                _mm256_add_ps(
-                    _mm256_add_ps(
-                        _mm256_add_ps(_mm256_mul_ps(_mm256_set1_ps(c0.$c), x), _mm256_mul_ps(_mm256_set1_ps(c1.$c), y)),
-                        _mm256_mul_ps(_mm256_set1_ps(c2.$c), z),
-                    ),
-                    _mm256_set1_ps(c3.$c),
-                )
-            };
-        }
-        let (qx, qy, qz, qw) = (row!(x), row!(y), row!(z), row!(w));
+        // As `SplatView::project` (the image splat's transform).
+        let [qx, qy, qz, qw] = crate::splat::x86::transform8(&view.pixel_from_world, x, y, z);
         let inv_w = _mm256_div_ps(_mm256_set1_ps(1.0), qw);
         let defocus = if lens.perspective {
             _mm256_sub_ps(_mm256_set1_ps(lens.inv_focus), inv_w)
