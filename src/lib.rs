@@ -7,6 +7,7 @@ pub mod bench;
 pub mod camera;
 pub mod chaos_game;
 pub mod color;
+pub mod cpu_time;
 pub mod edit;
 pub mod export;
 pub mod gpu;

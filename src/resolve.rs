@@ -45,10 +45,12 @@ use crate::color::linear_to_srgb;
 use crate::scene::spec::{Look, RenderSettings, SplatMode};
 use crate::splat::{Framebuffer, ShadowView, SplatView};
 
+mod light_rows;
 mod linear;
 pub mod shadow;
 mod solid;
 mod tone;
+pub use light_rows::LightRows;
 pub use linear::{LinearImage, resolve_linear};
 pub use shadow::{KEY_LIGHT_PITCH_DEG, KEY_LIGHT_YAW_DEG, SOLID_SHADOWS};
 pub use solid::{fitted_slopes, lit, lit_by, normal_and_eye, occlusion};
@@ -422,6 +424,33 @@ pub fn resolve_fragment_perturbed(
     y: u32,
     slope_offset: (f32, f32),
 ) -> [f32; 3] {
+    fragment(p, inputs, x, y, Light::Fitted(slope_offset))
+}
+
+/// Where a fragment's solid light comes from.
+#[derive(Clone, Copy)]
+enum Light<'a> {
+    /// Computed for the pixel ([`solid::light`]), with this offset added to the fitted slopes.
+    Fitted((f32, f32)),
+    /// Read from the light factors of its rows (the GPU's light cache; the same bits).
+    Rows(&'a LightRows),
+}
+
+/// Resolves row `y`: `pixel(x, colour)` for each pixel left to right, the colours
+/// [`resolve_fragment`] gives, with the solid look's light computed for the row's pixels
+/// together ([`LightRows`], eight at a time) rather than one fragment at a time.
+pub fn resolve_row(p: &ResolveParams, inputs: &ResolveInputs<'_>, y: u32, mut pixel: impl FnMut(usize, [f32; 3])) {
+    let lit = p.mode == MODE_CLOSEST && (p.shading > 0.0 || p.occlusion > 0.0);
+    // The keys within the point radius may sit on the rows around.
+    let r = p.point_radius_px as i32;
+    let rows = lit.then(|| LightRows::new(p, inputs, y as i32 - r..=y as i32 + r));
+    let light = rows.as_ref().map_or(Light::Fitted((0.0, 0.0)), Light::Rows);
+    for x in 0..p.width {
+        pixel(x as usize, fragment(p, inputs, x, y, light));
+    }
+}
+
+fn fragment(p: &ResolveParams, inputs: &ResolveInputs<'_>, x: u32, y: u32, light: Light<'_>) -> [f32; 3] {
     let accum = inputs.accum;
     let mut c = [p.background[0], p.background[1], p.background[2]];
     if x < p.width && y < p.height {
@@ -450,7 +479,12 @@ pub fn resolve_fragment_perturbed(
                 // The GPU's table has 256 entries; keys only hold indices of compiled functions.
                 let mut base = inputs.colors[fi.min(inputs.colors.len() - 1)];
                 if p.shading > 0.0 || p.occlusion > 0.0 {
-                    base = solid::light(p, inputs, at.0, at.1, key, Vec3::from_array(base), slope_offset).to_array();
+                    base = match light {
+                        Light::Fitted(slope_offset) => {
+                            solid::light(p, inputs, at.0, at.1, key, Vec3::from_array(base), slope_offset).to_array()
+                        }
+                        Light::Rows(rows) => rows.lit(at.0, at.1, base),
+                    };
                 }
                 c = cue(p, base, t);
             }
@@ -506,10 +540,7 @@ pub fn resolve_image(framebuffer: &Framebuffer, camera: &OrbitCamera, style: &Re
     let width_px = view.width as usize;
     let mut bytes = vec![0u8; 3 * width_px * view.height as usize];
     bytes.par_chunks_mut(3 * width_px.max(1)).enumerate().for_each(|(y, row)| {
-        for (x, pixel) in row.chunks_exact_mut(3).enumerate() {
-            let c = resolve_fragment(&params, &inputs, x as u32, y as u32).map(unorm8);
-            pixel.copy_from_slice(&c);
-        }
+        resolve_row(&params, &inputs, y as u32, |x, c| row[3 * x..3 * x + 3].copy_from_slice(&c.map(unorm8)));
     });
     image::RgbImage::from_raw(view.width, view.height, bytes).expect("3 bytes for each of width × height pixels")
 }

@@ -40,6 +40,7 @@ const LAYERS: &[(&str, Layer)] = &[
     // Leaf helpers that every layer may use.
     ("color", Layer::Base),
     ("rng", Layer::Base),
+    ("cpu_time", Layer::Base),
     ("io", Layer::Base),
     ("simd", Layer::Base),
     ("camera", Layer::Base),

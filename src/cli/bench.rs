@@ -10,6 +10,7 @@ use std::time::Instant;
 use anyhow::Context;
 use clap::Subcommand;
 
+use nlifs::cpu_time::cpu_secs;
 use nlifs::io::save_png;
 use nlifs::raytrace::{self, RaytraceSettings};
 
@@ -82,11 +83,12 @@ pub enum BenchCommand {
         #[arg(long, default_value_t = 3)]
         repeats: usize,
     },
-    /// The solid look's cost in `nlifs render`: a still's preparation (bounds and camera) and
-    /// chaos game + splat (closest mode, all threads), then its resolve in the paper look, with shading only and in the solid look
-    /// (shading + occlusion), and the PNG write; of each part the best wall time of R runs and
-    /// the mean process CPU time, and what each look adds in % of the whole render (chaos game,
-    /// preparation, chaos game, resolve and write).
+    /// The solid look's cost in `nlifs render` (closest mode, all threads): the whole command
+    /// (`nlifs render SCENE --look ...`, run R times as a child process) in the paper look, with
+    /// shading only, solid without shadows and solid, and what each look adds in % of its
+    /// render; then the parts in this process: preparation (bounds, camera), chaos game +
+    /// splat, the shadow map's splat, each look's resolve and the PNG write. Best wall time of
+    /// R runs, mean CPU time.
     Look {
         #[arg(default_value = "scenes/plant2.toml")]
         scene: PathBuf,
@@ -131,7 +133,9 @@ pub fn run(command: BenchCommand) -> anyhow::Result<()> {
             record(&scene, frames, width, height, points_per_frame, &out)
         }
         BenchCommand::Render(args) => super::bench_render::run(args),
-        BenchCommand::Look { scene, width, height, points, repeats } => look(&scene, width, height, points, repeats),
+        BenchCommand::Look { scene, width, height, points, repeats } => {
+            super::bench_look::run(&scene, width, height, points, repeats)
+        }
         BenchCommand::Coverage { scene, budget, reference, size } => {
             let s = load(&scene)?;
             println!("{}: share of the attractor's {size}x{size} pixels lit by {budget} points", s.name);
@@ -198,113 +202,6 @@ fn cpu(path: &Path, points: u64, repeats: usize) -> anyhow::Result<()> {
         println!("map + splat 1920x1080 {:<8} {:8.1} M points/s", mode.name(), rate / 1e6);
     }
     Ok(())
-}
-
-/// `nlifs bench look`: see [`BenchCommand::Look`].
-fn look(path: &Path, width: u32, height: u32, points: u64, repeats: usize) -> anyhow::Result<()> {
-    use nlifs::resolve::{ResolveStyle, resolve_image};
-    use nlifs::scene::spec::SplatMode;
-    use nlifs::shot::{Framing, Shot};
-
-    let scene = load(path)?;
-    let mut settings = scene.render_at(0.0);
-    (settings.width, settings.height, settings.points, settings.mode) = (width, height, points, SplatMode::Closest);
-    let prepare = || Shot::prepare(&scene, 0.0, &settings, Framing::Fit, None).map_err(|e| BadInput(e.to_string()));
-    let shot = prepare()?;
-    // The splat without the shadow map (the solid look without shadows), then with it.
-    let no_shadows = ResolveStyle { shadows: 0.0, ..ResolveStyle::SOLID };
-    let shot_without_shadows = shot.clone().with_style(no_shadows);
-    let shot = shot.with_style(ResolveStyle::SOLID);
-    // The best wall seconds of `repeats` runs of `f`, and their mean process CPU seconds (the
-    // CPU clock ticks at 10 ms: a mean over many runs resolves finer).
-    let repeats = repeats.max(1);
-    let best = |f: &mut dyn FnMut()| {
-        let mut wall = f64::INFINITY;
-        let c = cpu_secs().0;
-        for _ in 0..repeats {
-            let t = Instant::now();
-            f();
-            wall = wall.min(t.elapsed().as_secs_f64());
-        }
-        (wall, (cpu_secs().0 - c) / repeats as f64)
-    };
-    // The render's preparation: the attractor's bounds and the camera fitted to a sample.
-    let prepared = best(&mut || drop(prepare()));
-    let splat_without_shadows = best(&mut || drop(shot_without_shadows.splat(|| {})));
-    let mut framebuffer = None;
-    let splat = best(&mut || framebuffer = Some(shot.splat(|| {})));
-    let Some(framebuffer) = framebuffer else { return Ok(()) };
-    println!(
-        "{}: {width}×{height}, {points} points, closest mode, {} threads; best wall time of {repeats} runs, mean process CPU",
-        scene.name,
-        rayon::current_num_threads()
-    );
-    println!("  prepare (bounds, camera) {:8.1} ms wall {:8.1} ms CPU", 1e3 * prepared.0, 1e3 * prepared.1);
-    println!(
-        "  chaos game + splat       {:8.1} ms wall {:8.1} ms CPU",
-        1e3 * splat_without_shadows.0,
-        1e3 * splat_without_shadows.1
-    );
-    println!(
-        "  + shadow map splat       {:8.1} ms wall {:8.1} ms CPU ({}² texels)",
-        1e3 * splat.0,
-        1e3 * splat.1,
-        shot.view.shadow.map_or(0, |s| s.side_px)
-    );
-    // `nlifs render` also writes its picture: the PNG of the paper resolve, written as the
-    // render writes it, counts in the render's time (a scratch file, removed after).
-    let paper_image = resolve_image(&framebuffer, &shot.camera, &ResolveStyle::PAPER);
-    let scratch = std::env::temp_dir().join(format!("nlifs-bench-look-{}.png", std::process::id()));
-    let write = best(&mut || {
-        if let Err(e) = nlifs::output::png::save_rgb8(&scratch, &paper_image, None) {
-            eprintln!("warning: could not write {}: {e}", scratch.display());
-        }
-    });
-    let _ = std::fs::remove_file(&scratch);
-    println!("  write PNG                {:8.1} ms wall {:8.1} ms CPU", 1e3 * write.0, 1e3 * write.1);
-    let shading_only = ResolveStyle { occlusion: 0.0, shadows: 0.0, ..ResolveStyle::SOLID };
-    // Each look's render: preparation, the splat it needs (with the shadow map where it casts
-    // shadows), its resolve and the write; its cost is what it adds to the paper look's render.
-    let mut paper_render = (0.0, 0.0);
-    for (name, style) in [
-        ("paper", ResolveStyle::PAPER),
-        ("shading only", shading_only),
-        ("solid, no shadow", no_shadows),
-        ("solid", ResolveStyle::SOLID),
-    ] {
-        let r = best(&mut || drop(resolve_image(&framebuffer, &shot.camera, &style)));
-        let splat = if style.shadows > 0.0 { splat } else { splat_without_shadows };
-        let render = (prepared.0 + splat.0 + r.0 + write.0, prepared.1 + splat.1 + r.1 + write.1);
-        if name == "paper" {
-            paper_render = render;
-        }
-        let look = (render.0 - paper_render.0, render.1 - paper_render.1);
-        println!(
-            "  resolve, {name:<16} {:8.1} ms wall {:8.1} ms CPU; the look adds {:7.1} ms wall ({:4.1} % of its render) {:7.1} ms CPU ({:4.1} %)",
-            1e3 * r.0,
-            1e3 * r.1,
-            1e3 * look.0,
-            100.0 * look.0 / render.0,
-            1e3 * look.1,
-            100.0 * look.1 / render.1.max(1e-9),
-        );
-    }
-    Ok(())
-}
-
-/// (own, waited-for children's) CPU seconds, user + system, from /proc/self/stat (Linux; zeros
-/// elsewhere). CPU time is what the comparison uses: the machine is shared, so wall-clock
-/// time depends on what else runs.
-fn cpu_secs() -> (f64, f64) {
-    let Ok(stat) = std::fs::read_to_string("/proc/self/stat") else { return (0.0, 0.0) };
-    // Fields after the parenthesised command name; utime is field 14 (index 11 here).
-    let rest = stat.rsplit_once(')').map_or("", |(_, r)| r);
-    let f: Vec<f64> = rest.split_whitespace().map(|v| v.parse().unwrap_or(0.0)).collect();
-    if f.len() < 15 {
-        return (0.0, 0.0);
-    }
-    let tick = 100.0; // USER_HZ on Linux
-    ((f[11] + f[12]) / tick, (f[13] + f[14]) / tick)
 }
 
 fn raytrace(scenes: &Path, width: u32, height: u32, spp: u32, no_povray: bool, out: &Path) -> anyhow::Result<()> {

@@ -8,6 +8,7 @@
 
 mod args;
 mod bench;
+mod bench_look;
 mod bench_render;
 mod color_args;
 mod export;

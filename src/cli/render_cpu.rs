@@ -14,7 +14,7 @@ use nlifs::output::memory;
 use nlifs::output::png_rows::{RowLayout, write_rows};
 use nlifs::output::{self, Format, ImageLayers, OutputOptions, Provenance};
 use nlifs::resolve::density_estimation::{self, Estimated};
-use nlifs::resolve::{ResolveArgs, ResolveInputs, resolve_fragment};
+use nlifs::resolve::{ResolveArgs, ResolveInputs, resolve_row};
 use nlifs::scene::spec::SplatMode;
 use nlifs::shot::{Accumulation, Shot};
 
@@ -133,10 +133,8 @@ fn stream_png(
     let estimated: Option<Estimated> =
         density_estimation::applies(shot.settings.density_estimation.as_ref(), view.mode)
             .map(|de| density_estimation::estimate(&framebuffer.accum, width, height, &de));
-    let fragment = |x: u32, y: u32| match &estimated {
-        Some(e) => e.fragment(&params, x, y),
-        None => resolve_fragment(&params, &inputs, x, y),
-    };
+    // What an 8-bit unorm target stores (the resolve's `unorm8`).
+    let unorm8 = |c: [f32; 3]| c.map(|v| (v * 255.0 + 0.5) as u8);
     let background = view.background.map(linear_to_srgb8);
     let bar = super::progress_bar(height as u64, "write");
     let row_bytes = width as usize * 3;
@@ -150,10 +148,13 @@ fn stream_png(
             let rows = ROWS_PER_BLOCK.min(height - start);
             block[..rows as usize * row_bytes].par_chunks_mut(row_bytes).enumerate().for_each(|(i, row)| {
                 let y = start + i as u32;
-                for (x, px) in row.chunks_exact_mut(3).enumerate() {
-                    // What an 8-bit unorm target stores (the resolve's `unorm8`).
-                    let c = fragment(x as u32, y).map(|v| (v * 255.0 + 0.5) as u8);
-                    px.copy_from_slice(&c);
+                match &estimated {
+                    Some(e) => {
+                        for (x, px) in row.chunks_exact_mut(3).enumerate() {
+                            px.copy_from_slice(&unorm8(e.fragment(&params, x as u32, y)));
+                        }
+                    }
+                    None => resolve_row(&params, &inputs, y, |x, c| row[3 * x..3 * x + 3].copy_from_slice(&unorm8(c))),
                 }
             });
             block_start = start;

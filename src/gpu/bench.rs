@@ -106,10 +106,7 @@ fn submit_frame(
 /// User + system CPU seconds of this process (all threads, lavapipe's workers included), from
 /// /proc (Linux; 0 elsewhere). 10 ms resolution.
 pub fn process_cpu_secs() -> f64 {
-    let stat = std::fs::read_to_string("/proc/self/stat").unwrap_or_default();
-    let fields: Vec<&str> = stat.rsplit(')').next().unwrap_or("").split_whitespace().collect();
-    let ticks = |i: usize| fields.get(i).and_then(|f| f.parse::<f64>().ok()).unwrap_or(0.0);
-    (ticks(11) + ticks(12)) / 100.0
+    crate::cpu_time::cpu_secs().0
 }
 
 fn wait(ctx: &GpuContext) {

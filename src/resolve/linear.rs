@@ -5,7 +5,7 @@ use rayon::prelude::*;
 
 use super::{
     COLOR_SCALE, EMPTY, MODE_AVERAGE, MODE_CLOSEST, ResolveArgs, ResolveInputs, ResolveParams, ResolveStyle,
-    background, density_of, key_at, resolve_fragment, tone_uniforms, toned,
+    background, density_of, key_at, resolve_row, tone_uniforms, toned,
 };
 use crate::camera::OrbitCamera;
 use crate::splat::Framebuffer;
@@ -40,8 +40,8 @@ pub fn resolve_linear(framebuffer: &Framebuffer, camera: &OrbitCamera, style: &R
     let mut alpha = vec![0f32; pixels];
     rgb.par_chunks_mut(width_px.max(1)).zip(alpha.par_chunks_mut(width_px.max(1))).enumerate().for_each(
         |(y, (rgb, alpha))| {
-            for (x, (rgb, alpha)) in rgb.iter_mut().zip(alpha).enumerate() {
-                *rgb = resolve_fragment(&params, &inputs, x as u32, y as u32);
+            resolve_row(&params, &inputs, y as u32, |x, c| rgb[x] = c);
+            for (x, alpha) in alpha.iter_mut().enumerate() {
                 *alpha = coverage(&params, &inputs, x as u32, y as u32);
             }
         },

@@ -11,7 +11,7 @@ use super::*;
 /// Offset `i` (0..8) of ring `ring` (0..2) of the occlusion samples, in units of
 /// `occlusion_step_px`: the ring's two base offsets (along an axis and off it) turned by
 /// (i / 2) quarter turns, and one over its length.
-fn occlusion_offset(ring: i32, i: i32) -> (i32, i32, f32) {
+pub(super) fn occlusion_offset(ring: i32, i: i32) -> (i32, i32, f32) {
     let odd = i % 2 == 1;
     let (mut ox, mut oy, inv_length) = if ring == 0 {
         if odd { (2, 2, INV_LENGTH_2_2) } else { (3, 0, INV_LENGTH_3_0) }

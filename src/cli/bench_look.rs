@@ -1,0 +1,152 @@
+//! `nlifs bench look`: what the solid look costs in `nlifs render`. First the whole command,
+//! run as a child process in each look (what a user waits for: start, scene, bounds, chaos game,
+//! splats, resolve, PNG), then the parts in this process, to say where the time goes.
+
+use std::path::Path;
+use std::process::{Command, Stdio};
+use std::time::Instant;
+
+use nlifs::cpu_time::cpu_secs;
+use nlifs::output::png_rows::{RowLayout, write_rows};
+use nlifs::resolve::{ResolveStyle, resolve_image};
+use nlifs::scene::spec::SplatMode;
+use nlifs::shot::{Framing, Shot};
+
+use super::{BadInput, load};
+
+/// The looks compared: name, `nlifs render` flags, style.
+fn looks() -> [(&'static str, &'static [&'static str], ResolveStyle); 4] {
+    [
+        ("paper", &["--look", "paper"], ResolveStyle::PAPER),
+        (
+            "shading only",
+            &["--look", "solid", "--occlusion", "0", "--shadows", "0"],
+            ResolveStyle { occlusion: 0.0, shadows: 0.0, ..ResolveStyle::SOLID },
+        ),
+        (
+            "solid, no shadows",
+            &["--look", "solid", "--shadows", "0"],
+            ResolveStyle { shadows: 0.0, ..ResolveStyle::SOLID },
+        ),
+        ("solid", &["--look", "solid"], ResolveStyle::SOLID),
+    ]
+}
+
+/// The best wall seconds of `repeats` runs of `f`, and the mean CPU seconds of this process
+/// (`children`: of its waited-for children) per run. The CPU clock ticks at 10 ms: a mean over
+/// many runs resolves finer.
+fn best(repeats: usize, children: bool, f: &mut dyn FnMut() -> anyhow::Result<()>) -> anyhow::Result<(f64, f64)> {
+    let cpu = || if children { cpu_secs().1 } else { cpu_secs().0 };
+    let (mut wall, c) = (f64::INFINITY, cpu());
+    for _ in 0..repeats {
+        let t = Instant::now();
+        f()?;
+        wall = wall.min(t.elapsed().as_secs_f64());
+    }
+    Ok((wall, (cpu() - c) / repeats as f64))
+}
+
+pub fn run(path: &Path, width: u32, height: u32, points: u64, repeats: usize) -> anyhow::Result<()> {
+    let scene = load(path)?;
+    let repeats = repeats.max(1);
+    let scratch = std::env::temp_dir().join(format!("nlifs-bench-look-{}.png", std::process::id()));
+    println!(
+        "{}: {width}×{height}, {points} points, closest mode, {} threads; best wall time of {repeats} runs, mean CPU",
+        scene.name,
+        rayon::current_num_threads()
+    );
+
+    // The whole command, as a user runs it.
+    println!("nlifs render (the whole command, on the CPU):");
+    let exe = std::env::current_exe()?;
+    let size = [width.to_string(), height.to_string(), points.to_string()];
+    let mut paper = (0.0, 0.0);
+    for (name, flags, _) in looks() {
+        let mut render = || -> anyhow::Result<()> {
+            let out = Command::new(&exe)
+                .arg("render")
+                .arg(path)
+                .args(["--width", &size[0], "--height", &size[1], "--points", &size[2], "--mode", "closest"])
+                .args(["--backend", "cpu"])
+                .args(flags)
+                .arg("-o")
+                .arg(&scratch)
+                .stdout(Stdio::null())
+                .stderr(Stdio::piped())
+                .output()?;
+            if !out.status.success() {
+                anyhow::bail!("nlifs render {name} failed: {}", String::from_utf8_lossy(&out.stderr));
+            }
+            Ok(())
+        };
+        let r = best(repeats, true, &mut render)?;
+        if name == "paper" {
+            paper = r;
+        }
+        let adds = (r.0 - paper.0, r.1 - paper.1);
+        println!(
+            "  {name:<18} {:7.1} ms wall {:7.1} ms CPU; the look adds {:6.1} ms wall ({:4.1} % of its render) {:6.1} ms CPU ({:4.1} %)",
+            1e3 * r.0,
+            1e3 * r.1,
+            1e3 * adds.0,
+            100.0 * adds.0 / r.0,
+            1e3 * adds.1,
+            100.0 * adds.1 / r.1.max(1e-9),
+        );
+    }
+
+    // The parts, in this process.
+    let mut settings = scene.render_at(0.0);
+    (settings.width, settings.height, settings.points, settings.mode) = (width, height, points, SplatMode::Closest);
+    let prepare = || Shot::prepare(&scene, 0.0, &settings, Framing::Fit, None).map_err(|e| BadInput(e.to_string()));
+    let shot = prepare()?;
+    let no_shadows = shot.clone().with_style(ResolveStyle { shadows: 0.0, ..ResolveStyle::SOLID });
+    let shot = shot.with_style(ResolveStyle::SOLID);
+    println!("parts (in this process):");
+    let part = |name: &str, (wall, cpu): (f64, f64), note: &str| {
+        println!("  {name:<28} {:7.1} ms wall {:7.1} ms CPU{note}", 1e3 * wall, 1e3 * cpu);
+    };
+    part(
+        "prepare (bounds, camera)",
+        best(repeats, false, &mut || {
+            prepare()?;
+            Ok(())
+        })?,
+        "",
+    );
+    part(
+        "chaos game + splat",
+        best(repeats, false, &mut || {
+            no_shadows.splat(|| {});
+            Ok(())
+        })?,
+        "",
+    );
+    let mut framebuffer = None;
+    let splat = best(repeats, false, &mut || {
+        framebuffer = Some(shot.splat(|| {}));
+        Ok(())
+    })?;
+    let side = shot.view.shadow.map_or(0, |s| s.side_px);
+    part("  with the shadow map's", splat, &format!(" ({side}² texels)"));
+    let Some(framebuffer) = framebuffer else { return Ok(()) };
+    for (name, _, style) in looks() {
+        let r = best(repeats, false, &mut || {
+            resolve_image(&framebuffer, &shot.camera, &style);
+            Ok(())
+        })?;
+        part(&format!("resolve, {name}"), r, "");
+    }
+    // The PNG as `nlifs render` writes it: streamed rows, adaptive filters (a scratch file).
+    let image = resolve_image(&framebuffer, &shot.camera, &ResolveStyle::PAPER);
+    let row_bytes = 3 * width as usize;
+    let write = best(repeats, false, &mut || {
+        write_rows(&scratch, width, height, RowLayout::Rgb8, None, |y, out| {
+            out.copy_from_slice(&image.as_raw()[y as usize * row_bytes..][..row_bytes]);
+        })
+        .map_err(anyhow::Error::from)
+    });
+    let _ = std::fs::remove_file(&scratch);
+    part("write PNG", write?, "");
+    Ok(())
+}
