@@ -84,11 +84,13 @@ pub enum BenchCommand {
         repeats: usize,
     },
     /// The solid look's cost in `nlifs render` (closest mode, all threads): the whole command
-    /// (`nlifs render SCENE --look ...`, run R times as a child process) in the paper look, with
-    /// shading only, solid without shadows and solid, and what each look adds in % of its
-    /// render; then the parts in this process: preparation (bounds, camera), chaos game +
-    /// splat, the shadow map's splat, each look's resolve and the PNG write. Best wall time of
-    /// R runs, mean CPU time.
+    /// (`nlifs render SCENE --look ...` as a child process) in the paper look, with shading
+    /// only, solid without shadows and solid, in R rounds of one run per look (the order
+    /// rotating), and what each look adds in % of its render: the median over the rounds of
+    /// its time minus the paper look's in the same round, with the middle half of the rounds;
+    /// median and best wall time, mean CPU time. Then the parts in this process (best wall of
+    /// R runs, mean CPU): preparation (bounds, camera), chaos game + splat, the shadow map's
+    /// splat, each look's resolve and the PNG write.
     Look {
         #[arg(default_value = "scenes/plant2.toml")]
         scene: PathBuf,
