@@ -226,10 +226,13 @@ pub(crate) struct OwnPixels<'a> {
 impl Pixels for OwnPixels<'_> {
     #[inline(always)]
     fn min_key(&mut self, pixel: usize, key: u32) {
+        // A store whatever the comparison says (a conditional move, not a branch): the branch
+        // on a key just loaded from a random pixel mispredicts often, and each miss discards
+        // the loads of the pixels after it; without it the splat keeps several cache misses in
+        // flight (`nlifs bench look`: image and shadow splat 71 → 56 ms CPU, plant2 1920×1080,
+        // 4·10^6 points).
         let slot = &mut self.closest[pixel];
-        if key < *slot {
-            *slot = key;
-        }
+        *slot = (*slot).min(key);
     }
 
     #[inline(always)]
