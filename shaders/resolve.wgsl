@@ -95,6 +95,7 @@ const INV_LENGTH_3_0: f32 = 0.33333334;
 const INV_LENGTH_2_2: f32 = 0.35355338;
 const INV_LENGTH_6_3: f32 = 0.1490712;
 const OCCLUSION_FALLOFF: f32 = 3.0;
+const INV_OCCLUSION_FALLOFF: f32 = 1.0 / OCCLUSION_FALLOFF;
 const OCCLUSION_BIAS: f32 = 0.1;
 const OCCLUSION_GAIN: f32 = 2.0;
 const SHADOW_PCF_RADIUS: i32 = 1;
@@ -219,8 +220,10 @@ fn fitted_slopes(x: i32, y: i32, key: u32) -> vec2<f32> {
                 let z = f32(i32(k >> 8u) - depth0) * z_per_unit;
                 let fx = f32(dx);
                 let fy = f32(dy);
+                // 1 / (1 + q² / r²) with one division.
                 let q = z / SLOPE_SCALE;
-                let w = 1.0 / (1.0 + q * q / (fx * fx + fy * fy));
+                let r2 = fx * fx + fy * fy;
+                let w = r2 / (q * q + r2);
                 sw += w;
                 sx += w * fx;
                 sy += w * fy;
@@ -233,14 +236,15 @@ fn fitted_slopes(x: i32, y: i32, key: u32) -> vec2<f32> {
             }
         }
     }
-    let cxx = sxx - sx * sx / sw + RIDGE;
-    let cyy = syy - sy * sy / sw + RIDGE;
-    let cxy = sxy - sx * sy / sw;
-    let cxz = sxz - sx * sz / sw;
-    let cyz = syz - sy * sz / sw;
-    let det = cxx * cyy - cxy * cxy;
-    let slope_x = clamp((cyy * cxz - cxy * cyz) / det, -SLOPE_MAX, SLOPE_MAX);
-    let slope_y = clamp((cxx * cyz - cxy * cxz) / det, -SLOPE_MAX, SLOPE_MAX);
+    let inv_sw = 1.0 / sw;
+    let cxx = sxx - sx * sx * inv_sw + RIDGE;
+    let cyy = syy - sy * sy * inv_sw + RIDGE;
+    let cxy = sxy - sx * sy * inv_sw;
+    let cxz = sxz - sx * sz * inv_sw;
+    let cyz = syz - sy * sz * inv_sw;
+    let inv_det = 1.0 / (cxx * cyy - cxy * cxy);
+    let slope_x = clamp((cyy * cxz - cxy * cyz) * inv_det, -SLOPE_MAX, SLOPE_MAX);
+    let slope_y = clamp((cxx * cyz - cxy * cxz) * inv_det, -SLOPE_MAX, SLOPE_MAX);
     return vec2<f32>(slope_x, slope_y);
 }
 
@@ -249,6 +253,7 @@ fn occlusion_at(x: i32, y: i32, key: u32, slopes: vec2<f32>) -> f32 {
     let z_per_unit = footprints_per_unit(key);
     let depth0 = i32(key >> 8u);
     let step = i32(params.occlusion_step_px);
+    let inv_step = 1.0 / f32(step);
     var occluded = 0.0;
     var samples = 0.0;
     for (var ring = 0; ring < OCCLUSION_RINGS; ring += 1) {
@@ -260,9 +265,9 @@ fn occlusion_at(x: i32, y: i32, key: u32, slopes: vec2<f32>) -> f32 {
             if k != EMPTY {
                 let z = f32(i32(k >> 8u) - depth0) * z_per_unit;
                 let above = slopes.x * f32(ox) + slopes.y * f32(oy) - z;
-                let e = max(above * o.z / f32(step) - OCCLUSION_BIAS, 0.0);
-                let f = e / OCCLUSION_FALLOFF;
-                occluded += e / (1.0 + e) / (1.0 + f * f);
+                let e = max(above * (o.z * inv_step) - OCCLUSION_BIAS, 0.0);
+                let f = e * INV_OCCLUSION_FALLOFF;
+                occluded += e / ((1.0 + e) * (1.0 + f * f));
                 samples += 1.0;
             }
         }

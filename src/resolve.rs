@@ -103,6 +103,7 @@ pub const INV_LENGTH_6_3: f32 = 0.1490712;
 /// Elevation (tangent) past which a sample stops occluding: something that far in front is
 /// another object, not the wall of a crease.
 pub const OCCLUSION_FALLOFF: f32 = 3.0;
+pub const INV_OCCLUSION_FALLOFF: f32 = 1.0 / OCCLUSION_FALLOFF;
 /// Elevation (tangent, about 6°) that a sample must exceed to occlude: the fitted plane is
 /// flattened a little by the ridge and depths are quantized, so a plane's own samples may sit
 /// slightly above it.

@@ -259,8 +259,8 @@ fn light8<L: Lanes>(
             let here = L::present(k);
             let z = L::depths(k, keys, z_per_unit);
             let (fx, fy) = (dx as f32, dy as f32);
-            let q = z / SLOPE_SCALE;
-            let w = one / (one + q * q / (fx * fx + fy * fy));
+            let (q, r2) = (z / SLOPE_SCALE, fx * fx + fy * fy);
+            let w = L::splat(r2) / (q * q + r2);
             sw = (sw + w).or(here, sw);
             sx = (sx + w * fx).or(here, sx);
             sy = (sy + w * fy).or(here, sy);
@@ -272,15 +272,16 @@ fn light8<L: Lanes>(
             syz = (syz + w * fy * z).or(here, syz);
         }
     }
-    let cxx = sxx - sx * sx / sw + RIDGE;
-    let cyy = syy - sy * sy / sw + RIDGE;
-    let cxy = sxy - sx * sy / sw;
-    let cxz = sxz - sx * sz / sw;
-    let cyz = syz - sy * sz / sw;
-    let det = cxx * cyy - cxy * cxy;
+    let inv_sw = one / sw;
+    let cxx = sxx - sx * sx * inv_sw + RIDGE;
+    let cyy = syy - sy * sy * inv_sw + RIDGE;
+    let cxy = sxy - sx * sy * inv_sw;
+    let cxz = sxz - sx * sz * inv_sw;
+    let cyz = syz - sy * sz * inv_sw;
+    let inv_det = one / (cxx * cyy - cxy * cxy);
     // light adds the slope offset, 0 here.
-    let slope_x = ((cyy * cxz - cxy * cyz) / det).clamp(-SLOPE_MAX, SLOPE_MAX) + 0.0;
-    let slope_y = ((cxx * cyz - cxy * cxz) / det).clamp(-SLOPE_MAX, SLOPE_MAX) + 0.0;
+    let slope_x = ((cyy * cxz - cxy * cyz) * inv_det).clamp(-SLOPE_MAX, SLOPE_MAX) + 0.0;
+    let slope_y = ((cxx * cyz - cxy * cxz) * inv_det).clamp(-SLOPE_MAX, SLOPE_MAX) + 0.0;
 
     // normal_and_eye.
     let x = L::from_array(std::array::from_fn(|i| (x0 + i as i32) as f32));
@@ -341,6 +342,7 @@ fn occlusion8<L: Lanes>(
 ) -> L {
     let one = L::splat(1.0);
     let step = p.occlusion_step_px as i32;
+    let inv_step = 1.0 / step as f32;
     let (mut occluded, mut samples) = (L::splat(0.0), L::splat(0.0));
     for ring in 0..OCCLUSION_RINGS {
         for i in 0..OCCLUSION_DIRECTIONS {
@@ -349,9 +351,9 @@ fn occlusion8<L: Lanes>(
             let here = L::present(k);
             let z = L::depths(k, keys, z_per_unit);
             let above = slope_x * (ox * step) as f32 + slope_y * (oy * step) as f32 - z;
-            let e = (above * inv_length / step as f32 - OCCLUSION_BIAS).max(0.0);
-            let f = e / OCCLUSION_FALLOFF;
-            occluded = (occluded + e / (one + e) / (one + f * f)).or(here, occluded);
+            let e = (above * (inv_length * inv_step) - OCCLUSION_BIAS).max(0.0);
+            let f = e * INV_OCCLUSION_FALLOFF;
+            occluded = (occluded + e / ((one + e) * (one + f * f))).or(here, occluded);
             samples = (samples + 1.0).or(here, samples);
         }
     }
