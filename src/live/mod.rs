@@ -87,19 +87,23 @@ impl LiveView {
         })
     }
 
-    /// What the GPU side runs for `settings`: the same, without shadows while navigating.
+    /// What the GPU side runs for `settings`: the same, without shadows and occlusion while
+    /// navigating.
     fn progressive_settings(&self, settings: &LiveSettings) -> ProgressiveSettings {
         let mut p = ProgressiveSettings::from(settings);
         if self.navigating {
             p.shadows = 0.0;
+            p.occlusion = 0.0;
         }
         p
     }
 
-    /// While the camera is dragged (orbit, pan) the view draws without the key light's shadows,
-    /// as 3D viewports lower their quality while navigating: every frame of a moving camera
-    /// starts afresh, and on lavapipe the shadow map and its lookups take it below 20 fps. They
-    /// come back, with a fresh accumulation, when the drag ends.
+    /// While the camera is dragged (orbit, pan) the view draws without the key light's shadows
+    /// and without ambient occlusion (normals, key, fill and highlight stay), as 3D viewports
+    /// lower their quality while navigating: every frame of a moving camera starts afresh and
+    /// lights every pixel, and on lavapipe the shadow map, its lookups and the 16 occlusion
+    /// samples a pixel take it below 20 fps. Both come back, with a fresh accumulation, when
+    /// the drag ends.
     pub fn set_navigating(&mut self, ctx: &GpuContext, navigating: bool) -> Result<(), GpuError> {
         if navigating == self.navigating {
             return Ok(());
