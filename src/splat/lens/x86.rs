@@ -33,13 +33,23 @@ pub(super) fn project_block(view: &SplatView, batch: PointBatch<'_>, start: usiz
     assert!(supported(view));
     let n = out.len();
     assert!(start + n <= batch.x.len() && start + n <= batch.y.len() && start + n <= batch.z.len());
+    // SAFETY: the CPU has AVX2 and the view at least one pixel; the batch's slices hold the
+    // block (both asserted above).
+    unsafe { project_block_avx2(view, batch, start, out) }
+}
+
+/// [`project_block`] compiled with AVX2, so that the loads, stores and [`project8`] inline
+/// into the loop (from a function without the feature each intrinsic was an out-of-line call).
+#[target_feature(enable = "avx2")]
+unsafe fn project_block_avx2(view: &SplatView, batch: PointBatch<'_>, start: usize, out: &mut [Option<(usize, f32)>]) {
+    let n = out.len();
     let vectors = n / LANES;
     for g in 0..vectors {
         let o = start + g * LANES;
         let mut pixels = [0u32; LANES];
         let mut ts = [0f32; LANES];
-        // SAFETY: the CPU has AVX2 and the view at least one pixel (asserted above); o + 8 ≤
-        // start + n ≤ each slice's length (asserted), and the stores go to local arrays.
+        // SAFETY: the CPU has AVX2 and the view at least one pixel (the caller asserted); o + 8
+        // ≤ start + n ≤ each slice's length (asserted there), and the stores go to local arrays.
         let inside = unsafe {
             let (x, y, z) = (
                 _mm256_loadu_ps(batch.x.as_ptr().add(o)),
