@@ -32,11 +32,10 @@ fn looks() -> [(&'static str, &'static [&'static str], ResolveStyle); 4] {
     ]
 }
 
-/// The best wall seconds of `repeats` runs of `f`, and the mean CPU seconds of this process
-/// (`children`: of its waited-for children) per run. The CPU clock ticks at 10 ms: a mean over
-/// many runs resolves finer.
-fn best(repeats: usize, children: bool, f: &mut dyn FnMut() -> anyhow::Result<()>) -> anyhow::Result<(f64, f64)> {
-    let cpu = || if children { cpu_secs().1 } else { cpu_secs().0 };
+/// The best wall seconds of `repeats` runs of `f` in this process, and its mean CPU seconds
+/// per run. The CPU clock ticks at 10 ms: a mean over many runs resolves finer.
+fn best(repeats: usize, f: &mut dyn FnMut() -> anyhow::Result<()>) -> anyhow::Result<(f64, f64)> {
+    let cpu = || cpu_secs().0;
     let (mut wall, c) = (f64::INFINITY, cpu());
     for _ in 0..repeats {
         let t = Instant::now();
@@ -129,7 +128,7 @@ pub fn run(path: &Path, width: u32, height: u32, points: u64, repeats: usize) ->
     };
     part(
         "prepare (bounds, camera)",
-        best(repeats, false, &mut || {
+        best(repeats, &mut || {
             prepare()?;
             Ok(())
         })?,
@@ -137,14 +136,14 @@ pub fn run(path: &Path, width: u32, height: u32, points: u64, repeats: usize) ->
     );
     part(
         "chaos game + splat",
-        best(repeats, false, &mut || {
+        best(repeats, &mut || {
             no_shadows.splat(|| {});
             Ok(())
         })?,
         "",
     );
     let mut framebuffer = None;
-    let splat = best(repeats, false, &mut || {
+    let splat = best(repeats, &mut || {
         framebuffer = Some(shot.splat(|| {}));
         Ok(())
     })?;
@@ -152,7 +151,7 @@ pub fn run(path: &Path, width: u32, height: u32, points: u64, repeats: usize) ->
     part("  with the shadow map's", splat, &format!(" ({side}² texels)"));
     let Some(framebuffer) = framebuffer else { return Ok(()) };
     for (name, _, style) in looks {
-        let r = best(repeats, false, &mut || {
+        let r = best(repeats, &mut || {
             resolve_image(&framebuffer, &shot.camera, &style);
             Ok(())
         })?;
@@ -161,7 +160,7 @@ pub fn run(path: &Path, width: u32, height: u32, points: u64, repeats: usize) ->
     // The PNG as `nlifs render` writes it: streamed rows, adaptive filters (a scratch file).
     let image = resolve_image(&framebuffer, &shot.camera, &ResolveStyle::PAPER);
     let row_bytes = 3 * width as usize;
-    let write = best(repeats, false, &mut || {
+    let write = best(repeats, &mut || {
         write_rows(&scratch, width, height, RowLayout::Rgb8, None, |y, out| {
             out.copy_from_slice(&image.as_raw()[y as usize * row_bytes..][..row_bytes]);
         })

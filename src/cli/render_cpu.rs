@@ -2,8 +2,8 @@
 //! allocated, the chaos game into one framebuffer (shared by the threads when per-thread copies
 //! would be large, `Accumulation`), and the resolve streamed row by row into the PNG, so that a
 //! 16384² still holds its framebuffer and little more; the rows are resolved a block ahead of
-//! the encoder (`BlocksAhead`), whose filter and compression take one thread. Other formats go through the float layers
-//! (`ImageLayers`), with the EXR layers chosen by `--layers`.
+//! the encoder (`BlocksAhead`), whose filter and compression take one thread. Other formats go
+//! through the float layers (`ImageLayers`), with the EXR layers chosen by `--layers`.
 
 use std::path::Path;
 use std::sync::mpsc;
