@@ -36,7 +36,8 @@ const NO_KERNEL: u32 = 0xffffffffu;
 // Side of the tiles whose largest reach the gather consults (`TILE` in the host side).
 const TILE: u32 = 8u;
 
-@group(1) @binding(8) var<uniform> de: DensityEstimationParams;
+// Storage rather than uniform, as `params` in resolve.wgsl (lavapipe's inlined uniforms leak).
+@group(1) @binding(8) var<storage, read> de: DensityEstimationParams;
 // Per kernel step: the smallest count whose step is ≤ it (falls with the step).
 @group(1) @binding(9) var<storage, read> first_count: array<u32>;
 // Per kernel step: its first weight's index and its reach r ((2r + 1)² weights, row by row).

@@ -90,17 +90,18 @@ impl GpuDensityEstimation {
             })
         };
         let (index_pipeline, estimate_pipeline) = (compute("kernel_index"), compute("estimate"));
-        let uniform = |label: &str, size: usize| {
+        // Parameters read as storage, not uniforms: `params` in shaders/resolve.wgsl says why.
+        let parameters = |label: &str, size: usize| {
             device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some(label),
                 size: size as u64,
-                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
                 mapped_at_creation: false,
             })
         };
         Self {
-            params: uniform("density_estimation_params", std::mem::size_of::<DensityEstimationParams>()),
-            resolve_params: uniform("density_estimation_resolve_params", std::mem::size_of::<ResolveParams>()),
+            params: parameters("density_estimation_params", std::mem::size_of::<DensityEstimationParams>()),
+            resolve_params: parameters("density_estimation_resolve_params", std::mem::size_of::<ResolveParams>()),
             module,
             index_pipeline,
             estimate_pipeline,

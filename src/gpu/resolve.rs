@@ -75,7 +75,8 @@ impl GpuResolve {
         let params = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("resolve_params"),
             size: std::mem::size_of::<ResolveParams>() as u64,
-            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            // Read as storage: `params` in the shader says why.
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
         let stats = device.create_buffer(&wgpu::BufferDescriptor {
