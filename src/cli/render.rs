@@ -11,7 +11,7 @@ use nlifs::scene::spec::{Look, SplatMode};
 use nlifs::shot::{Framing, Shot};
 
 use super::image_args::{ImageArgs, render_part, write_still};
-use super::{BadInput, load, progress_bar};
+use super::{BadInput, load, probe_output, progress_bar};
 
 #[derive(Args)]
 pub struct RenderArgs {
@@ -178,6 +178,7 @@ pub fn render(args: RenderArgs) -> anyhow::Result<()> {
     let provenance = Provenance::for_render(&scene, args.time, &settings);
     let start = std::time::Instant::now();
     let shot = Shot::prepare(&scene, args.time, &settings, Framing::Fit, None).map_err(|e| BadInput(e.to_string()))?;
+    probe_output(&output)?;
     let style = ResolveStyle { point_radius_px: args.point_radius, ..shot.style };
     let shot = shot.with_style(style);
     let bar = progress_bar(shot.plan.chunks() as u64, "render");
