@@ -273,16 +273,17 @@ pub fn record(args: RecordArgs) -> anyhow::Result<()> {
             BadInput(record::RecordError::TooManyFrames { start: frames.start, end: frames.end }.to_string()).into()
         );
     }
-    // The frames' folder and the video can be written: checked before any frame is made.
-    let first_frame = record::frame_path_as(&args.output, frames.start, options.format);
-    super::probe_outputs(
-        &[Some(first_frame.as_path()), args.video.as_deref()].into_iter().flatten().collect::<Vec<_>>(),
-    )?;
     if rec.settings().renderer == Renderer::Chaos {
         rec = choose_backend(rec, args.backend)?;
     } else {
         eprintln!("record: ray-traced on the CPU");
     }
+    // The frames' folder and the video can be written: checked before any frame is made (and
+    // after the GPU, whose absence is an error too: no folder is made for nothing).
+    let first_frame = record::frame_path_as(&args.output, frames.start, options.format);
+    super::probe_outputs(
+        &[Some(first_frame.as_path()), args.video.as_deref()].into_iter().flatten().collect::<Vec<_>>(),
+    )?;
     let todo = record::frames_to_render_as(&rec, &args.output, frames.clone(), args.resume, options.format).len();
     if args.resume && todo < frames.len() {
         eprintln!("resume: {} of {} frames already complete", frames.len() - todo, frames.len());

@@ -178,7 +178,6 @@ pub fn render(args: RenderArgs) -> anyhow::Result<()> {
     let provenance = Provenance::for_render(&scene, args.time, &settings);
     let start = std::time::Instant::now();
     let shot = Shot::prepare(&scene, args.time, &settings, Framing::Fit, None).map_err(|e| BadInput(e.to_string()))?;
-    probe_output(&output)?;
     let style = ResolveStyle { point_radius_px: args.point_radius, ..shot.style };
     let shot = shot.with_style(style);
     let bar = progress_bar(shot.plan.chunks() as u64, "render");
@@ -195,6 +194,8 @@ pub fn render(args: RenderArgs) -> anyhow::Result<()> {
         // The GPU still writes every layer the mode has; choosing them is the CPU writer's.
         return Err(BadInput("--layers needs --backend cpu (the GPU route writes all the mode's layers)".into()).into());
     }
+    // After the checks (the GPU's among them), before the work.
+    probe_output(&output)?;
     for warning in nlifs::scene::warnings::scene_warnings(&scene, args.time) {
         bar.suspend(|| eprintln!("warning: {warning}"));
     }
