@@ -128,6 +128,53 @@ fn write_atomic_inner(path: &Path, write: impl FnOnce(&mut dyn Write) -> std::io
     result
 }
 
+/// Checks before any work that `path` can be written as [`write_atomic`] writes it: creates the
+/// missing folders above it, then creates its temporary file in its folder and removes it
+/// again, so that a read-only or missing place fails at once instead of after a long render.
+/// Returns the folders this call created, outermost first (the caller may say so, or take
+/// them back with [`remove_created`]); on an error it leaves nothing behind. The error is a
+/// [`WriteError`], as [`write_atomic`]'s.
+pub fn probe(path: &Path) -> std::io::Result<Vec<PathBuf>> {
+    let mut created = Vec::new();
+    probe_inner(path, &mut created).map(|()| created.clone()).map_err(|e| {
+        remove_created(&created);
+        WriteError::wrap(path, e)
+    })
+}
+
+fn probe_inner(path: &Path, created: &mut Vec<PathBuf>) -> std::io::Result<()> {
+    if path.is_dir() || path.as_os_str().is_empty() || path.file_name().is_none() {
+        return Err(ErrorKind::IsADirectory.into());
+    }
+    let dir = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
+        _ => PathBuf::from("."),
+    };
+    // The folders missing now, outermost first: the ones create_dir_all is about to make.
+    let missing: Vec<PathBuf> = dir
+        .ancestors()
+        .take_while(|a| !a.as_os_str().is_empty() && std::fs::symlink_metadata(a).is_err())
+        .map(Path::to_path_buf)
+        .collect();
+    std::fs::create_dir_all(&dir).map_err(|e| match e.kind() {
+        ErrorKind::AlreadyExists => std::io::Error::from(ErrorKind::NotADirectory),
+        _ => e,
+    })?;
+    created.extend(missing.into_iter().rev());
+    let tmp = temp_path(path);
+    // This process writes nothing yet, so a file of this name is a dead one's, as good to replace.
+    drop(std::fs::File::create(&tmp)?);
+    std::fs::remove_file(&tmp)
+}
+
+/// Removes the folders [`probe`] created (outermost first, as it returns them) where they are
+/// still empty, innermost first.
+pub fn remove_created(folders: &[PathBuf]) {
+    for dir in folders.iter().rev() {
+        let _ = std::fs::remove_dir(dir);
+    }
+}
+
 /// Removes `.<name>.<pid>.tmp` files of `path` left by processes that no longer run (a write
 /// killed before its rename). Files of running processes, this one included, are kept: another
 /// process may be writing the same output right now.
@@ -237,6 +284,27 @@ mod tests {
         let names: Vec<_> = std::fs::read_dir(&dir).unwrap().map(|e| e.unwrap().file_name()).collect();
         assert_eq!(names.len(), 2, "{names:?}");
         std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn a_probe_creates_the_folder_and_leaves_no_file() {
+        let top = std::env::temp_dir().join(format!("nlifs-probe-{}", std::process::id()));
+        let out = top.join("a/b/out.png");
+        std::fs::create_dir_all(&top).unwrap();
+        assert_eq!(probe(&out).unwrap(), [top.join("a"), top.join("a/b")]);
+        assert_eq!(std::fs::read_dir(top.join("a/b")).unwrap().count(), 0, "the probe left a file");
+        assert_eq!(probe(&out).unwrap(), Vec::<PathBuf>::new(), "an existing folder is not created again");
+        remove_created(&[top.join("a"), top.join("a/b")]);
+        assert!(!top.join("a").exists(), "the created folders stay");
+        // A folder that is a file: the probe fails as the write would, and creates nothing.
+        std::fs::write(top.join("file.txt"), b"x").unwrap();
+        let e = probe(&top.join("file.txt/out.png")).unwrap_err();
+        assert!(WriteError::of(&e).is_some_and(WriteError::is_bad_input), "{e}");
+        assert_eq!(e.to_string(), "a part of its path is a file, not a folder");
+        let mut names: Vec<_> = std::fs::read_dir(&top).unwrap().map(|e| e.unwrap().file_name()).collect();
+        names.sort();
+        assert_eq!(names, ["file.txt"]);
+        std::fs::remove_dir_all(&top).unwrap();
     }
 
     #[test]

@@ -15,7 +15,7 @@ use super::BadInput;
 
 #[derive(Args)]
 pub struct GeometryArgs {
-    /// n of W^n(A) (with --adaptive: the most refinement).
+    /// n of W^n(A).
     #[arg(long, default_value_t = 6, value_parser = clap::value_parser!(u32).range(0..=16))]
     pub depth: u32,
     /// Initial object A: `sphere`, `grid` (the initial grid's surface) or a .glb/.gltf file.

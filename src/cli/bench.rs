@@ -166,6 +166,8 @@ fn record(
         ..nlifs::record::RecordSettings::for_scene(&scene)
     };
     let points = points_per_frame.unwrap_or(scene.render.points);
+    let (cpu_frame, gpu_frame) = (out.join("cpu/frame_00000.png"), out.join("gpu/frame_00000.png"));
+    super::probe_outputs(&[&cpu_frame, &gpu_frame])?;
     println!("record {}: {width}×{height}, {points} points per frame, {frames} frames", scene.name);
     for gpu in [false, true] {
         let ctx = if gpu {
@@ -207,7 +209,7 @@ fn cpu(path: &Path, points: u64, repeats: usize) -> anyhow::Result<()> {
 }
 
 fn raytrace(scenes: &Path, width: u32, height: u32, spp: u32, no_povray: bool, out: &Path) -> anyhow::Result<()> {
-    std::fs::create_dir_all(out)?;
+    super::probe_output(&out.join("tapering_n6_nlifs.png"))?;
     let threads = rayon::current_num_threads();
     println!(
         "machine: {} threads in rayon's pool; {width}×{height}, {spp} spp, 2 lights with shadows, ground plane",

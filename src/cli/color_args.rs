@@ -29,6 +29,17 @@ enum ColorArg {
 }
 
 impl ColorArgs {
+    /// The first of these flags given, by name (for commands where they do not apply).
+    pub fn given(&self) -> Option<&'static str> {
+        if self.color.is_some() {
+            Some("--color")
+        } else if self.palette.is_some() {
+            Some("--palette")
+        } else {
+            None
+        }
+    }
+
     /// Sets the given colour mode and palette in `settings`; an unknown palette or an
     /// unreadable image is bad input.
     pub fn apply(&self, settings: &mut RenderSettings) -> Result<(), BadInput> {

@@ -90,6 +90,7 @@ fn export_points(path: &Path, output: &Path, points: u64, seed: Option<u32>, tim
     };
     let settings = RenderSettings { points, seed: seed.unwrap_or(scene.render.seed), ..scene.render_at(time) };
     let shot = Shot::prepare(&scene, time, &settings, Framing::Scene, None).map_err(|e| BadInput(e.to_string()))?;
+    super::probe_output(output)?;
     let (compiled, plan, seed) = (&shot.compiled, &shot.plan, settings.seed);
     let passes = if glb { 3 } else { 1 };
     let bar = progress_bar(passes * plan.chunks() as u64, "points");
@@ -155,6 +156,7 @@ fn export_mesh(args: ExportMeshArgs) -> anyhow::Result<()> {
     }
     let ifs = scene.at(args.geometry.time);
     let initial = args.geometry.initial()?;
+    super::probe_output(&args.output)?;
     let h = raytrace::build_fixed(&ifs, &initial, args.geometry.depth)?;
     let colors: Vec<[f32; 3]> = ifs.active().iter().map(|&i| ifs.functions[i].color).collect();
     let names: Vec<String> = ifs.active().iter().map(|&i| ifs.functions[i].name.clone()).collect();
@@ -166,6 +168,7 @@ fn export_mesh(args: ExportMeshArgs) -> anyhow::Result<()> {
 
 fn export_pov(args: ExportPovArgs) -> anyhow::Result<()> {
     let scene = load(&args.scene)?;
+    super::probe_output(&args.output)?;
     write_pov(&scene, args.time, args.depth, args.width, args.height, &args.output)?;
     eprintln!("wrote {}", args.output.display());
     Ok(())

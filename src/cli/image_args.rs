@@ -106,6 +106,7 @@ pub fn render_part(
     let chunks =
         nlifs::chaos_game::ChunkPlan::new(settings.points).map_err(|e| super::BadInput(e.to_string()))?.chunks();
     let range = spec.chunk_range(chunks);
+    super::probe_output(raw)?;
     let bar = super::progress_bar(range.len() as u64, "part");
     let start = std::time::Instant::now();
     let part = output::part::render_part(scene, t_secs, settings, spec, &|d, _| bar.set_position(d)).map_err(bad)?;

@@ -35,7 +35,11 @@ pub fn info(args: InfoArgs) -> anyhow::Result<()> {
         load(&args.scene)?
     };
     let ifs = scene.at(args.time);
-    let report: IfsReport = ifs.report();
+    let mut report: IfsReport = ifs.report();
+    // The model samples a builder onto a grid; the report names the kind the scene file gives.
+    for (f, spec) in report.functions.iter_mut().zip(&scene.functions) {
+        f.kind = spec.def.kind();
+    }
     // Sampled along the whole timeline, for animated scenes.
     let bar = progress_bar(0, "timeline check");
     let timeline = nlifs::scene::timeline_check::check_timeline_with_progress(

@@ -23,6 +23,7 @@ pub struct MergeArgs {
 
 pub fn merge(args: MergeArgs) -> anyhow::Result<()> {
     let options = args.image.for_file(&args.output)?;
+    super::probe_output(&args.output)?;
     let start = std::time::Instant::now();
     let merged = merge_parts(&args.parts).map_err(bad)?;
     write_still(

@@ -27,7 +27,7 @@ mod view;
 use std::path::Path;
 use std::process::ExitCode;
 
-use clap::{Parser, Subcommand};
+use clap::{CommandFactory, FromArgMatches, Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
 
 use nlifs::scene::Scene;
@@ -52,6 +52,9 @@ enum Command {
     /// Contractivity, Lipschitz bounds, containment and probabilities of a scene's functions.
     Info(info::InfoArgs),
     /// Render a still with the chaos game (headless).
+    // clap leaves an output that is required unless another option is given out of the usage.
+    #[command(override_usage = "nlifs render [OPTIONS] --output <OUTPUT> <SCENE>\n       \
+                                nlifs render [OPTIONS] --part <PART> --raw <RAW> <SCENE>")]
     Render(render::RenderArgs),
     /// Export geometry.
     #[command(subcommand)]
@@ -78,8 +81,12 @@ struct BadInput(String);
 /// scene files, geometry the ray tracer refuses), 1 for anything else.
 pub fn main() -> ExitCode {
     quiet_on_closed_pipe();
+    no_display_probing_without_a_display();
     env_logger::Builder::from_env(env_logger::Env::default().default_filter_or("warn")).init();
-    let cli = match Cli::try_parse() {
+    let cli = match negative_numbers_are_values(Cli::command())
+        .try_get_matches()
+        .and_then(|matches| Cli::from_arg_matches(&matches))
+    {
         Ok(cli) => cli,
         Err(e) => {
             let code = if e.use_stderr() { 2 } else { 0 };
@@ -103,6 +110,39 @@ pub fn main() -> ExitCode {
             ExitCode::from(if bad_input { 2 } else { 1 })
         }
     }
+}
+
+/// Mesa's Vulkan device-selection layer (an implicit layer, so in every Vulkan instance) asks a
+/// Wayland compositor, then an X server, for the default GPU; where there is no display
+/// (ssh, cron) libwayland prints "error: XDG_RUNTIME_DIR is invalid or not set in the
+/// environment" on stderr, twice per instance, on every headless run that tries the GPU. wgpu
+/// enables the surface extensions that make the layer ask even for an instance without a
+/// display. Where neither Wayland (a usable XDG_RUNTIME_DIR or an absolute WAYLAND_DISPLAY) nor
+/// X (DISPLAY) can be reached, the layer has no one to ask, so it is turned off with its own
+/// switch, `NODEVICE_SELECT=1`, unless the user chose a device through it (DRI_PRIME,
+/// MESA_VK_DEVICE_SELECT) or set the switch. wgpu then picks the adapter as it does elsewhere.
+fn no_display_probing_without_a_display() {
+    let given = |name: &str| std::env::var_os(name).is_some_and(|v| !v.is_empty());
+    let absolute = |name: &str| std::env::var_os(name).is_some_and(|v| Path::new(&v).is_absolute());
+    let reachable =
+        absolute("XDG_RUNTIME_DIR") || absolute("WAYLAND_DISPLAY") || given("WAYLAND_SOCKET") || given("DISPLAY");
+    let chosen = given("DRI_PRIME") || given("MESA_VK_DEVICE_SELECT") || std::env::var_os("NODEVICE_SELECT").is_some();
+    if cfg!(target_os = "linux") && !reachable && !chosen {
+        // SAFETY: called first thing in main, before any thread exists, so no other thread
+        // reads the environment while it changes.
+        #[expect(unsafe_code, reason = "std::env::set_var is unsafe in edition 2024")]
+        unsafe {
+            std::env::set_var("NODEVICE_SELECT", "1");
+        }
+    }
+}
+
+/// `cmd` with every option that takes a value accepting a negative number as that value, so
+/// that `--width -100` reaches the option's own range check ("-100 is not in 1..=16384")
+/// instead of reading as an unknown flag `-1`.
+fn negative_numbers_are_values(cmd: clap::Command) -> clap::Command {
+    cmd.mut_args(|arg| if arg.get_action().takes_values() { arg.allow_negative_numbers(true) } else { arg })
+        .mut_subcommands(negative_numbers_are_values)
 }
 
 /// `nlifs info scene.toml | head` ends quietly when `head` closes the pipe, as Unix tools do,
@@ -150,6 +190,32 @@ fn run(cli: Cli) -> anyhow::Result<()> {
 
 fn load(path: &Path) -> anyhow::Result<Scene> {
     Ok(Scene::load(path)?)
+}
+
+/// Checks that `paths` can be written before the command's work starts ([`nlifs::io::probe`]):
+/// a read-only or impossible place fails at once with exit code 2, not after the render, and
+/// leaves no folder behind. A missing folder is created, and said so on stderr (`created
+/// folder /abs/path`).
+fn probe_outputs(paths: &[&Path]) -> anyhow::Result<()> {
+    let mut created: Vec<Vec<std::path::PathBuf>> = Vec::new();
+    for path in paths {
+        match nlifs::io::probe(path) {
+            Ok(folders) => created.push(folders),
+            Err(e) => {
+                created.iter().rev().for_each(|folders| nlifs::io::remove_created(folders));
+                return Err(anyhow::Error::from(e).context(format!("cannot write {}", path.display())));
+            }
+        }
+    }
+    for dir in created.iter().filter_map(|folders| folders.last()) {
+        eprintln!("created folder {}", std::path::absolute(dir).unwrap_or_else(|_| dir.clone()).display());
+    }
+    Ok(())
+}
+
+/// [`probe_outputs`] of one output.
+fn probe_output(path: &Path) -> anyhow::Result<()> {
+    probe_outputs(&[path])
 }
 
 fn progress_bar(total: u64, what: &str) -> ProgressBar {

@@ -105,9 +105,10 @@ struct TraceArgs {
     /// Ray tracing, with --adaptive: the projected size in pixels to stop at (default 1).
     #[arg(long, value_parser = positive_pixels)]
     stop_pixels: Option<f32>,
-    /// Ray tracing: colour by function (default) or depth.
-    #[arg(long, value_enum)]
-    color: Option<ColorArg>,
+    /// Ray tracing: colour by function (default) or depth (`--color` and `--palette` colour
+    /// the chaos game's points).
+    #[arg(long, value_enum, value_name = "MODE")]
+    raytrace_color: Option<ColorArg>,
     /// Ray tracing: no shadow rays.
     #[arg(long)]
     no_shadows: bool,
@@ -128,7 +129,7 @@ impl TraceArgs {
             (self.initial.is_some(), "--initial"),
             (self.adaptive, "--adaptive"),
             (self.stop_pixels.is_some(), "--stop-pixels"),
-            (self.color.is_some(), "--color"),
+            (self.raytrace_color.is_some(), "--raytrace-color"),
             (self.no_shadows, "--no-shadows"),
             (self.no_ground, "--no-ground"),
             (self.background.is_some(), "--background"),
@@ -164,7 +165,7 @@ impl TraceArgs {
             adaptive: self.adaptive,
             stop_pixels: self.stop_pixels.unwrap_or(d.stop_pixels),
             initial,
-            color_mode: self.color.map_or(d.color_mode, Into::into),
+            color_mode: self.raytrace_color.map_or(d.color_mode, Into::into),
             shadows: !self.no_shadows,
             ground: !self.no_ground,
             background: self.background.or(d.background),
@@ -218,6 +219,12 @@ pub fn record(args: RecordArgs) -> anyhow::Result<()> {
             if !options.is_plain_png() {
                 return Err(BadInput(record::RecordError::RaytraceLayers.to_string()).into());
             }
+            if let Some(flag) = args.color.given() {
+                return Err(BadInput(format!(
+                    "{flag} colours the chaos game's points; the ray tracer colours by --raytrace-color function|depth"
+                ))
+                .into());
+            }
             Renderer::Raytrace(args.trace.options()?)
         }
     };
@@ -253,11 +260,6 @@ pub fn record(args: RecordArgs) -> anyhow::Result<()> {
         println!("{count}");
         return Ok(());
     }
-    if rec.settings().renderer == Renderer::Chaos {
-        rec = choose_backend(rec, args.backend)?;
-    } else {
-        eprintln!("record: ray-traced on the CPU");
-    }
     let frames = args.frames.clone().unwrap_or(0..count);
     if frames.end > count {
         return Err(BadInput(format!(
@@ -271,6 +273,17 @@ pub fn record(args: RecordArgs) -> anyhow::Result<()> {
             BadInput(record::RecordError::TooManyFrames { start: frames.start, end: frames.end }.to_string()).into()
         );
     }
+    if rec.settings().renderer == Renderer::Chaos {
+        rec = choose_backend(rec, args.backend)?;
+    } else {
+        eprintln!("record: ray-traced on the CPU");
+    }
+    // The frames' folder and the video can be written: checked before any frame is made (and
+    // after the GPU, whose absence is an error too: no folder is made for nothing).
+    let first_frame = record::frame_path_as(&args.output, frames.start, options.format);
+    super::probe_outputs(
+        &[Some(first_frame.as_path()), args.video.as_deref()].into_iter().flatten().collect::<Vec<_>>(),
+    )?;
     let todo = record::frames_to_render_as(&rec, &args.output, frames.clone(), args.resume, options.format).len();
     if args.resume && todo < frames.len() {
         eprintln!("resume: {} of {} frames already complete", frames.len() - todo, frames.len());

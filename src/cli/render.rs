@@ -11,7 +11,7 @@ use nlifs::scene::spec::{Look, SplatMode};
 use nlifs::shot::{Framing, Shot};
 
 use super::image_args::{ImageArgs, render_part, write_still};
-use super::{BadInput, load, progress_bar};
+use super::{BadInput, load, probe_output, progress_bar};
 
 #[derive(Args)]
 pub struct RenderArgs {
@@ -194,6 +194,8 @@ pub fn render(args: RenderArgs) -> anyhow::Result<()> {
         // The GPU still writes every layer the mode has; choosing them is the CPU writer's.
         return Err(BadInput("--layers needs --backend cpu (the GPU route writes all the mode's layers)".into()).into());
     }
+    // After the checks (the GPU's among them), before the work.
+    probe_output(&output)?;
     for warning in nlifs::scene::warnings::scene_warnings(&scene, args.time) {
         bar.suspend(|| eprintln!("warning: {warning}"));
     }

@@ -107,6 +107,7 @@ pub fn snapshot(args: SnapshotArgs) -> anyhow::Result<()> {
         seed: scene.render.seed,
         background: args.background,
     };
+    super::probe_output(&args.output)?;
     for w in nlifs::scene::warnings::scene_warnings(&scene, args.geometry.time) {
         eprintln!("warning: {w}");
     }

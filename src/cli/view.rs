@@ -78,6 +78,9 @@ pub fn view(args: ViewArgs) -> anyhow::Result<()> {
             nlifs::scene::Scene::load(path)?;
         }
     }
+    if let Some(path) = &args.screenshot {
+        super::probe_output(path)?;
+    }
     let mut live = nlifs::live::LiveSettings::default();
     if let Some(n) = args.points {
         live.point_count = n;

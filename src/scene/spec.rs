@@ -101,6 +101,18 @@ pub enum FunctionDef {
     Julia(JuliaMap),
 }
 
+impl FunctionDef {
+    /// The function's `kind` as the scene file spells it.
+    pub fn kind(&self) -> &'static str {
+        match self {
+            FunctionDef::Grid { .. } => "grid",
+            FunctionDef::Builder { .. } => "builder",
+            FunctionDef::Affine(_) => "affine",
+            FunctionDef::Julia(_) => "julia",
+        }
+    }
+}
+
 #[derive(Clone, Debug, PartialEq)]
 pub struct FunctionSpec {
     pub name: String,
