@@ -85,13 +85,9 @@ fn line_diff(before: &str, after: &str) -> (Vec<String>, Vec<String>) {
     (removed, added)
 }
 
-/// `longer` is `shorter` with one run of text put in: that run.
-fn inserted_run<'a>(shorter: &str, longer: &'a str) -> &'a str {
-    let prefix = shorter.bytes().zip(longer.bytes()).take_while(|(a, b)| a == b).count();
-    let room = shorter.len() - prefix;
-    let suffix = shorter.bytes().rev().zip(longer.bytes().rev()).take(room).take_while(|(a, b)| a == b).count();
-    assert_eq!(prefix + suffix, shorter.len(), "the rest of the file is byte-identical");
-    &longer[prefix..longer.len() - suffix]
+/// `text` without its bytes `from..to`.
+fn without(text: &str, from: usize, to: usize) -> String {
+    format!("{}{}", &text[..from], &text[to..])
 }
 
 #[test]
@@ -124,7 +120,10 @@ fn every_shipped_scene_saved_after_one_edit_differs_in_the_edited_line_only() {
         assert_eq!(added, vec!["color = \"#123456\"".to_string()], "{name}:\n{saved}");
         assert!(removed.len() <= 1 && removed.iter().all(|l| l.starts_with("color = ")), "{name}: {removed:?}");
         // The edit goes again on the saved file: the second save starts from the first's text.
-        s.apply([Command::SetFunctionColor { function: 0, color: [0x65, 0x43, 0x21].map(nlifs::color::srgb8_to_linear) }]);
+        s.apply([Command::SetFunctionColor {
+            function: 0,
+            color: [0x65, 0x43, 0x21].map(nlifs::color::srgb8_to_linear),
+        }]);
         let again = save(&mut s, &path);
         assert_eq!(
             line_diff(&saved, &again),
@@ -141,13 +140,14 @@ fn an_added_function_is_one_new_table_after_the_others_and_the_rest_stays_byte_i
     s.apply([Command::AddFunction]);
     assert_eq!(s.scene.functions.len(), 6);
     let saved = save(&mut s, &path);
-    let run = inserted_run(&original, &saved);
-    assert_eq!(run.matches("[[function]]").count(), 1, "one table:\n{run}");
-    assert!(run.contains("name = \"f6\"") && run.contains("kind = \"affine\""), "{run}");
-    assert!(!run.contains("[render]") && !run.contains('#'), "{run}");
-    // After the last function, before [render].
-    let at = saved.find("name = \"f6\"").unwrap();
-    assert!(saved[..at].contains("name = \"f5\"") && saved[at..].contains("[render]"));
+    // The new table: after the last function, before [render], the rest byte-identical.
+    let from = saved.find("\n[[function]]\nname = \"f6\"").expect("a new function table");
+    let to = saved.find("\n\n[render]").unwrap() + 1;
+    assert!(from > saved.find("name = \"f5\"").unwrap() && from < to, "{saved}");
+    let table = &saved[from..to];
+    assert_eq!(table.matches("[[function]]").count(), 1, "one table:\n{table}");
+    assert!(table.contains("kind = \"affine\"") && !table.lines().any(|l| l.starts_with('#')), "{table}");
+    assert_eq!(without(&saved, from, to), original, "the rest of the file is byte-identical");
     // Ten comment lines and `4_000_000` untouched.
     assert_eq!(saved.lines().filter(|l| l.starts_with('#')).count(), 10);
     assert!(saved.contains("points = 4_000_000"));
@@ -159,18 +159,23 @@ fn a_deleted_function_takes_only_its_table() {
     let mut s = open(&path);
     s.apply([Command::DeleteFunction(1)]);
     let saved = save(&mut s, &path);
-    let run = inserted_run(&saved, &original);
-    assert_eq!(run.matches("[[function]]").count(), 1, "one table:\n{run}");
-    assert!(run.contains("name = \"f2\"") && !run.contains("name = \"f3\""), "{run}");
-    assert!(!run.contains('#'));
+    let from = original.find("\n[[function]]\nname = \"f2\"").unwrap();
+    let to = original.find("\n[[function]]\nname = \"f3\"").unwrap();
+    assert_eq!(saved, without(&original, from, to), "only f2's table is gone");
 
-    // On a timeline, the keys' entries for the function go too, and nothing is added.
+    // On a timeline, the keys' entries for the function go too. Its functions have no colour
+    // lines (each takes the palette colour of its place): the two that move up keep theirs,
+    // written out, and nothing else is added.
     let (path, original) = copy_of("twist-anim", "delete");
     let mut s = open(&path);
+    let colors: Vec<String> = s.scene.functions[2..]
+        .iter()
+        .map(|f| format!("color = \"{}\"", nlifs::color::hex_text(f.color.map(nlifs::color::linear_to_srgb8))))
+        .collect();
     s.apply([Command::DeleteFunction(1)]);
     let saved = save(&mut s, &path);
     let (removed, added) = line_diff(&original, &saved);
-    assert!(added.is_empty(), "{added:?}");
+    assert_eq!(added, colors);
     assert!(!saved.contains("\"f2\"") && !removed.iter().any(|l| l.starts_with('#')), "{removed:?}");
 }
 
@@ -254,8 +259,14 @@ fn a_changed_value_keeps_its_comment_and_grouped_digits_stay_grouped() {
     let out = scene.to_toml_over(text);
     assert_eq!(Scene::parse(&out, "s.toml").unwrap(), scene);
     let (removed, added) = line_diff(text, &out);
-    assert_eq!(removed, ["name = \"s\" # its name", "matrix = [[0.5, 0], [0, 0.5]] # halves", "points = 1_000_000 # a million"]);
-    assert_eq!(added, ["name = \"t\" # its name", "matrix = [[0.25, 0], [0, 0.5]] # halves", "points = 2_500_000 # a million"]);
+    assert_eq!(
+        removed,
+        ["name = \"s\" # its name", "matrix = [[0.5, 0], [0, 0.5]] # halves", "points = 1_000_000 # a million"]
+    );
+    assert_eq!(
+        added,
+        ["name = \"t\" # its name", "matrix = [[0.25, 0], [0, 0.5]] # halves", "points = 2_500_000 # a million"]
+    );
     // Unnamed functions (named by their place) keep no name line until their place changes.
     scene.functions.remove(0);
     let out = scene.to_toml_over(text);

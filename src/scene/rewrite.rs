@@ -264,7 +264,7 @@ fn align(base: &[&Table], target: &[&Table]) -> Vec<Option<usize>> {
     }
     let mut out = vec![None; n];
     let (mut gap_b, mut gap_t) = (Vec::new(), Vec::new());
-    let mut flush = |gap_b: &mut Vec<usize>, gap_t: &mut Vec<usize>, out: &mut Vec<Option<usize>>| {
+    let flush = |gap_b: &mut Vec<usize>, gap_t: &mut Vec<usize>, out: &mut Vec<Option<usize>>| {
         for (&i, &j) in gap_b.iter().zip(gap_t.iter()) {
             out[i] = Some(j);
         }
@@ -329,7 +329,9 @@ fn same_value(a: &Value, b: &Value) -> bool {
         (Value::Float(x), Value::Float(y)) => x.value() == y.value(),
         (Value::Boolean(x), Value::Boolean(y)) => x.value() == y.value(),
         (Value::Datetime(x), Value::Datetime(y)) => x.value() == y.value(),
-        (Value::Array(x), Value::Array(y)) => x.len() == y.len() && x.iter().zip(y.iter()).all(|(p, q)| same_value(p, q)),
+        (Value::Array(x), Value::Array(y)) => {
+            x.len() == y.len() && x.iter().zip(y.iter()).all(|(p, q)| same_value(p, q))
+        }
         (Value::InlineTable(x), Value::InlineTable(y)) => {
             x.len() == y.len() && x.iter().all(|(k, v)| y.get(k).is_some_and(|w| same_value(v, w)))
         }
