@@ -7,7 +7,8 @@
 //! together. Reading is two passes: serde reads the text into the span-keeping structs of
 //! `file.rs`, then `check/` checks the meaning and reports any problem with the file, line,
 //! column and field ([`Scene::load`], [`Scene::parse`]). `write.rs` writes a scene back
-//! ([`Scene::to_toml`]); `timeline_check.rs` checks contractivity along the timeline.
+//! ([`Scene::to_toml`]), `rewrite.rs` over the file it was read from, keeping the file's form
+//! ([`Scene::to_toml_over`]); `timeline_check.rs` checks contractivity along the timeline.
 
 use std::path::PathBuf;
 
@@ -20,6 +21,7 @@ use crate::scene::timeline::Timeline;
 
 mod check;
 pub mod file;
+mod rewrite;
 pub mod spec;
 pub mod timeline;
 pub mod timeline_check;

@@ -1,6 +1,8 @@
-//! Writing a scene back as TOML (the viewer's save): every setting explicit, numbers in Rust's
-//! shortest round-trip form and colours as hex when that is exact, so that reading the text
-//! back gives an equal scene.
+//! Writing a scene back as TOML: every setting explicit, numbers in Rust's shortest round-trip
+//! form and colours as hex when that is exact, so that reading the text back gives an equal
+//! scene. This is the text of a scene without a file (and of recovery files and PNG metadata);
+//! a save over the scene's own file edits that file instead (`rewrite.rs`, which compares two
+//! such full texts to find what changed).
 
 use std::path::Path;
 
@@ -145,8 +147,27 @@ fn camera_fields(c: &CameraSpec) -> String {
 impl Scene {
     /// Writes [`Scene::to_toml`] to `path` atomically.
     pub fn save(&self, path: &Path) -> std::io::Result<()> {
-        let text = self.to_toml();
-        crate::io::write_atomic(path, |w| std::io::Write::write_all(w, text.as_bytes()))
+        self.save_over(path, None).map(drop)
+    }
+
+    /// Writes the scene to `path` atomically: as `original` (the text of the file the scene
+    /// was read from) edited where the scene differs from it ([`Scene::to_toml_over`]), or in
+    /// full without one. Returns the text written.
+    pub fn save_over(&self, path: &Path, original: Option<&str>) -> std::io::Result<String> {
+        let text = match original {
+            Some(original) => self.to_toml_over(original),
+            None => self.to_toml(),
+        };
+        crate::io::write_atomic(path, |w| std::io::Write::write_all(w, text.as_bytes()))?;
+        Ok(text)
+    }
+
+    /// The scene as `original` (a scene file's text) edited to hold it: the file's comments,
+    /// layout, order and number spellings stay, only what differs changes, and defaults the
+    /// file leaves unset stay unset (`rewrite.rs`). Reading the text back gives an equal scene;
+    /// where an edit cannot give that (text that is not a scene), [`Scene::to_toml`].
+    pub fn to_toml_over(&self, original: &str) -> String {
+        super::rewrite::edit_over(self, original).unwrap_or_else(|| self.to_toml())
     }
 
     /// The scene as format-version-1 TOML, with every setting explicit; reading it back gives

@@ -20,7 +20,8 @@ use super::recovery;
 use super::state::{RecoveryOffer, ViewerState, mtime};
 
 impl ViewerState {
-    /// Saves the scene to `path`; it becomes the scene's file, and its recovery file goes.
+    /// Saves the scene to `path`; it becomes the scene's file, and its recovery file goes. A
+    /// scene read from a file is saved as that file's text changed only where edited.
     pub(super) fn save_scene(&mut self, path: &Path) {
         self.end_gesture();
         if path.as_os_str().is_empty() {
@@ -29,8 +30,11 @@ impl ViewerState {
         }
         let mut saved = self.scene.clone();
         saved.path = Some(path.to_path_buf());
-        match saved.save(path) {
-            Ok(()) => {
+        // Over the text of the scene's file, so that its comments and spellings stay (also
+        // under a new name: Save As copies the file's form).
+        match saved.save_over(path, self.files.scene_text.as_deref()) {
+            Ok(text) => {
+                self.files.scene_text = Some(text);
                 if let Some(file) = &self.recovery_file {
                     recovery::remove(file);
                 }

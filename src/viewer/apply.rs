@@ -438,9 +438,10 @@ impl ViewerState {
 
     /// Loads `path`; on failure keeps the current scene and records the error.
     fn load(&mut self, path: &Path) -> bool {
-        match Scene::load(path) {
-            Ok(scene) => {
+        match Scene::load_with_text(path) {
+            Ok((scene, text)) => {
                 self.scene = scene;
+                self.files.scene_text = Some(text);
                 self.scene_as_saved = self.scene.clone();
                 self.ui.file_changed_on_disk = false;
                 self.scene_path = Some(path.to_path_buf());

@@ -1,6 +1,6 @@
 //! The viewer's files as plain data (what `files.rs` changes and the panels read): the recent
-//! files, the error shown over the view, and what this machine offers for files (native
-//! dialogs, ffmpeg). Kept apart from `files.rs` so that the state imports no command logic.
+//! files, the error shown over the view, what this machine offers for files (native dialogs,
+//! ffmpeg), and the text of the scene's file that a save edits. Kept apart from `files.rs` so that the state imports no command logic.
 
 use std::path::PathBuf;
 
@@ -21,4 +21,7 @@ pub struct FilesState {
     pub ffmpeg: bool,
     /// A native dialog is open (one at a time).
     pub dialog_open: bool,
+    /// The text of the scene's file as read or last written (None: the built-in scene): a save
+    /// edits it, so that the file keeps its comments and spellings (`Scene::save_over`).
+    pub scene_text: Option<String>,
 }

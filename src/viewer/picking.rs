@@ -5,7 +5,9 @@
 //!
 //! A drag keeps the point's view distance: the start point is projected to clip space, moved by
 //! the cursor's pixel delta and unprojected. With an axis lock the pixel delta is projected onto
-//! the screen image of that world axis instead. Nothing here reads the viewer's state: the
+//! the screen image of that world axis instead. The moved coordinates are rounded to the
+//! shortest decimal of their f32 (the precision the drag was worked out in), so that a saved
+//! file holds short numbers. Nothing here reads the viewer's state: the
 //! state gathers the grids and the view, the overlay (`grid_edit_ui.rs`) draws with the same
 //! functions.
 
@@ -104,7 +106,18 @@ pub fn dragged_position(
             start + offset.as_dvec3()
         }
     };
-    if dim == 2 { DVec3::new(moved.x, moved.y, start.z) } else { moved }
+    let moved = if dim == 2 { DVec3::new(moved.x, moved.y, start.z) } else { moved };
+    // The drag is worked out in f32: each moved coordinate is the shortest decimal that reads
+    // back as its f32 (23.061722, not 23.06172164916992, in a saved file); an unmoved one stays.
+    DVec3::from_array(std::array::from_fn(|i| if moved[i] == start[i] { start[i] } else { shortest_f32(moved[i]) }))
+}
+
+/// The shortest decimal that reads back as `x`'s f32, as f64; `x` itself where f32 cannot hold
+/// it (a coordinate past f32's range or below its precision).
+fn shortest_f32(x: f64) -> f64 {
+    let single = x as f32;
+    let short = single.to_string().parse::<f64>().unwrap_or(x);
+    if single.is_finite() && (short - x).abs() <= 1e-6 * x.abs() { short } else { x }
 }
 
 /// The point nearest to `cursor_in_view_px` within [`PICK_RADIUS_PX`] among the editable

@@ -229,6 +229,9 @@ impl ViewerState {
             nesting: NestingView { shown: false, level: 1, translucent: false },
             files: super::files_state::FilesState::default(),
         };
+        // What a save edits; a file that no longer reads as this scene is only a starting
+        // point there (`Scene::to_toml_over` checks what it writes).
+        state.files.scene_text = state.scene_path.as_deref().and_then(|p| std::fs::read_to_string(p).ok());
         state.edit.save_text = state.default_save_text();
         state.live.seed = state.scene.render.seed;
         state.live.mode = state.scene.render.mode;

@@ -16,6 +16,12 @@ const MAX_SCENE_BYTES: u64 = 64 << 20;
 impl Scene {
     /// Reads and checks a scene file.
     pub fn load(path: &Path) -> Result<Self, LoadError> {
+        Self::load_with_text(path).map(|(scene, _)| scene)
+    }
+
+    /// [`Scene::load`], with the file's text (what a save over the file edits,
+    /// [`Scene::save_over`]).
+    pub fn load_with_text(path: &Path) -> Result<(Self, String), LoadError> {
         use std::io::Read;
         let file = path.display().to_string();
         let io_error = |cause: std::io::Error| LoadError::Io { path: file.clone(), cause };
@@ -45,6 +51,6 @@ impl Scene {
         })?;
         let mut scene = Self::parse(&text, &file)?;
         scene.path = Some(path.to_path_buf());
-        Ok(scene)
+        Ok((scene, text))
     }
 }
