@@ -225,8 +225,7 @@ pub fn save_png(path: &Path, img: &image::RgbImage) -> std::io::Result<()> {
 /// files that are printed.
 pub fn printable(text: &str, keep_lines: bool) -> std::borrow::Cow<'_, str> {
     let escaped = |c: char| {
-        (c.is_control() && !(keep_lines && c == '\n'))
-            || matches!(c, '\u{202a}'..='\u{202e}' | '\u{2066}'..='\u{2069}')
+        (c.is_control() && !(keep_lines && c == '\n')) || matches!(c, '\u{202a}'..='\u{202e}' | '\u{2066}'..='\u{2069}')
     };
     if !text.chars().any(escaped) {
         return text.into();

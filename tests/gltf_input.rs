@@ -347,7 +347,7 @@ fn triangle_glb() -> Vec<u8> {
     let mut doc = triangle_doc("");
     doc["buffers"] = json!([{"byteLength": 48}]);
     let mut json = doc.to_string().into_bytes();
-    while json.len() % 4 != 0 {
+    while !json.len().is_multiple_of(4) {
         json.push(b' ');
     }
     let bin = triangle_bin();
@@ -390,10 +390,8 @@ fn truncated_glbs_and_required_extensions_say_so() {
         doc["accessors"].as_array_mut().unwrap().push(json!({"componentType": 5126, "count": k + 1, "type": "VEC3"}));
     }
     let draco = case.write_json("draco.gltf", &doc);
-    let err = case.refused(
-        &draco,
-        &["requires the glTF extension KHR_draco_mesh_compression, which nlifs does not support"],
-    );
+    let err =
+        case.refused(&draco, &["requires the glTF extension KHR_draco_mesh_compression, which nlifs does not support"]);
     assert!(err.len() < 300, "{} characters:\n{err}", err.len());
     // Extensions that change no geometry are fine.
     case.write("tri.bin", &triangle_bin());
@@ -405,9 +403,7 @@ fn truncated_glbs_and_required_extensions_say_so() {
 /// A 1×1 PNG with the given iTXt chunks, as nlifs writes its scenes.
 fn png_with(chunks: &[(&str, &str)]) -> Vec<u8> {
     let mut plain = Vec::new();
-    image::RgbImage::new(1, 1)
-        .write_to(&mut std::io::Cursor::new(&mut plain), image::ImageFormat::Png)
-        .unwrap();
+    image::RgbImage::new(1, 1).write_to(&mut std::io::Cursor::new(&mut plain), image::ImageFormat::Png).unwrap();
     nlifs::output::png::with_text_chunks(&plain, chunks)
 }
 
@@ -442,4 +438,29 @@ fn info_escapes_control_characters_and_checks_the_time() {
         assert!(err.len() < 300, "{err}");
         assert_clean(&err);
     }
+}
+
+/// Every byte of a small GLB replaced by a few values (digits make counts, offsets and indices
+/// large): each load succeeds or is an error, never a panic (in process, so a panic fails the
+/// test), and never an allocation past the caps (which would abort it).
+#[test]
+fn byte_changes_of_a_glb_never_panic() {
+    let case = Case::new("mutations");
+    let glb = triangle_glb();
+    let path = case.dir.join("m.glb");
+    let (mut loaded, mut refused) = (0, 0);
+    for at in 0..glb.len() {
+        for value in [0xffu8, b'9', b'"'] {
+            let mut bytes = glb.clone();
+            bytes[at] = value;
+            std::fs::write(&path, &bytes).unwrap();
+            match nlifs::raytrace::mesh::load_gltf(&path, glam::DVec3::ZERO, glam::DVec3::ONE) {
+                Ok(_) => loaded += 1,
+                Err(_) => refused += 1,
+            }
+        }
+    }
+    // Both outcomes occur: the loop reaches past the parser (e.g. a changed position or a
+    // name), and the checks behind it.
+    assert!(loaded > 0 && refused > 0, "{loaded} loaded, {refused} refused");
 }

@@ -167,7 +167,10 @@ pub fn text_chunks(png: &[u8], path: &Path) -> Result<Vec<(String, String)>, Out
         let kind = &png[at + 4..at + 8];
         let end = at + 8 + len + 4;
         if end > png.len() {
-            return Err(invalid(format!("truncated {} chunk", crate::io::printable(&String::from_utf8_lossy(kind), false))));
+            return Err(invalid(format!(
+                "truncated {} chunk",
+                crate::io::printable(&String::from_utf8_lossy(kind), false)
+            )));
         }
         if kind == b"IDAT" || kind == b"IEND" {
             break;
@@ -175,7 +178,10 @@ pub fn text_chunks(png: &[u8], path: &Path) -> Result<Vec<(String, String)>, Out
         let data = &png[at + 8..at + 8 + len];
         let crc = u32::from_be_bytes(png[end - 4..end].try_into().expect("4 bytes"));
         if (kind == b"iTXt" || kind == b"tEXt") && crc32(&png[at + 4..at + 8 + len]) != crc {
-            return Err(invalid(format!("{} chunk with a bad checksum", crate::io::printable(&String::from_utf8_lossy(kind), false))));
+            return Err(invalid(format!(
+                "{} chunk with a bad checksum",
+                crate::io::printable(&String::from_utf8_lossy(kind), false)
+            )));
         }
         if let Some(kw_end) = data.iter().position(|&b| b == 0) {
             // Escaped: the keyword appears in messages.
@@ -223,7 +229,8 @@ pub fn scene_from_png(path: &Path) -> Result<Provenance, OutputError> {
                 "`{SETTINGS_KEYWORD}` gives t_secs = {}, not a scene time (0 to {MAX_TIME_SECS:e} s)",
                 match t.as_f64() {
                     Some(t) => format!("{t:e}"),
-                    None => crate::io::printable(&t.to_string().chars().take(40).collect::<String>(), false).into_owned(),
+                    None =>
+                        crate::io::printable(&t.to_string().chars().take(40).collect::<String>(), false).into_owned(),
                 }
             ),
         })?,

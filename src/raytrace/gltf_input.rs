@@ -1,6 +1,6 @@
 //! Reading third-party glTF 2.0 files (.gltf with external or `data:` buffers, and .glb) into
 //! one triangle mesh in the file's own coordinates: the default scene's nodes with their
-//! transforms, every triangle, strip and fan primitive. [`super::mesh::load_gltf`] fits the
+//! transforms, every triangle, strip and fan primitive. `mesh::load_gltf` fits the
 //! result into the grid's box.
 //!
 //! Everything here reads untrusted files, so nothing is taken on trust: the JSON is parsed with
@@ -24,7 +24,8 @@ use json::accessor::{ComponentType, GenericComponentType, IndexComponentType, Ty
 use json::mesh::{Mode, Semantic};
 use json::validation::Checked;
 
-use super::mesh::{MAX_MESH_BYTES, Mesh};
+/// The largest glTF file or external buffer read: 2 GiB, ten times a 10 M-triangle mesh.
+pub const MAX_MESH_BYTES: u64 = 2 << 30;
 
 /// The most elements one accessor may have, and the most vertices (and triangles) the placed
 /// meshes may add up to: 2²⁶, about 67 M, 1.6 GB of f64 positions (a 10 M-triangle mesh has
@@ -41,18 +42,26 @@ fn extension_is_harmless(name: &str) -> bool {
         || name.starts_with("EXT_texture_")
 }
 
+/// An indexed triangle mesh as the file gives it (`mesh::Mesh` is made of it, which keeps this
+/// module below `mesh`).
+#[derive(Default)]
+pub struct Triangles {
+    pub positions: Vec<DVec3>,
+    pub triangles: Vec<[u32; 3]>,
+}
+
 /// The triangle mesh of the glTF or GLB file at `path`, in the file's coordinates.
-pub fn read_mesh(path: &Path) -> Result<Mesh, String> {
+pub fn read_mesh(path: &Path) -> Result<Triangles, String> {
     let bytes = read_capped(path)?;
     let (json_bytes, bin) = if bytes.starts_with(b"glTF") { split_glb(&bytes)? } else { (&bytes[..], None) };
     check_head(json_bytes)?;
-    let root: json::Root =
-        serde_json::from_slice(json_bytes).map_err(|e| format!("not a glTF 2.0 document: {e}"))?;
+    let root: json::Root = serde_json::from_slice(json_bytes).map_err(|e| format!("not a glTF 2.0 document: {e}"))?;
     let folder = match path.parent() {
         Some(p) if !p.as_os_str().is_empty() => p,
         _ => Path::new("."),
     };
-    let folder = std::fs::canonicalize(folder).map_err(|e| format!("cannot resolve the folder {}: {e}", folder.display()))?;
+    let folder =
+        std::fs::canonicalize(folder).map_err(|e| format!("cannot resolve the folder {}: {e}", folder.display()))?;
     let declared: u64 = root.buffers.iter().map(|b| b.byte_length.0.min(MAX_MESH_BYTES)).sum();
     let mut model = Model {
         buffers: vec![None; root.buffers.len()],
@@ -206,7 +215,7 @@ struct Layout<'b> {
 impl<'a> Model<'a> {
     /// Every mesh of the default scene (or the first), placed by its nodes; every mesh as it
     /// is when the file has no scene.
-    fn read_scene(&mut self) -> Result<Mesh, String> {
+    fn read_scene(&mut self) -> Result<Triangles, String> {
         let mut placed: Vec<(usize, DMat4)> = Vec::new();
         let scene = match self.root.scene {
             Some(s) => Some(
@@ -220,7 +229,8 @@ impl<'a> Model<'a> {
         match scene {
             Some(scene) => {
                 let mut reached = vec![false; self.root.nodes.len()];
-                let mut stack: Vec<(usize, DMat4)> = scene.nodes.iter().rev().map(|n| (n.value(), DMat4::IDENTITY)).collect();
+                let mut stack: Vec<(usize, DMat4)> =
+                    scene.nodes.iter().rev().map(|n| (n.value(), DMat4::IDENTITY)).collect();
                 while let Some((index, parent)) = stack.pop() {
                     let node = self.root.nodes.get(index).ok_or_else(|| format!("node {index} does not exist"))?;
                     if std::mem::replace(&mut reached[index], true) {
@@ -240,7 +250,7 @@ impl<'a> Model<'a> {
             None => placed.extend((0..self.root.meshes.len()).map(|m| (m, DMat4::IDENTITY))),
         }
         let mut parts: Vec<Option<Vec<Part>>> = (0..self.root.meshes.len()).map(|_| None).collect();
-        let mut mesh = Mesh::default();
+        let mut mesh = Triangles::default();
         for (m, world) in placed {
             if m >= parts.len() {
                 return Err(format!("mesh {m} does not exist (the file has {})", parts.len()));
@@ -293,16 +303,17 @@ impl<'a> Model<'a> {
                 .map_err(|e| format!("{label}: POSITION accessor {position}: {e}"))?;
             let n = positions.len() as u32;
             let indices: Vec<u32> = match indices {
-                Some(a) => {
-                    self.read_accessor(a, Type::Scalar, &[ComponentType::U8, ComponentType::U16, ComponentType::U32], |v| {
+                Some(a) => self
+                    .read_accessor(a, Type::Scalar, &[ComponentType::U8, ComponentType::U16, ComponentType::U32], |v| {
                         v[0] as u32
                     })
-                    .map_err(|e| format!("{label}: index accessor {a}: {e}"))?
-                }
+                    .map_err(|e| format!("{label}: index accessor {a}: {e}"))?,
                 None => (0..n).collect(),
             };
             if let Some(bad) = indices.iter().find(|&&i| i >= n) {
-                return Err(format!("{label}: index {bad} out of range (POSITION accessor {position} has {n} vertices)"));
+                return Err(format!(
+                    "{label}: index {bad} out of range (POSITION accessor {position} has {n} vertices)"
+                ));
             }
             parts.push(Part { positions, triangles: triangulate(mode, &indices) });
         }
@@ -357,32 +368,44 @@ impl<'a> Model<'a> {
             make(&values)
         };
         let count = count as usize;
+        // Every layout is checked (and its buffer loaded) before the elements are allocated.
+        let offset = byte_offset.map_or(0, |o| o.0);
+        if let Some(view) = view {
+            self.load_view(view.value())?;
+            self.layout(view.value(), offset, count, element, true)?;
+        }
+        let sparse = match sparse {
+            None => None,
+            Some(sparse) => {
+                let sparse_count = sparse.count.0;
+                if sparse_count > count as u64 {
+                    return Err(format!("{sparse_count} sparse values for {count} elements"));
+                }
+                let Checked::Valid(IndexComponentType(index_component)) = sparse.indices.component_type else {
+                    return Err("sparse indices of an unknown componentType".into());
+                };
+                let sparse_count = sparse_count as usize;
+                let indices = (sparse.indices.buffer_view.value(), sparse.indices.byte_offset.0);
+                let values = (sparse.values.buffer_view.value(), sparse.values.byte_offset.0);
+                self.load_view(indices.0).map_err(|e| format!("sparse indices: {e}"))?;
+                self.load_view(values.0).map_err(|e| format!("sparse values: {e}"))?;
+                self.layout(indices.0, indices.1, sparse_count, index_component.size(), false)
+                    .map_err(|e| format!("sparse indices: {e}"))?;
+                self.layout(values.0, values.1, sparse_count, element, false)
+                    .map_err(|e| format!("sparse values: {e}"))?;
+                Some((sparse_count, index_component, indices, values))
+            }
+        };
         let mut out = vec![T::default(); count];
         if let Some(view) = view {
-            let offset = byte_offset.map_or(0, |o| o.0);
-            self.load_view(view.value())?;
             let layout = self.layout(view.value(), offset, count, element, true)?;
             for (k, slot) in out.iter_mut().enumerate() {
                 *slot = read(&layout, k);
             }
         }
-        if let Some(sparse) = sparse {
-            let sparse_count = sparse.count.0;
-            if sparse_count > count as u64 {
-                return Err(format!("{sparse_count} sparse values for {count} elements"));
-            }
-            let Checked::Valid(IndexComponentType(index_component)) = sparse.indices.component_type else {
-                return Err("sparse indices of an unknown componentType".into());
-            };
-            let sparse_count = sparse_count as usize;
-            let (iv, io) = (sparse.indices.buffer_view.value(), sparse.indices.byte_offset.0);
-            let (vv, vo) = (sparse.values.buffer_view.value(), sparse.values.byte_offset.0);
-            self.load_view(iv).map_err(|e| format!("sparse indices: {e}"))?;
-            self.load_view(vv).map_err(|e| format!("sparse values: {e}"))?;
-            let indices = self
-                .layout(iv, io, sparse_count, index_component.size(), false)
-                .map_err(|e| format!("sparse indices: {e}"))?;
-            let values = self.layout(vv, vo, sparse_count, element, false).map_err(|e| format!("sparse values: {e}"))?;
+        if let Some((sparse_count, index_component, (iv, io), (vv, vo))) = sparse {
+            let indices = self.layout(iv, io, sparse_count, index_component.size(), false)?;
+            let values = self.layout(vv, vo, sparse_count, element, false)?;
             for j in 0..sparse_count {
                 let at = indices.offset + j * indices.stride;
                 let target = component_value(&indices.bytes[at..at + index_component.size()], index_component, false);
@@ -398,11 +421,10 @@ impl<'a> Model<'a> {
 
     /// Loads the buffer of buffer view `v`.
     fn load_view(&mut self, v: usize) -> Result<(), String> {
-        let view = self
-            .root
-            .buffer_views
-            .get(v)
-            .ok_or_else(|| format!("buffer view {v} does not exist (the file has {})", self.root.buffer_views.len()))?;
+        let view =
+            self.root.buffer_views.get(v).ok_or_else(|| {
+                format!("buffer view {v} does not exist (the file has {})", self.root.buffer_views.len())
+            })?;
         self.buffer(view.buffer.value())?;
         Ok(())
     }
@@ -418,11 +440,17 @@ impl<'a> Model<'a> {
             _ => element,
         };
         if stride < element {
-            return Err(format!("buffer view {v} has a byteStride of {stride}, less than the element's {element} bytes"));
+            return Err(format!(
+                "buffer view {v} has a byteStride of {stride}, less than the element's {element} bytes"
+            ));
         }
         let data = self.buffers.get(b).and_then(|d| d.as_deref()).unwrap_or_default();
         let end = start.checked_add(length).filter(|&e| e <= data.len() as u64).ok_or_else(|| {
-            format!("buffer view {v} spans bytes {start}..{} of buffer {b}, which has {}", start.saturating_add(length), data.len())
+            format!(
+                "buffer view {v} spans bytes {start}..{} of buffer {b}, which has {}",
+                start.saturating_add(length),
+                data.len()
+            )
         })?;
         let need = match count {
             0 => 0,
@@ -446,13 +474,18 @@ impl<'a> Model<'a> {
         if self.buffers[b].is_none() {
             let length = buffer.byte_length.0;
             if length > MAX_MESH_BYTES {
-                return Err(format!("buffer {b} declares {length} bytes, more than the {MAX_MESH_BYTES} a mesh may have"));
+                return Err(format!(
+                    "buffer {b} declares {length} bytes, more than the {MAX_MESH_BYTES} a mesh may have"
+                ));
             }
             let data = match &buffer.uri {
                 None => match (b, self.bin) {
                     (0, Some(bin)) if bin.len() as u64 >= length => Cow::Borrowed(&bin[..length as usize]),
                     (0, Some(bin)) => {
-                        return Err(format!("buffer 0 declares {length} bytes, the GLB's binary chunk holds {}", bin.len()));
+                        return Err(format!(
+                            "buffer 0 declares {length} bytes, the GLB's binary chunk holds {}",
+                            bin.len()
+                        ));
                     }
                     _ => return Err(format!("buffer {b} has no uri and is not the GLB's binary chunk")),
                 },
@@ -580,9 +613,9 @@ fn node_transform(node: &json::Node) -> Result<DMat4, String> {
 pub(super) fn triangulate(mode: Mode, v: &[u32]) -> Vec<[u32; 3]> {
     let runs = v.len().saturating_sub(2);
     match mode {
-        Mode::TriangleStrip => {
-            (0..runs).map(|i| if i % 2 == 0 { [v[i], v[i + 1], v[i + 2]] } else { [v[i], v[i + 2], v[i + 1]] }).collect()
-        }
+        Mode::TriangleStrip => (0..runs)
+            .map(|i| if i % 2 == 0 { [v[i], v[i + 1], v[i + 2]] } else { [v[i], v[i + 2], v[i + 1]] })
+            .collect(),
         Mode::TriangleFan => (0..runs).map(|i| [v[i + 1], v[i + 2], v[0]]).collect(),
         _ => v.chunks_exact(3).map(|t| [t[0], t[1], t[2]]).collect(),
     }

@@ -8,6 +8,7 @@ use std::path::Path;
 use glam::{DVec3, Vec3};
 
 use super::error::RaytraceError;
+pub use super::gltf_input::MAX_MESH_BYTES;
 
 /// An indexed triangle mesh in the scene's coordinates (f64 so that deep compositions of maps
 /// stay accurate before they are rounded for tracing).
@@ -96,14 +97,15 @@ impl Mesh {
 }
 
 /// Reads every surface primitive (triangles, strips, fans) of the default scene (or of all
-/// meshes, when the file has no scene) with its node transforms ([`super::gltf_input`]), and
+/// meshes, when the file has no scene) with its node transforms (`gltf_input.rs`), and
 /// fits the result into the box [lo, hi]: uniformly scaled to the box's largest extent that it
 /// fits, centred. Any problem is an error, never a panic.
 pub fn load_gltf(path: &Path, lo: DVec3, hi: DVec3) -> Result<Mesh, RaytraceError> {
     let bad = |message: String| RaytraceError::Gltf { path: path.display().to_string(), message };
-    let mut mesh = super::gltf_input::read_mesh(path).map_err(bad)?;
+    let read = super::gltf_input::read_mesh(path).map_err(bad)?;
+    let mut mesh = Mesh { positions: read.positions, triangles: read.triangles };
     if mesh.triangles.is_empty() {
-        return Err(bad("no triangle primitives with positions".into()));
+        return Err(bad("no triangle, strip or fan primitives with positions".into()));
     }
     let (mlo, mhi) = mesh.bounds();
     let extent = mhi - mlo;
@@ -137,9 +139,6 @@ fn spread_bits(v: u32) -> u32 {
     x = (x | x << 4) & 0x030c_30c3;
     (x | x << 2) & 0x0924_9249
 }
-
-/// The largest glTF file or external buffer read: 2 GiB, ten times a 10 M-triangle mesh.
-pub const MAX_MESH_BYTES: u64 = 2 << 30;
 
 #[cfg(test)]
 mod tests {
