@@ -11,6 +11,9 @@
 //! Every error is a [`WriteError`] inside the `std::io::Error` (so callers keep their
 //! `io::Result`s), which says in the user's words what is wrong with the path and whether the
 //! user's input caused it ([`WriteError::is_bad_input`], exit code 2 on the command line).
+//!
+//! Text read from files goes to the terminal through [`printable`], so that a scene's name or a
+//! PNG's text chunk cannot move the cursor, recolour the terminal or hide what follows it.
 
 use std::io::{ErrorKind, Write};
 use std::path::{Path, PathBuf};
@@ -261,6 +264,28 @@ pub fn save_png(path: &Path, img: &image::RgbImage) -> std::io::Result<()> {
     let mut bytes = Vec::new();
     img.write_to(&mut std::io::Cursor::new(&mut bytes), image::ImageFormat::Png).map_err(std::io::Error::other)?;
     write_atomic(path, |w| w.write_all(&bytes))
+}
+
+/// `text` with its control characters escaped as Rust writes them (`\u{1b}`, `\0`, `\r`;
+/// line feeds too unless `keep_lines`), and the bidirectional overrides and isolates escaped
+/// likewise, which would reorder what a terminal shows: for names and descriptions read from
+/// files that are printed.
+pub fn printable(text: &str, keep_lines: bool) -> std::borrow::Cow<'_, str> {
+    let escaped = |c: char| {
+        (c.is_control() && !(keep_lines && c == '\n')) || matches!(c, '\u{202a}'..='\u{202e}' | '\u{2066}'..='\u{2069}')
+    };
+    if !text.chars().any(escaped) {
+        return text.into();
+    }
+    let mut out = String::with_capacity(text.len() + 8);
+    for c in text.chars() {
+        if escaped(c) {
+            out.extend(c.escape_debug());
+        } else {
+            out.push(c);
+        }
+    }
+    out.into()
 }
 
 #[cfg(test)]

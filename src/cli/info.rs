@@ -1,10 +1,13 @@
 //! `nlifs info`: the contractivity, Lipschitz bounds, containment and probabilities of a
-//! scene's functions, and for animated scenes the timeline check, as a table or JSON.
+//! scene's functions, and for animated scenes the timeline check, as a table or JSON. Text
+//! from the file (names, the description, the path) is printed with its control characters
+//! escaped ([`printable`]); JSON escapes them itself.
 
 use std::path::PathBuf;
 
 use clap::Args;
 
+use nlifs::io::printable;
 use nlifs::model::IfsReport;
 use nlifs::scene::warnings::{TIMELINE_SAMPLES_PER_INTERVAL, ifs_warnings};
 
@@ -29,7 +32,8 @@ pub fn info(args: InfoArgs) -> anyhow::Result<()> {
     // A PNG that nlifs wrote carries its scene (output::png): its info is that scene's.
     let scene = if nlifs::output::png::is_png(&args.scene) {
         let (scene, t_secs) = nlifs::output::png::load_scene_or_png(&args.scene).map_err(super::image_args::bad)?;
-        println!("scene inside {} (the image was made at t = {t_secs} s)", args.scene.display());
+        let path = args.scene.display().to_string();
+        println!("scene inside {} (the image was made at t = {t_secs} s)", printable(&path, false));
         scene
     } else {
         load(&args.scene)?
@@ -62,10 +66,15 @@ pub fn info(args: InfoArgs) -> anyhow::Result<()> {
     let d = scene.domain.dims();
     println!(
         "{} ({}D, grid {}×{}×{}, probabilities: {})",
-        scene.name, report.dimension, d[0], d[1], d[2], report.probability_mode
+        printable(&scene.name, false),
+        report.dimension,
+        d[0],
+        d[1],
+        d[2],
+        report.probability_mode
     );
     if !scene.description.is_empty() {
-        println!("{}", scene.description);
+        println!("{}", printable(&scene.description, true));
     }
     println!(
         "{:<12} {:<8} {:>10} {:>15} {:>10} {:>11}",
@@ -79,7 +88,7 @@ pub fn info(args: InfoArgs) -> anyhow::Result<()> {
         };
         println!(
             "{:<12} {:<8} {:>10} {:>15} {:>10} {:>11.4}",
-            f.name,
+            printable(&f.name, false),
             f.kind,
             fmt_opt(f.grid_ratio),
             fmt_opt(f.lipschitz_bound),
@@ -92,7 +101,7 @@ pub fn info(args: InfoArgs) -> anyhow::Result<()> {
     }
     // The same sentences `render`, `record` and `snapshot` print.
     for w in ifs_warnings(&report) {
-        println!("warning: {w}");
+        println!("warning: {}", printable(&w, false));
     }
     println!(
         "IFS: max grid_ratio {}, max lipschitz_bound {}, all contained: {}",
@@ -110,7 +119,7 @@ pub fn info(args: InfoArgs) -> anyhow::Result<()> {
         } else {
             println!("{} problems", check.problems.len());
             for p in &check.problems {
-                println!("    {p}");
+                println!("    {}", printable(&p.to_string(), false));
             }
         }
     }

@@ -11,6 +11,7 @@ use std::path::Path;
 
 use crate::color::linear_to_srgb;
 use crate::output::{Format, ImageLayers, OutputError, OutputOptions, Provenance};
+use crate::scene::spec::MAX_TIME_SECS;
 
 /// The keyword of the chunk holding the scene's TOML.
 pub const SCENE_KEYWORD: &str = "nlifs:scene";
@@ -166,7 +167,10 @@ pub fn text_chunks(png: &[u8], path: &Path) -> Result<Vec<(String, String)>, Out
         let kind = &png[at + 4..at + 8];
         let end = at + 8 + len + 4;
         if end > png.len() {
-            return Err(invalid(format!("truncated {} chunk", String::from_utf8_lossy(kind))));
+            return Err(invalid(format!(
+                "truncated {} chunk",
+                crate::io::printable(&String::from_utf8_lossy(kind), false)
+            )));
         }
         if kind == b"IDAT" || kind == b"IEND" {
             break;
@@ -174,10 +178,14 @@ pub fn text_chunks(png: &[u8], path: &Path) -> Result<Vec<(String, String)>, Out
         let data = &png[at + 8..at + 8 + len];
         let crc = u32::from_be_bytes(png[end - 4..end].try_into().expect("4 bytes"));
         if (kind == b"iTXt" || kind == b"tEXt") && crc32(&png[at + 4..at + 8 + len]) != crc {
-            return Err(invalid(format!("{} chunk with a bad checksum", String::from_utf8_lossy(kind))));
+            return Err(invalid(format!(
+                "{} chunk with a bad checksum",
+                crate::io::printable(&String::from_utf8_lossy(kind), false)
+            )));
         }
         if let Some(kw_end) = data.iter().position(|&b| b == 0) {
-            let keyword = String::from_utf8_lossy(&data[..kw_end]).into_owned();
+            // Escaped: the keyword appears in messages.
+            let keyword = crate::io::printable(&String::from_utf8_lossy(&data[..kw_end]), false).into_owned();
             if kind == b"tEXt" {
                 out.push((keyword, data[kw_end + 1..].iter().map(|&b| b as char).collect()));
             } else if kind == b"iTXt" && data.get(kw_end + 1) == Some(&0) {
@@ -211,7 +219,22 @@ pub fn scene_from_png(path: &Path) -> Result<Provenance, OutputError> {
         })?,
         None => serde_json::json!({}),
     };
-    let t_secs = settings.get("t_secs").and_then(|t| t.as_f64()).unwrap_or(0.0);
+    // The time is printed and rendered at: a number of the scene format's key range, not
+    // whatever the chunk holds (1e308 printed as 309 digits).
+    let t_secs = match settings.get("t_secs") {
+        None => 0.0,
+        Some(t) => t.as_f64().filter(|t| (0.0..=MAX_TIME_SECS).contains(t)).ok_or_else(|| OutputError::Invalid {
+            path: path.display().to_string(),
+            message: format!(
+                "`{SETTINGS_KEYWORD}` gives t_secs = {}, not a scene time (0 to {MAX_TIME_SECS:e} s)",
+                match t.as_f64() {
+                    Some(t) => format!("{t:e}"),
+                    None =>
+                        crate::io::printable(&t.to_string().chars().take(40).collect::<String>(), false).into_owned(),
+                }
+            ),
+        })?,
+    };
     Ok(Provenance { scene_toml, t_secs, settings })
 }
 

@@ -5,9 +5,10 @@
 
 use std::path::Path;
 
-use glam::{DMat4, DVec3, Vec3};
+use glam::{DVec3, Vec3};
 
 use super::error::RaytraceError;
+pub use super::gltf_input::MAX_MESH_BYTES;
 
 /// An indexed triangle mesh in the scene's coordinates (f64 so that deep compositions of maps
 /// stay accurate before they are rounded for tracing).
@@ -95,35 +96,16 @@ impl Mesh {
     }
 }
 
-/// Reads every triangle primitive of the default scene (or of all meshes, when the file has no
-/// scene) with its node transforms, and fits the result into the box [lo, hi]: uniformly
-/// scaled to the box's largest extent that it fits, centred. Any problem is an error, never a
-/// panic.
+/// Reads every surface primitive (triangles, strips, fans) of the default scene (or of all
+/// meshes, when the file has no scene) with its node transforms (`gltf_input.rs`), and
+/// fits the result into the box [lo, hi]: uniformly scaled to the box's largest extent that it
+/// fits, centred. Any problem is an error, never a panic.
 pub fn load_gltf(path: &Path, lo: DVec3, hi: DVec3) -> Result<Mesh, RaytraceError> {
     let bad = |message: String| RaytraceError::Gltf { path: path.display().to_string(), message };
-    let bytes = read_capped(path).map_err(bad)?;
-    let gltf = gltf::Gltf::from_slice(&bytes).map_err(|e| bad(e.to_string()))?;
-    let base = path.parent();
-    // The gltf crate reads external buffers whole; each is checked first to be a regular file
-    // no larger than the cap (a uri of /dev/zero would otherwise read until memory runs out).
-    for buffer in gltf.document.buffers() {
-        if let gltf::buffer::Source::Uri(uri) = buffer.source()
-            && !uri.starts_with("data:")
-        {
-            let file = base.unwrap_or(Path::new(".")).join(uri);
-            check_mesh_file(&file).map_err(|m| bad(format!("buffer {} (uri {uri}): {m}", buffer.index())))?;
-        }
-    }
-    let buffers = gltf::import_buffers(&gltf.document, base, gltf.blob.clone()).map_err(|e| bad(e.to_string()))?;
-    // The gltf crate validates the document but its accessor readers can still panic on
-    // inconsistent data; such a file is reported like any other bad input.
-    let read = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| read_document(&gltf.document, &buffers)));
-    let mut mesh = match read {
-        Ok(r) => r.map_err(bad)?,
-        Err(_) => return Err(bad("inconsistent accessor or buffer data".into())),
-    };
+    let read = super::gltf_input::read_mesh(path).map_err(bad)?;
+    let mut mesh = Mesh { positions: read.positions, triangles: read.triangles };
     if mesh.triangles.is_empty() {
-        return Err(bad("no triangle primitives with positions".into()));
+        return Err(bad("no triangle, strip or fan primitives with positions".into()));
     }
     let (mlo, mhi) = mesh.bounds();
     let extent = mhi - mlo;
@@ -156,106 +138,6 @@ fn spread_bits(v: u32) -> u32 {
     x = (x | x << 8) & 0x0300_f00f;
     x = (x | x << 4) & 0x030c_30c3;
     (x | x << 2) & 0x0924_9249
-}
-
-/// The largest glTF file or external buffer read: 2 GiB, ten times a 10 M-triangle mesh.
-pub const MAX_MESH_BYTES: u64 = 2 << 30;
-
-/// Refuses what is not a regular file of at most [`MAX_MESH_BYTES`].
-fn check_mesh_file(path: &Path) -> Result<(), String> {
-    let meta = std::fs::metadata(path).map_err(|e| e.to_string())?;
-    if !meta.is_file() {
-        return Err("not a regular file".into());
-    }
-    if meta.len() > MAX_MESH_BYTES {
-        return Err(format!("{} bytes, more than the {MAX_MESH_BYTES} a mesh may have", meta.len()));
-    }
-    Ok(())
-}
-
-fn read_capped(path: &Path) -> Result<Vec<u8>, String> {
-    check_mesh_file(path)?;
-    let mut bytes = Vec::new();
-    use std::io::Read;
-    std::fs::File::open(path)
-        .and_then(|f| f.take(MAX_MESH_BYTES + 1).read_to_end(&mut bytes))
-        .map_err(|e| e.to_string())?;
-    if bytes.len() as u64 > MAX_MESH_BYTES {
-        return Err(format!("more than the {MAX_MESH_BYTES} bytes a mesh may have"));
-    }
-    Ok(bytes)
-}
-
-fn read_document(doc: &gltf::Document, buffers: &[gltf::buffer::Data]) -> Result<Mesh, String> {
-    let mut mesh = Mesh::default();
-    let add = |m: gltf::Mesh, world: DMat4, mesh: &mut Mesh| -> Result<(), String> {
-        for prim in m.primitives() {
-            if prim.mode() != gltf::mesh::Mode::Triangles {
-                continue;
-            }
-            let reader = prim.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
-            let Some(positions) = reader.read_positions() else { continue };
-            let base = mesh.positions.len() as u32;
-            let count_before = mesh.positions.len();
-            mesh.positions.extend(positions.map(|p| world.transform_point3(Vec3::from(p).as_dvec3())));
-            let n = (mesh.positions.len() - count_before) as u32;
-            // The readers stop at the end of their buffer; an accessor that claims more
-            // elements than its buffer holds is a broken file, not a shorter mesh.
-            let declared = prim.get(&gltf::Semantic::Positions).map_or(0, |a| a.count());
-            if n as usize != declared {
-                return Err(format!(
-                    "mesh {:?}: the position accessor claims {declared} vertices, its buffer holds {n}",
-                    m.name().unwrap_or("")
-                ));
-            }
-            let indices: Vec<u32> = match reader.read_indices() {
-                Some(ix) => ix.into_u32().collect(),
-                None => (0..n).collect(),
-            };
-            if let Some(a) = prim.indices()
-                && a.count() != indices.len()
-            {
-                return Err(format!(
-                    "mesh {:?}: the index accessor claims {} indices, its buffer holds {}",
-                    m.name().unwrap_or(""),
-                    a.count(),
-                    indices.len()
-                ));
-            }
-            if let Some(bad) = indices.iter().find(|&&i| i >= n) {
-                return Err(format!("mesh {:?}: index {bad} out of range ({n} vertices)", m.name().unwrap_or("")));
-            }
-            for t in indices.chunks_exact(3) {
-                mesh.triangles.push([base + t[0], base + t[1], base + t[2]]);
-            }
-        }
-        Ok(())
-    };
-    let scene = doc.default_scene().or_else(|| doc.scenes().next());
-    match scene {
-        Some(scene) => {
-            let mut stack: Vec<(gltf::Node, DMat4)> = scene.nodes().map(|n| (n, DMat4::IDENTITY)).collect();
-            let mut visited = 0usize;
-            while let Some((node, parent)) = stack.pop() {
-                visited += 1;
-                if visited > 1_000_000 {
-                    return Err("node hierarchy too deep or cyclic".into());
-                }
-                let local = DMat4::from_cols_array_2d(&node.transform().matrix().map(|c| c.map(f64::from)));
-                let world = parent * local;
-                if let Some(m) = node.mesh() {
-                    add(m, world, &mut mesh)?;
-                }
-                stack.extend(node.children().map(|c| (c, world)));
-            }
-        }
-        None => {
-            for m in doc.meshes() {
-                add(m, DMat4::IDENTITY, &mut mesh)?;
-            }
-        }
-    }
-    Ok(mesh)
 }
 
 #[cfg(test)]

@@ -11,6 +11,7 @@
 mod error;
 pub mod export;
 pub mod geometry;
+mod gltf_input;
 pub mod hierarchy;
 pub mod mesh;
 pub mod search;
