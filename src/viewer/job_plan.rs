@@ -45,8 +45,11 @@ pub fn deepest_within_budget(functions: usize) -> u32 {
 /// 2.2 s), so that the default starts soon; deeper is the user's choice, up to the budget.
 pub const DEFAULT_DEPTH_NODES: f64 = NODE_BUDGET / 4.0;
 
-/// How small the default depth makes the largest leaf, in pixels across.
-pub const LEAF_TARGET_PX: f64 = 1.0;
+/// How small the default depth makes the largest leaf, in pixels across. A few pixels rather
+/// than one: the bound is the largest branch's, most leaves are smaller, and spheres below a
+/// pixel render as sparse dust (twist-anim at 640×480: depth 7, largest leaf 2.5 px, reads as
+/// solid detail; depth 8, 1 px, already thins out).
+pub const LEAF_TARGET_PX: f64 = 3.0;
 
 /// The deepest the form offers.
 pub const MAX_DEPTH: u32 = 12;
@@ -59,9 +62,10 @@ pub const MAX_DEPTH: u32 = 12;
 /// leaf is below [`LEAF_TARGET_PX`]. Each map shrinks by at most c = `contraction`, so a leaf
 /// of W^n(A) lies in a sphere of at most c^n times A's: it spans at most c^n · `initial_px`
 /// pixels, below the target from n = ⌈ln(initial_px / target) / ln(1/c)⌉ on. Past that depth
-/// more nodes add no detail; short of it the leaves show as blobs (twist-anim at the old fixed
-/// depth 5 has leaves up to 19 px across). A scene that may not be contractive (c ≥ 1, or no
-/// bound) gets the budget's depth.
+/// more nodes add little but dust; short of it the leaves show as blobs (tapering, c = 0.63, at
+/// the old fixed depth 5 has leaves up to about 100 px across and looks like four sausages; the
+/// budget gives it depth 10). A scene that may not be contractive (c ≥ 1, or no bound) gets the
+/// budget's depth.
 pub fn default_depth(functions: usize, contraction: Option<f64>, initial_px: f64) -> u32 {
     let budget = (0..=MAX_DEPTH).take_while(|&d| hierarchy_nodes(functions, d) <= DEFAULT_DEPTH_NODES).last();
     let budget = budget.unwrap_or(0);
