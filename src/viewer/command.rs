@@ -14,8 +14,6 @@ use crate::model::builder::Step;
 use crate::scene::Scene;
 use crate::scene::timeline::{Ease, Interpolation, LoopMode};
 
-use super::job_plan::RecordPlan;
-
 /// Everything one change to the viewer can be.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Command {
@@ -354,6 +352,21 @@ impl Default for RaytraceForm {
     fn default() -> Self {
         Self { depth: None, spp: 2, width: 640, height: 480, png_text: String::new() }
     }
+}
+
+/// A recording the record form asks for, checked and with its folder and video resolved
+/// (`job_plan::plan_record` makes it).
+#[derive(Clone, Debug, PartialEq)]
+pub struct RecordPlan {
+    pub settings: crate::record::RecordSettings,
+    /// The frames to write.
+    pub frames: std::ops::Range<u32>,
+    /// Frames in the whole timeline at this frame rate.
+    pub frame_count: u32,
+    pub dir: PathBuf,
+    pub options: crate::output::OutputOptions,
+    /// Where the video goes (None: frames only).
+    pub video: Option<PathBuf>,
 }
 
 /// The "record timeline" settings.

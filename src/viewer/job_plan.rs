@@ -4,7 +4,6 @@
 //! recording's frames, format and video, and where both write: next to the scene, numbered so
 //! that no run overwrites an earlier one.
 
-use std::ops::Range;
 use std::path::{Path, PathBuf};
 
 use crate::output::{Format, OutputOptions};
@@ -12,6 +11,7 @@ use crate::record::{MAX_FRAMES_PER_RUN, RecordSettings};
 use crate::scene::Scene;
 use crate::scene::timeline::LoopMode;
 
+pub use super::command::RecordPlan;
 use super::command::{RaytraceForm, RecordForm};
 use super::state::ViewerState;
 
@@ -192,20 +192,6 @@ pub fn record_outputs(form: &RecordForm, scene_path: Option<&Path>) -> (PathBuf,
         typed => dir.join(typed),
     };
     (frames, video)
-}
-
-/// A recording the form asks for, checked.
-#[derive(Clone, Debug, PartialEq)]
-pub struct RecordPlan {
-    pub settings: RecordSettings,
-    /// The frames to write.
-    pub frames: Range<u32>,
-    /// Frames in the whole timeline at this frame rate.
-    pub frame_count: u32,
-    pub dir: PathBuf,
-    pub options: OutputOptions,
-    /// Where the video goes (None: frames only).
-    pub video: Option<PathBuf>,
 }
 
 /// Frames of `scene`'s timeline at `fps`: the rule of `Recorder::frame_count` (once: both ends;
