@@ -63,7 +63,7 @@ pub fn raytrace_ui(ui: &mut egui::Ui, state: &ViewerState, jobs: &JobView, comma
             let mut depth = form.depth.unwrap_or_else(|| state.default_raytrace_depth());
             ui.add_enabled(!auto, egui::DragValue::new(&mut depth).range(0..=job_plan::MAX_DEPTH).prefix("depth "));
             ui.checkbox(&mut auto, "auto").on_hover_text(
-                "deep enough that the largest leaf is below about 3 pixels (from the scene's contraction), within a quarter of the node budget",
+                "deep enough that the largest leaf is below about 3 pixels (from the scene's contraction), within 2.5 million nodes",
             );
             form.depth = (!auto).then_some(depth);
             ui.add(egui::DragValue::new(&mut form.spp).range(1..=64).prefix("spp "));
