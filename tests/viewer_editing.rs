@@ -220,7 +220,7 @@ fn ray_trace_and_record_jobs_run_in_the_background_and_cancel() {
     // Ray-trace this view: the viewer's camera, a small image, written as PNG and shown.
     let mut s = state_for("tapering.toml");
     let png = dir.join("rt.png");
-    let form = RaytraceForm { depth: 2, spp: 1, width: 64, height: 48, png_text: png.display().to_string() };
+    let form = RaytraceForm { depth: Some(2), spp: 1, width: 64, height: 48, png_text: png.display().to_string() };
     let changes =
         s.apply([Command::SetRaytraceForm(form), Command::Orbit { dx_px: 30.0, dy_px: 0.0 }, Command::StartRaytrace]);
     for r in changes.jobs {
@@ -244,7 +244,7 @@ fn ray_trace_and_record_jobs_run_in_the_background_and_cancel() {
 
     // A cancelled ray-trace ends with a message and no new image.
     let big = RaytraceForm {
-        depth: 8,
+        depth: Some(8),
         spp: 16,
         width: 1024,
         height: 768,

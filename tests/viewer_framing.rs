@@ -125,3 +125,61 @@ fn zoom_at_the_cursor_keeps_the_point_under_it() {
         "the point under the cursor moved from {at} to {after} (a centre zoom: {naive})"
     );
 }
+
+#[test]
+fn views_along_the_axes_frame_the_attractor_as_f_does() {
+    use nlifs::viewer::command::ViewAxis;
+    for name in ["plant1", "twisting"] {
+        for axis in [ViewAxis::Front, ViewAxis::Right, ViewAxis::Top, ViewAxis::Bottom] {
+            let mut s = opened(name);
+            // Far in and off to the side first: a view that kept the distance cropped the
+            // attractor (a tall plant seen from the top, zoomed in).
+            s.apply([Command::Zoom { steps: 10.0 }, Command::Pan { dx_px: 120.0, dy_px: 40.0 }]);
+            s.apply([Command::ViewAlong(axis)]);
+            assert_eq!((s.camera.yaw_deg, s.camera.pitch_deg), axis.angles_deg(), "{name} {axis:?}");
+            let (w, h) = (s.width_px, s.height_px);
+            let (lo, hi) = extent(&s);
+            assert!(
+                lo.x >= 0.0 && lo.y >= 0.0 && hi.x <= w && hi.y <= h,
+                "{name} {axis:?}: the attractor spans {lo}..{hi} in a {w}×{h} view"
+            );
+            assert!((hi.x - lo.x) / w > 0.6 || (hi.y - lo.y) / h > 0.6, "{name} {axis:?}: spans only {lo}..{hi}");
+            // The same camera as F from those angles.
+            let viewed = s.camera;
+            s.apply([Command::FrameAttractor]);
+            assert_eq!(s.camera, viewed, "{name} {axis:?}");
+        }
+    }
+}
+
+#[test]
+fn animate_and_a_resize_keep_the_users_framed_camera() {
+    // Orbit, then F (the camera is framed again, from the user's angles), then the panel's
+    // Animate: the timeline panel that appears shrinks the view, and the resize used to frame
+    // the scene's camera, turning the view back to the scene's angles.
+    let mut s = opened("plant2");
+    let scene_angles = (s.camera.yaw_deg, s.camera.pitch_deg);
+    s.apply([Command::Orbit { dx_px: 150.0, dy_px: -60.0 }, Command::FrameAttractor]);
+    let angles = (s.camera.yaw_deg, s.camera.pitch_deg);
+    assert_ne!(angles, scene_angles);
+    s.apply([Command::SetTime(0.0), Command::AddOrUpdateKey, Command::SetDuration(4.0)]);
+    assert!(s.scene.timeline.is_some());
+    s.apply([Command::SetViewRect { origin_px: [310.0, 0.0], size_px: [970.0, 610.0] }]);
+    assert_eq!((s.camera.yaw_deg, s.camera.pitch_deg), angles, "the user's angles stay");
+    // Still framed for the new view, as F frames it there.
+    let resized = s.camera;
+    s.apply([Command::FrameAttractor]);
+    assert_eq!(s.camera, resized);
+    // A camera moved after the framing stays as it is.
+    s.apply([Command::Orbit { dx_px: 20.0, dy_px: 0.0 }]);
+    let moved = s.camera;
+    s.apply([Command::SetViewRect { origin_px: [310.0, 0.0], size_px: [970.0, 720.0] }]);
+    assert_eq!(s.camera, moved);
+    // A view along an axis is refitted on a resize as F is.
+    s.apply([Command::ViewAlong(nlifs::viewer::command::ViewAxis::Top)]);
+    s.apply([Command::SetViewRect { origin_px: [310.0, 0.0], size_px: [600.0, 720.0] }]);
+    let refitted = s.camera;
+    s.apply([Command::FrameAttractor]);
+    assert_eq!(s.camera, refitted);
+    assert_eq!((s.camera.yaw_deg, s.camera.pitch_deg), nlifs::viewer::command::ViewAxis::Top.angles_deg());
+}

@@ -127,7 +127,7 @@ fn the_hierarchy_estimate_counts_every_level_and_the_budget_refuses_past_it() {
     let too_deep = job_plan::deepest_within_budget(m) + 1;
     assert!(too_deep <= 12, "plant2 has {m} functions: the form's depth 12 stays within the budget");
     let mut form = plant.raytrace_form.clone();
-    form.depth = too_deep;
+    form.depth = Some(too_deep);
     let changes = plant.apply([Command::SetRaytraceForm(form), Command::StartRaytrace]);
     assert!(changes.jobs.is_empty(), "{:?}", changes.jobs);
     assert!(plant.error.as_deref().is_some_and(|e| e.contains("budget")), "{:?}", plant.error);
@@ -172,7 +172,6 @@ fn the_record_form_says_what_is_wrong_and_does_not_start() {
     };
     check(&mut s, &|f| f.frame_range = Some((10, 10)), &["10..10", "exclusive"]);
     check(&mut s, &|f| f.frame_range = Some((90, 97)), &["past the end", "96 frames"]);
-    check(&mut s, &|f| f.dir_text = "  ".into(), &["folder"]);
     check(&mut s, &|f| f.width = 8, &["width"]);
     // A video needs ffmpeg, and PNG frames.
     s.apply([Command::SetToolSupport { native_dialogs: false, ffmpeg: false }]);
@@ -222,7 +221,10 @@ fn the_record_form_says_what_is_wrong_and_does_not_start() {
     let plan = s.record_plan().unwrap();
     assert_eq!(plan.frames, 10..20);
     assert_eq!(plan.options.format, Format::Png16);
-    assert_eq!(plan.video.as_deref(), Some(std::path::Path::new("nlifs-record.mp4")));
+    // The video beside the frames' folder, named after it (the built-in scene's folder: the
+    // working folder, as F12's).
+    assert_eq!(plan.video, Some(plan.dir.with_extension("mp4")), "{plan:?}");
+    assert!(plan.dir.is_absolute() && plan.dir.starts_with(std::env::current_dir().unwrap()), "{plan:?}");
     assert!(matches!(changes.jobs.as_slice(), [JobRequest::Record { .. }]), "{:?}", changes.jobs);
 }
 

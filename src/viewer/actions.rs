@@ -14,10 +14,11 @@ use crate::scene::spec::{CameraSpec, FunctionDef};
 use crate::scene::timeline::Key;
 
 use super::apply::Changes;
-use super::command::{Command, JobConfirm, JobKind, JobRequest};
+use super::command::{Command, JobConfirm, JobKind, JobRequest, RaytraceForm};
 use super::framing;
+use super::job_plan;
 use super::recovery;
-use super::state::{RecoveryOffer, ViewerState, mtime};
+use super::state::{CameraFit, RecoveryOffer, ViewerState, mtime};
 
 impl ViewerState {
     /// Saves the scene to `path`; it becomes the scene's file, and its recovery file goes. A
@@ -143,6 +144,7 @@ impl ViewerState {
             framing::fit(&mut self.camera, &points, aspect);
         }
         self.camera_moved = false;
+        self.camera_fit = CameraFit::Attractor { with_grid };
     }
 
     /// Zooms by `steps` keeping the point under `cursor_px` (on the plane through the target)
@@ -245,7 +247,7 @@ impl ViewerState {
         }
         let doubts = self.contractivity_doubts();
         if doubts.is_empty() {
-            changes.jobs.push(self.job_request(job));
+            self.push_job(job, changes);
             return;
         }
         let verb = match job {
@@ -255,14 +257,16 @@ impl ViewerState {
         self.ui.job_confirm = Some(JobConfirm { job, question: format!("{} {verb} anyway?", doubts.join(" ")) });
     }
 
-    /// What `jobs.rs` needs to run `job` on the scene as it is now.
-    pub(super) fn job_request(&self, job: JobKind) -> JobRequest {
-        match job {
+    /// What `jobs.rs` needs to run `job` on the scene as it is now (a recording the form
+    /// cannot make: why not).
+    pub(super) fn job_request(&self, job: JobKind) -> Result<JobRequest, String> {
+        Ok(match job {
             JobKind::Raytrace => JobRequest::Raytrace {
                 scene: Box::new(self.scene.clone()),
                 t_secs: self.t_secs,
                 camera: self.camera,
-                form: self.raytrace_form.clone(),
+                form: RaytraceForm { depth: Some(self.raytrace_depth()), ..self.raytrace_form.clone() },
+                png: self.raytrace_png(),
             },
             JobKind::Record => {
                 // The current view: the viewer's camera (where keys leave it open) and splat settings.
@@ -279,25 +283,27 @@ impl ViewerState {
                 scene.render.mode = self.live.mode;
                 scene.render.depth_cue = self.live.depth_cue;
                 scene.render.background = self.live.background;
-                JobRequest::Record { scene: Box::new(scene), form: self.record_form.clone() }
+                // The plan as the form showed it (`start_job` refused a bad one), with its
+                // numbered folder taken now.
+                JobRequest::Record { scene: Box::new(scene), plan: Box::new(self.record_plan()?) }
             }
+        })
+    }
+
+    /// Starts `job` now, or says why it cannot.
+    pub(super) fn push_job(&mut self, job: JobKind, changes: &mut Changes) {
+        match self.job_request(job) {
+            Ok(request) => changes.jobs.push(request),
+            Err(why) => self.error = Some(format!("cannot start: {why}")),
         }
     }
 
     /// The next free `<scene>-<n>.png` next to the scene file (the working folder for the
-    /// built-in scene).
+    /// built-in scene), where the jobs write too (`job_plan::output_place`).
     pub(super) fn screenshot_next_to_scene(&self) -> PathBuf {
-        let (dir, stem) = match &self.scene_path {
-            Some(p) => (
-                p.parent().map(Path::to_path_buf).unwrap_or_default(),
-                p.file_stem().map_or("nlifs".into(), |s| s.to_string_lossy().into_owned()),
-            ),
-            None => (PathBuf::new(), "nlifs".into()),
-        };
-        (1..10_000)
-            .map(|n| dir.join(format!("{stem}-{n}.png")))
-            .find(|p| !p.exists())
-            .unwrap_or_else(|| dir.join(format!("{stem}.png")))
+        let (dir, stem) = job_plan::output_place(self.scene_path.as_deref());
+        let [png] = job_plan::first_free(|n| [dir.join(format!("{stem}-{n}.png"))]);
+        png
     }
 
     /// Adds, duplicates or deletes a function: one undo step (the whole scene, since keys refer

@@ -21,7 +21,7 @@ use crate::scene::timeline::{Key, LoopMode};
 use super::command::{CloseChoice, Command, FileDialogRequest, JobKind, JobRequest};
 use super::picking;
 use super::recovery;
-use super::state::{Gesture, PointDrag, ViewerState, mtime};
+use super::state::{CameraFit, Gesture, PointDrag, ViewerState, mtime};
 
 /// What the renderer must refresh after a batch of commands.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -114,8 +114,10 @@ impl ViewerState {
                     changes.camera = true;
                 }
                 Command::ViewAlong(axis) => {
+                    // Framed from there as `F` frames: keeping the distance cropped a tall
+                    // attractor seen from the top.
                     (self.camera.yaw_deg, self.camera.pitch_deg) = axis.angles_deg();
-                    self.camera_moved = true;
+                    self.frame(false);
                     changes.camera = true;
                 }
                 Command::FrameAttractor => {
@@ -140,7 +142,10 @@ impl ViewerState {
                         // window resize, the panel resized or hidden) only while the user has
                         // not moved the camera since it was framed.
                         if !self.view_rect_known || !self.camera_moved {
-                            self.camera = self.framed_camera();
+                            match self.camera_fit {
+                                CameraFit::Scene => self.camera = self.framed_camera(),
+                                CameraFit::Attractor { with_grid } => self.frame(with_grid),
+                            }
                         }
                     }
                     self.view_rect_known = true;
@@ -369,11 +374,12 @@ impl ViewerState {
                     if let Some(confirm) = self.ui.job_confirm.take()
                         && go
                     {
-                        changes.jobs.push(self.job_request(confirm.job));
+                        self.push_job(confirm.job, &mut changes);
                     }
                 }
                 Command::CancelRecord => changes.jobs.push(JobRequest::CancelRecord),
                 Command::CloseRaytraceImage => changes.jobs.push(JobRequest::CloseImage),
+                Command::ShowFolder(folder) => changes.jobs.push(JobRequest::ShowFolder(folder)),
 
                 // Authoring (`authoring.rs`).
                 Command::SetFunctionKind { function, kind } => edited |= self.set_function_kind(function, kind),
@@ -427,6 +433,7 @@ impl ViewerState {
             self.take_scene_look();
             self.camera = self.framed_camera();
             self.camera_moved = false;
+            self.camera_fit = CameraFit::Scene;
             changes.scene_replaced = true;
             changes.camera = true;
             changes.live_settings = true;

@@ -63,7 +63,8 @@ pub enum Command {
     },
     /// Puts the camera back (Esc during an orbit or pan restores the camera at its press).
     SetCamera(OrbitCamera),
-    /// Blender's numpad views: look along an axis, keeping target and distance.
+    /// Blender's numpad views: look along an axis, the attractor framed from there as `F`
+    /// frames it.
     ViewAlong(ViewAxis),
     /// "Save view": the view's camera becomes the scene's camera (saved with the scene; one
     /// undo step).
@@ -172,6 +173,8 @@ pub enum Command {
     ConfirmJob(bool),
     CancelRecord,
     CloseRaytraceImage,
+    /// *Show folder*: opens a folder a job wrote into in the desktop's file manager.
+    ShowFolder(PathBuf),
 
     // Authoring: a function's kind and probabilities, a builder's steps, key times. Each is one
     // undo step (a drag of a key is one gesture).
@@ -312,27 +315,58 @@ impl ViewAxis {
 /// A job for `jobs.rs` to start or stop, with everything it needs copied.
 #[derive(Clone, Debug, PartialEq)]
 pub enum JobRequest {
-    Raytrace { scene: Box<Scene>, t_secs: f64, camera: OrbitCamera, form: RaytraceForm },
+    /// `form.depth` is filled in (never *auto*); `png` is where the image goes, absolute.
+    Raytrace {
+        scene: Box<Scene>,
+        t_secs: f64,
+        camera: OrbitCamera,
+        form: RaytraceForm,
+        png: PathBuf,
+    },
     CancelRaytrace,
-    Record { scene: Box<Scene>, form: RecordForm },
+    /// The plan the form checked, with its folder and video resolved (`job_plan.rs`).
+    Record {
+        scene: Box<Scene>,
+        plan: Box<RecordPlan>,
+    },
     CancelRecord,
     CloseImage,
+    /// Opens `folder` in the desktop's file manager, detached (`jobs::open_folder`).
+    ShowFolder(PathBuf),
 }
 
 /// The "ray-trace this view" settings.
 #[derive(Clone, Debug, PartialEq)]
 pub struct RaytraceForm {
-    pub depth: u32,
+    /// n of W^n(A); None: *auto*, from the scene's contraction and the node budget
+    /// (`job_plan::default_depth`).
+    pub depth: Option<u32>,
     pub spp: u32,
     pub width: u32,
     pub height: u32,
+    /// Where the PNG goes; empty: next to the scene, numbered (`job_plan::raytrace_png`).
     pub png_text: String,
 }
 
 impl Default for RaytraceForm {
     fn default() -> Self {
-        Self { depth: 5, spp: 2, width: 640, height: 480, png_text: "nlifs-raytrace.png".into() }
+        Self { depth: None, spp: 2, width: 640, height: 480, png_text: String::new() }
     }
+}
+
+/// A recording the record form asks for, checked and with its folder and video resolved
+/// (`job_plan::plan_record` makes it).
+#[derive(Clone, Debug, PartialEq)]
+pub struct RecordPlan {
+    pub settings: crate::record::RecordSettings,
+    /// The frames to write.
+    pub frames: std::ops::Range<u32>,
+    /// Frames in the whole timeline at this frame rate.
+    pub frame_count: u32,
+    pub dir: PathBuf,
+    pub options: crate::output::OutputOptions,
+    /// Where the video goes (None: frames only).
+    pub video: Option<PathBuf>,
 }
 
 /// The "record timeline" settings.
@@ -342,6 +376,7 @@ pub struct RecordForm {
     pub height: u32,
     pub fps: f64,
     pub points_per_frame: u64,
+    /// The frames' folder; empty: next to the scene, numbered (`job_plan::record_outputs`).
     pub dir_text: String,
     /// Frames `first..end` (end exclusive); None: every frame of the timeline.
     pub frame_range: Option<(u32, u32)>,
@@ -349,6 +384,7 @@ pub struct RecordForm {
     pub format: crate::output::Format,
     /// Encode the frames into a video with ffmpeg afterwards.
     pub video: bool,
+    /// The video's file; empty: beside the frames' folder, named after it.
     pub video_text: String,
     /// Frames ray-traced (the snapshot's tracer at `trace_depth` and `trace_spp`) instead of
     /// splatted by the chaos game.
@@ -366,11 +402,11 @@ impl Default for RecordForm {
             height: 360,
             fps: 24.0,
             points_per_frame: 500_000,
-            dir_text: "nlifs-record".into(),
+            dir_text: String::new(),
             frame_range: None,
             format: crate::output::Format::Png,
             video: false,
-            video_text: "nlifs-record.mp4".into(),
+            video_text: String::new(),
             ray_traced: false,
             trace_depth: 5,
             trace_spp: 2,

@@ -6,9 +6,9 @@
 //! (`job_plan.rs`): its frames, their format, then the video through ffmpeg; another renderer
 //! for the frames would be one more field of that plan, chosen where the frames are made below.
 
-use std::path::PathBuf;
-use std::sync::Arc;
+use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::sync::{Arc, OnceLock};
 use std::thread::JoinHandle;
 use std::time::Instant;
 
@@ -109,6 +109,11 @@ pub struct JobView {
     pub raytrace_image: Option<(egui::TextureId, [usize; 2])>,
     pub raytrace_message: Option<String>,
     pub record_message: Option<String>,
+    /// The folders the last finished ray-trace and recording wrote into (for *Show folder*).
+    pub raytrace_folder: Option<PathBuf>,
+    pub record_folder: Option<PathBuf>,
+    /// Whether this desktop has a program that shows a folder ([`folder_opener`]).
+    pub can_show_folder: bool,
 }
 
 type RaytraceResult = (Result<Traced, String>, PathBuf);
@@ -116,7 +121,8 @@ type RaytraceResult = (Result<Traced, String>, PathBuf);
 #[derive(Default)]
 pub struct Jobs {
     raytrace: Option<Running<RaytraceResult>>,
-    record: Option<Running<Result<String, String>>>,
+    /// What the recording said, with the folder that holds its output.
+    record: Option<Running<Result<(String, PathBuf), String>>>,
     texture: Option<egui::TextureHandle>,
     notices: Vec<String>,
     pub view: JobView,
@@ -126,7 +132,7 @@ impl Jobs {
     /// Starts or cancels jobs.
     pub fn handle(&mut self, request: JobRequest) {
         match request {
-            JobRequest::Raytrace { scene, t_secs, camera, form } => {
+            JobRequest::Raytrace { scene, t_secs, camera, form, png } => {
                 if self.raytrace.is_some() {
                     return;
                 }
@@ -137,7 +143,6 @@ impl Jobs {
                     depth: job_plan::effective_depth(&form),
                     ..RaytraceSettings::default()
                 };
-                let png = PathBuf::from(form.png_text.trim());
                 // The state refused this already (`job_plan.rs`); checked again so that no
                 // request builds past the budget.
                 let functions = scene.at(t_secs).active().len();
@@ -169,18 +174,12 @@ impl Jobs {
                     r.cancel.store(true, Ordering::Relaxed);
                 }
             }
-            JobRequest::Record { scene, form } => {
+            JobRequest::Record { scene, plan } => {
                 if self.record.is_some() {
                     return;
                 }
-                // ffmpeg was checked with the form; `encode_video` says so again if it went.
-                let plan = match job_plan::plan_record(&form, &scene, true) {
-                    Ok(plan) => plan,
-                    Err(why) => {
-                        self.view.record_message = Some(why);
-                        return;
-                    }
-                };
+                // The state checked the plan (ffmpeg too; `encode_video` says so again if it
+                // went).
                 let job = Running::spawn(move |cancel, done, total| record_job(&scene, &plan, cancel, done, total));
                 match job {
                     Ok(job) => {
@@ -199,12 +198,18 @@ impl Jobs {
                     r.cancel.store(true, Ordering::Relaxed);
                 }
             }
+            JobRequest::ShowFolder(folder) => {
+                if let Err(e) = open_folder(&folder) {
+                    self.notices.push(format!("cannot show {}: {e}", folder.display()));
+                }
+            }
         }
     }
 
     /// Collects finished jobs (uploading a ray-traced image as a texture) and refreshes the
     /// view. True while a job runs. What a finished job says waits in [`Jobs::take_notices`].
     pub fn poll(&mut self, ctx: &egui::Context) -> bool {
+        self.view.can_show_folder = folder_opener().is_some();
         self.view.raytrace = self.raytrace.as_mut().map(Running::progress);
         self.view.record = self.record.as_mut().map(Running::progress);
         if self.raytrace.as_ref().is_some_and(|r| r.handle.is_finished())
@@ -218,13 +223,14 @@ impl Jobs {
                     let texture = ctx.load_texture("nlifs_raytrace", image, egui::TextureOptions::LINEAR);
                     self.view.raytrace_image = Some((texture.id(), [w as usize, h as usize]));
                     self.texture = Some(texture);
-                    let saved = if png.as_os_str().is_empty() {
-                        "not saved (no path)".to_string()
-                    } else {
-                        match crate::io::save_png(&png, &traced.image) {
-                            Ok(()) => format!("saved {}", png.display()),
-                            Err(e) => format!("cannot write {}: {e}", png.display()),
+                    // The default name is free (numbered); a typed one may not be.
+                    let replaced = if png.exists() { ", replacing the file there" } else { "" };
+                    let saved = match crate::io::save_png(&png, &traced.image) {
+                        Ok(()) => {
+                            self.view.raytrace_folder = png.parent().map(Path::to_path_buf);
+                            format!("saved {}{replaced}", png.display())
                         }
+                        Err(e) => format!("cannot write {}: {e}", png.display()),
                     };
                     format!(
                         "{w}×{h}, {} leaves, {:.1} s; {saved}",
@@ -242,7 +248,10 @@ impl Jobs {
         {
             self.view.record = None;
             self.view.record_message = Some(match r.handle.join() {
-                Ok(Ok(m)) => m,
+                Ok(Ok((m, folder))) => {
+                    self.view.record_folder = Some(folder);
+                    m
+                }
                 Ok(Err(e)) => format!("record: {e}"),
                 Err(_) => "record failed (the thread panicked)".into(),
             });
@@ -265,17 +274,21 @@ fn record_job(
     cancel: &AtomicBool,
     done: &AtomicU64,
     total: &AtomicU64,
-) -> Result<String, String> {
+) -> Result<(String, PathBuf), String> {
     let rec = Recorder::new(scene, plan.settings.clone()).map_err(|e| e.to_string())?;
     let dir = &plan.dir;
+    // The default folder is new (numbered); a typed one may hold an earlier run.
+    let had_files = std::fs::read_dir(dir).is_ok_and(|mut d| d.next().is_some());
     std::fs::create_dir_all(dir).map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
+    let folder = dir.clone();
+    let message = |text: String| (text, folder.clone());
     let frames = plan.frames.clone();
     let count = frames.len();
     // The video's encoding counts as one more unit.
     total.store(count as u64 + plan.video.is_some() as u64, Ordering::Relaxed);
     for (n, k) in frames.clone().enumerate() {
         if cancel.load(Ordering::Relaxed) {
-            return Ok(format!("cancelled after {n} of {count} frames in {}", dir.display()));
+            return Ok(message(format!("cancelled after {n} of {count} frames in {}", dir.display())));
         }
         crate::record::record_as(&rec, dir, k..k + 1, false, &plan.options, &mut |_, _| {})
             .map_err(|e| e.to_string())?;
@@ -285,12 +298,50 @@ fn record_job(
         crate::output::Format::Png => String::new(),
         other => format!("{} ", other.name()),
     };
-    let frames_text = format!("{count} {format}frames to {}", dir.display());
-    let Some(video) = &plan.video else { return Ok(format!("recorded {frames_text}")) };
+    let over = if had_files { " (the folder was not empty: frames of the same number were replaced)" } else { "" };
+    let frames_text = format!("{count} {format}frames to {}{over}", dir.display());
+    let Some(video) = &plan.video else { return Ok(message(format!("recorded {frames_text}"))) };
     if cancel.load(Ordering::Relaxed) {
-        return Ok(format!("recorded {frames_text}; the video was cancelled"));
+        return Ok(message(format!("recorded {frames_text}; the video was cancelled")));
     }
+    let replaced = if video.exists() { ", replacing the file there" } else { "" };
     crate::record::encode_video(dir, frames, plan.settings.fps, video).map_err(|e| e.to_string())?;
     done.store(count as u64 + 1, Ordering::Relaxed);
-    Ok(format!("recorded {frames_text} and the video {}", video.display()))
+    Ok(message(format!("recorded {frames_text} and the video {}{replaced}", video.display())))
+}
+
+/// The program that shows a folder in the desktop's file manager, found on `PATH` once:
+/// `xdg-open` (Linux and other Unix desktops), `open` (macOS), `explorer` (Windows). None
+/// where there is none (a bare X server, a container): *Show folder* is then not offered.
+pub fn folder_opener() -> Option<&'static Path> {
+    static OPENER: OnceLock<Option<PathBuf>> = OnceLock::new();
+    OPENER
+        .get_or_init(|| {
+            let name = if cfg!(target_os = "macos") {
+                "open"
+            } else if cfg!(windows) {
+                "explorer.exe"
+            } else {
+                "xdg-open"
+            };
+            find_on_path(name, std::env::var_os("PATH").as_deref())
+        })
+        .as_deref()
+}
+
+/// `name` in one of the folders of `path` (a `PATH` value), as a file. (A few lines rather than
+/// a crate: nlifs looks up only these three names, with their full file name.)
+pub fn find_on_path(name: &str, path: Option<&std::ffi::OsStr>) -> Option<PathBuf> {
+    std::env::split_paths(path?).map(|dir| dir.join(name)).find(|p| p.is_file())
+}
+
+/// Shows `folder` in the file manager: runs [`folder_opener`] on it without waiting (a thread
+/// reaps it, so that nothing blocks the UI and no zombie stays).
+pub fn open_folder(folder: &Path) -> std::io::Result<()> {
+    use std::process::{Command, Stdio};
+    let opener = folder_opener().ok_or_else(|| std::io::Error::other("no program shows folders here"))?;
+    let mut child =
+        Command::new(opener).arg(folder).stdin(Stdio::null()).stdout(Stdio::null()).stderr(Stdio::null()).spawn()?;
+    std::thread::Builder::new().name("nlifs-open-folder".into()).spawn(move || child.wait())?;
+    Ok(())
 }

@@ -15,6 +15,15 @@ use super::state::ViewerState;
 
 const ERROR_COLOR: Color32 = Color32::from_rgb(255, 110, 90);
 
+/// *Show folder* for the folder a finished job wrote into, where the desktop can show one.
+fn show_folder_ui(ui: &mut egui::Ui, jobs: &JobView, folder: &Option<std::path::PathBuf>, commands: &mut Vec<Command>) {
+    if let Some(folder) = folder.as_ref().filter(|_| jobs.can_show_folder)
+        && ui.button("Show folder").on_hover_text(folder.display().to_string()).clicked()
+    {
+        commands.push(Command::ShowFolder(folder.clone()));
+    }
+}
+
 /// "37 % · 12 s left" with a Cancel button, while a job runs (`preparing` before its units are
 /// counted); then its last message.
 fn progress_ui(
@@ -50,7 +59,13 @@ pub fn raytrace_ui(ui: &mut egui::Ui, state: &ViewerState, jobs: &JobView, comma
     egui::CollapsingHeader::new("Ray-trace this view").default_open(false).show(ui, |ui| {
         let mut form: RaytraceForm = state.raytrace_form.clone();
         ui.horizontal(|ui| {
-            ui.add(egui::DragValue::new(&mut form.depth).range(0..=12).prefix("depth "));
+            let mut auto = form.depth.is_none();
+            let mut depth = form.depth.unwrap_or_else(|| state.default_raytrace_depth());
+            ui.add_enabled(!auto, egui::DragValue::new(&mut depth).range(0..=job_plan::MAX_DEPTH).prefix("depth "));
+            ui.checkbox(&mut auto, "auto").on_hover_text(
+                "deep enough that the largest leaf is below about 3 pixels (from the scene's contraction), within 2.5 million nodes",
+            );
+            form.depth = (!auto).then_some(depth);
             ui.add(egui::DragValue::new(&mut form.spp).range(1..=64).prefix("spp "));
         });
         ui.horizontal(|ui| {
@@ -59,8 +74,9 @@ pub fn raytrace_ui(ui: &mut egui::Ui, state: &ViewerState, jobs: &JobView, comma
         });
         ui.horizontal(|ui| {
             ui.label("PNG");
-            ui.text_edit_singleline(&mut form.png_text);
+            ui.add(egui::TextEdit::singleline(&mut form.png_text).hint_text("next to the scene, numbered"));
         });
+        ui.small(format!("writes {}", state.raytrace_png().display()));
         if form != state.raytrace_form {
             commands.push(Command::SetRaytraceForm(form));
         }
@@ -89,6 +105,9 @@ pub fn raytrace_ui(ui: &mut egui::Ui, state: &ViewerState, jobs: &JobView, comma
             Command::CancelRaytrace,
             commands,
         );
+        if jobs.raytrace.is_none() {
+            show_folder_ui(ui, jobs, &jobs.raytrace_folder, commands);
+        }
     });
 }
 
@@ -139,11 +158,14 @@ pub fn record_ui(ui: &mut egui::Ui, state: &ViewerState, jobs: &JobView, command
         });
         ui.horizontal(|ui| {
             ui.label("folder");
-            ui.text_edit_singleline(&mut form.dir_text);
+            ui.add(egui::TextEdit::singleline(&mut form.dir_text).hint_text("next to the scene, numbered"));
         });
         ui.horizontal(|ui| {
             ui.checkbox(&mut form.video, "make a video");
-            ui.add_enabled(form.video, egui::TextEdit::singleline(&mut form.video_text));
+            ui.add_enabled(
+                form.video,
+                egui::TextEdit::singleline(&mut form.video_text).hint_text("beside the frames' folder"),
+            );
         });
         if form != state.record_form {
             commands.push(Command::SetRecordForm(form));
@@ -157,14 +179,25 @@ pub fn record_ui(ui: &mut egui::Ui, state: &ViewerState, jobs: &JobView, command
             "CPU, deterministic; the viewer's camera and splat settings."
         });
         let plan = state.record_plan();
-        if let Err(why) = &plan {
-            ui.colored_label(ERROR_COLOR, why);
+        match &plan {
+            Ok(plan) => {
+                ui.small(format!("writes {}", plan.dir.display()));
+                if let Some(video) = &plan.video {
+                    ui.small(format!("and {}", video.display()));
+                }
+            }
+            Err(why) => {
+                ui.colored_label(ERROR_COLOR, why);
+            }
         }
         let can_start = jobs.record.is_none() && plan.is_ok();
         if ui.add_enabled(can_start, egui::Button::new("Record timeline")).clicked() {
             commands.push(Command::StartRecord);
         }
         progress_ui(ui, jobs.record, "framing the timeline…", &jobs.record_message, Command::CancelRecord, commands);
+        if jobs.record.is_none() {
+            show_folder_ui(ui, jobs, &jobs.record_folder, commands);
+        }
     });
 }
 
@@ -179,6 +212,7 @@ pub fn raytrace_window_ui(ctx: &egui::Context, jobs: &JobView, commands: &mut Ve
         if let Some(m) = &jobs.raytrace_message {
             ui.label(RichText::new(m).small().color(Color32::LIGHT_GRAY));
         }
+        show_folder_ui(ui, jobs, &jobs.raytrace_folder, commands);
     });
     if !open {
         commands.push(Command::CloseRaytraceImage);

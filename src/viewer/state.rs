@@ -96,6 +96,20 @@ pub struct UiState {
     pub job_confirm: Option<JobConfirm>,
 }
 
+/// How the camera was last framed, which decides how a resize of the view (a panel shown or
+/// hidden, the timeline panel appearing) refits a camera the user has not moved since.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum CameraFit {
+    /// The scene's camera, framed on opening: a resize frames the scene's camera again.
+    #[default]
+    Scene,
+    /// `F`, `Shift+F` (`with_grid`) or a view along an axis: a resize fits the attractor
+    /// again from the user's angles. (It used to frame the scene's camera, so that a resize
+    /// after `F` turned the view back to the scene's angles: *Animate* did so, its timeline
+    /// panel shrinking the view.)
+    Attractor { with_grid: bool },
+}
+
 /// Smoothed frame statistics.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct FrameStats {
@@ -164,6 +178,8 @@ pub struct ViewerState {
     pub ui: UiState,
     /// The user moved the camera since it was last framed: a resize keeps it.
     pub camera_moved: bool,
+    /// How it was last framed: what a resize refits while it is not moved.
+    pub camera_fit: CameraFit,
     /// The W^k nesting view drawn over the points.
     pub nesting: NestingView,
     /// Recent files, file dialogs, the error shown over the view (`files.rs`).
@@ -226,6 +242,7 @@ impl ViewerState {
                 job_confirm: None,
             },
             camera_moved: false,
+            camera_fit: CameraFit::Scene,
             nesting: NestingView { shown: false, level: 1, translucent: false },
             files: super::files_state::FilesState::default(),
         };

@@ -1,8 +1,16 @@
-//! The timeline panel, along the bottom of the whole window: play / pause, scrub, speed, loop
-//! mode, duration, the keys drawn on a strip under the scrubber (click one to jump to it, drag
-//! one to move it in time), add / update / delete the key at the playhead, and the
-//! interpolation and ease of the segment that starts at that key. Like every `*_ui` function
-//! it only reads the state and emits commands.
+//! The timeline panel, along the bottom of the whole window: play / pause, the time, speed,
+//! loop mode, duration; the scrubber (press or drag anywhere on it to seek); the keys drawn on a
+//! strip under it (click one to jump to it, drag one to move it in time); add / update / delete
+//! the key at the playhead, and the interpolation and ease of the segment that starts at that
+//! key. Like every `*_ui` function it only reads the state and emits commands.
+//!
+//! The scrubber and the key strip map time to x through one [`TimeTrack`] over the same span,
+//! so that the playhead on the strip stands under the scrubber's handle. Scrubbed times snap to
+//! frame times at the record form's frame rate ([`snap_time`]; Shift scrubs freely), so that
+//! the playhead lands on frames a recording writes. (The scrubber was an egui slider: its
+//! "smart aim" picked round-looking values such as 2.010 s, it sensed drags only, so that a
+//! click whose press and release came within one frame did not seek, and its rail did not line
+//! up with the strip below.)
 
 use egui::{Color32, Sense, Stroke};
 
@@ -15,17 +23,83 @@ const INTERPOLATIONS: [Interpolation; 3] = [Interpolation::Hold, Interpolation::
 const EASES: [Ease; 4] = [Ease::None, Ease::In, Ease::Out, Ease::InOut];
 const LOOP_MODES: [LoopMode; 3] = [LoopMode::Once, LoopMode::Loop, LoopMode::PingPong];
 
+/// Space kept free at each end of a track (points), so that a handle or a key at either end
+/// is drawn whole inside it.
+pub const TRACK_INSET: f32 = 8.0;
+/// The scrubber's height and its handle's radius (points).
+pub const SCRUBBER_HEIGHT: f32 = 18.0;
+pub const HANDLE_RADIUS: f32 = 6.0;
+/// The scrubber's handle and the playhead line on the key strip.
+pub const PLAYHEAD_COLOR: Color32 = Color32::from_rgb(255, 110, 90);
+/// The Play / Pause button's width (points): one width for both words, so that what follows
+/// it in the row does not move when playback starts or stops.
+pub const PLAY_BUTTON_WIDTH: f32 = 56.0;
+
+/// Where times of a `duration_secs` timeline lie along a track: time 0 at `left`, the end at
+/// `right` (points). The scrubber and the key strip share it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TimeTrack {
+    pub left: f32,
+    pub right: f32,
+    pub duration_secs: f64,
+}
+
+impl TimeTrack {
+    /// The track inside a widget spanning `x` (points), [`TRACK_INSET`] from each end.
+    pub fn new(x: egui::Rangef, duration_secs: f64) -> Self {
+        let inner = x.shrink(TRACK_INSET.min(0.25 * x.span()));
+        Self { left: inner.min, right: inner.max.max(inner.min + 1.0), duration_secs: duration_secs.max(1e-3) }
+    }
+
+    /// The x of time `t_secs` (clamped to the timeline).
+    pub fn x_of(&self, t_secs: f64) -> f32 {
+        let f = (t_secs / self.duration_secs).clamp(0.0, 1.0) as f32;
+        self.left + (self.right - self.left) * f
+    }
+
+    /// The time at `x` (clamped to the timeline).
+    pub fn time_of(&self, x: f32) -> f64 {
+        ((x - self.left) / (self.right - self.left)).clamp(0.0, 1.0) as f64 * self.duration_secs
+    }
+}
+
+/// The time a scrub at `t_secs` lands on: the nearest frame time k / `fps`, within
+/// `0..=duration_secs`; with `free` (Shift held), `t_secs` itself. A frame rate that is not a
+/// positive number leaves the time free.
+pub fn snap_time(t_secs: f64, fps: f64, duration_secs: f64, free: bool) -> f64 {
+    let t = if free || !(fps.is_finite() && fps > 0.0) { t_secs } else { (t_secs * fps).round() / fps };
+    t.clamp(0.0, duration_secs.max(0.0))
+}
+
+/// The time a press or drag at `x` on `track` seeks to (snapped unless `free`), as
+/// [`snap_time`] at the record form's frame rate.
+pub fn seek_time(state: &ViewerState, track: &TimeTrack, x: f32, free: bool) -> f64 {
+    snap_time(track.time_of(x), state.record_form.fps, track.duration_secs, free)
+}
+
 pub fn timeline_ui(ui: &mut egui::Ui, state: &ViewerState, commands: &mut Vec<Command>) {
     let Some(tl) = &state.scene.timeline else { return };
     let d = tl.duration_secs.max(1e-3);
     let playhead = state.playhead_secs();
     ui.horizontal(|ui| {
         let playing = state.playback.playing;
-        if ui.button(if playing { "Pause" } else { "Play" }).on_hover_text("Space").clicked() {
+        let play = egui::Button::new(if playing { "Pause" } else { "Play" });
+        if ui.add_sized([PLAY_BUTTON_WIDTH, ui.spacing().interact_size.y], play).on_hover_text("Space").clicked() {
             commands.push(Command::SetPlaying(!playing));
         }
         if ui.button("|<").on_hover_text("to the start").clicked() {
             commands.push(Command::SetTime(0.0));
+        }
+        // The time as a number to type or drag. Only the user moves time from here: a widget
+        // that wrote back its (clamped, rounded) value every frame sent the previous frame's
+        // time after each playback tick, and playback ran at about half speed.
+        let mut t = playhead;
+        let field = ui.add(
+            egui::DragValue::new(&mut t).range(0.0..=d).speed(d / 500.0).max_decimals(3).prefix("t ").suffix(" s"),
+        );
+        let by_user = field.dragged() || field.has_focus() || field.lost_focus();
+        if field.changed() && by_user && t != playhead && t.is_finite() {
+            commands.push(Command::SetTime(t.clamp(0.0, d)));
         }
         let mut speed = state.playback.speed;
         if ui.add(egui::DragValue::new(&mut speed).speed(0.02).range(-8.0..=8.0).prefix("speed ×")).changed() {
@@ -55,19 +129,11 @@ pub fn timeline_ui(ui: &mut egui::Ui, state: &ViewerState, commands: &mut Vec<Co
         {
             commands.push(Command::SetDuration(duration));
         }
-        // Only the user moves time from here: a slider that wrote back its (clamped, rounded
-        // to 3 decimals) value every frame sent the previous frame's time after each playback
-        // tick, and playback ran at about half speed.
-        // The scrubber takes the rest of the row: the panel spans the window.
-        ui.spacing_mut().slider_width = (ui.available_width() - 110.0).max(120.0);
-        let mut t = playhead;
-        let scrub = ui.add(super::widgets::slider(&mut t, 0.0..=d).suffix(" s").max_decimals(3).text("t"));
-        let by_user = scrub.dragged() || scrub.is_pointer_button_down_on() || scrub.has_focus() || scrub.clicked();
-        if scrub.changed() && by_user && t != playhead {
-            commands.push(Command::SetTime(t));
-        }
     });
-    keys_strip_ui(ui, state, d, playhead, commands);
+    // The scrubber and the key strip span the panel's width, one above the other, on one track.
+    let width = ui.available_width().max(50.0);
+    scrubber_ui(ui, state, width, d, playhead, commands);
+    keys_strip_ui(ui, state, width, d, playhead, commands);
     ui.horizontal(|ui| {
         let key = state.key_at_playhead();
         let label = if key.is_some() { "Update key (pin all functions)" } else { "Add key" };
@@ -106,17 +172,50 @@ pub fn timeline_ui(ui: &mut egui::Ui, state: &ViewerState, commands: &mut Vec<Co
     });
 }
 
-/// The keys as diamonds on a strip the width of the timeline panel. A click jumps to a key (or
-/// to the time under the cursor); a drag that starts on a key moves it along the strip (one
-/// undo step, kept between its neighbours); a drag elsewhere scrubs.
-fn keys_strip_ui(ui: &mut egui::Ui, state: &ViewerState, d: f64, playhead: f64, commands: &mut Vec<Command>) {
+/// The scrubber: a rail with a handle at the playhead. A press anywhere on it seeks there, and
+/// a drag scrubs, both to frame times unless Shift is held.
+fn scrubber_ui(ui: &mut egui::Ui, state: &ViewerState, width: f32, d: f64, playhead: f64, commands: &mut Vec<Command>) {
+    let (rect, response) = ui.allocate_exact_size(egui::vec2(width, SCRUBBER_HEIGHT), Sense::click_and_drag());
+    let track = TimeTrack::new(rect.x_range(), d);
+    // On the press itself (not only once a drag starts or the button is released), and only
+    // while the pointer holds it: playback moves the handle otherwise.
+    if (response.is_pointer_button_down_on() || response.clicked())
+        && let Some(pos) = response.interact_pointer_pos()
+    {
+        let free = ui.input(|i| i.modifiers.shift);
+        let t = seek_time(state, &track, pos.x, free);
+        if t != playhead {
+            commands.push(Command::SetTime(t));
+        }
+    }
+    let painter = ui.painter_at(rect);
+    let rail = egui::Rect::from_x_y_ranges(track.left..=track.right, rect.center().y - 2.0..=rect.center().y + 2.0);
+    painter.rect_filled(rail, 2.0, Color32::from_gray(60));
+    let x = track.x_of(playhead);
+    painter.rect_filled(egui::Rect::from_x_y_ranges(track.left..=x, rail.y_range()), 2.0, Color32::from_gray(120));
+    painter.circle_filled(egui::pos2(x, rect.center().y), HANDLE_RADIUS, PLAYHEAD_COLOR);
+    response.on_hover_text("press or drag to seek (to frame times at the record form's rate; Shift: freely)");
+}
+
+/// The keys as diamonds on a strip under the scrubber. A click jumps to a key (or to the time
+/// under the cursor); a drag that starts on a key moves it along the strip (one undo step, kept
+/// between its neighbours); a drag elsewhere scrubs. Times snap to frames unless Shift is held.
+fn keys_strip_ui(
+    ui: &mut egui::Ui,
+    state: &ViewerState,
+    width: f32,
+    d: f64,
+    playhead: f64,
+    commands: &mut Vec<Command>,
+) {
     let Some(tl) = &state.scene.timeline else { return };
-    let width = ui.available_width().max(50.0);
     let (rect, response) = ui.allocate_exact_size(egui::vec2(width, 22.0), Sense::click_and_drag());
     let painter = ui.painter_at(rect);
     painter.rect_filled(rect, 2.0, Color32::from_gray(30));
-    let x_of = |t: f64| rect.left() + 8.0 + (rect.width() - 16.0) * (t / d).clamp(0.0, 1.0) as f32;
-    let t_of = |x: f32| (((x - rect.left() - 8.0) / (rect.width() - 16.0)).clamp(0.0, 1.0) as f64) * d;
+    let track = TimeTrack::new(rect.x_range(), d);
+    let x_of = |t: f64| track.x_of(t);
+    let free = ui.input(|i| i.modifiers.shift);
+    let t_of = |x: f32| seek_time(state, &track, x, free);
     // The nearest key within 8 px of `x`.
     let key_near = |x: f32| {
         tl.keys
@@ -169,10 +268,7 @@ fn keys_strip_ui(ui: &mut egui::Ui, state: &ViewerState, d: f64, playhead: f64, 
         ));
     }
     let x = x_of(playhead);
-    painter.line_segment(
-        [egui::pos2(x, rect.top()), egui::pos2(x, rect.bottom())],
-        Stroke::new(2.0, Color32::from_rgb(255, 110, 90)),
-    );
+    painter.line_segment([egui::pos2(x, rect.top()), egui::pos2(x, rect.bottom())], Stroke::new(2.0, PLAYHEAD_COLOR));
     if let Some(key) = held {
         let t = tl.keys.get(key).map_or(0.0, |k| k.t_secs);
         painter.text(
