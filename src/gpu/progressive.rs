@@ -151,6 +151,8 @@ pub struct Progressive {
     pub light_bands: u32,
     /// The next band to refresh, and the arguments the light cache was last refreshed with.
     light_band: u32,
+    /// Bands refreshed since the accumulation last changed (all of them: the light is current).
+    bands_since_change: u32,
     light_args: Option<ResolveArgs>,
     /// Clears of the accumulation so far (an estimate belongs to one accumulation).
     clears: u64,
@@ -200,6 +202,7 @@ impl Progressive {
             has_ifs: false,
             light_bands: 0,
             light_band: 0,
+            bands_since_change: 0,
             light_args: None,
             clears: 0,
             estimation: None,
@@ -282,6 +285,12 @@ impl Progressive {
         !self.clear && self.splats_since_clear >= self.settings.max_splats
     }
 
+    /// True when another draw would show what the last one showed: accumulation has stopped
+    /// and the light cache's bands were all refreshed since it last changed.
+    pub fn at_rest(&self) -> bool {
+        self.converged() && (self.light_bands <= 1 || self.bands_since_change >= self.light_bands)
+    }
+
     /// Records one chaos-game frame into `encoder` unless converged; returns the number of
     /// point steps splatted. Submit `encoder` before the next call.
     pub fn advance(&mut self, ctx: &GpuContext, encoder: &mut wgpu::CommandEncoder) -> u64 {
@@ -306,6 +315,7 @@ impl Progressive {
             self.clears += 1;
         }
         let splats = self.game.point_count as u64 * self.settings.steps_per_frame as u64;
+        self.bands_since_change = 0;
         self.frames_since_clear += 1;
         self.splats_since_clear += splats;
         self.frame = self.frame.wrapping_add(1);
@@ -348,6 +358,7 @@ impl Progressive {
         if !accum.is_empty() {
             ctx.queue.write_buffer(&self.game.accum, 0, bytemuck::cast_slice(accum));
         }
+        self.bands_since_change = 0;
         self.frames_since_clear += 1;
         self.splats_since_clear += splats;
         self.frame = self.frame.wrapping_add(1);
@@ -464,10 +475,12 @@ impl Progressive {
         let same_args = self.light_args.is_some_and(|a| ResolveArgs { origin_px: a.origin_px, ..*args } == a);
         if !same_args || self.frames_since_clear <= LIGHT_FULL_FRAMES {
             self.light_args = Some(*args);
+            self.bands_since_change = self.light_bands;
             return LightRows::Refresh { start: 0, end: height };
         }
         let (band, bands) = (self.light_band % self.light_bands, self.light_bands);
         self.light_band = self.light_band.wrapping_add(1);
+        self.bands_since_change = self.bands_since_change.saturating_add(1);
         LightRows::Refresh { start: band * height / bands, end: (band + 1) * height / bands }
     }
 

@@ -190,6 +190,12 @@ impl LiveView {
         self.gpu.converged()
     }
 
+    /// True when another draw would show the same picture (see [`Progressive::at_rest`]): the
+    /// viewer then draws nothing until something changes.
+    pub fn at_rest(&self) -> bool {
+        self.gpu.at_rest()
+    }
+
     /// Records one chaos-game frame into `encoder` (GPU route) or splats and uploads one on
     /// the CPU, unless converged; returns the number of point steps splatted. Submit `encoder`
     /// before the next call.

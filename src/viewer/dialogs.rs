@@ -70,6 +70,11 @@ impl Dialogs {
         Ok(())
     }
 
+    /// A dialog is open (its answer is polled for).
+    pub fn pending(&self) -> bool {
+        self.pending.is_some()
+    }
+
     /// The dialog's answer, once it has one.
     pub fn poll(&mut self) -> Option<Command> {
         let (kind, receive) = self.pending.as_ref()?;

@@ -157,6 +157,7 @@ pub fn run(options: ViewerOptions) -> Result<(), ViewerError> {
         cursor: None,
         last_frame: None,
         last_poll: Instant::now(),
+        egui_repaint_at: None,
         started: Instant::now(),
         frames: 0,
         splats: 0,
@@ -219,6 +220,8 @@ struct App {
     cursor: Option<(f64, f64)>,
     last_frame: Option<Instant>,
     last_poll: Instant,
+    /// When egui asked for its next frame.
+    egui_repaint_at: Option<Instant>,
     started: Instant,
     frames: u64,
     splats: u64,
@@ -311,7 +314,9 @@ impl ApplicationHandler for App {
             if k.logical_key == Key::Named(NamedKey::Tab));
         if !tab || text_focus {
             let response = gfx.egui_state.on_window_event(&gfx.window, &event);
-            if response.repaint {
+            // egui asks for a repaint on RedrawRequested too: that event is the repaint (asking
+            // again redrew an untouched window forever).
+            if response.repaint && !matches!(event, WindowEvent::RedrawRequested) {
                 gfx.window.request_redraw();
             }
         }
@@ -439,49 +444,99 @@ impl ApplicationHandler for App {
             event_loop.exit();
             return;
         }
+        self.wake();
         let Some(gfx) = &self.gfx else { return };
-        // Converged and idle: wake a few times a second (file polling), else draw continuously.
-        let busy = self.state.playback.playing
-            || self.state.edit.gesture.is_some()
-            || self.jobs.view.raytrace.is_some()
-            || self.jobs.view.record.is_some();
-        let idle = gfx.live.converged()
-            && self.commands.is_empty()
-            && self.drag.is_none()
-            && self.state.ui.toast.is_none()
-            && !busy;
-        if idle {
-            let next = self.last_frame.unwrap_or_else(Instant::now) + Duration::from_millis(250);
-            if Instant::now() >= next {
+        let now = Instant::now();
+        match self.redraw(gfx, now) {
+            Redraw::Continuous => {
+                event_loop.set_control_flow(ControlFlow::Poll);
                 gfx.window.request_redraw();
             }
-            event_loop.set_control_flow(ControlFlow::WaitUntil(next));
-        } else {
-            event_loop.set_control_flow(ControlFlow::Poll);
-            gfx.window.request_redraw();
+            Redraw::At(at) if at <= now => {
+                gfx.window.request_redraw();
+                event_loop.set_control_flow(ControlFlow::Wait);
+            }
+            Redraw::At(at) => event_loop.set_control_flow(ControlFlow::WaitUntil(at.min(self.next_wake(now)))),
+            Redraw::OnEvent => event_loop.set_control_flow(ControlFlow::WaitUntil(self.next_wake(now))),
         }
     }
 }
 
+/// When the window needs its next frame ([`App::redraw`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Redraw {
+    /// Every frame: the picture changes (accumulating, playing, dragging, commands to apply).
+    Continuous,
+    /// At this instant (a job's progress, a toast's end, an egui animation); then again asks.
+    At(Instant),
+    /// Only on input or what a wake-up finds (the file changed, a dialog answered).
+    OnEvent,
+}
+
+/// How often a running job's progress is redrawn, and how often a wake-up looks for a file
+/// dialog's answer and a changed scene file.
+const JOB_REDRAW: Duration = Duration::from_millis(100);
+const DIALOG_POLL: Duration = Duration::from_millis(100);
+const FILE_POLL: Duration = Duration::from_millis(500);
+
 impl App {
-    fn frame(&mut self) {
-        let Some(gfx) = &mut self.gfx else { return };
-        let t_start = Instant::now();
-        if self.last_poll.elapsed() >= Duration::from_millis(500) {
+    /// What the event loop does between frames, drawing nothing: looks for a changed scene file
+    /// and a file dialog's answer (commands for the next frame) and writes the recovery file
+    /// when it is due.
+    fn wake(&mut self) {
+        if self.last_poll.elapsed() >= FILE_POLL {
             self.last_poll = Instant::now();
             if let Some(c) = self.state.poll_file() {
                 self.commands.push(c);
             }
         }
+        self.commands.extend(self.dialogs.poll());
+        let now_secs = self.clock.now_secs();
+        if now_secs - self.last_autosave_secs >= recovery::AUTOSAVE_SECS {
+            self.last_autosave_secs = now_secs;
+            // Writes a file when there are unsaved edits; nothing on screen changes.
+            self.state.apply([Command::Autosave]);
+        }
+    }
+
+    /// When the next frame is needed: a converged, untouched view is not redrawn (the last
+    /// frame stays on screen) until input, a timer or a wake-up asks for one.
+    fn redraw(&self, gfx: &Gfx, now: Instant) -> Redraw {
+        let changing = self.state.playback.playing
+            || self.state.edit.gesture.is_some()
+            || self.drag.is_some()
+            || !self.commands.is_empty()
+            || !gfx.live.at_rest();
+        if changing {
+            return Redraw::Continuous;
+        }
+        let jobs = self.jobs.view.raytrace.is_some() || self.jobs.view.record.is_some();
+        let job_frame = jobs.then(|| self.last_frame.map_or(now, |t| t + JOB_REDRAW));
+        let toast_end = self
+            .toast_shown
+            .as_ref()
+            .map(|(_, since)| now + Duration::from_secs_f64((since + TOAST_SECS - self.clock.now_secs()).max(0.0)));
+        match [job_frame, toast_end, self.egui_repaint_at].into_iter().flatten().min() {
+            Some(at) => Redraw::At(at),
+            None => Redraw::OnEvent,
+        }
+    }
+
+    /// The next wake-up (file and dialog polling, the autosave timer).
+    fn next_wake(&self, now: Instant) -> Instant {
+        let poll = if self.dialogs.pending() { DIALOG_POLL } else { FILE_POLL };
+        let autosave_secs = (self.last_autosave_secs + recovery::AUTOSAVE_SECS - self.clock.now_secs()).max(0.0);
+        (self.last_poll + FILE_POLL).min(now + poll).min(now + Duration::from_secs_f64(autosave_secs))
+    }
+
+    fn frame(&mut self) {
+        let Some(gfx) = &mut self.gfx else { return };
+        let t_start = Instant::now();
         // Playback: scene time advances by the wall-clock interval since the last frame
         // (`clock.rs`).
         let now_secs = self.clock.now_secs();
         if let Some(dt_secs) = self.playback_clock.advance(now_secs, self.state.playback.playing) {
             self.commands.push(Command::Tick { dt_secs });
-        }
-        if now_secs - self.last_autosave_secs >= recovery::AUTOSAVE_SECS {
-            self.last_autosave_secs = now_secs;
-            self.commands.push(Command::Autosave);
         }
         // A toast shows for a few seconds from when it (or another text) appeared.
         match (&self.state.ui.toast, &self.toast_shown) {
@@ -497,7 +552,6 @@ impl App {
         for notice in self.jobs.take_notices() {
             self.commands.push(Command::SetToast(Some(notice)));
         }
-        self.commands.extend(self.dialogs.poll());
         let raw_input = gfx.egui_state.take_egui_input(&gfx.window);
         let state = &self.state;
         let commands = &mut self.commands;
@@ -507,6 +561,11 @@ impl App {
         let full_output =
             gfx.egui_ctx.run_ui(raw_input, |ui| view_rect = ui::panels_ui(ui, state, job_view, ppp, commands));
         gfx.egui_state.handle_platform_output(&gfx.window, full_output.platform_output);
+        // When egui wants its next frame (an animation, a tooltip's delay); none: Duration::MAX.
+        self.egui_repaint_at = full_output
+            .viewport_output
+            .get(&egui::ViewportId::ROOT)
+            .and_then(|v| Instant::now().checked_add(v.repaint_delay));
         // The attractor is drawn and framed in what the panels leave, in whole window pixels.
         let (origin_px, size_px) = view_pixels(view_rect, ppp, [gfx.config.width, gfx.config.height]);
         let minimized = gfx.config.width == 0 || gfx.config.height == 0;
@@ -547,7 +606,8 @@ impl App {
         if !minimized && gfx.live.size() != (size_px[0], size_px[1]) {
             gfx.live.resize(&gfx.ctx, size_px[0], size_px[1]);
         }
-        if let Err(e) = gfx.live.set_navigating(&gfx.ctx, self.drag.is_some()) {
+        // Playing, as dragging, draws without shadows and occlusion (back when it stops).
+        if let Err(e) = gfx.live.set_navigating(&gfx.ctx, self.drag.is_some() || self.state.playback.playing) {
             self.state.error = Some(e.to_string());
         }
         gfx.live.set_camera(&self.state.camera);

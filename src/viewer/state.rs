@@ -282,7 +282,7 @@ impl ViewerState {
 
     /// The attractor sample framing fits (empty without an enabled function).
     pub fn framing_sample(&self) -> Vec<glam::Vec3> {
-        self.compiled.as_ref().map(|c| framing::framing_sample(c, self.live.seed)).unwrap_or_default()
+        self.compiled.as_ref().map(|c| framing::framing_sample(c, crate::shot::FRAMING_SEED)).unwrap_or_default()
     }
 
     /// The scene differs from its file (or, for the built-in scene, from how it started).
