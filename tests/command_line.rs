@@ -147,39 +147,15 @@ fn a_missing_folder_is_created_and_said() {
     let base = common::temp_dir("created-folder");
     let png = base.join("new/deeper/x.png");
     let plant2 = common::scene_path("plant2");
-    let out = common::run_nlifs(&[
-        "render",
-        s(&plant2),
-        "-o",
-        s(&png),
-        "--width",
-        "32",
-        "--height",
-        "24",
-        "--points",
-        "1000",
-        "--backend",
-        "cpu",
-    ]);
+    let size = ["--width", "32", "--height", "24", "--points", "1000", "--backend", "cpu"];
+    let render = || common::run_nlifs(&[&["render", s(&plant2), "-o", s(&png)][..], &size].concat());
+    let out = render();
     assert!(out.status.success(), "{}", stderr(&out));
     let said = format!("created folder {}\n", base.join("new/deeper").display());
     assert!(stderr(&out).contains(&said), "expected `{said}` in: {}", stderr(&out));
     assert!(png.is_file());
     // Once the folder exists, nothing is said.
-    let again = common::run_nlifs(&[
-        "render",
-        s(&plant2),
-        "-o",
-        s(&png),
-        "--width",
-        "32",
-        "--height",
-        "24",
-        "--points",
-        "1000",
-        "--backend",
-        "cpu",
-    ]);
+    let again = render();
     assert!(again.status.success() && !stderr(&again).contains("created folder"), "{}", stderr(&again));
     let _ = std::fs::remove_dir_all(&base);
 }

@@ -20,7 +20,8 @@
 //! panel, `functions_ui.rs`, `grid_edit_ui.rs`, `nesting_ui.rs`, `jobs_ui.rs`, `timeline_ui.rs`,
 //! `overlay_ui.rs`), `ui_layer.rs` (egui on wgpu), `jobs.rs` with the forms' checks in
 //! `job_plan.rs`, `recent.rs` (the recent files list, its state in `files_state.rs`) and
-//! `dialogs.rs` (native dialogs on a thread of their own). State, command and apply import no
+//! `dialogs.rs` (native dialogs on a thread of their own) and `redraw.rs` (when a frame is drawn: a
+//! view at rest is not redrawn). State, command and apply import no
 //! UI file.
 
 pub mod actions;
@@ -51,6 +52,7 @@ pub mod picking;
 pub mod pointer;
 pub mod recent;
 pub mod recovery;
+mod redraw;
 mod screenshot;
 pub mod state;
 pub mod timeline_ui;
@@ -76,6 +78,7 @@ use clock::{Clock, PlaybackClock, WallClock};
 use frame_log::FrameLog;
 use input::{pointer_button, pointer_context};
 use pointer::{PointerEvent, PointerRouter, Route};
+use redraw::Redraw;
 
 pub use command::Command;
 use command::NestingView;
@@ -462,73 +465,7 @@ impl ApplicationHandler for App {
     }
 }
 
-/// When the window needs its next frame ([`App::redraw`]).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum Redraw {
-    /// Every frame: the picture changes (accumulating, playing, dragging, commands to apply).
-    Continuous,
-    /// At this instant (a job's progress, a toast's end, an egui animation); then again asks.
-    At(Instant),
-    /// Only on input or what a wake-up finds (the file changed, a dialog answered).
-    OnEvent,
-}
-
-/// How often a running job's progress is redrawn, and how often a wake-up looks for a file
-/// dialog's answer and a changed scene file.
-const JOB_REDRAW: Duration = Duration::from_millis(100);
-const DIALOG_POLL: Duration = Duration::from_millis(100);
-const FILE_POLL: Duration = Duration::from_millis(500);
-
 impl App {
-    /// What the event loop does between frames, drawing nothing: looks for a changed scene file
-    /// and a file dialog's answer (commands for the next frame) and writes the recovery file
-    /// when it is due.
-    fn wake(&mut self) {
-        if self.last_poll.elapsed() >= FILE_POLL {
-            self.last_poll = Instant::now();
-            if let Some(c) = self.state.poll_file() {
-                self.commands.push(c);
-            }
-        }
-        self.commands.extend(self.dialogs.poll());
-        let now_secs = self.clock.now_secs();
-        if now_secs - self.last_autosave_secs >= recovery::AUTOSAVE_SECS {
-            self.last_autosave_secs = now_secs;
-            // Writes a file when there are unsaved edits; nothing on screen changes.
-            self.state.apply([Command::Autosave]);
-        }
-    }
-
-    /// When the next frame is needed: a converged, untouched view is not redrawn (the last
-    /// frame stays on screen) until input, a timer or a wake-up asks for one.
-    fn redraw(&self, gfx: &Gfx, now: Instant) -> Redraw {
-        let changing = self.state.playback.playing
-            || self.state.edit.gesture.is_some()
-            || self.drag.is_some()
-            || !self.commands.is_empty()
-            || !gfx.live.at_rest();
-        if changing {
-            return Redraw::Continuous;
-        }
-        let jobs = self.jobs.view.raytrace.is_some() || self.jobs.view.record.is_some();
-        let job_frame = jobs.then(|| self.last_frame.map_or(now, |t| t + JOB_REDRAW));
-        let toast_end = self
-            .toast_shown
-            .as_ref()
-            .map(|(_, since)| now + Duration::from_secs_f64((since + TOAST_SECS - self.clock.now_secs()).max(0.0)));
-        match [job_frame, toast_end, self.egui_repaint_at].into_iter().flatten().min() {
-            Some(at) => Redraw::At(at),
-            None => Redraw::OnEvent,
-        }
-    }
-
-    /// The next wake-up (file and dialog polling, the autosave timer).
-    fn next_wake(&self, now: Instant) -> Instant {
-        let poll = if self.dialogs.pending() { DIALOG_POLL } else { FILE_POLL };
-        let autosave_secs = (self.last_autosave_secs + recovery::AUTOSAVE_SECS - self.clock.now_secs()).max(0.0);
-        (self.last_poll + FILE_POLL).min(now + poll).min(now + Duration::from_secs_f64(autosave_secs))
-    }
-
     fn frame(&mut self) {
         let Some(gfx) = &mut self.gfx else { return };
         let t_start = Instant::now();
