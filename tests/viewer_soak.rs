@@ -40,9 +40,9 @@ const IDLE_MEASURE_SECS: u64 = 10;
 /// One drag on the view.
 const ORBIT_SECS: u64 = 6;
 /// Shortest idle stretch: the view converges after 2^30 splats (`LiveSettings::max_splats`),
-/// about 25–35 s at the settings below on a 2-core machine on lavapipe (35–60 M points/s on
+/// about 20–35 s at the settings below on a 2-core machine on lavapipe (35–60 M points/s on
 /// the CPU route), then [`IDLE_MEASURE_SECS`] are measured.
-const MIN_IDLE_SECS: u64 = 50;
+const MIN_IDLE_SECS: u64 = 60;
 /// Warm-up: the first minute, or the first sixth of a shorter run.
 const MAX_WARM_UP_SECS: u64 = 60;
 /// 2^20 points × 8 steps a frame: the same points as the viewer's default, 8× the splats a
