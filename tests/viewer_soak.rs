@@ -202,8 +202,7 @@ fn viewer_command() -> Command {
     match std::env::var_os("NLIFS_SOAK_BIN") {
         Some(bin) => {
             let mut command = Command::new(bin);
-            command
-                .env("NLIFS_CONFIG_DIR", std::env::temp_dir().join(format!("nlifs-config-{}", std::process::id())));
+            command.env("NLIFS_CONFIG_DIR", std::env::temp_dir().join(format!("nlifs-config-{}", std::process::id())));
             command
         }
         None => common::nlifs_command(),
@@ -314,8 +313,17 @@ fn soak(backend: &str) {
     for w in samples.windows(2) {
         let (a, b) = (&w[0], &w[1]);
         let cpu_percent = 100.0 * (b.cpu_ticks - a.cpu_ticks) as f64 / tck;
-        let (fps, mpoints) = b.fps.map_or((String::new(), String::new()), |(f, m)| (format!("{f:.1}"), format!("{m:.1}")));
-        eprintln!("{:>6}  {:<14} {:>8.1} {:>7.1} {:>7} {:>9}", b.t_secs, b.kind.name(), b.rss_mb, cpu_percent, fps, mpoints);
+        let (fps, mpoints) =
+            b.fps.map_or((String::new(), String::new()), |(f, m)| (format!("{f:.1}"), format!("{m:.1}")));
+        eprintln!(
+            "{:>6}  {:<14} {:>8.1} {:>7.1} {:>7} {:>9}",
+            b.t_secs,
+            b.kind.name(),
+            b.rss_mb,
+            cpu_percent,
+            fps,
+            mpoints
+        );
         csv += &format!("{},{},{:.2},{:.1},{fps},{mpoints}\n", b.t_secs, b.kind.name(), b.rss_mb, cpu_percent);
     }
     std::fs::write(dir.join("samples.csv"), csv).unwrap();
