@@ -139,8 +139,11 @@ fn views_along_the_axes_frame_the_attractor_as_f_does() {
             assert_eq!((s.camera.yaw_deg, s.camera.pitch_deg), axis.angles_deg(), "{name} {axis:?}");
             let (w, h) = (s.width_px, s.height_px);
             let (lo, hi) = extent(&s);
+            // Framing fits the fixed framing sample (65,536 points); the 64 other samples here
+            // reach a few pixels past its hull at the tips (plant1's stem: 4.8 px of 720).
+            let slack = 0.01 * w.max(h);
             assert!(
-                lo.x >= 0.0 && lo.y >= 0.0 && hi.x <= w && hi.y <= h,
+                lo.x >= -slack && lo.y >= -slack && hi.x <= w + slack && hi.y <= h + slack,
                 "{name} {axis:?}: the attractor spans {lo}..{hi} in a {w}×{h} view"
             );
             assert!((hi.x - lo.x) / w > 0.6 || (hi.y - lo.y) / h > 0.6, "{name} {axis:?}: spans only {lo}..{hi}");
