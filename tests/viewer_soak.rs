@@ -341,7 +341,13 @@ fn soak(backend: &str) {
         let converged_after = lines_in(p.start_secs, p.end_secs)
             .find(|l| l.mpoints_per_sec == 0.0)
             .map(|l| format!("{:.0} s", (l.at - at(p.start_secs)).as_secs_f64()))
-            .unwrap_or_else(|| "— (no frame with nothing splatted)".into());
+            // A view at rest draws nothing, so it logs nothing: the last line is when it stopped.
+            .or_else(|| {
+                lines_in(p.start_secs, p.end_secs)
+                    .next_back()
+                    .map(|l| format!("{:.0} s (drawing stopped)", (l.at - at(p.start_secs)).as_secs_f64()))
+            })
+            .unwrap_or_else(|| "— (no frame drawn)".into());
         let cpu = idle_cpu_percent(p.end_secs);
         eprintln!(
             "soak ({backend}): idle {}–{} s: converged after {converged_after}, CPU over its last {IDLE_MEASURE_SECS} s {cpu:.1} % of a core",
