@@ -10,6 +10,7 @@ pub mod color;
 pub mod cpu_time;
 pub mod edit;
 pub mod export;
+pub mod flame;
 pub mod gpu;
 pub mod io;
 pub mod live;

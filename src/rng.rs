@@ -53,6 +53,14 @@ impl Pcg32 {
     pub fn next_f32(&mut self) -> f32 {
         (self.next_u32() >> 8) as f32 * (1.0 / 16_777_216.0)
     }
+
+    /// Uniform in [0, 1) with 53 bits of resolution (two draws; the flames' chaos game).
+    #[inline(always)]
+    pub fn next_f64(&mut self) -> f64 {
+        let hi = (self.next_u32() >> 5) as u64;
+        let lo = (self.next_u32() >> 6) as u64;
+        ((hi << 26) | lo) as f64 * (1.0 / 9_007_199_254_740_992.0)
+    }
 }
 
 #[cfg(test)]
