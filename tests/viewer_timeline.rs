@@ -173,3 +173,71 @@ fn a_press_on_the_scrubber_or_the_strip_seeks_there() {
     let sent = click(&ctx, &s, egui::pos2(x, 0.5 * (strip_top + strip_bottom)), false, true);
     assert!(sent.contains(&Command::SetTime(expected)), "{sent:?}");
 }
+
+/// The panels' egui output at scene time `t` split as the viewer's cached layers split it.
+fn layers_at(
+    ctx: &egui::Context,
+    state: &mut ViewerState,
+    t: f64,
+) -> (Vec<egui::epaint::ClippedShape>, Vec<egui::epaint::ClippedShape>) {
+    state.apply([Command::SetTime(t)]);
+    let mut out = None;
+    for _ in 0..2 {
+        let input = egui::RawInput {
+            screen_rect: Some(egui::Rect::from_min_size(egui::Pos2::ZERO, egui::vec2(1280.0, 720.0))),
+            ..Default::default()
+        };
+        let mut commands = Vec::new();
+        let mut layout = None;
+        let output = ctx.run_ui(input, |ui| {
+            layout = Some(nlifs::viewer::ui::panels_ui(ui, state, &JobView::default(), 1.0, &mut commands));
+        });
+        let strip = layout.and_then(|l| l.timeline).expect("twist-anim has a timeline strip");
+        out = Some(nlifs::viewer::ui_layer::split_strip(output.shapes, strip));
+    }
+    out.unwrap()
+}
+
+/// The timeline strip gets a cached layer of its own, which holds what playing changes every
+/// frame (the time field, the scrubber's handle and the key strip's playhead), so that the
+/// viewer re-renders the side panel only a few times a second while playing.
+#[test]
+fn the_strip_has_a_layer_of_its_own() {
+    let ctx = egui::Context::default();
+    let mut state = twist_anim();
+    let (_, strip_1) = layers_at(&ctx, &mut state, 1.0);
+    let (panels_2, strip_2) = layers_at(&ctx, &mut state, 2.0);
+    assert!(!strip_1.is_empty(), "the strip got a layer of its own");
+    assert!(strip_1 != strip_2, "the strip shows the time");
+    let flat = |shapes: Vec<egui::epaint::ClippedShape>| {
+        let mut out = Vec::new();
+        fn flatten(shape: egui::Shape, out: &mut Vec<egui::Shape>) {
+            match shape {
+                egui::Shape::Vec(v) => v.into_iter().for_each(|s| flatten(s, out)),
+                s => out.push(s),
+            }
+        }
+        shapes.into_iter().for_each(|c| flatten(c.shape, &mut out));
+        out
+    };
+    // Both marks of the playhead are in the strip's layer, none in the panels'.
+    playhead_marks(&flat(strip_2));
+    let in_panels = flat(panels_2).into_iter().filter(|s| match s {
+        egui::Shape::Circle(c) => c.fill == PLAYHEAD_COLOR,
+        egui::Shape::LineSegment { stroke, .. } => stroke.color == PLAYHEAD_COLOR,
+        _ => false,
+    });
+    assert_eq!(in_panels.count(), 0, "the playhead is painted in the strip's layer only");
+    // The time field is in the strip.
+    let texts = |shapes: &[egui::Shape]| -> Vec<String> {
+        shapes
+            .iter()
+            .filter_map(|s| match s {
+                egui::Shape::Text(t) => Some(t.galley.text().to_string()),
+                _ => None,
+            })
+            .collect()
+    };
+    let (_, strip_t) = layers_at(&ctx, &mut state, 2.5);
+    assert!(texts(&flat(strip_t)).iter().any(|t| t.contains("2.5")), "the strip shows t = 2.5 s");
+}

@@ -490,13 +490,18 @@ impl App {
             self.commands.push(Command::SetToast(Some(notice)));
         }
         let raw_input = gfx.egui_state.take_egui_input(&gfx.window);
+        // While the timeline plays untouched the side panel's animated values may lag the
+        // playhead by a few frames (`ui_layer.rs`); any input shows them at once.
+        let panels_lag_secs =
+            (self.state.playback.playing && raw_input.events.is_empty()).then_some(PLAYING_PANELS_LAG_SECS);
         let state = &self.state;
         let commands = &mut self.commands;
         let job_view = &self.jobs.view;
         let ppp = gfx.egui_ctx.pixels_per_point();
-        let mut view_rect = egui::Rect::NOTHING;
+        let mut layout = ui::PanelLayout { view: egui::Rect::NOTHING, timeline: None };
         let full_output =
-            gfx.egui_ctx.run_ui(raw_input, |ui| view_rect = ui::panels_ui(ui, state, job_view, ppp, commands));
+            gfx.egui_ctx.run_ui(raw_input, |ui| layout = ui::panels_ui(ui, state, job_view, ppp, commands));
+        let view_rect = layout.view;
         gfx.egui_state.handle_platform_output(&gfx.window, full_output.platform_output);
         // When egui wants its next frame (an animation, a tooltip's delay); none: Duration::MAX.
         self.egui_repaint_at = full_output
@@ -612,22 +617,29 @@ impl App {
         let splats = gfx.live.advance(&gfx.ctx, &mut encoder);
         gfx.live.draw(&gfx.ctx, &mut encoder, &view, gfx.config.format, origin_px);
 
-        let extra = gfx.ui_layer.update(
+        let ui_stale = gfx.ui_layer.update(
             &gfx.ctx.device,
             &gfx.ctx.queue,
-            &mut encoder,
             &mut gfx.egui_renderer,
             &gfx.egui_ctx,
-            full_output.shapes,
-            full_output.pixels_per_point,
-            textures_changed,
+            ui_layer::EguiFrame {
+                shapes: full_output.shapes,
+                pixels_per_point: full_output.pixels_per_point,
+                textures_changed,
+                strip: layout.timeline,
+                now_secs,
+                panels_lag_secs,
+            },
             [gfx.config.width, gfx.config.height],
         );
         gfx.ui_layer.composite(&mut encoder, &view);
-        gfx.ctx.queue.submit(extra.into_iter().chain([encoder.finish()]));
+        gfx.ctx.queue.submit([encoder.finish()]);
         let t_submitted = Instant::now();
         gfx.ctx.queue.present(frame);
         free(gfx);
+        if ui_stale {
+            gfx.window.request_redraw();
+        }
         if suboptimal {
             gfx.reconfigure();
         }
@@ -669,6 +681,10 @@ impl App {
 
 /// Seconds a toast stays on screen.
 const TOAST_SECS: f64 = 4.0;
+
+/// How long the side panel may show values older than the playhead while the timeline plays:
+/// re-rendering it every frame costs a software rasterizer as much as the rest of the frame.
+const PLAYING_PANELS_LAG_SECS: f64 = 0.25;
 
 /// The window pixels (origin, size) of `rect` (egui points at `ppp` pixels per point) inside a
 /// window of `window_px`; at least one pixel wide and tall.

@@ -14,20 +14,22 @@ use super::widgets::slider;
 
 /// The left side panel with every section, the timeline at the bottom, the grid overlay, the
 /// ray-traced image window and the keyboard shortcuts. `ppp`: pixels per egui point. Returns
-/// the rectangle (egui points) the panels leave to the view.
+/// where the panels are (egui points).
 pub fn panels_ui(
     ui: &mut egui::Ui,
     state: &ViewerState,
     jobs: &JobView,
     ppp: f32,
     commands: &mut Vec<Command>,
-) -> egui::Rect {
+) -> PanelLayout {
     shortcuts_ui(ui.ctx(), state, commands);
-    if state.scene.timeline.is_some() {
+    let timeline = state.scene.timeline.is_some().then(|| {
         egui::Panel::bottom("nlifs_timeline")
             .resizable(false)
-            .show(ui, |ui| super::timeline_ui::timeline_ui(ui, state, commands));
-    }
+            .show(ui, |ui| super::timeline_ui::timeline_ui(ui, state, commands))
+            .response
+            .rect
+    });
     // Tab hides the panel; it resizes by its right edge, and scrolls when its open sections
     // do not fit the window.
     let mut shown = state.ui.panel_shown;
@@ -60,7 +62,17 @@ pub fn panels_ui(
     super::nesting_ui::nesting_overlay_ui(ui.ctx(), view_rect, state, ppp);
     super::jobs_ui::raytrace_window_ui(ui.ctx(), jobs, commands);
     super::overlay_ui::overlays_ui(ui.ctx(), view_rect, state, commands);
-    view_rect
+    PanelLayout { view: view_rect, timeline }
+}
+
+/// Where [`panels_ui`] put things, in egui points.
+#[derive(Clone, Copy, Debug)]
+pub struct PanelLayout {
+    /// What the panels leave to the view of the attractor.
+    pub view: egui::Rect,
+    /// The timeline strip at the bottom, when the scene has a timeline (it changes every frame
+    /// while playing: `ui_layer.rs` renders it apart from the other panels).
+    pub timeline: Option<egui::Rect>,
 }
 
 /// Undo (Ctrl+Z), redo (Ctrl+Shift+Z, Ctrl+Y), open (Ctrl+O), save (Ctrl+S), save as

@@ -1,8 +1,8 @@
 //! egui drawn once per change, not once per frame. The panels are tessellated and rendered
-//! into a cached texture of the window's size (premultiplied alpha over transparent) only when
+//! into cached textures of the window's size (premultiplied alpha over transparent) only when
 //! egui's output differs from the last frame's (other shapes, texture updates, another size
-//! or scale); every frame composites that texture over the attractor (`shaders/composite.wgsl`),
-//! scissored to the union of the clip rectangles egui drew in.
+//! or scale); every frame composites those textures over the attractor
+//! (`shaders/composite.wgsl`), each scissored to the union of the clip rectangles egui drew in.
 //!
 //! Why: on a software rasterizer (lavapipe) rendering the panels cost about as much CPU as the
 //! resolve and present together (≈ 35 ms a frame at 1280×720, docs/performance.md), while the
@@ -11,18 +11,48 @@
 //! same image: egui's blending (colour One/OneMinusSrcAlpha, alpha OneMinusDstAlpha/One) into a
 //! transparent texture yields the premultiplied "over" of its shapes, and compositing that with
 //! premultiplied blending equals drawing the shapes onto the frame directly.
+//!
+//! The timeline strip changes every frame while the timeline plays or is scrubbed (its time
+//! field and playhead), so it has a layer of its own ([`split_strip`]): the strip's shapes are
+//! rendered into a second texture composited after the first, and playing re-renders only the
+//! strip. The split keeps egui's painting order: it is made only when the strip's shapes are
+//! one run of the output and nothing painted after them overlaps the strip (a tooltip or a
+//! menu over it puts everything back into one layer for those frames).
 
-/// The cached layer: texture, the egui output it shows, and the composite pipeline.
+/// One frame's egui output, as [`UiLayer::update`] takes it.
+pub struct EguiFrame {
+    pub shapes: Vec<egui::epaint::ClippedShape>,
+    pub pixels_per_point: f32,
+    /// egui uploaded or freed textures this frame.
+    pub textures_changed: bool,
+    /// The timeline strip (egui points), rendered apart when it can be.
+    pub strip: Option<egui::Rect>,
+    /// The event loop's clock (seconds).
+    pub now_secs: f64,
+    /// How long the panels' layer may keep showing older shapes (None: never); the strip's
+    /// layer is always current.
+    pub panels_lag_secs: Option<f64>,
+}
+
+/// The cached layers (the panels, the timeline strip) and the composite pipeline.
 pub struct UiLayer {
     pipeline: wgpu::RenderPipeline,
     format: wgpu::TextureFormat,
+    layers: [Layer; 2],
+    /// Layer renders so far (statistics for `--log-fps`; a frame that re-renders both counts 2).
+    pub renders: u64,
+}
+
+/// One cached texture and what it shows.
+#[derive(Default)]
+struct Layer {
     target: Option<Target>,
     /// What the texture shows: egui's shapes and pixels per point.
     shown: Option<(Vec<egui::epaint::ClippedShape>, f32)>,
     /// Where egui drew (window pixels: x, y, width, height); None when it drew nothing.
     scissor: Option<[u32; 4]>,
-    /// Frames whose egui output was re-rendered (statistics for `--log-fps`).
-    pub renders: u64,
+    /// When it was last rendered (the event loop's clock, seconds).
+    rendered_secs: f64,
 }
 
 struct Target {
@@ -59,83 +89,110 @@ impl UiLayer {
             multiview_mask: None,
             cache: None,
         });
-        Self { pipeline, format, target: None, shown: None, scissor: None, renders: 0 }
+        Self { pipeline, format, layers: Default::default(), renders: 0 }
     }
 
-    /// Brings the cached texture up to date with this frame's egui output (`shapes` at
-    /// `pixels_per_point`, `textures_changed`: egui uploaded or freed textures this frame), in a
-    /// window of `size_px`. Renders only when something changed; records into `encoder`.
-    #[expect(clippy::too_many_arguments, reason = "the egui frame's parts and the device handles, used once per frame")]
+    /// Brings the cached textures up to date with this frame's egui output in a window of
+    /// `size_px`. Renders (and submits, one submission a layer: egui's renderer stages its
+    /// buffers in the queue) only the layers whose shapes changed, the panels' not before
+    /// `panels_lag_secs` have passed when that is set. True when a layer was left showing
+    /// older shapes (another frame must follow).
     pub fn update(
         &mut self,
         device: &wgpu::Device,
         queue: &wgpu::Queue,
-        encoder: &mut wgpu::CommandEncoder,
         renderer: &mut egui_wgpu::Renderer,
         egui_ctx: &egui::Context,
-        shapes: Vec<egui::epaint::ClippedShape>,
-        pixels_per_point: f32,
-        textures_changed: bool,
+        frame: EguiFrame,
         size_px: [u32; 2],
-    ) -> Vec<wgpu::CommandBuffer> {
-        if self.target.as_ref().is_none_or(|t| t.size != size_px) {
-            self.target = Some(self.make_target(device, size_px));
-            self.shown = None;
+    ) -> bool {
+        let EguiFrame { shapes, pixels_per_point, textures_changed, strip, now_secs, panels_lag_secs } = frame;
+        let mut stale = false;
+        let (panels, strip) = match strip {
+            Some(rect) => split_strip(shapes, rect),
+            None => (shapes, Vec::new()),
+        };
+        for (i, shapes) in [panels, strip].into_iter().enumerate() {
+            if self.layers[i].target.as_ref().is_none_or(|t| t.size != size_px) {
+                let target = self.make_target(device, size_px);
+                self.layers[i] = Layer { target: Some(target), ..Layer::default() };
+            }
+            let layer = &mut self.layers[i];
+            let unchanged = !textures_changed
+                && layer.shown.as_ref().is_some_and(|(s, ppp)| *ppp == pixels_per_point && *s == shapes);
+            if unchanged {
+                continue;
+            }
+            let may_lag = i == 0 && !textures_changed && layer.shown.is_some();
+            if let Some(lag) = panels_lag_secs.filter(|_| may_lag)
+                && now_secs - layer.rendered_secs < lag
+            {
+                stale = true;
+                continue;
+            }
+            if shapes.is_empty() {
+                // Nothing to draw: nothing to composite either.
+                layer.scissor = None;
+                layer.shown = Some((shapes, pixels_per_point));
+                continue;
+            }
+            let Some(target) = &layer.target else { continue };
+            let mut encoder =
+                device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("egui_layer") });
+            let paint_jobs = egui_ctx.tessellate(shapes.clone(), pixels_per_point);
+            let screen = egui_wgpu::ScreenDescriptor { size_in_pixels: size_px, pixels_per_point };
+            let extra = renderer.update_buffers(device, queue, &mut encoder, &paint_jobs, &screen);
+            {
+                let pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                    label: Some("egui_layer"),
+                    color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                        view: &target.view,
+                        depth_slice: None,
+                        resolve_target: None,
+                        ops: wgpu::Operations {
+                            load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+                            store: wgpu::StoreOp::Store,
+                        },
+                    })],
+                    depth_stencil_attachment: None,
+                    timestamp_writes: None,
+                    occlusion_query_set: None,
+                    multiview_mask: None,
+                });
+                renderer.render(&mut pass.forget_lifetime(), &paint_jobs, &screen);
+            }
+            queue.submit(extra.into_iter().chain([encoder.finish()]));
+            layer.scissor = scissor_of(&paint_jobs, pixels_per_point, size_px);
+            layer.shown = Some((shapes, pixels_per_point));
+            layer.rendered_secs = now_secs;
+            self.renders += 1;
         }
-        let unchanged =
-            !textures_changed && self.shown.as_ref().is_some_and(|(s, ppp)| *ppp == pixels_per_point && *s == shapes);
-        if unchanged {
-            return Vec::new();
-        }
-        let Some(target) = &self.target else { return Vec::new() };
-        let paint_jobs = egui_ctx.tessellate(shapes.clone(), pixels_per_point);
-        let screen = egui_wgpu::ScreenDescriptor { size_in_pixels: size_px, pixels_per_point };
-        let extra = renderer.update_buffers(device, queue, encoder, &paint_jobs, &screen);
-        {
-            let pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some("egui_layer"),
+        stale
+    }
+
+    /// Records the composite of the cached layers over `view` (the frame, of the layers' size),
+    /// the panels' first.
+    pub fn composite(&self, encoder: &mut wgpu::CommandEncoder, view: &wgpu::TextureView) {
+        for layer in &self.layers {
+            let (Some(target), Some([x, y, w, h])) = (&layer.target, layer.scissor) else { continue };
+            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("composite"),
                 color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                    view: &target.view,
+                    view,
                     depth_slice: None,
                     resolve_target: None,
-                    ops: wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
-                        store: wgpu::StoreOp::Store,
-                    },
+                    ops: wgpu::Operations { load: wgpu::LoadOp::Load, store: wgpu::StoreOp::Store },
                 })],
                 depth_stencil_attachment: None,
                 timestamp_writes: None,
                 occlusion_query_set: None,
                 multiview_mask: None,
             });
-            renderer.render(&mut pass.forget_lifetime(), &paint_jobs, &screen);
+            pass.set_scissor_rect(x, y, w, h);
+            pass.set_pipeline(&self.pipeline);
+            pass.set_bind_group(0, &target.bind_group, &[]);
+            pass.draw(0..3, 0..1);
         }
-        self.scissor = scissor_of(&paint_jobs, pixels_per_point, size_px);
-        self.shown = Some((shapes, pixels_per_point));
-        self.renders += 1;
-        extra
-    }
-
-    /// Records the composite of the cached layer over `view` (the frame, of the layer's size).
-    pub fn composite(&self, encoder: &mut wgpu::CommandEncoder, view: &wgpu::TextureView) {
-        let (Some(target), Some([x, y, w, h])) = (&self.target, self.scissor) else { return };
-        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some("composite"),
-            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                view,
-                depth_slice: None,
-                resolve_target: None,
-                ops: wgpu::Operations { load: wgpu::LoadOp::Load, store: wgpu::StoreOp::Store },
-            })],
-            depth_stencil_attachment: None,
-            timestamp_writes: None,
-            occlusion_query_set: None,
-            multiview_mask: None,
-        });
-        pass.set_scissor_rect(x, y, w, h);
-        pass.set_pipeline(&self.pipeline);
-        pass.set_bind_group(0, &target.bind_group, &[]);
-        pass.draw(0..3, 0..1);
     }
 
     fn make_target(&self, device: &wgpu::Device, size_px: [u32; 2]) -> Target {
@@ -173,4 +230,28 @@ fn scissor_of(paint_jobs: &[egui::ClippedPrimitive], pixels_per_point: f32, size
     let x1 = (union.max.x * pixels_per_point).ceil().clamp(0.0, w);
     let y1 = (union.max.y * pixels_per_point).ceil().clamp(0.0, h);
     (x1 > x0 && y1 > y0).then_some([x0 as u32, y0 as u32, (x1 - x0) as u32, (y1 - y0) as u32])
+}
+
+/// Splits egui's shapes into the panels' and the strip's (`strip`: the timeline's rectangle,
+/// egui points) when that keeps the painting order: the shapes clipped to within the strip are
+/// one run, and nothing painted after that run overlaps what the run paints (then compositing
+/// the strip's layer last paints what egui would paint; the panel's border line, painted later
+/// along the strip's edge, only touches it). Otherwise every shape stays in the first part and
+/// the second is empty.
+pub fn split_strip(
+    shapes: Vec<egui::epaint::ClippedShape>,
+    strip: egui::Rect,
+) -> (Vec<egui::epaint::ClippedShape>, Vec<egui::epaint::ClippedShape>) {
+    let inside = |s: &egui::epaint::ClippedShape| strip.contains_rect(s.clip_rect);
+    let painted = |s: &egui::epaint::ClippedShape| s.shape.visual_bounding_rect().intersect(s.clip_rect);
+    let Some(first) = shapes.iter().position(inside) else { return (shapes, Vec::new()) };
+    let run = shapes[first..].iter().take_while(|s| inside(s)).count();
+    let run_painted = shapes[first..first + run].iter().map(painted).fold(egui::Rect::NOTHING, |a, b| a.union(b));
+    let after_overlaps = shapes[first + run..].iter().any(|s| painted(s).intersect(run_painted).is_positive());
+    if after_overlaps {
+        return (shapes, Vec::new());
+    }
+    let mut panels = shapes;
+    let strip_shapes: Vec<_> = panels.drain(first..first + run).collect();
+    (panels, strip_shapes)
 }
