@@ -104,6 +104,15 @@ pub(super) fn prepare(v: u8, p: [f64; 8], c: &Coefs) -> [f64; 8] {
     k
 }
 
+/// C's conversion of a double to `int` as flam3's x86-64 builds do it: toward zero, and
+/// 0x80000000 (i32::MIN) for NaN and anything out of range (where Rust's `as` saturates).
+/// fan2 and rings2 with a parameter near 0 divide by ~1e−10 and land there, so their pictures
+/// depend on it.
+#[inline(always)]
+pub(super) fn c_int(v: f64) -> i32 {
+    if v > -2_147_483_649.0 && v < 2_147_483_648.0 { v as i32 } else { i32::MIN }
+}
+
 /// The sum of four uniform draws minus 2: flam3's pseudo-Gaussian in (−2, 2).
 #[inline(always)]
 pub(super) fn pseudo_gaussian(rng: &mut Pcg32) -> f64 {
@@ -252,7 +261,7 @@ pub(super) fn eval(v: u8, w: f64, k: &[f64; 8], pt: &Point, rng: &mut Pcg32) -> 
         25 => {
             let (dx, dy) = (k[0], k[1]);
             let dx2 = 0.5 * dx;
-            let t = a + dy - dx * ((a + dy) / dx).trunc();
+            let t = a + dy - dx * c_int((a + dy) / dx) as f64;
             let aa = if t > dx2 { a - dx2 } else { a + dx2 };
             let f = w * r;
             let (s, c) = aa.sin_cos();
@@ -261,7 +270,7 @@ pub(super) fn eval(v: u8, w: f64, k: &[f64; 8], pt: &Point, rng: &mut Pcg32) -> 
         // rings2
         26 => {
             let dx = k[0];
-            let f = r + (-2.0 * dx * ((r + dx) / (2.0 * dx)).trunc() + r * (1.0 - dx));
+            let f = r + (-2.0 * dx * c_int((r + dx) / (2.0 * dx)) as f64 + r * (1.0 - dx));
             [w * sa * f, w * ca * f]
         }
         // eyefish
@@ -289,7 +298,7 @@ pub(super) fn eval(v: u8, w: f64, k: &[f64; 8], pt: &Point, rng: &mut Pcg32) -> 
         }
         // julian: one of |power| branches of t^(dist/power).
         32 => {
-            let branch = (k[1] * rng.next_f64()).trunc();
+            let branch = c_int(k[1] * rng.next_f64()) as f64;
             let ang = (ayx + 2.0 * PI * branch) / k[0];
             let f = w * r2.powf(k[2]);
             let (s, c) = ang.sin_cos();
@@ -325,7 +334,7 @@ pub(super) fn eval(v: u8, w: f64, k: &[f64; 8], pt: &Point, rng: &mut Pcg32) -> 
         }
         // pie: slices, rotation, thickness
         37 => {
-            let slice = (rng.next_f64() * k[0] + 0.5).trunc();
+            let slice = c_int(rng.next_f64() * k[0] + 0.5) as f64;
             let ang = k[1] + 2.0 * PI * (slice + rng.next_f64() * k[2]) / k[0];
             let f = w * rng.next_f64();
             let (s, c) = ang.sin_cos();

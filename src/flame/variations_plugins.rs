@@ -8,7 +8,7 @@
 //! from y, loonie, scry and whorl use the weight inside, boarders rounds half to even (C's
 //! `rint`), flux's weight shifts its poles.
 
-use super::basic::pseudo_gaussian;
+use super::basic::{c_int, pseudo_gaussian};
 use super::{EPS, NEEDS_ATAN_XY, NEEDS_ATAN_YX, Point};
 use crate::rng::Pcg32;
 use std::f64::consts::{FRAC_1_PI, FRAC_2_PI, FRAC_PI_2, FRAC_PI_4, PI};
@@ -154,14 +154,15 @@ pub(super) fn eval(v: u8, w: f64, k: &[f64; 8], pt: &Point, rng: &mut Pcg32) -> 
         58 => {
             let size = k[0];
             let inv = 1.0 / size;
-            let mut cx = (x * inv).floor();
-            let mut cy = (y * inv).floor();
-            let dx = x - cx * size;
-            let dy = y - cy * size;
-            // Interleave the four quadrants' cells on the positive ones.
-            cy = if cy >= 0.0 { cy * 2.0 } else { -(2.0 * cy + 1.0) };
-            cx = if cx >= 0.0 { cx * 2.0 } else { -(2.0 * cx + 1.0) };
-            [w * (dx + cx * size), -(w * (dy + cy * size))]
+            // The cell's index as C's int (size 0 gives i32::MIN, times 0: flam3's (w·x, −w·y)).
+            let cx = c_int((x * inv).floor());
+            let cy = c_int((y * inv).floor());
+            let dx = x - cx as f64 * size;
+            let dy = y - cy as f64 * size;
+            // Interleave the four quadrants' cells on the positive ones (C's int arithmetic).
+            let fold =
+                |c: i32| if c >= 0 { c.wrapping_mul(2) } else { c.wrapping_mul(2).wrapping_add(1).wrapping_neg() };
+            [w * (dx + fold(cx) as f64 * size), -(w * (dy + fold(cy) as f64 * size))]
         }
         // cpow: 2π/power, r/power, i/power, power
         59 => {
@@ -310,7 +311,7 @@ pub(super) fn eval(v: u8, w: f64, k: &[f64; 8], pt: &Point, rng: &mut Pcg32) -> 
         // wedge_julia: angle, count, power, cn, |power|, compensation
         78 => {
             let f = w * r2.powf(k[3]);
-            let branch = (k[4] * rng.next_f64()).trunc();
+            let branch = c_int(k[4] * rng.next_f64()) as f64;
             let aa = (ayx + 2.0 * PI * branch) / k[2];
             let c = wedge_index(k[1], aa);
             let aa = aa * k[5] + c * k[0];

@@ -375,3 +375,19 @@ fn random_variations_have_flam3s_distributions() {
         assert!(turn.fract() <= 0.25 + 1e-9 && q[0].hypot(q[1]) < 1.0, "pie point {q:?}");
     }
 }
+
+#[test]
+fn c_int_overflow_as_flam3_on_x86_64() {
+    assert_eq!(basic::c_int(2.9), 2);
+    assert_eq!(basic::c_int(-2.9), -2);
+    assert_eq!(basic::c_int(3e9), i32::MIN);
+    assert_eq!(basic::c_int(-3e9), i32::MIN);
+    assert_eq!(basic::c_int(f64::NAN), i32::MIN);
+    // rings2 with val 0: (r + EPS) / 2EPS overflows, so r' = r + 2³²·EPS + r (1 − EPS).
+    let f = 1.0 + (4_294_967_296.0 * EPS + (1.0 - EPS));
+    assert_close(one("rings2", 1.0, &[0.0], [0.6, 0.8], 0), [0.6 * f, 0.8 * f], 1e-12);
+    // cell of size 0: the index overflows and is multiplied by 0, leaving (w·x, −w·y).
+    assert_close(one("cell", 0.5, &[0.0], [0.3, 0.7], 0), [0.15, -0.35], 1e-12);
+    // cell of size 1 at (1.5, −0.5): cells (1, −1) fold to (2, 1), offsets (0.5, 0.5).
+    assert_close(one("cell", 1.0, &[1.0], [1.5, -0.5], 0), [2.5, -1.5], 1e-12);
+}
