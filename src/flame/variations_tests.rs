@@ -391,3 +391,18 @@ fn c_int_overflow_as_flam3_on_x86_64() {
     // cell of size 1 at (1.5, −0.5): cells (1, −1) fold to (2, 1), offsets (0.5, 0.5).
     assert_close(one("cell", 1.0, &[1.0], [1.5, -0.5], 0), [2.5, -1.5], 1e-12);
 }
+
+#[test]
+fn missing_parameters_take_defaults_and_unknown_variations_are_ignored() {
+    let julian = Variation::by_name("julian").unwrap();
+    let mut x = xform(&[], IDENTITY, None);
+    // No parameters given: julian's defaults (power 1, dist 1) make it the identity.
+    x.variations.push(VariationTerm { variation: julian, weight: 1.0, params: vec![] });
+    x.variations.push(VariationTerm { variation: Variation(250), weight: 1.0, params: vec![] });
+    let q = CompiledXform::new(&x).apply([0.3, -0.2], &mut Pcg32::for_stream(0, 0, 0));
+    assert_close(q, [0.3, -0.2], 1e-12);
+    // super_shape's rnd is clamped to [0, 1] as flam3's reader does: rnd 5 acts as rnd 1.
+    let (a, b) =
+        (one("super_shape", 1.0, &[5.0, 4.0], [0.3, 0.4], 9), one("super_shape", 1.0, &[1.0, 4.0], [0.3, 0.4], 9));
+    assert_eq!(a, b);
+}
