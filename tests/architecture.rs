@@ -45,8 +45,9 @@ const LAYERS: &[(&str, Layer)] = &[
     ("simd", Layer::Base),
     ("camera", Layer::Base),
     ("palette", Layer::Base),
-    // The IFS: maps, grids, builders.
+    // The IFS: maps, grids, builders; flam3's flames (their data, variations and reader).
     ("model", Layer::Model),
+    ("flame", Layer::Model),
     // Editable scene data and its format: the scene, its timeline, edits of it.
     ("scene", Layer::Scene),
     ("timeline", Layer::Scene),
