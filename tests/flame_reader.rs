@@ -15,7 +15,7 @@ use nlifs::flame::{FilterShape, IDENTITY, PaletteMode, Variation};
 /// entry i = (0, 0, i); one malformed palette (number 3) that must be left out.
 fn fixture_library(dir: &Path) -> PathBuf {
     let hex = |f: &dyn Fn(usize) -> [usize; 3]| -> String {
-        (0..256).map(|i| f(i)).map(|[r, g, b]| format!("00{r:02x}{g:02x}{b:02x}")).collect()
+        (0..256).map(f).map(|[r, g, b]| format!("00{r:02x}{g:02x}{b:02x}")).collect()
     };
     let text = format!(
         "<palettes>\n<palette number=\"0\" name=\"ramp\" data=\"{}\"/>\n<palette number=\"3\" data=\"00zz\"/>\n<palette number=\"7\" data=\"{}\"/>\n</palettes>\n",
@@ -385,7 +385,7 @@ fn bad_values_are_errors_or_warnings() {
 #[test]
 fn ten_thousand_xforms() {
     let xform = |i: usize| {
-        let chaos = if i % 100 == 0 { r#" chaos="1 0""# } else { "" };
+        let chaos = if i.is_multiple_of(100) { r#" chaos="1 0""# } else { "" };
         format!("<xform weight=\"1\" color=\"{}\" linear=\"0.5\"{chaos}/>\n", i % 2)
     };
     let body: String = (0..10_000).map(xform).collect();
@@ -438,4 +438,39 @@ fn truncated_and_garbled_inputs_never_panic() {
             assert!(e.to_string().starts_with("t.flame"), "{e}");
         }
     }
+}
+
+#[test]
+fn info_lists_the_flames_and_exits_2_for_a_bad_file() {
+    let dir = common::temp_dir("flame-reader-info");
+    let good = dir.join("two.flame");
+    let body = format!(
+        "{XF}<xform weight=\"1\" spherical=\"1\" zork=\"1\"/><finalxform swirl=\"1\"/><color index=\"0\" rgb=\"255 0 0\"/>"
+    );
+    std::fs::write(&good, format!("{}{}", flame(r#"name="first" size="64 32""#, &body), flame("", XF))).unwrap();
+    let out = common::run_nlifs(&["info", good.to_str().unwrap()]);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(out.status.code(), Some(0), "{stdout}{}", String::from_utf8_lossy(&out.stderr));
+    assert!(stdout.contains(": 2 flames"), "{stdout}");
+    let first = stdout.lines().find(|l| l.contains("first")).unwrap_or_else(|| panic!("{stdout}"));
+    for part in ["64×32", " 2 ", "yes", "<color> ×1", "linear spherical swirl"] {
+        assert!(first.contains(part), "{part:?} missing in {first:?}");
+    }
+    assert!(stdout.contains("warning: ") && stdout.contains("zork"), "{stdout}");
+
+    let out = common::run_nlifs(&["info", "--json", good.to_str().unwrap()]);
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
+    assert_eq!(v["flames"][0]["xforms"], 2);
+    assert_eq!(v["flames"][0]["final_xform"], true);
+    assert_eq!(v["flames"][1]["size"], serde_json::json!([100, 100]));
+    assert!(v["warnings"].as_array().unwrap().iter().any(|w| w.as_str().unwrap().contains("zork")));
+
+    // A bad flame file, recognised by its content though its name ends .xml: exit 2, the
+    // file and position in the message.
+    let bad = dir.join("bad.xml");
+    std::fs::write(&bad, "<flame>\n<xform weight=\"1\" coefs=\"1 2\"/>\n</flame>\n").unwrap();
+    let out = common::run_nlifs(&["info", bad.to_str().unwrap()]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains("bad.xml:2:26: flame #0: xform 0: attribute coefs"), "{stderr}");
 }

@@ -318,8 +318,9 @@ mod tests {
         let full = p.filled();
         // Halfway between 10 and 20.
         assert_eq!(full[15], [0.5, 0.5, 0.0, 1.0]);
-        // The wrapped run 21..=255, 0..=9 blends green (20) to red (266 = 10 + 256).
-        let t = (0.0 - (20.0 - 256.0)) / (266.0 - (20.0 - 256.0));
+        // The leading run 0..=9 blends the last given entry (20, placed at 20 − 256) to red
+        // (10); the trailing run 21..=255 blends green (20) to the first (10, at 10 + 256).
+        let t = (0.0 - (20.0 - 256.0)) / (10.0 - (20.0 - 256.0));
         let want = [t, 1.0 - t, 0.0, 1.0];
         for k in 0..4 {
             assert!((full[0][k] - want[k]).abs() < 1e-12, "{:?} vs {want:?}", full[0]);

@@ -10,14 +10,15 @@
 //! quality, xaos table) so that a hostile file cannot make the reader or the renderer run out
 //! of memory or time.
 //!
-//! This file holds the document, positions, the `<flame>` attributes and the palette elements;
-//! `xml_xform.rs` the `<xform>`, `<finalxform>` and `<symmetry>` elements.
+//! This file holds the document, positions and the `<flame>` attributes; `xml_palette.rs` the
+//! palette elements; `xml_xform.rs` the `<xform>`, `<finalxform>` and `<symmetry>` elements.
 
 use std::fmt::Display;
 use std::path::{Path, PathBuf};
 
-use super::palette::{self, HexLayout, InlineForm, PaletteEntries, PaletteLibrary, PaletteSource};
-use super::xml_xform::{self, ParamIndex, XformRead};
+use super::palette::{self, InlineForm, PaletteEntries, PaletteLibrary, PaletteSource};
+use super::xml_palette::{PaletteIssues, palette_color, palette_colors, palette_element};
+use super::xml_xform::{self, XformRead};
 use super::{FilterShape, Flame, PaletteMode, Xform};
 
 /// Largest flame file read, in bytes: real files are kilobytes to a few megabytes.
@@ -139,14 +140,7 @@ pub fn read_str_with(text: &str, file_name: &str, options: &ReadOptions) -> Resu
         let message = e.to_string().replace(&format!(" at {shown}"), "").replace(&shown, "here");
         FlameError::At { file: file_name.into(), line, column, message: format!("malformed XML: {message}") }
     })?;
-    let mut reader = Reader {
-        file: file_name,
-        source: &source,
-        options,
-        params: ParamIndex::new(),
-        library: None,
-        out: FlameFile::default(),
-    };
+    let mut reader = Reader { file: file_name, source: &source, options, library: None, out: FlameFile::default() };
     reader.scan(doc.root())?;
     if reader.out.flames.is_empty() {
         return Err(FlameError::File { file: file_name.into(), message: "no <flame> element".into() });
@@ -375,7 +369,6 @@ struct Reader<'a> {
     file: &'a str,
     source: &'a Source,
     options: &'a ReadOptions,
-    params: ParamIndex,
     /// Read on first use.
     library: Option<PaletteLibrary>,
     out: FlameFile,
@@ -467,17 +460,17 @@ impl Reader<'_> {
                 }
                 "center" => {
                     let v = attr_numbers(ctx, &attr, 2)?;
-                    for k in 0..2 {
-                        if let Some(x) = finite(ctx, v[k], &format!("center[{k}]")) {
-                            f.center[k] = x;
+                    for (k, (&x, slot)) in v.iter().zip(&mut f.center).enumerate() {
+                        if let Some(x) = finite(ctx, x, &format!("center[{k}]")) {
+                            *slot = x;
                         }
                     }
                 }
                 "background" => {
                     let v = attr_numbers(ctx, &attr, 3)?;
-                    for k in 0..3 {
-                        if let Some(x) = finite(ctx, v[k], &format!("background[{k}]")) {
-                            f.background[k] = x;
+                    for (k, (&x, slot)) in v.iter().zip(&mut f.background).enumerate() {
+                        if let Some(x) = finite(ctx, x, &format!("background[{k}]")) {
+                            *slot = x;
                         }
                     }
                 }
@@ -582,8 +575,7 @@ impl Reader<'_> {
                     let array_len = std_xforms.len() + usize::from(final_xform.is_some());
                     let label =
                         if is_final { "final xform".to_string() } else { format!("xform {}", std_xforms.len()) };
-                    let XformRead { xform, chaos } =
-                        xml_xform::xform(ctx, child, &self.params, is_final, array_len, &label)?;
+                    let XformRead { xform, chaos } = xml_xform::xform(ctx, child, is_final, array_len, &label)?;
                     if child.children().any(|n| n.has_tag_name("motion")) && !motion_warned {
                         motion_warned = true;
                         ctx.warn(child, "<motion> elements (animation) are ignored");
@@ -692,180 +684,4 @@ impl Reader<'_> {
         };
         Ok((f, source))
     }
-}
-
-/// Palette troubles counted over a flame, said in one warning each kind.
-#[derive(Default)]
-struct PaletteIssues {
-    clamped: usize,
-    bad_index: Vec<i64>,
-    short_data: usize,
-    extra_data: usize,
-}
-
-impl PaletteIssues {
-    fn report(&self, ctx: &mut Ctx, node: roxmltree::Node) {
-        if self.clamped > 0 {
-            ctx.warn(node, format!("{} palette channel values outside 0..255 were clamped", self.clamped));
-        }
-        if !self.bad_index.is_empty() {
-            let shown: Vec<String> = self.bad_index.iter().take(5).map(|i| i.to_string()).collect();
-            let more = if self.bad_index.len() > 5 { ", …" } else { "" };
-            ctx.warn(
-                node,
-                format!(
-                    "{} <color> entries with an index outside 0..255 or none were left out ({}{more})",
-                    self.bad_index.len(),
-                    shown.join(", ")
-                ),
-            );
-        }
-        if self.short_data > 0 {
-            ctx.warn(node, format!("{} palette elements have fewer colours than their count", self.short_data));
-        }
-        if self.extra_data > 0 {
-            ctx.warn(node, format!("{} palette elements have data past their count, ignored", self.extra_data));
-        }
-    }
-}
-
-/// `<color index rgb|rgba [a]>`: channels 0..255, premultiplied by alpha as flam3 does. As in
-/// flam3, the alpha resets to 255 at each attribute, so only an `rgba` or `a` last counts.
-fn palette_color(
-    ctx: &Ctx,
-    node: roxmltree::Node,
-    entries: &mut PaletteEntries,
-    issues: &mut PaletteIssues,
-) -> Result<(), FlameError> {
-    let mut index: Option<i64> = None;
-    let mut rgb = [0.0; 3];
-    let mut alpha = 255.0;
-    for attr in node.attributes() {
-        alpha = 255.0;
-        match attr.name() {
-            "index" => index = Some(attr_int(ctx, &attr)?),
-            "rgb" => rgb.copy_from_slice(&attr_numbers(ctx, &attr, 3)?),
-            "rgba" => {
-                let v = attr_numbers(ctx, &attr, 4)?;
-                rgb.copy_from_slice(&v[..3]);
-                alpha = v[3];
-            }
-            "a" => alpha = attr_number(ctx, &attr)?,
-            other => return Err(ctx.error(node, format!("<color> has an unknown attribute {other}"))),
-        }
-    }
-    let mut channel = |v: f64| {
-        let c = if v.is_nan() { 0.0 } else { v.clamp(0.0, 255.0) };
-        if c != v {
-            issues.clamped += 1;
-        }
-        c / 255.0
-    };
-    let a = channel(alpha);
-    let color = [a * channel(rgb[0]), a * channel(rgb[1]), a * channel(rgb[2]), a];
-    match index {
-        Some(i) if (0..256).contains(&i) => entries.entries[i as usize] = Some(color),
-        other => issues.bad_index.push(other.unwrap_or(-1)),
-    }
-    Ok(())
-}
-
-/// `<colors count data>`: `count` entries of hex `00RRGGBB` from entry 0.
-fn palette_colors(
-    ctx: &Ctx,
-    node: roxmltree::Node,
-    entries: &mut PaletteEntries,
-    issues: &mut PaletteIssues,
-) -> Result<(), FlameError> {
-    let mut count: Option<i64> = None;
-    let mut data = None;
-    for attr in node.attributes() {
-        match attr.name() {
-            "count" => count = Some(attr_int(ctx, &attr)?),
-            "data" => data = Some(attr),
-            other => return Err(ctx.error(node, format!("<colors> has an unknown attribute {other}"))),
-        }
-    }
-    let Some(data) = data else { return Err(ctx.error(node, "<colors> without data")) };
-    hex_into(ctx, node, data.value(), HexLayout::Hex00Rgb, count, entries, issues)
-}
-
-/// `<palette>`: the hex form (`count`, `format` RGB|RGBA, hex content) fills entries and gives
-/// `None`; the old form (`index0 hue0 index1 hue1 blend`) gives its two library palettes.
-#[expect(clippy::type_complexity, reason = "the old form's five numbers, used once by the caller")]
-fn palette_element(
-    ctx: &Ctx,
-    node: roxmltree::Node,
-    entries: &mut PaletteEntries,
-    issues: &mut PaletteIssues,
-) -> Result<Option<(i32, f64, i32, f64, f64)>, FlameError> {
-    let (mut old, mut new) = (false, false);
-    let (mut index0, mut index1, mut hue0, mut hue1, mut blend) = (-1, -1, 0.0, 0.0, 0.5);
-    let mut count = None;
-    let mut layout = None;
-    for attr in node.attributes() {
-        let as_i32 = |v: i64| i32::try_from(v).map_err(|_| ctx.attr_error(&attr, "out of range"));
-        match attr.name() {
-            "index0" => (old, index0) = (true, as_i32(attr_int(ctx, &attr)?)?),
-            "index1" => (old, index1) = (true, as_i32(attr_int(ctx, &attr)?)?),
-            "hue0" => (old, hue0) = (true, attr_number(ctx, &attr)?),
-            "hue1" => (old, hue1) = (true, attr_number(ctx, &attr)?),
-            "blend" => (old, blend) = (true, attr_number(ctx, &attr)?),
-            "count" => (new, count) = (true, Some(attr_int(ctx, &attr)?)),
-            "format" => {
-                new = true;
-                layout = Some(match attr.value() {
-                    "RGB" => HexLayout::Rgb,
-                    "RGBA" => HexLayout::Rgba,
-                    other => return Err(ctx.attr_error(&attr, format!("'{other}' is not RGB or RGBA"))),
-                });
-            }
-            other => return Err(ctx.error(node, format!("<palette> has an unknown attribute {other}"))),
-        }
-    }
-    if old && new {
-        return Err(ctx.error(node, "<palette> mixes the old (index0, blend) and new (count, format) forms"));
-    }
-    if old {
-        if index0 < 0 || index1 < 0 {
-            return Err(
-                ctx.error(node, "<palette> blends a random library palette (index -1), which a still cannot pick")
-            );
-        }
-        return Ok(Some((index0, hue0, index1, hue1, blend)));
-    }
-    let Some(layout) = layout else { return Err(ctx.error(node, "<palette> without format=\"RGB\" or \"RGBA\"")) };
-    let text: String = node.children().filter_map(|n| n.text()).collect();
-    hex_into(ctx, node, &text, layout, count, entries, issues)?;
-    Ok(None)
-}
-
-/// Hex colours from entry 0 into `entries`.
-fn hex_into(
-    ctx: &Ctx,
-    node: roxmltree::Node,
-    data: &str,
-    layout: HexLayout,
-    count: Option<i64>,
-    entries: &mut PaletteEntries,
-    issues: &mut PaletteIssues,
-) -> Result<(), FlameError> {
-    let count = count.unwrap_or(palette::PALETTE_LEN as i64);
-    if count > palette::PALETTE_LEN as i64 {
-        issues.extra_data += 1;
-    }
-    let max = count.clamp(0, palette::PALETTE_LEN as i64) as usize;
-    let (colors, left_over) =
-        palette::parse_hex_colors(data, layout, max).map_err(|palette::HexError::BadDigit { entry }| {
-            ctx.error(node, format!("palette entry {entry}: not hexadecimal colour data"))
-        })?;
-    if colors.len() < max {
-        issues.short_data += 1;
-    } else if left_over {
-        issues.extra_data += 1;
-    }
-    for (slot, c) in entries.entries.iter_mut().zip(colors) {
-        *slot = Some(c);
-    }
-    Ok(())
 }

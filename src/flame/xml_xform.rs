@@ -4,65 +4,22 @@
 //! name, the legacy `var1` / `var` lists), and `<symmetry kind>`'s rotational and dihedral
 //! copies.
 //!
-//! Variations and parameters are looked up in the variations' table ([`VARIATIONS`]), whatever
-//! it holds: a name it lacks is left out and named, with the others of its xform, in one
+//! Variations and parameters (with flam3's other spellings) are looked up in the variations'
+//! table ([`VARIATIONS`], [`Variation::param_by_name`]), whatever it holds: a name it lacks is left out and named, with the others of its xform, in one
 //! warning. As in flam3, an xform's `linear` is 0 unless the file gives it (an xform naming no
 //! known variation maps every point to the origin).
 
 use std::collections::HashMap;
 
-use super::variations::VARIATIONS;
+use super::variations::{FLAM3_VARIATIONS, VARIATIONS};
 use super::xml::{Ctx, attr_int, attr_number, numbers};
 use super::{Coefs, FlameError, IDENTITY, Variation, VariationTerm, Xform};
 
 /// Largest |kind| of `<symmetry>`: each unit adds an xform.
 pub const MAX_SYMMETRY_KIND: i64 = 4096;
 
-/// flam3's alternative spellings of parameters: (one spelling, the other).
-const PARAM_ALIASES: &[(&str, &str)] = &[
-    ("Re_A", "mobius_re_a"),
-    ("Re_B", "mobius_re_b"),
-    ("Re_C", "mobius_re_c"),
-    ("Re_D", "mobius_re_d"),
-    ("Im_A", "mobius_im_a"),
-    ("Im_B", "mobius_im_b"),
-    ("Im_C", "mobius_im_c"),
-    ("Im_D", "mobius_im_d"),
-    ("oscilloscope_separation", "oscope_separation"),
-    ("oscilloscope_frequency", "oscope_frequency"),
-    ("oscilloscope_amplitude", "oscope_amplitude"),
-    ("oscilloscope_damping", "oscope_damping"),
-];
-
 /// `<xform>` attributes flam3 reads that change nothing in a still image.
 const STILL_IGNORED: &[&str] = &["animate", "motion_frequency", "motion_function"];
-
-/// Every parameter name of the table: (variation, index in its params).
-pub(super) struct ParamIndex {
-    by_name: HashMap<&'static str, (Variation, usize)>,
-}
-
-impl ParamIndex {
-    pub fn new() -> Self {
-        let mut by_name = HashMap::new();
-        for (v, info) in VARIATIONS.iter().enumerate() {
-            for (k, (name, _)) in info.params.iter().enumerate() {
-                by_name.entry(*name).or_insert((Variation(v as u8), k));
-            }
-        }
-        Self { by_name }
-    }
-
-    fn get(&self, name: &str) -> Option<(Variation, usize)> {
-        self.by_name.get(name).copied().or_else(|| {
-            PARAM_ALIASES.iter().find_map(|&(a, b)| match name {
-                n if n == a => self.by_name.get(b).copied(),
-                n if n == b => self.by_name.get(a).copied(),
-                _ => None,
-            })
-        })
-    }
-}
 
 /// An xform read, with its xaos row as given (`None`: no `chaos` attribute).
 pub(super) struct XformRead {
@@ -75,26 +32,19 @@ pub(super) struct XformRead {
 pub(super) fn xform(
     ctx: &mut Ctx,
     node: roxmltree::Node,
-    params: &ParamIndex,
     is_final: bool,
     array_len: usize,
     label: &str,
 ) -> Result<XformRead, FlameError> {
     // Messages name the xform after the flame.
-    let flame = std::mem::replace(&mut ctx.flame, String::new());
+    let flame = std::mem::take(&mut ctx.flame);
     ctx.flame = format!("{flame}: {label}");
-    let read = xform_in(ctx, node, params, is_final, array_len);
+    let read = xform_in(ctx, node, is_final, array_len);
     ctx.flame = flame;
     read
 }
 
-fn xform_in(
-    ctx: &mut Ctx,
-    node: roxmltree::Node,
-    params: &ParamIndex,
-    is_final: bool,
-    array_len: usize,
-) -> Result<XformRead, FlameError> {
+fn xform_in(ctx: &mut Ctx, node: roxmltree::Node, is_final: bool, array_len: usize) -> Result<XformRead, FlameError> {
     let mut x = Xform {
         weight: 0.0,
         color: (array_len & 1) as f64,
@@ -110,6 +60,8 @@ fn xform_in(
     let mut unknown: Vec<String> = Vec::new();
     let mut chaos = None;
     let mut weight_given = false;
+    // `var1` and `var` number flam3's own variations only.
+    let legacy_count = FLAM3_VARIATIONS.min(VARIATIONS.len());
     for attr in node.attributes() {
         let name = attr.name();
         match name {
@@ -166,7 +118,7 @@ fn xform_in(
             "var1" => {
                 weights.iter_mut().for_each(|w| *w = 0.0);
                 let j = attr_int(ctx, &attr)?;
-                match usize::try_from(j).ok().filter(|&j| j < VARIATIONS.len()) {
+                match usize::try_from(j).ok().filter(|&j| j < legacy_count) {
                     Some(j) => weights[j] = 1.0,
                     None => unknown.push(format!("var1=\"{j}\"")),
                 }
@@ -176,7 +128,7 @@ fn xform_in(
                     .ok_or_else(|| ctx.attr_error(&attr, format!("'{}' is not a list of numbers", attr.value())))?;
                 weights.iter_mut().for_each(|w| *w = 0.0);
                 for (j, w) in v.into_iter().enumerate() {
-                    match weights.get_mut(j) {
+                    match weights[..legacy_count].get_mut(j) {
                         Some(slot) => *slot = w,
                         None if w != 0.0 => unknown.push(format!("var[{j}]")),
                         None => {}
@@ -187,7 +139,7 @@ fn xform_in(
             _ => {
                 if let Some(v) = Variation::by_name(name) {
                     weights[v.0 as usize] = attr_number(ctx, &attr)?;
-                } else if let Some((v, k)) = params.get(name) {
+                } else if let Some((v, k)) = Variation::param_by_name(name) {
                     given.insert((v.0, k), attr_number(ctx, &attr)?);
                 } else {
                     unknown.push(name.to_string());
@@ -252,7 +204,6 @@ pub(super) fn symmetry(ctx: &mut Ctx, node: roxmltree::Node) -> Result<Vec<Xform
     if kind.abs() > MAX_SYMMETRY_KIND {
         return Err(ctx.error(node, format!("<symmetry kind=\"{kind}\">: more than {MAX_SYMMETRY_KIND} copies")));
     }
-    let linear = Variation::by_name("linear").unwrap_or(Variation(0));
     let copy = |color: f64, coefs: Coefs| Xform {
         weight: 1.0,
         color,
@@ -260,7 +211,7 @@ pub(super) fn symmetry(ctx: &mut Ctx, node: roxmltree::Node) -> Result<Vec<Xform
         opacity: 1.0,
         coefs,
         post: None,
-        variations: vec![VariationTerm { variation: linear, weight: 1.0, params: Vec::new() }],
+        variations: vec![VariationTerm { variation: Variation::LINEAR, weight: 1.0, params: Vec::new() }],
         chaos: Vec::new(),
     };
     let mut out = Vec::new();
