@@ -16,6 +16,7 @@ pub mod palette;
 pub mod variations;
 pub mod xml;
 mod xml_palette;
+mod xml_source;
 mod xml_xform;
 
 pub use variations::{Variation, VariationInfo};

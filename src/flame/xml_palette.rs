@@ -3,9 +3,9 @@
 //! `palette.rs` completes. Out-of-range values are clamped and bad indices left out, each kind
 //! counted and said in one warning per flame; data that is not hex is an error.
 
-use super::FlameError;
 use super::palette::{self, HexLayout, PaletteEntries};
-use super::xml::{Ctx, attr_int, attr_number, attr_numbers};
+use super::xml_source::FlameError;
+use super::xml_source::{Ctx, attr_int, attr_number, attr_numbers};
 
 /// Palette troubles counted over a flame, said in one warning each kind.
 #[derive(Default)]

@@ -12,8 +12,9 @@
 use std::collections::HashMap;
 
 use super::variations::{FLAM3_VARIATIONS, VARIATIONS};
-use super::xml::{Ctx, attr_int, attr_number, numbers};
-use super::{Coefs, FlameError, IDENTITY, Variation, VariationTerm, Xform};
+use super::xml_source::FlameError;
+use super::xml_source::{Ctx, attr_int, attr_number, numbers};
+use super::{Coefs, IDENTITY, Variation, VariationTerm, Xform};
 
 /// Largest |kind| of `<symmetry>`: each unit adds an xform.
 pub const MAX_SYMMETRY_KIND: i64 = 4096;

@@ -682,8 +682,7 @@ impl App {
 /// Seconds a toast stays on screen.
 const TOAST_SECS: f64 = 4.0;
 
-/// How long the side panel may show values older than the playhead while the timeline plays:
-/// re-rendering it every frame costs a software rasterizer as much as the rest of the frame.
+/// How long the side panel may lag the playhead while playing (its re-render is costly: ui_layer.rs).
 const PLAYING_PANELS_LAG_SECS: f64 = 0.25;
 
 /// The window pixels (origin, size) of `rect` (egui points at `ppp` pixels per point) inside a
