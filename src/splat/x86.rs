@@ -20,6 +20,9 @@ use crate::chaos_game::PointBatch;
 use crate::simd::SimdLevel;
 
 const LANES: usize = 8;
+/// Points whose accumulating updates are made (and their pixels prefetched) before any is
+/// applied.
+const BLOCK: usize = 256;
 
 /// Whether [`splat`] can run for this view on this CPU.
 pub(super) fn supported(view: &SplatView) -> bool {
@@ -116,37 +119,139 @@ unsafe fn project8(view: &SplatView, x: __m256, y: __m256, z: __m256) -> (__m256
     }
 }
 
+/// The closest-mode keys of 8 points from offset `o` of `batch` (o + 8 ≤ its length): a mask
+/// of the lanes inside the image, their pixels (0 elsewhere) and their keys (the empty key
+/// elsewhere, a no-op under min), as the portable splat computes them.
+#[inline(always)]
+unsafe fn closest_keys8(view: &SplatView, batch: &PointBatch<'_>, o: usize) -> (__m256i, __m256i, __m256i) {
+    let scale = ((1u32 << DEPTH_BITS) - 1) as f32;
+    // SAFETY: the caller checked the CPU features (module doc) and that o + 8 ≤ the length of
+    // each of the batch's slices.
+    unsafe {
+        let x = _mm256_loadu_ps(batch.x.as_ptr().add(o));
+        let y = _mm256_loadu_ps(batch.y.as_ptr().add(o));
+        let z = _mm256_loadu_ps(batch.z.as_ptr().add(o));
+        let fi = _mm256_cvtepu8_epi32(_mm_loadl_epi64(batch.functions.as_ptr().add(o).cast()));
+        let (inside, pixel, t) = project8(view, x, y, z);
+        // d = t · scale, then the portable splat's `d > 0 ? d : 0` (maxps returns its
+        // second operand on NaN, and −0 becomes +0, which truncates alike).
+        let d = _mm256_max_ps(_mm256_mul_ps(t, _mm256_set1_ps(scale)), _mm256_setzero_ps());
+        let key = _mm256_or_si256(_mm256_slli_epi32::<8>(_mm256_cvttps_epi32(d)), fi);
+        let key = _mm256_blendv_epi8(_mm256_set1_epi32(EMPTY as i32), key, inside);
+        (inside, pixel, key)
+    }
+}
+
+/// The closest-mode keys of 16 points from offset `o` of `batch` (o + 16 ≤ its length): as
+/// [`closest_keys8`] with AVX-512F, [`project8`]'s operations in the same order.
+#[inline(always)]
+unsafe fn closest_keys16(view: &SplatView, batch: &PointBatch<'_>, o: usize) -> (__mmask16, __m512i, __m512i) {
+    let scale = ((1u32 << DEPTH_BITS) - 1) as f32;
+    let m = view.pixel_from_world;
+    let (c0, c1, c2, c3) = (m.x_axis, m.y_axis, m.z_axis, m.w_axis);
+    // SAFETY: the caller checked the CPU features (module doc) and that o + 16 ≤ the length of
+    // each of the batch's slices.
+    unsafe {
+        let x = _mm512_loadu_ps(batch.x.as_ptr().add(o));
+        let y = _mm512_loadu_ps(batch.y.as_ptr().add(o));
+        let z = _mm512_loadu_ps(batch.z.as_ptr().add(o));
+        let fi = _mm512_cvtepu8_epi32(_mm_loadu_si128(batch.functions.as_ptr().add(o).cast()));
+        macro_rules! row {
+            ($c:ident) => {
+                _mm512_add_ps(
+                    _mm512_add_ps(
+                        _mm512_add_ps(_mm512_mul_ps(_mm512_set1_ps(c0.$c), x), _mm512_mul_ps(_mm512_set1_ps(c1.$c), y)),
+                        _mm512_mul_ps(_mm512_set1_ps(c2.$c), z),
+                    ),
+                    _mm512_set1_ps(c3.$c),
+                )
+            };
+        }
+        let (qx, qy, qz, qw) = (row!(x), row!(y), row!(z), row!(w));
+        let inv_w = _mm512_div_ps(_mm512_set1_ps(1.0), qw);
+        let (px, py) = (_mm512_mul_ps(qx, inv_w), _mm512_mul_ps(qy, inv_w));
+        let zero = _mm512_setzero_ps();
+        let inside = _mm512_cmp_ps_mask::<_CMP_GT_OQ>(qw, zero)
+            & _mm512_cmp_ps_mask::<_CMP_GE_OQ>(px, zero)
+            & _mm512_cmp_ps_mask::<_CMP_GE_OQ>(py, zero)
+            & _mm512_cmp_ps_mask::<_CMP_LT_OQ>(px, _mm512_set1_ps(view.width as f32))
+            & _mm512_cmp_ps_mask::<_CMP_LT_OQ>(py, _mm512_set1_ps(view.height as f32));
+        let pixel = _mm512_add_epi32(
+            _mm512_mullo_epi32(_mm512_cvttps_epi32(py), _mm512_set1_epi32(view.width as i32)),
+            _mm512_cvttps_epi32(px),
+        );
+        let t =
+            _mm512_mul_ps(_mm512_sub_ps(qz, _mm512_set1_ps(view.near)), _mm512_set1_ps(1.0 / (view.far - view.near)));
+        let t = _mm512_mask_blend_ps(_mm512_cmp_ps_mask::<_CMP_LT_OQ>(t, zero), t, zero);
+        let t = _mm512_mask_blend_ps(_mm512_cmp_ps_mask::<_CMP_GT_OQ>(t, _mm512_set1_ps(1.0)), t, _mm512_set1_ps(1.0));
+        let d = _mm512_max_ps(_mm512_mul_ps(t, _mm512_set1_ps(scale)), zero);
+        let key = _mm512_or_si512(_mm512_slli_epi32::<8>(_mm512_cvttps_epi32(d)), fi);
+        let key = _mm512_mask_blend_epi32(inside, _mm512_set1_epi32(EMPTY as i32), key);
+        (inside, _mm512_maskz_mov_epi32(inside, pixel), key)
+    }
+}
+
+/// Lowers `keys[pixels[l]]` to `new[l]` for each lane l set in `lanes`, one lane after the
+/// other (two lanes on one pixel leave the smaller key).
+#[inline(always)]
+fn lower_lanes(keys: &mut [u32], pixels: &[u32], new: &[u32], mut lanes: u32) {
+    while lanes != 0 {
+        let l = lanes.trailing_zeros() as usize;
+        lanes &= lanes - 1;
+        let slot = &mut keys[pixels[l] as usize];
+        *slot = (*slot).min(new[l]);
+    }
+}
+
+/// The closest-mode splat, 8 points per vector.
 #[target_feature(enable = "avx2")]
 unsafe fn splat_closest_avx2(view: &SplatView, out: &mut impl Pixels, batch: PointBatch<'_>) {
     let n = batch.len();
-    let scale = ((1u32 << DEPTH_BITS) - 1) as f32;
     let vectors = n / LANES;
-    for g in 0..vectors {
-        let o = g * LANES;
-        let mut keys = [0u32; LANES];
-        let mut pixels = [0u32; LANES];
-        // SAFETY: o + 8 ≤ n, the length of each of the batch's slices; stores into local arrays.
-        unsafe {
-            let x = _mm256_loadu_ps(batch.x.as_ptr().add(o));
-            let y = _mm256_loadu_ps(batch.y.as_ptr().add(o));
-            let z = _mm256_loadu_ps(batch.z.as_ptr().add(o));
-            let fi = _mm256_cvtepu8_epi32(_mm_loadl_epi64(batch.functions.as_ptr().add(o).cast()));
-            let (inside, pixel, t) = project8(view, x, y, z);
-            // d = t · scale, then the portable splat's `d > 0 ? d : 0` (maxps returns its
-            // second operand on NaN, and −0 becomes +0, which truncates alike).
-            let d = _mm256_max_ps(_mm256_mul_ps(t, _mm256_set1_ps(scale)), _mm256_setzero_ps());
-            let key = _mm256_or_si256(_mm256_slli_epi32::<8>(_mm256_cvttps_epi32(d)), fi);
-            // Outside lanes: the empty key (a no-op under min) on pixel 0.
-            let key = _mm256_blendv_epi8(_mm256_set1_epi32(EMPTY as i32), key, inside);
-            _mm256_storeu_si256(keys.as_mut_ptr().cast(), key);
-            _mm256_storeu_si256(pixels.as_mut_ptr().cast(), pixel);
+    let pixel_count = view.width as usize * view.height as usize;
+    match out.own_keys().filter(|k| k.len() == pixel_count) {
+        Some(keys) => {
+            for g in 0..vectors {
+                // SAFETY: g · 8 + 8 ≤ n, the length of each of the batch's slices. The gather
+                // reads only the inside lanes (the mask), whose pixels are iy · width + ix with
+                // 0 ≤ ix < width and 0 ≤ iy < height (exact truncations of the checked
+                // coordinates), below width · height = keys.len() (checked above).
+                unsafe {
+                    let (inside, pixel, key) = closest_keys8(view, &batch, g * LANES);
+                    let empty = _mm256_set1_epi32(EMPTY as i32);
+                    let old = _mm256_mask_i32gather_epi32::<4>(empty, keys.as_ptr().cast(), pixel, inside);
+                    // key < old (unsigned) ⇔ max(key, old) ≠ key; outside lanes compare the
+                    // empty key with itself.
+                    let kept = _mm256_cmpeq_epi32(_mm256_max_epu32(key, old), key);
+                    let lower = !(_mm256_movemask_ps(_mm256_castsi256_ps(kept)) as u32) & 0xff;
+                    if lower != 0 {
+                        let (mut new, mut pixels) = ([0u32; LANES], [0u32; LANES]);
+                        _mm256_storeu_si256(new.as_mut_ptr().cast(), key);
+                        _mm256_storeu_si256(pixels.as_mut_ptr().cast(), pixel);
+                        lower_lanes(keys, &pixels, &new, lower);
+                    }
+                }
+            }
         }
-        for l in 0..LANES {
-            // An inside lane's pixel is iy · width + ix with 0 ≤ ix < width and 0 ≤ iy < height
-            // (exact truncations of the checked coordinates); an outside lane's is 0.
-            out.min_key(pixels[l] as usize, keys[l]);
+        None => {
+            for g in 0..vectors {
+                let (mut keys, mut pixels) = ([0u32; LANES], [0u32; LANES]);
+                // SAFETY: g · 8 + 8 ≤ n, the length of each of the batch's slices; stores into
+                // local arrays.
+                unsafe {
+                    let (_, pixel, key) = closest_keys8(view, &batch, g * LANES);
+                    _mm256_storeu_si256(keys.as_mut_ptr().cast(), key);
+                    _mm256_storeu_si256(pixels.as_mut_ptr().cast(), pixel);
+                }
+                for l in 0..LANES {
+                    // An inside lane's pixel is iy · width + ix with 0 ≤ ix < width and
+                    // 0 ≤ iy < height; an outside lane's is 0, with the empty key.
+                    out.min_key(pixels[l] as usize, keys[l]);
+                }
+            }
         }
     }
+    let scale = ((1u32 << DEPTH_BITS) - 1) as f32;
     for i in vectors * LANES..n {
         if let Some((idx, t)) = view.project(batch.point(i)) {
             let d = t * scale;
@@ -156,70 +261,50 @@ unsafe fn splat_closest_avx2(view: &SplatView, out: &mut impl Pixels, batch: Poi
     }
 }
 
-/// The closest-mode splat with 16 points per vector: [`project8`] and [`splat_closest_avx2`]
-/// with AVX-512F, the same operations in the same order.
+/// The closest-mode splat with 16 points per vector: [`closest_keys16`] and the loops of
+/// [`splat_closest_avx2`] with AVX-512F.
 #[target_feature(enable = "avx2,avx512f")]
 unsafe fn splat_closest_avx512(view: &SplatView, out: &mut impl Pixels, batch: PointBatch<'_>) {
     const WIDE: usize = 16;
     let n = batch.len();
-    let scale = ((1u32 << DEPTH_BITS) - 1) as f32;
-    let m = view.pixel_from_world;
-    let (c0, c1, c2, c3) = (m.x_axis, m.y_axis, m.z_axis, m.w_axis);
     let vectors = n / WIDE;
-    for g in 0..vectors {
-        let o = g * WIDE;
-        let mut keys = [0u32; WIDE];
-        let mut pixels = [0u32; WIDE];
-        // SAFETY: o + 16 ≤ n, the length of each of the batch's slices; stores into local arrays.
-        unsafe {
-            let x = _mm512_loadu_ps(batch.x.as_ptr().add(o));
-            let y = _mm512_loadu_ps(batch.y.as_ptr().add(o));
-            let z = _mm512_loadu_ps(batch.z.as_ptr().add(o));
-            let fi = _mm512_cvtepu8_epi32(_mm_loadu_si128(batch.functions.as_ptr().add(o).cast()));
-            macro_rules! row {
-                ($c:ident) => {
-                    _mm512_add_ps(
-                        _mm512_add_ps(
-                            _mm512_add_ps(
-                                _mm512_mul_ps(_mm512_set1_ps(c0.$c), x),
-                                _mm512_mul_ps(_mm512_set1_ps(c1.$c), y),
-                            ),
-                            _mm512_mul_ps(_mm512_set1_ps(c2.$c), z),
-                        ),
-                        _mm512_set1_ps(c3.$c),
-                    )
-                };
+    let pixel_count = view.width as usize * view.height as usize;
+    match out.own_keys().filter(|k| k.len() == pixel_count) {
+        Some(keys) => {
+            for g in 0..vectors {
+                // SAFETY: as in splat_closest_avx2: whole vectors of the batch, and the gather
+                // reads only inside lanes, whose pixels are below width · height = keys.len().
+                unsafe {
+                    let (inside, pixel, key) = closest_keys16(view, &batch, g * WIDE);
+                    let old = _mm512_mask_i32gather_epi32::<4>(
+                        _mm512_set1_epi32(EMPTY as i32),
+                        inside,
+                        pixel,
+                        keys.as_ptr().cast(),
+                    );
+                    let lower = _mm512_mask_cmplt_epu32_mask(inside, key, old) as u32;
+                    if lower != 0 {
+                        let (mut new, mut pixels) = ([0u32; WIDE], [0u32; WIDE]);
+                        _mm512_storeu_si512(new.as_mut_ptr().cast(), key);
+                        _mm512_storeu_si512(pixels.as_mut_ptr().cast(), pixel);
+                        lower_lanes(keys, &pixels, &new, lower);
+                    }
+                }
             }
-            let (qx, qy, qz, qw) = (row!(x), row!(y), row!(z), row!(w));
-            let inv_w = _mm512_div_ps(_mm512_set1_ps(1.0), qw);
-            let (px, py) = (_mm512_mul_ps(qx, inv_w), _mm512_mul_ps(qy, inv_w));
-            let zero = _mm512_setzero_ps();
-            let inside = _mm512_cmp_ps_mask::<_CMP_GT_OQ>(qw, zero)
-                & _mm512_cmp_ps_mask::<_CMP_GE_OQ>(px, zero)
-                & _mm512_cmp_ps_mask::<_CMP_GE_OQ>(py, zero)
-                & _mm512_cmp_ps_mask::<_CMP_LT_OQ>(px, _mm512_set1_ps(view.width as f32))
-                & _mm512_cmp_ps_mask::<_CMP_LT_OQ>(py, _mm512_set1_ps(view.height as f32));
-            let pixel = _mm512_add_epi32(
-                _mm512_mullo_epi32(_mm512_cvttps_epi32(py), _mm512_set1_epi32(view.width as i32)),
-                _mm512_cvttps_epi32(px),
-            );
-            let t = _mm512_mul_ps(
-                _mm512_sub_ps(qz, _mm512_set1_ps(view.near)),
-                _mm512_set1_ps(1.0 / (view.far - view.near)),
-            );
-            let t = _mm512_mask_blend_ps(_mm512_cmp_ps_mask::<_CMP_LT_OQ>(t, zero), t, zero);
-            let t =
-                _mm512_mask_blend_ps(_mm512_cmp_ps_mask::<_CMP_GT_OQ>(t, _mm512_set1_ps(1.0)), t, _mm512_set1_ps(1.0));
-            let d = _mm512_max_ps(_mm512_mul_ps(t, _mm512_set1_ps(scale)), zero);
-            let key = _mm512_or_si512(_mm512_slli_epi32::<8>(_mm512_cvttps_epi32(d)), fi);
-            let key = _mm512_mask_blend_epi32(inside, _mm512_set1_epi32(EMPTY as i32), key);
-            let pixel = _mm512_maskz_mov_epi32(inside, pixel);
-            _mm512_storeu_si512(keys.as_mut_ptr().cast(), key);
-            _mm512_storeu_si512(pixels.as_mut_ptr().cast(), pixel);
         }
-        for l in 0..WIDE {
-            // As in splat_closest_avx2.
-            out.min_key(pixels[l] as usize, keys[l]);
+        None => {
+            for g in 0..vectors {
+                let (mut keys, mut pixels) = ([0u32; WIDE], [0u32; WIDE]);
+                // SAFETY: whole vectors of the batch; stores into local arrays.
+                unsafe {
+                    let (_, pixel, key) = closest_keys16(view, &batch, g * WIDE);
+                    _mm512_storeu_si512(keys.as_mut_ptr().cast(), key);
+                    _mm512_storeu_si512(pixels.as_mut_ptr().cast(), pixel);
+                }
+                for l in 0..WIDE {
+                    out.min_key(pixels[l] as usize, keys[l]);
+                }
+            }
         }
     }
     let rest = vectors * WIDE;
@@ -262,74 +347,91 @@ unsafe fn splat_accumulate_avx2(
         std::array::from_fn(|ch| if permuted { Vec::new() } else { colors.iter().map(|c| c[ch]).collect() });
     let last_color = colors.len().saturating_sub(1).min(255) as i32;
     let vectors = n / LANES;
-    for g in 0..vectors {
-        let o = g * LANES;
-        let mut pixels = [0u32; LANES];
-        let mut ts = [0f32; LANES];
-        // Per lane: r, g, b, 1 to add (when the vector colour arithmetic applies).
-        let mut adds = [[0u32; 4]; LANES];
-        // SAFETY: o + 8 ≤ n, the length of each of the batch's slices; stores into local arrays.
-        let (mut inside, vector) = unsafe {
-            let fi = _mm256_cvtepu8_epi32(_mm_loadl_epi64(batch.functions.as_ptr().add(o).cast()));
-            let (inside, pixel, t) = project8(
-                &view,
-                _mm256_loadu_ps(batch.x.as_ptr().add(o)),
-                _mm256_loadu_ps(batch.y.as_ptr().add(o)),
-                _mm256_loadu_ps(batch.z.as_ptr().add(o)),
-            );
-            _mm256_storeu_si256(pixels.as_mut_ptr().cast(), pixel);
-            _mm256_storeu_ps(ts.as_mut_ptr(), t);
-            let inside = _mm256_movemask_ps(_mm256_castsi256_ps(inside)) as u32;
-            // k = depth_cue · t; per channel (c + (bg − c) · k + 0.5) as u32, the saturating
-            // cast: NaN and negatives → 0 (the mask), values ≥ 2^31 (beyond the signed
-            // truncation) send the group to the scalar arithmetic.
-            let k = _mm256_mul_ps(_mm256_set1_ps(view.depth_cue), t);
-            let mut big = 0;
-            let mut channel = [_mm256_setzero_si256(); 3];
-            for ch in 0..3 {
-                let c = if permuted {
-                    _mm256_permutevar8x32_ps(_mm256_loadu_ps(table[ch].as_ptr()), fi)
-                } else {
-                    // SAFETY: the indices are clamped to 0..=last_color < columns[ch].len().
-                    _mm256_i32gather_ps::<4>(columns[ch].as_ptr(), _mm256_min_epi32(fi, _mm256_set1_epi32(last_color)))
-                };
-                let v = _mm256_add_ps(
-                    _mm256_add_ps(c, _mm256_mul_ps(_mm256_sub_ps(_mm256_set1_ps(bg[ch]), c), k)),
-                    _mm256_set1_ps(0.5),
+    // The updates of a block of points are made first (their pixels' lines prefetched), then
+    // applied, so that the fetches of a block's pixels overlap (see the module comment).
+    let mut block_pixels = [0u32; BLOCK];
+    let mut block_adds = [[0u32; 4]; BLOCK];
+    for block in (0..vectors).step_by(BLOCK / LANES) {
+        let mut filled = 0;
+        for g in block..vectors.min(block + BLOCK / LANES) {
+            let o = g * LANES;
+            let mut pixels = [0u32; LANES];
+            let mut ts = [0f32; LANES];
+            // Per lane: r, g, b, 1 to add (when the vector colour arithmetic applies).
+            let mut adds = [[0u32; 4]; LANES];
+            // SAFETY: o + 8 ≤ n, the length of each of the batch's slices; stores into local arrays.
+            let (mut inside, vector) = unsafe {
+                let fi = _mm256_cvtepu8_epi32(_mm_loadl_epi64(batch.functions.as_ptr().add(o).cast()));
+                let (inside, pixel, t) = project8(
+                    &view,
+                    _mm256_loadu_ps(batch.x.as_ptr().add(o)),
+                    _mm256_loadu_ps(batch.y.as_ptr().add(o)),
+                    _mm256_loadu_ps(batch.z.as_ptr().add(o)),
                 );
-                big |= _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_GE_OQ>(v, _mm256_set1_ps(2_147_483_648.0)));
-                let nonneg = _mm256_castps_si256(_mm256_cmp_ps::<_CMP_GE_OQ>(v, _mm256_setzero_ps()));
-                channel[ch] = _mm256_and_si256(_mm256_cvttps_epi32(v), nonneg);
+                _mm256_storeu_si256(pixels.as_mut_ptr().cast(), pixel);
+                _mm256_storeu_ps(ts.as_mut_ptr(), t);
+                let inside = _mm256_movemask_ps(_mm256_castsi256_ps(inside)) as u32;
+                // k = depth_cue · t; per channel (c + (bg − c) · k + 0.5) as u32, the saturating
+                // cast: NaN and negatives → 0 (the mask), values ≥ 2^31 (beyond the signed
+                // truncation) send the group to the scalar arithmetic.
+                let k = _mm256_mul_ps(_mm256_set1_ps(view.depth_cue), t);
+                let mut big = 0;
+                let mut channel = [_mm256_setzero_si256(); 3];
+                for ch in 0..3 {
+                    let c = if permuted {
+                        _mm256_permutevar8x32_ps(_mm256_loadu_ps(table[ch].as_ptr()), fi)
+                    } else {
+                        // SAFETY: the indices are clamped to 0..=last_color < columns[ch].len().
+                        _mm256_i32gather_ps::<4>(
+                            columns[ch].as_ptr(),
+                            _mm256_min_epi32(fi, _mm256_set1_epi32(last_color)),
+                        )
+                    };
+                    let v = _mm256_add_ps(
+                        _mm256_add_ps(c, _mm256_mul_ps(_mm256_sub_ps(_mm256_set1_ps(bg[ch]), c), k)),
+                        _mm256_set1_ps(0.5),
+                    );
+                    big |= _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_GE_OQ>(v, _mm256_set1_ps(2_147_483_648.0)));
+                    let nonneg = _mm256_castps_si256(_mm256_cmp_ps::<_CMP_GE_OQ>(v, _mm256_setzero_ps()));
+                    channel[ch] = _mm256_and_si256(_mm256_cvttps_epi32(v), nonneg);
+                }
+                // Transpose to r, g, b, 1 per lane: lane l in half l / 4 of vector l % 4.
+                let [r, gr, b] = channel;
+                let one = _mm256_set1_epi32(1);
+                let (rg_lo, rg_hi) = (_mm256_unpacklo_epi32(r, gr), _mm256_unpackhi_epi32(r, gr));
+                let (b1_lo, b1_hi) = (_mm256_unpacklo_epi32(b, one), _mm256_unpackhi_epi32(b, one));
+                let rows = [
+                    _mm256_unpacklo_epi64(rg_lo, b1_lo),
+                    _mm256_unpackhi_epi64(rg_lo, b1_lo),
+                    _mm256_unpacklo_epi64(rg_hi, b1_hi),
+                    _mm256_unpackhi_epi64(rg_hi, b1_hi),
+                ];
+                for (j, row) in rows.into_iter().enumerate() {
+                    _mm_storeu_si128(adds[j].as_mut_ptr().cast(), _mm256_castsi256_si128(row));
+                    _mm_storeu_si128(adds[j + 4].as_mut_ptr().cast(), _mm256_extracti128_si256::<1>(row));
+                }
+                (inside, vector_colors && big == 0)
+            };
+            while inside != 0 {
+                let l = inside.trailing_zeros() as usize;
+                inside &= inside - 1;
+                let add = if vector {
+                    adds[l]
+                } else {
+                    // The portable splat's arithmetic for one point.
+                    let c = colors[batch.functions[o + l] as usize];
+                    let k = view.depth_cue * ts[l];
+                    let add = [0, 1, 2].map(|ch| (c[ch] + (bg[ch] - c[ch]) * k + 0.5) as u32);
+                    [add[0], add[1], add[2], 1]
+                };
+                out.prefetch(pixels[l] as usize);
+                block_pixels[filled] = pixels[l];
+                block_adds[filled] = add;
+                filled += 1;
             }
-            // Transpose to r, g, b, 1 per lane: lane l in half l / 4 of vector l % 4.
-            let [r, gr, b] = channel;
-            let one = _mm256_set1_epi32(1);
-            let (rg_lo, rg_hi) = (_mm256_unpacklo_epi32(r, gr), _mm256_unpackhi_epi32(r, gr));
-            let (b1_lo, b1_hi) = (_mm256_unpacklo_epi32(b, one), _mm256_unpackhi_epi32(b, one));
-            let rows = [
-                _mm256_unpacklo_epi64(rg_lo, b1_lo),
-                _mm256_unpackhi_epi64(rg_lo, b1_lo),
-                _mm256_unpacklo_epi64(rg_hi, b1_hi),
-                _mm256_unpackhi_epi64(rg_hi, b1_hi),
-            ];
-            for (j, row) in rows.into_iter().enumerate() {
-                _mm_storeu_si128(adds[j].as_mut_ptr().cast(), _mm256_castsi256_si128(row));
-                _mm_storeu_si128(adds[j + 4].as_mut_ptr().cast(), _mm256_extracti128_si256::<1>(row));
-            }
-            (inside, vector_colors && big == 0)
-        };
-        while inside != 0 {
-            let l = inside.trailing_zeros() as usize;
-            inside &= inside - 1;
-            if vector {
-                out.add(pixels[l] as usize, adds[l]);
-            } else {
-                // The portable splat's arithmetic for one point.
-                let c = colors[batch.functions[o + l] as usize];
-                let k = view.depth_cue * ts[l];
-                let add = [0, 1, 2].map(|ch| (c[ch] + (bg[ch] - c[ch]) * k + 0.5) as u32);
-                out.add(pixels[l] as usize, [add[0], add[1], add[2], 1]);
-            }
+        }
+        for (&pixel, &add) in block_pixels[..filled].iter().zip(&block_adds[..filled]) {
+            out.add(pixel as usize, add);
         }
     }
     let tail = PointBatch {
@@ -339,4 +441,12 @@ unsafe fn splat_accumulate_avx2(
         functions: &batch.functions[vectors * LANES..],
     };
     splat_portable(&view, function_colors, tail, out);
+}
+
+/// Asks the caches for the line of `slot` (a hint: its update comes soon).
+#[inline(always)]
+pub(super) fn prefetch<T>(slot: &T) {
+    // SAFETY: SSE is part of the x86-64 baseline, and a prefetch reads nothing into the
+    // program (a reference's address is valid in any case).
+    unsafe { _mm_prefetch::<_MM_HINT_T0>((slot as *const T).cast()) }
 }
