@@ -221,9 +221,6 @@ pub(crate) trait Pixels {
     fn own_keys(&mut self) -> Option<&mut [u32]> {
         None
     }
-    /// Accumulating modes: a hint that `pixel`'s update comes soon (its line may be fetched).
-    #[inline(always)]
-    fn prefetch(&self, _pixel: usize) {}
 }
 
 /// A framebuffer's own pixels as a [`Pixels`] target.
@@ -255,14 +252,6 @@ impl Pixels for OwnPixels<'_> {
 
     fn own_keys(&mut self) -> Option<&mut [u32]> {
         Some(self.closest)
-    }
-
-    #[inline(always)]
-    fn prefetch(&self, pixel: usize) {
-        #[cfg(target_arch = "x86_64")]
-        if let Some(slot) = self.accum.get(pixel) {
-            x86::prefetch(slot);
-        }
     }
 }
 
