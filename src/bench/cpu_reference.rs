@@ -182,7 +182,7 @@ mod tests {
             let mut keys = ReferenceKeys::new(view);
             let mut behind_nlifs = ReferenceKeys::new(view);
             let last_steps = shot.plan.steps(shot.plan.chunks() - 1);
-            assert!(shot.plan.chunks() > 1 && last_steps % ROUNDS != 0, "{name}: {last_steps} steps");
+            assert!(shot.plan.chunks() > 1 && !last_steps.is_multiple_of(ROUNDS), "{name}: {last_steps} steps");
             for c in shot.plan.iter() {
                 crate::chaos_game::run_chunk(&shot.compiled, 3, 0, c.index, c.steps, &mut fb);
                 run_chunk(&shot.compiled, 3, 0, c.index, c.steps, &mut keys);
