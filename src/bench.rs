@@ -1,5 +1,7 @@
-//! `nlifs bench cpu`: chaos-game throughput of the CPU reference on one core, map only and
-//! map + splat at 1920×1080, side by side in one run so their ratio is meaningful.
+//! `nlifs bench cpu`: chaos-game throughput of the CPU path on one core, map only and map +
+//! splat at 1920×1080, beside a plain batched implementation of the same chaos game and closest
+//! splat (`bench/cpu_reference.rs`), all in one run so that their ratios are meaningful; the
+//! coverage of an attractor by a budget of points; and `nlifs bench record`'s frames per second.
 
 use std::time::Instant;
 
@@ -10,6 +12,8 @@ use crate::scene::Scene;
 use crate::scene::spec::{RenderSettings, SplatMode};
 use crate::shot::{Framing, Shot, ShotError};
 use crate::splat::{Framebuffer, SplatView};
+
+mod cpu_reference;
 
 /// A sink that only keeps the points alive (so mapping is not optimized away).
 struct MapOnly {
@@ -24,16 +28,54 @@ impl PointSink for MapOnly {
     }
 }
 
-pub struct CpuBench {
-    pub map_points_per_sec: f64,
-    pub splat_points_per_sec: Vec<(SplatMode, f64)>,
+/// A throughput in points per second: by wall-clock time and by the thread's CPU time (what a
+/// shared machine's comparisons use: wall time also counts the time other programs run).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Rate {
+    pub wall: f64,
+    pub cpu: f64,
 }
 
-/// Runs `points` chaos-game points of `scene` on the current thread, map only and then map +
-/// splat into a `width`×`height` framebuffer in each mode; the best of `repeats` runs each.
-/// For profiling one of them alone (e.g. under callgrind), env `NLIFS_BENCH_ONLY` = `map`,
-/// `closest`, `average` or `density` skips the others (their rate is reported as 0).
-pub fn cpu(scene: &Scene, points: u64, width: u32, height: u32, repeats: usize) -> Result<CpuBench, ShotError> {
+impl Rate {
+    /// The better of two rates, each measure on its own.
+    fn best(self, other: Rate) -> Rate {
+        Rate { wall: self.wall.max(other.wall), cpu: self.cpu.max(other.cpu) }
+    }
+}
+
+/// The rows of `nlifs bench cpu`, each the best of its runs.
+pub struct CpuBench {
+    /// nlifs's chaos game, map only.
+    pub map: Rate,
+    /// Map + splat into the image in each mode (the image only: no shadow map).
+    pub splat: Vec<(SplatMode, Rate)>,
+    /// Map + closest splat with the shadow map the scene's look splats beside the image (None:
+    /// the look casts no shadows).
+    pub closest_with_shadow: Option<Rate>,
+    /// The batched reference (`bench/cpu_reference.rs`): map only, and map + closest splat.
+    pub reference_map: Rate,
+    pub reference_closest: Rate,
+    /// nlifs's map + the reference's closest splat.
+    pub reference_splat: Rate,
+}
+
+/// The calling thread's CPU seconds (from /proc/thread-self/schedstat, in nanoseconds), if the
+/// system tells.
+fn thread_cpu_secs() -> Option<f64> {
+    let text = std::fs::read_to_string("/proc/thread-self/schedstat").ok()?;
+    Some(text.split_whitespace().next()?.parse::<f64>().ok()? * 1e-9)
+}
+
+/// Runs `points` chaos-game points of `scene` on the current thread in every row of
+/// [`CpuBench`]: nlifs's map only, map + splat into a `width`×`height` framebuffer in each mode,
+/// closest with the look's shadow map, and the batched reference's map, map + closest and its
+/// closest splat behind nlifs's map. The
+/// rows take turns, one run each per round, for `rounds` rounds (so that a busy spell of a
+/// shared machine spreads over them all), each run into a fresh framebuffer; each row keeps its
+/// best. For profiling one row alone (e.g. under callgrind), env `NLIFS_BENCH_ONLY` = `map`,
+/// `closest`, `average`, `density`, `shadow` or `reference` skips the others (their rates are
+/// reported as 0).
+pub fn cpu(scene: &Scene, points: u64, width: u32, height: u32, rounds: usize) -> Result<CpuBench, ShotError> {
     let settings = RenderSettings {
         width,
         height,
@@ -45,35 +87,71 @@ pub fn cpu(scene: &Scene, points: u64, width: u32, height: u32, repeats: usize) 
     };
     let shot = Shot::prepare(scene, 0.0, &settings, Framing::Scene, None)?;
     let (compiled, plan) = (&shot.compiled, &shot.plan);
-    let time = |sink: &mut dyn FnMut(u32, usize)| -> f64 {
-        let mut best = f64::INFINITY;
-        for _ in 0..repeats {
-            let start = Instant::now();
-            for chunk in plan.iter() {
-                sink(chunk.index, chunk.steps);
-            }
-            best = best.min(start.elapsed().as_secs_f64());
-        }
-        points as f64 / best
-    };
     let only = std::env::var("NLIFS_BENCH_ONLY").ok();
     let wanted = |name: &str| only.as_deref().is_none_or(|o| o == name);
-    let mut map_only = MapOnly { acc: Vec3::ZERO };
-    let map_points_per_sec =
-        if !wanted("map") { 0.0 } else { time(&mut |c, n| chaos_game::run_chunk(compiled, 1, 0, c, n, &mut map_only)) };
-    std::hint::black_box(map_only.acc);
-    let mut splat_points_per_sec = Vec::new();
-    for mode in SplatMode::ALL {
-        if !wanted(mode.name()) {
-            splat_points_per_sec.push((mode, 0.0));
-            continue;
+    // One timed run of every chunk of the plan.
+    let run = |chunk: &mut dyn FnMut(u32, usize)| -> Rate {
+        let (start, cpu0) = (Instant::now(), thread_cpu_secs());
+        for c in plan.iter() {
+            chunk(c.index, c.steps);
         }
-        let mut fb = Framebuffer::new(SplatView { mode, ..shot.view }, compiled.colors.clone());
-        let rate = time(&mut |c, n| chaos_game::run_chunk(compiled, 1, 0, c, n, &mut fb));
-        std::hint::black_box(fb.covered_pixels());
-        splat_points_per_sec.push((mode, rate));
+        let wall = start.elapsed().as_secs_f64();
+        let cpu = match (cpu0, thread_cpu_secs()) {
+            (Some(a), Some(b)) if b > a => b - a,
+            _ => wall,
+        };
+        Rate { wall: points as f64 / wall, cpu: points as f64 / cpu }
+    };
+    let image_view = SplatView { shadow: None, ..shot.view };
+    let shadow_view = shot.view.shadow.is_some().then_some(shot.view);
+    let mut bench = CpuBench {
+        map: Rate::default(),
+        splat: SplatMode::ALL.iter().map(|&m| (m, Rate::default())).collect(),
+        closest_with_shadow: shadow_view.map(|_| Rate::default()),
+        reference_map: Rate::default(),
+        reference_closest: Rate::default(),
+        reference_splat: Rate::default(),
+    };
+    for _ in 0..rounds.max(1) {
+        if wanted("map") {
+            let mut sink = MapOnly { acc: Vec3::ZERO };
+            bench.map = bench.map.best(run(&mut |c, n| chaos_game::run_chunk(compiled, 1, 0, c, n, &mut sink)));
+            std::hint::black_box(sink.acc);
+        }
+        for (mode, rate) in &mut bench.splat {
+            if wanted(mode.name()) {
+                let mut fb = Framebuffer::new(SplatView { mode: *mode, ..image_view }, compiled.colors.clone());
+                // A zeroed allocation's pages are mapped on first touch: touch them before the
+                // clock starts.
+                fb.accum.fill([0; 4]);
+                *rate = rate.best(run(&mut |c, n| chaos_game::run_chunk(compiled, 1, 0, c, n, &mut fb)));
+                std::hint::black_box(fb.covered_pixels());
+            }
+        }
+        if let (Some(view), Some(rate)) = (shadow_view, bench.closest_with_shadow.as_mut())
+            && wanted("shadow")
+        {
+            let mut fb = Framebuffer::new(view, compiled.colors.clone());
+            *rate = rate.best(run(&mut |c, n| chaos_game::run_chunk(compiled, 1, 0, c, n, &mut fb)));
+            std::hint::black_box(fb.covered_pixels());
+        }
+        if wanted("reference") {
+            let mut sink = cpu_reference::Discard::default();
+            bench.reference_map =
+                bench.reference_map.best(run(&mut |c, n| cpu_reference::run_chunk(compiled, 1, 0, c, n, &mut sink)));
+            std::hint::black_box(sink.acc);
+            let mut keys = cpu_reference::ReferenceKeys::new(SplatView { mode: SplatMode::Closest, ..image_view });
+            bench.reference_closest = bench
+                .reference_closest
+                .best(run(&mut |c, n| cpu_reference::run_chunk(compiled, 1, 0, c, n, &mut keys)));
+            std::hint::black_box(keys.image().len());
+            let mut keys = cpu_reference::ReferenceKeys::new(SplatView { mode: SplatMode::Closest, ..image_view });
+            bench.reference_splat =
+                bench.reference_splat.best(run(&mut |c, n| chaos_game::run_chunk(compiled, 1, 0, c, n, &mut keys)));
+            std::hint::black_box(keys.image().len());
+        }
     }
-    Ok(CpuBench { map_points_per_sec, splat_points_per_sec })
+    Ok(bench)
 }
 
 /// Coverage of the attractor by a fixed budget of points under each way of choosing

@@ -215,6 +215,12 @@ pub(crate) trait Pixels {
     fn min_key(&mut self, pixel: usize, key: u32);
     /// Accumulating modes: add r, g, b and the count (saturating) to the pixel's sums.
     fn add(&mut self, pixel: usize, add: [u32; 4]);
+    /// Closest mode: the keys themselves, one per pixel, where this target holds them (the
+    /// vector splat then reads them a vector at a time and writes only the keys that fall);
+    /// None: updates go through [`Self::min_key`] only.
+    fn own_keys(&mut self) -> Option<&mut [u32]> {
+        None
+    }
 }
 
 /// A framebuffer's own pixels as a [`Pixels`] target.
@@ -242,6 +248,10 @@ impl Pixels for OwnPixels<'_> {
         for c in 0..4 {
             a[c] += add[c].min(!a[c]);
         }
+    }
+
+    fn own_keys(&mut self) -> Option<&mut [u32]> {
+        Some(self.closest)
     }
 }
 
@@ -383,6 +393,7 @@ mod tests {
             Framebuffer::new(view, (0..5).map(|i| [if i == 4 { 1e7 } else { 0.2 * i as f32 }, 1.0, 0.5]).collect());
         let mut fastest = portable.clone();
         let mut narrow = portable.clone();
+        let mut forwarded = portable.clone();
         for start in (0..n).step_by(1000) {
             let end = (start + 1000).min(n);
             let batch = PointBatch {
@@ -393,6 +404,9 @@ mod tests {
             };
             portable.consume_portable(batch);
             fastest.consume(batch);
+            let (view, colors) = (forwarded.view, forwarded.colors.clone());
+            let own = OwnPixels { closest: &mut forwarded.closest, accum: &mut forwarded.accum };
+            splat_into(&view, &colors, batch, &mut Forward(own));
             #[cfg(target_arch = "x86_64")]
             if x86::supported(&narrow.view) {
                 let view = narrow.view;
@@ -410,5 +424,21 @@ mod tests {
         assert!(portable.covered_pixels() > 500, "{}", portable.covered_pixels());
         assert_eq!(portable.closest, fastest.closest, "{mode:?}");
         assert_eq!(portable.accum, fastest.accum, "{mode:?}");
+        assert_eq!(portable.closest, forwarded.closest, "{mode:?}: through min_key");
+        assert_eq!(portable.accum, forwarded.accum, "{mode:?}: through add");
+    }
+
+    /// A target that takes updates one by one only (as the shared framebuffer's writers do):
+    /// the vector splat's path without the keys at hand.
+    struct Forward<'a>(OwnPixels<'a>);
+
+    impl Pixels for Forward<'_> {
+        fn min_key(&mut self, pixel: usize, key: u32) {
+            self.0.min_key(pixel, key);
+        }
+
+        fn add(&mut self, pixel: usize, add: [u32; 4]) {
+            self.0.add(pixel, add);
+        }
     }
 }

@@ -13,6 +13,7 @@ use clap::Subcommand;
 use nlifs::cpu_time::cpu_secs;
 use nlifs::io::save_png;
 use nlifs::raytrace::{self, RaytraceSettings};
+use nlifs::scene::spec::SplatMode;
 
 use super::export::write_pov;
 use super::{BadInput, load};
@@ -73,13 +74,15 @@ pub enum BenchCommand {
         #[arg(long, default_value = "target/bench-record")]
         out: PathBuf,
     },
-    /// CPU chaos game on one core: map only and map + splat at 1920×1080.
+    /// CPU chaos game on one core: map only and map + splat at 1920×1080 in each mode, and a
+    /// plain batched implementation of the map and the closest splat beside them.
     Cpu {
         /// Scene to run (default: the paper's tapering).
         #[arg(default_value = "scenes/tapering.toml")]
         scene: PathBuf,
         #[arg(long, default_value_t = 50_000_000)]
         points: u64,
+        /// Rounds: each row runs once per round (the rows take turns) and keeps its best.
         #[arg(long, default_value_t = 3)]
         repeats: usize,
     },
@@ -199,11 +202,40 @@ fn record(
 
 fn cpu(path: &Path, points: u64, repeats: usize) -> anyhow::Result<()> {
     let scene = load(path)?;
-    eprintln!("CPU chaos game, one thread, {} ({points} points, best of {repeats})", scene.name);
-    let r = nlifs::bench::cpu(&scene, points, 1920, 1080, repeats.max(1)).map_err(|e| BadInput(e.to_string()))?;
-    println!("map only:                 {:8.1} M points/s", r.map_points_per_sec / 1e6);
-    for (mode, rate) in r.splat_points_per_sec {
-        println!("map + splat 1920x1080 {:<8} {:8.1} M points/s", mode.name(), rate / 1e6);
+    let (width, height) = (1920, 1080);
+    println!(
+        "CPU chaos game, one thread, {} ({points} points, {width}x{height}, best of {} rounds)",
+        scene.name,
+        repeats.max(1)
+    );
+    let r = nlifs::bench::cpu(&scene, points, width, height, repeats.max(1)).map_err(|e| BadInput(e.to_string()))?;
+    println!("  {:<52} {:>10} {:>12}", "", "M points/s", "per CPU s");
+    let row = |name: &str, rate: nlifs::bench::Rate| {
+        println!("  {name:<52} {:>10.1} {:>12.1}", rate.wall / 1e6, rate.cpu / 1e6);
+    };
+    row("nlifs map only", r.map);
+    for (mode, rate) in &r.splat {
+        row(&format!("nlifs map + splat {}", mode.name()), *rate);
+    }
+    if let Some(rate) = r.closest_with_shadow {
+        row("nlifs map + splat closest + the look's shadow map", rate);
+    }
+    row("reference (16 chains x 64 rounds, scalar min) map only", r.reference_map);
+    row("reference map + splat closest", r.reference_closest);
+    row("nlifs map + reference splat closest", r.reference_splat);
+    let closest = r.splat.iter().find(|(m, _)| *m == SplatMode::Closest).map_or_else(Default::default, |(_, c)| *c);
+    let ratio = |a: f64, b: f64| if b > 0.0 { a / b } else { 0.0 };
+    println!(
+        "  map + splat closest, nlifs / reference: {:.2}x per CPU s ({:.2}x wall)",
+        ratio(closest.cpu, r.reference_closest.cpu),
+        ratio(closest.wall, r.reference_closest.wall)
+    );
+    println!(
+        "  map + splat closest, nlifs / nlifs map + reference splat: {:.2}x per CPU s",
+        ratio(closest.cpu, r.reference_splat.cpu)
+    );
+    for (mode, rate) in r.splat.iter().filter(|(m, _)| *m != SplatMode::Closest) {
+        println!("  map + splat {} / map + splat closest: {:.2}x per CPU s", mode.name(), ratio(rate.cpu, closest.cpu));
     }
     Ok(())
 }
