@@ -1,7 +1,8 @@
 //! `nlifs bench cpu`: chaos-game throughput of the CPU path on one core, map only and map +
 //! splat at 1920×1080, beside a plain batched implementation of the same chaos game and closest
 //! splat (`bench/cpu_reference.rs`), all in one run so that their ratios are meaningful; the
-//! coverage of an attractor by a budget of points; and `nlifs bench record`'s frames per second.
+//! coverage of an attractor by a budget of points; and `nlifs bench record`'s frames per second
+//! (of a ray-traced recording also the hierarchy's rebuild alone).
 
 use std::time::Instant;
 
@@ -253,4 +254,42 @@ pub fn record(
         secs: start.elapsed().as_secs_f64(),
         cpu_secs: crate::gpu::bench::process_cpu_secs() - cpu0,
     })
+}
+
+/// The hierarchy rebuilds of a ray-traced recording.
+pub struct RebuildBench {
+    pub frames: u32,
+    /// Wall seconds of all the rebuilds (every temporal sample of every frame), and this
+    /// process's CPU seconds in them (all threads).
+    pub secs: f64,
+    pub cpu_secs: f64,
+    /// Leaves and nodes of the last frame's W^n(A).
+    pub leaf_count: usize,
+    pub node_count: usize,
+}
+
+/// Builds W^n(A) for every temporal sample of frames `0..frames` of `scene` recorded with
+/// `settings` and ray-traced with `options`, as the recording builds them before tracing,
+/// timed alone: what the rebuild takes of [`record`]'s frames.
+pub fn raytrace_rebuilds(
+    scene: &Scene,
+    settings: crate::record::RecordSettings,
+    options: &crate::record::TraceOptions,
+    frames: u32,
+) -> Result<RebuildBench, crate::record::RecordError> {
+    let trace = options.settings(settings.width, settings.height, scene.render.seed);
+    let rec = crate::record::Recorder::new(scene, settings)?;
+    let frames = 0..frames.clamp(1, rec.frame_count());
+    let (mut secs, mut cpu_secs, mut leaf_count, mut node_count) = (0.0, 0.0, 0, 0);
+    for frame in frames.clone() {
+        for sample in rec.samples(frame) {
+            let ifs = scene.at(sample.t_secs);
+            let (cpu0, start) = (crate::cpu_time::cpu_secs().0, Instant::now());
+            let (hierarchy, _) = crate::raytrace::build(scene, &ifs, sample.t_secs, Some(sample.camera), &trace)?;
+            secs += start.elapsed().as_secs_f64();
+            cpu_secs += crate::cpu_time::cpu_secs().0 - cpu0;
+            (leaf_count, node_count) = (hierarchy.leaf_count, hierarchy.nodes.len());
+        }
+    }
+    Ok(RebuildBench { frames: frames.len() as u32, secs, cpu_secs, leaf_count, node_count })
 }

@@ -14,11 +14,6 @@ use std::process::Command;
 
 use nlifs::output::png::{SCENE_KEYWORD, scene_from_png, text_chunks};
 
-/// Whether a missing tool fails the test (CI) instead of skipping it.
-fn tools_required() -> bool {
-    std::env::var_os("CI").is_some() || std::env::var("NLIFS_REQUIRE_TOOLS").as_deref() == Ok("1")
-}
-
 /// `oiiotool --info -v PATH` (stdout), or None after a loud skip where oiiotool is missing.
 fn oiio_info(path: &Path) -> Option<String> {
     match Command::new("oiiotool").arg("--info").arg("-v").arg(path).output() {
@@ -36,7 +31,7 @@ fn oiio_info(path: &Path) -> Option<String> {
                 "oiiotool (Debian: openimageio-tools) cannot run ({e}), so {} is not checked by an independent reader",
                 path.display()
             );
-            assert!(!tools_required(), "CI or NLIFS_REQUIRE_TOOLS=1 but {why}");
+            assert!(!common::tools_required(), "CI or NLIFS_REQUIRE_TOOLS=1 but {why}");
             eprintln!("\n*** SKIPPED: {why} ***\n");
             None
         }

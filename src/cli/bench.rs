@@ -56,7 +56,8 @@ pub enum BenchCommand {
         frames: u32,
     },
     /// Frames per second of `nlifs record` at 1920×1080, the chaos game on the CPU and on the
-    /// GPU (any adapter, a software one included, to measure it).
+    /// GPU (any adapter, a software one included, to measure it); with `--renderer raytrace`,
+    /// ray-traced W^n(A) rebuilt every frame, and the rebuild's share of a frame.
     Record {
         #[arg(default_value = "scenes/twist-anim.toml")]
         scene: PathBuf,
@@ -73,6 +74,15 @@ pub enum BenchCommand {
         /// Where the frames go (one folder per backend).
         #[arg(long, default_value = "target/bench-record")]
         out: PathBuf,
+        /// chaos: the chaos game on the CPU and the GPU; raytrace: `record --renderer raytrace`.
+        #[arg(long, value_enum, default_value_t = super::record::RendererArg::Chaos)]
+        renderer: super::record::RendererArg,
+        /// Ray tracing: n of W^n(A).
+        #[arg(long, default_value_t = 7, value_parser = clap::value_parser!(u32).range(0..=16))]
+        depth: u32,
+        /// Ray tracing: samples per pixel.
+        #[arg(long, default_value_t = 4, value_parser = clap::value_parser!(u32).range(1..=1024))]
+        spp: u32,
     },
     /// CPU chaos game on one core: map only and map + splat at 1920×1080 in each mode, and a
     /// plain batched implementation of the map and the closest splat beside them.
@@ -134,7 +144,16 @@ pub fn run(command: BenchCommand) -> anyhow::Result<()> {
             Ok(())
         }
         BenchCommand::Cpu { scene, points, repeats } => cpu(&scene, points, repeats),
-        BenchCommand::Record { scene, frames, width, height, points_per_frame, out } => {
+        BenchCommand::Record { scene, frames, width, height, points_per_frame, out, renderer, depth, spp } => {
+            if renderer == super::record::RendererArg::Raytrace {
+                if points_per_frame.is_some() {
+                    return Err(BadInput(
+                        "--points-per-frame applies to the chaos game, not to --renderer raytrace".into(),
+                    )
+                    .into());
+                }
+                return record_raytrace(&scene, frames, width, height, depth, spp, &out);
+            }
             record(&scene, frames, width, height, points_per_frame, &out)
         }
         BenchCommand::Render(args) => super::bench_render::run(args),
@@ -197,6 +216,59 @@ fn record(
             dir.display()
         );
     }
+    Ok(())
+}
+
+/// `bench record --renderer raytrace`: frames per second of the recording, then the same
+/// frames' rebuilds of W^n(A) timed alone, as a share of a frame.
+fn record_raytrace(
+    path: &Path,
+    frames: u32,
+    width: u32,
+    height: u32,
+    depth: u32,
+    spp: u32,
+    out: &Path,
+) -> anyhow::Result<()> {
+    let scene = load(path)?;
+    let options = nlifs::record::TraceOptions { depth, spp, ..Default::default() };
+    let settings = nlifs::record::RecordSettings {
+        width,
+        height,
+        renderer: nlifs::record::Renderer::Raytrace(options.clone()),
+        ..nlifs::record::RecordSettings::for_scene(&scene)
+    };
+    let dir = out.join("raytrace");
+    super::probe_output(&dir.join("frame_00000.png"))?;
+    println!(
+        "record {} --renderer raytrace: {width}×{height}, W^{depth}(sphere), {spp} spp, {frames} frames, {} threads",
+        scene.name,
+        rayon::current_num_threads()
+    );
+    let bad = |e: nlifs::record::RecordError| BadInput(e.to_string());
+    let r = nlifs::bench::record(&scene, settings.clone(), frames, None, &dir).map_err(bad)?;
+    let rebuild = nlifs::bench::raytrace_rebuilds(&scene, settings, &options, r.frames).map_err(bad)?;
+    let (frame_secs, rebuild_secs) = (r.secs / r.frames as f64, rebuild.secs / rebuild.frames as f64);
+    println!(
+        "  {:6.3} frames/s ({:.2} s wall, {:.2} s process CPU for {} frames) -> {}",
+        r.frames as f64 / r.secs,
+        r.secs,
+        r.cpu_secs,
+        r.frames,
+        dir.display()
+    );
+    let (frame_cpu, rebuild_cpu) = (r.cpu_secs / r.frames as f64, rebuild.cpu_secs / rebuild.frames as f64);
+    println!(
+        "  rebuild of W^{depth}(A) ({} leaves, {} nodes) per frame: {:.1} ms wall, {:.1} % of a frame's {:.0} ms; {:.1} ms CPU, {:.1} % of a frame's {:.0} ms",
+        rebuild.leaf_count,
+        rebuild.node_count,
+        1e3 * rebuild_secs,
+        100.0 * rebuild_secs / frame_secs,
+        1e3 * frame_secs,
+        1e3 * rebuild_cpu,
+        100.0 * rebuild_cpu / frame_cpu,
+        1e3 * frame_cpu
+    );
     Ok(())
 }
 

@@ -181,7 +181,7 @@ enum RecordBackend {
 }
 
 #[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
-enum RendererArg {
+pub(super) enum RendererArg {
     Chaos,
     Raytrace,
 }

@@ -141,6 +141,38 @@ pub struct Traced {
     pub trace_secs: f64,
 }
 
+/// W^n(A) of `ifs` (the scene at `t_secs`) as `settings` ask, and the camera that sees it:
+/// `camera`, or else the scene's camera framed on the geometry. What [`render`] traces (the
+/// adaptive stop needs the camera first); `nlifs bench record` times it alone.
+pub fn build(
+    scene: &Scene,
+    ifs: &Ifs,
+    t_secs: f64,
+    camera: Option<OrbitCamera>,
+    settings: &RaytraceSettings,
+) -> Result<(Hierarchy, OrbitCamera), RaytraceError> {
+    if settings.adaptive {
+        let camera = match camera {
+            Some(c) => c,
+            None => scene.camera_for_at(t_secs, framing_bounds(ifs, &settings.initial, settings.depth)?),
+        };
+        let rays = tracer::CameraRays::new(&camera, settings.width, settings.height, 1.0);
+        let pixel = PixelFootprint {
+            eye: camera.eye(),
+            perspective: camera.projection == Projection::Perspective,
+            per_pixel: rays.per_pixel() * settings.stop_pixels.max(1e-3),
+        };
+        let m = ifs.active().len().max(1) as f64;
+        let object = initial_object(ifs, &settings.initial, m.powi(settings.depth as i32))?;
+        Ok((Hierarchy::build(ifs, &object, Stop { max_depth: settings.depth, pixel: Some(pixel) })?, camera))
+    } else {
+        let h = build_fixed(ifs, &settings.initial, settings.depth)?;
+        let camera =
+            camera.unwrap_or_else(|| scene.camera_for_at(t_secs, (h.bounds.0.as_dvec3(), h.bounds.1.as_dvec3())));
+        Ok((h, camera))
+    }
+}
+
 /// Ray-traces `scene` at `t_secs`. `camera` overrides the scene camera (which is otherwise
 /// framed on the geometry). `progress(rows_done, rows)` is called from worker threads; setting
 /// `cancel` makes it return [`RaytraceError::Cancelled`] within a row's time. Safe to run on a
@@ -155,26 +187,7 @@ pub fn render(
 ) -> Result<Traced, RaytraceError> {
     let ifs = scene.at(t_secs);
     let start = std::time::Instant::now();
-    let (hierarchy, camera) = if settings.adaptive {
-        let camera = match camera {
-            Some(c) => c,
-            None => scene.camera_for_at(t_secs, framing_bounds(&ifs, &settings.initial, settings.depth)?),
-        };
-        let rays = tracer::CameraRays::new(&camera, settings.width, settings.height, 1.0);
-        let pixel = PixelFootprint {
-            eye: camera.eye(),
-            perspective: camera.projection == Projection::Perspective,
-            per_pixel: rays.per_pixel() * settings.stop_pixels.max(1e-3),
-        };
-        let m = ifs.active().len().max(1) as f64;
-        let object = initial_object(&ifs, &settings.initial, m.powi(settings.depth as i32))?;
-        (Hierarchy::build(&ifs, &object, Stop { max_depth: settings.depth, pixel: Some(pixel) })?, camera)
-    } else {
-        let h = build_fixed(&ifs, &settings.initial, settings.depth)?;
-        let camera =
-            camera.unwrap_or_else(|| scene.camera_for_at(t_secs, (h.bounds.0.as_dvec3(), h.bounds.1.as_dvec3())));
-        (h, camera)
-    };
+    let (hierarchy, camera) = build(scene, &ifs, t_secs, camera, settings)?;
     let build_secs = start.elapsed().as_secs_f64();
     let shading = shading_for(scene, &ifs, &camera, settings);
     let start = std::time::Instant::now();

@@ -59,6 +59,12 @@ pub fn gpu_required() -> bool {
     std::env::var("NLIFS_REQUIRE_GPU").as_deref() == Ok("1")
 }
 
+/// Whether a missing system tool (oiiotool, Slurm) fails the test instead of skipping it: `CI`
+/// or `NLIFS_REQUIRE_TOOLS=1` is set, as `.ci/run` does after installing the tools.
+pub fn tools_required() -> bool {
+    std::env::var_os("CI").is_some() || std::env::var("NLIFS_REQUIRE_TOOLS").as_deref() == Ok("1")
+}
+
 /// Skips a test that cannot run here, loudly; fails it instead when `NLIFS_REQUIRE_GPU=1`.
 pub fn skip(why: &str) {
     assert!(!gpu_required(), "NLIFS_REQUIRE_GPU=1 but {why}");
