@@ -12,6 +12,9 @@
 //! `xml.rs` the reader, `palette.rs` the palettes, `render.rs` the chaos game, histogram, density
 //! estimation, spatial filter and tone map (flam3's `rect.c`, `filters.c`).
 
+pub mod render;
+pub mod render_filter;
+pub mod render_tone;
 pub mod variations;
 
 pub use variations::{Variation, VariationInfo};
