@@ -12,12 +12,16 @@
 //! `xml.rs` the reader, `palette.rs` the palettes, `render.rs` the chaos game, histogram, density
 //! estimation, spatial filter and tone map (flam3's `rect.c`, `filters.c`).
 
+pub mod palette;
 pub mod render;
 pub mod render_filter;
 pub mod render_tone;
 pub mod variations;
+pub mod xml;
+mod xml_xform;
 
 pub use variations::{Variation, VariationInfo};
+pub use xml::{FlameError, FlameFile, read_file, read_str};
 
 /// flam3's affine coefficients `[a, b, c, d, e, f]`: x' = a·x + c·y + e, y' = b·x + d·y + f.
 pub type Coefs = [f64; 6];
