@@ -1,0 +1,419 @@
+//! flam3's variations 0–49 (linear … disc2): the original fractal-flame set, the 2006 blurs and
+//! julias, and the first Z+ plugins. [`prepare`] turns a term's parameters (and, for waves,
+//! popcorn, rings and fan, the xform's own coefficients, which flam3 reads there) into the
+//! constants [`eval`] uses; [`eval`] returns the term's weighted contribution w·V(t).
+//!
+//! flam3's oddities are kept, as its pictures depend on them: `sina`/`cosa` are tx/|t| and
+//! ty/|t| (the swapped angle), fisheye swaps its output axes, radial_blur's rotated part is not
+//! scaled by the weight, arch, rays, blade, secant2 and twintrian use the weight inside as well.
+
+use super::{EPS, NEEDS_ANGLES, NEEDS_ATAN_XY, NEEDS_ATAN_YX, Point};
+use crate::flame::Coefs;
+use crate::rng::Pcg32;
+use std::f64::consts::{FRAC_1_PI, PI};
+
+/// Which of [`Point`]'s optional quantities variation `v` reads.
+pub(super) fn needs(v: u8) -> u8 {
+    match v {
+        5..=8 | 12 | 13 | 22 | 25 | 49 => NEEDS_ATAN_XY,
+        23 => NEEDS_ATAN_XY | NEEDS_ANGLES,
+        9..=11 | 19 | 21 | 26 => NEEDS_ANGLES,
+        32 | 33 | 36 | 38 => NEEDS_ATAN_YX,
+        _ => 0,
+    }
+}
+
+/// The constants of variation `v` from its parameters `p` (in the table's order) and the
+/// xform's coefficients `[a, b, c, d, e, f]`.
+pub(super) fn prepare(v: u8, p: [f64; 8], c: &Coefs) -> [f64; 8] {
+    let mut k = p;
+    match v {
+        // waves: c, d as amplitudes, 1 / (e² + EPS) and 1 / (f² + EPS) as frequencies.
+        15 => {
+            k[0] = c[2];
+            k[1] = c[3];
+            k[2] = 1.0 / (c[4] * c[4] + EPS);
+            k[3] = 1.0 / (c[5] * c[5] + EPS);
+        }
+        // popcorn: e, f as amplitudes.
+        17 => {
+            k[0] = c[4];
+            k[1] = c[5];
+        }
+        // rings: e² + EPS.
+        21 => k[0] = c[4] * c[4] + EPS,
+        // fan: π (e² + EPS), f.
+        22 => {
+            k[0] = PI * (c[4] * c[4] + EPS);
+            k[1] = c[5];
+        }
+        // blob: low, high − low, waves.
+        23 => k[1] = p[1] - p[0],
+        // fan2: π (x² + EPS), y.
+        25 => {
+            k[0] = PI * (p[0] * p[0] + EPS);
+            k[1] = p[1];
+        }
+        // rings2: val² + EPS.
+        26 => k[0] = p[0] * p[0] + EPS,
+        // perspective: dist, sin(angle π/2), dist cos(angle π/2).
+        30 => {
+            let ang = p[0] * PI / 2.0;
+            k[0] = p[1];
+            k[1] = ang.sin();
+            k[2] = p[1] * ang.cos();
+        }
+        // julian, juliascope: power, |power|, dist / power / 2.
+        32 | 33 => {
+            k[0] = p[0];
+            k[1] = p[0].abs();
+            k[2] = p[1] / p[0] / 2.0;
+        }
+        // radial_blur: sin and cos of angle π/2 (spin and zoom).
+        36 => {
+            let (s, c) = (p[0] * PI / 2.0).sin_cos();
+            k[0] = s;
+            k[1] = c;
+        }
+        // ngon: 2π / sides, power / 2, circle, corners.
+        38 => {
+            k[0] = 2.0 * PI / p[0];
+            k[1] = p[1] / 2.0;
+        }
+        // disc2: rot π, sin(twist) and cos(twist) − 1, stretched past ±2π.
+        49 => {
+            let add = p[1];
+            let (mut s, mut c) = add.sin_cos();
+            c -= 1.0;
+            if add > 2.0 * PI {
+                let f = 1.0 + add - 2.0 * PI;
+                c *= f;
+                s *= f;
+            }
+            if add < -2.0 * PI {
+                let f = 1.0 + add + 2.0 * PI;
+                c *= f;
+                s *= f;
+            }
+            k[0] = p[0] * PI;
+            k[1] = s;
+            k[2] = c;
+        }
+        _ => {}
+    }
+    k
+}
+
+/// C's conversion of a double to `int` as flam3's x86-64 builds do it: toward zero, and
+/// 0x80000000 (i32::MIN) for NaN and anything out of range (where Rust's `as` saturates).
+/// fan2 and rings2 with a parameter near 0 divide by ~1e−10 and land there, so their pictures
+/// depend on it.
+#[inline(always)]
+pub(super) fn c_int(v: f64) -> i32 {
+    if v > -2_147_483_649.0 && v < 2_147_483_648.0 { v as i32 } else { i32::MIN }
+}
+
+/// The sum of four uniform draws minus 2: flam3's pseudo-Gaussian in (−2, 2).
+#[inline(always)]
+pub(super) fn pseudo_gaussian(rng: &mut Pcg32) -> f64 {
+    rng.next_f64() + rng.next_f64() + rng.next_f64() + rng.next_f64() - 2.0
+}
+
+/// w · V(t) for variation `v` (0–49) with constants `k`.
+#[inline]
+pub(super) fn eval(v: u8, w: f64, k: &[f64; 8], pt: &Point, rng: &mut Pcg32) -> [f64; 2] {
+    let Point { tx: x, ty: y, sumsq: r2, sqrt: r, atan_xy: a, sina: sa, cosa: ca, atan_yx: ayx } = *pt;
+    match v {
+        // linear
+        0 => [w * x, w * y],
+        // sinusoidal
+        1 => [w * x.sin(), w * y.sin()],
+        // spherical
+        2 => {
+            let f = w / (r2 + EPS);
+            [f * x, f * y]
+        }
+        // swirl
+        3 => {
+            let (s, c) = r2.sin_cos();
+            [w * (s * x - c * y), w * (c * x + s * y)]
+        }
+        // horseshoe
+        4 => {
+            let f = w / (r + EPS);
+            [(x - y) * (x + y) * f, 2.0 * x * y * f]
+        }
+        // polar
+        5 => [w * (a * FRAC_1_PI), w * (r - 1.0)],
+        // handkerchief
+        6 => [w * r * (a + r).sin(), w * r * (a - r).cos()],
+        // heart
+        7 => {
+            let (s, c) = (r * a).sin_cos();
+            let f = w * r;
+            [f * s, -f * c]
+        }
+        // disc
+        8 => {
+            let aa = a * FRAC_1_PI;
+            let (s, c) = (PI * r).sin_cos();
+            [w * s * aa, w * c * aa]
+        }
+        // spiral
+        9 => {
+            let rr = r + EPS;
+            let f = w / rr;
+            let (s, c) = rr.sin_cos();
+            [f * (ca + s), f * (sa - c)]
+        }
+        // hyperbolic
+        10 => {
+            let rr = r + EPS;
+            [w * sa / rr, w * ca * rr]
+        }
+        // diamond
+        11 => {
+            let (s, c) = r.sin_cos();
+            [w * sa * c, w * ca * s]
+        }
+        // ex
+        12 => {
+            let n0 = (a + r).sin();
+            let n1 = (a - r).cos();
+            let m0 = n0 * n0 * n0 * r;
+            let m1 = n1 * n1 * n1 * r;
+            [w * (m0 + m1), w * (m0 - m1)]
+        }
+        // julia: one of the two square roots, by a random bit.
+        13 => {
+            let mut aa = 0.5 * a;
+            if rng.next_u32() & 1 != 0 {
+                aa += PI;
+            }
+            let f = w * r.sqrt();
+            let (s, c) = aa.sin_cos();
+            [f * c, f * s]
+        }
+        // bent
+        14 => {
+            let nx = if x < 0.0 { x * 2.0 } else { x };
+            let ny = if y < 0.0 { y / 2.0 } else { y };
+            [w * nx, w * ny]
+        }
+        // waves
+        15 => [w * (x + k[0] * (y * k[2]).sin()), w * (y + k[1] * (x * k[3]).sin())],
+        // fisheye (flam3's, with the output axes swapped)
+        16 => {
+            let f = 2.0 * w / (r + 1.0);
+            [f * y, f * x]
+        }
+        // popcorn
+        17 => {
+            let dx = (3.0 * y).tan();
+            let dy = (3.0 * x).tan();
+            [w * (x + k[0] * dx.sin()), w * (y + k[1] * dy.sin())]
+        }
+        // exponential
+        18 => {
+            let dx = w * (x - 1.0).exp();
+            let (s, c) = (PI * y).sin_cos();
+            [dx * c, dx * s]
+        }
+        // power
+        19 => {
+            let f = w * r.powf(sa);
+            [f * ca, f * sa]
+        }
+        // cosine
+        20 => {
+            let (s, c) = (x * PI).sin_cos();
+            [w * (c * y.cosh()), w * (-s * y.sinh())]
+        }
+        // rings
+        21 => {
+            let dx = k[0];
+            let f = w * ((r + dx) % (2.0 * dx) - dx + r * (1.0 - dx));
+            [f * ca, f * sa]
+        }
+        // fan
+        22 => {
+            let (dx, dy) = (k[0], k[1]);
+            let dx2 = 0.5 * dx;
+            let aa = a + if (a + dy) % dx > dx2 { -dx2 } else { dx2 };
+            let f = w * r;
+            let (s, c) = aa.sin_cos();
+            [f * c, f * s]
+        }
+        // blob
+        23 => {
+            let f = r * (k[0] + k[1] * (0.5 + 0.5 * (k[2] * a).sin()));
+            [w * sa * f, w * ca * f]
+        }
+        // pdj
+        24 => {
+            let nx1 = (k[1] * x).cos();
+            let nx2 = (k[2] * x).sin();
+            let ny1 = (k[0] * y).sin();
+            let ny2 = (k[3] * y).cos();
+            [w * (ny1 - nx1), w * (nx2 - ny2)]
+        }
+        // fan2
+        25 => {
+            let (dx, dy) = (k[0], k[1]);
+            let dx2 = 0.5 * dx;
+            let t = a + dy - dx * c_int((a + dy) / dx) as f64;
+            let aa = if t > dx2 { a - dx2 } else { a + dx2 };
+            let f = w * r;
+            let (s, c) = aa.sin_cos();
+            [f * s, f * c]
+        }
+        // rings2
+        26 => {
+            let dx = k[0];
+            let f = r + (-2.0 * dx * c_int((r + dx) / (2.0 * dx)) as f64 + r * (1.0 - dx));
+            [w * sa * f, w * ca * f]
+        }
+        // eyefish
+        27 => {
+            let f = (w * 2.0) / (r + 1.0);
+            [f * x, f * y]
+        }
+        // bubble
+        28 => {
+            let f = w / (0.25 * r2 + 1.0);
+            [f * x, f * y]
+        }
+        // cylinder
+        29 => [w * x.sin(), w * y],
+        // perspective
+        30 => {
+            let t = 1.0 / (k[0] - y * k[1]);
+            [w * k[0] * x * t, w * k[2] * y * t]
+        }
+        // noise
+        31 => {
+            let (s, c) = (rng.next_f64() * 2.0 * PI).sin_cos();
+            let f = w * rng.next_f64();
+            [x * f * c, y * f * s]
+        }
+        // julian: one of |power| branches of t^(dist/power).
+        32 => {
+            let branch = c_int(k[1] * rng.next_f64()) as f64;
+            let ang = (ayx + 2.0 * PI * branch) / k[0];
+            let f = w * r2.powf(k[2]);
+            let (s, c) = ang.sin_cos();
+            [f * c, f * s]
+        }
+        // juliascope: as julian, the odd branches mirrored.
+        33 => {
+            let branch = (k[1] * rng.next_f64()).trunc();
+            let ang =
+                if branch % 2.0 == 0.0 { (2.0 * PI * branch + ayx) / k[0] } else { (2.0 * PI * branch - ayx) / k[0] };
+            let (s, c) = ang.sin_cos();
+            let f = w * r2.powf(k[2]);
+            [f * c, f * s]
+        }
+        // blur
+        34 => {
+            let (s, c) = (rng.next_f64() * 2.0 * PI).sin_cos();
+            let f = w * rng.next_f64();
+            [f * c, f * s]
+        }
+        // gaussian_blur
+        35 => {
+            let (s, c) = (rng.next_f64() * 2.0 * PI).sin_cos();
+            let f = w * pseudo_gaussian(rng);
+            [f * c, f * s]
+        }
+        // radial_blur
+        36 => {
+            let g = w * pseudo_gaussian(rng);
+            let (s, c) = (ayx + k[0] * g).sin_cos();
+            let rz = k[1] * g - 1.0;
+            [r * c + rz * x, r * s + rz * y]
+        }
+        // pie: slices, rotation, thickness
+        37 => {
+            let slice = c_int(rng.next_f64() * k[0] + 0.5) as f64;
+            let ang = k[1] + 2.0 * PI * (slice + rng.next_f64() * k[2]) / k[0];
+            let f = w * rng.next_f64();
+            let (s, c) = ang.sin_cos();
+            [f * c, f * s]
+        }
+        // ngon: 2π / sides, power / 2, circle, corners
+        38 => {
+            let r_factor = r2.powf(k[1]);
+            let b = k[0];
+            let mut phi = ayx - b * (ayx / b).floor();
+            if phi > b / 2.0 {
+                phi -= b;
+            }
+            let amp = (k[3] * (1.0 / (phi.cos() + EPS) - 1.0) + k[2]) / (r_factor + EPS);
+            [w * x * amp, w * y * amp]
+        }
+        // curl
+        39 => {
+            let (c1, c2) = (k[0], k[1]);
+            let re = 1.0 + c1 * x + c2 * (x * x - y * y);
+            let im = c1 * y + 2.0 * c2 * x * y;
+            let f = w / (re * re + im * im);
+            [(x * re + y * im) * f, (y * re - x * im) * f]
+        }
+        // rectangles
+        40 => {
+            let (rx, ry) = (k[0], k[1]);
+            let nx = if rx == 0.0 { x } else { (2.0 * (x / rx).floor() + 1.0) * rx - x };
+            let ny = if ry == 0.0 { y } else { (2.0 * (y / ry).floor() + 1.0) * ry - y };
+            [w * nx, w * ny]
+        }
+        // arch
+        41 => {
+            let (s, c) = (rng.next_f64() * w * PI).sin_cos();
+            [w * s, w * (s * s) / c]
+        }
+        // tangent
+        42 => [w * x.sin() / y.cos(), w * y.tan()],
+        // square
+        43 => [w * (rng.next_f64() - 0.5), w * (rng.next_f64() - 0.5)],
+        // rays
+        44 => {
+            let ang = w * rng.next_f64() * PI;
+            let f = w / (r2 + EPS);
+            let t = w * ang.tan() * f;
+            [t * x.cos(), t * y.sin()]
+        }
+        // blade
+        45 => {
+            let (s, c) = (rng.next_f64() * w * r).sin_cos();
+            [w * x * (c + s), w * x * (c - s)]
+        }
+        // secant2
+        46 => {
+            let cr = (w * r).cos();
+            let icr = 1.0 / cr;
+            [w * x, if cr < 0.0 { w * (icr + 1.0) } else { w * (icr - 1.0) }]
+        }
+        // twintrian
+        47 => {
+            let (s, c) = (rng.next_f64() * w * r).sin_cos();
+            let mut diff = (s * s).log10() + c;
+            if !(diff.abs() <= 1e10) {
+                diff = -30.0;
+            }
+            [w * x * diff, w * x * (diff - s * PI)]
+        }
+        // cross
+        48 => {
+            let s = x * x - y * y;
+            let f = w * (1.0 / (s * s + EPS)).sqrt();
+            [x * f, y * f]
+        }
+        // disc2: rot π, sin(twist)', cos(twist)' − 1
+        49 => {
+            let (s, c) = (k[0] * (x + y)).sin_cos();
+            let f = w * a / PI;
+            [(s + k[2]) * f, (c + k[1]) * f]
+        }
+        _ => [0.0, 0.0],
+    }
+}
