@@ -1,7 +1,7 @@
 //! `nlifs info`: the contractivity, Lipschitz bounds, containment and probabilities of a
 //! scene's functions, and for animated scenes the timeline check, as a table or JSON. Text
 //! from the file (names, the description, the path) is printed with its control characters
-//! escaped ([`printable`]); JSON escapes them itself.
+//! escaped ([`printable`]); JSON escapes them itself. flam3 flame files are `info_flame.rs`'s.
 
 use std::path::PathBuf;
 
@@ -15,6 +15,7 @@ use super::{load, progress_bar};
 
 #[derive(Args)]
 pub struct InfoArgs {
+    /// A scene file, a PNG nlifs wrote, or a flam3 flame file (.flame, .flam3).
     scene: PathBuf,
     /// Print JSON instead of a table.
     #[arg(long)]
@@ -29,6 +30,9 @@ fn fmt_opt(v: Option<f64>) -> String {
 }
 
 pub fn info(args: InfoArgs) -> anyhow::Result<()> {
+    if nlifs::flame::xml::is_flame_path(&args.scene) {
+        return super::info_flame::info(&args.scene, args.json);
+    }
     // A PNG that nlifs wrote carries its scene (output::png): its info is that scene's.
     let scene = if nlifs::output::png::is_png(&args.scene) {
         let (scene, t_secs) = nlifs::output::png::load_scene_or_png(&args.scene).map_err(super::image_args::bad)?;

@@ -14,6 +14,7 @@ mod color_args;
 mod export;
 mod image_args;
 mod info;
+mod info_flame;
 mod lens_args;
 mod light_args;
 mod merge;

@@ -77,6 +77,19 @@ impl Default for ReadOptions {
     }
 }
 
+/// Whether `path` names a flame file: extension `.flame` or `.flam3` (any case), or else text
+/// whose first non-blank character is `<` (scene files are TOML, PNGs binary).
+pub fn is_flame_path(path: &Path) -> bool {
+    let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
+    if matches!(ext.as_deref(), Some("flame" | "flam3")) {
+        return true;
+    }
+    let mut head = [0u8; 256];
+    let n = std::fs::File::open(path).and_then(|mut f| std::io::Read::read(&mut f, &mut head)).unwrap_or(0);
+    let head = head[..n].strip_prefix(b"\xef\xbb\xbf".as_slice()).unwrap_or(&head[..n]);
+    head.iter().find(|b| !b.is_ascii_whitespace()) == Some(&b'<')
+}
+
 /// Reads a flame file (at most [`MAX_FILE_BYTES`]; checked before reading).
 pub fn read_file(path: &Path) -> Result<FlameFile, FlameError> {
     read_file_with(path, &ReadOptions::default())
@@ -416,9 +429,6 @@ impl Reader<'_> {
         let mut hue_turns = 0.0;
         let mut solo_xform: Option<i64> = None;
         let mut ignored: Vec<&str> = Vec::new();
-        if node.attributes().len() == 0 {
-            return Err(ctx.error(node, "<flame> has no attributes"));
-        }
         for attr in node.attributes() {
             // A value that is not finite: warned about, the default kept.
             let finite = |ctx: &mut Ctx, v: f64, what: &str| -> Option<f64> {
@@ -592,6 +602,9 @@ impl Reader<'_> {
         if std_xforms.is_empty() {
             let what = if final_xform.is_some() { "has only a final xform" } else { "has no <xform>" };
             return Err(ctx.error(node, format!("{what}, nothing to draw (a size template such as vidres.flam3?)")));
+        }
+        if !(std_xforms.iter().map(|x| x.weight).sum::<f64>() > 0.0) {
+            return Err(ctx.error(node, "the xforms' weights sum to 0, nothing to draw"));
         }
         palette_issues.report(ctx, node);
 

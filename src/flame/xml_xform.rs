@@ -80,9 +80,21 @@ pub(super) fn xform(
     array_len: usize,
     label: &str,
 ) -> Result<XformRead, FlameError> {
-    if node.attributes().len() == 0 {
-        return Err(ctx.error(node, format!("{label} has no attributes")));
-    }
+    // Messages name the xform after the flame.
+    let flame = std::mem::replace(&mut ctx.flame, String::new());
+    ctx.flame = format!("{flame}: {label}");
+    let read = xform_in(ctx, node, params, is_final, array_len);
+    ctx.flame = flame;
+    read
+}
+
+fn xform_in(
+    ctx: &mut Ctx,
+    node: roxmltree::Node,
+    params: &ParamIndex,
+    is_final: bool,
+    array_len: usize,
+) -> Result<XformRead, FlameError> {
     let mut x = Xform {
         weight: 0.0,
         color: (array_len & 1) as f64,
@@ -106,7 +118,7 @@ pub(super) fn xform(
                 let w = attr_number(ctx, &attr)?;
                 if !w.is_finite() || w < 0.0 {
                     if !is_final {
-                        ctx.warn(node, format!("{label}: weight {w} is not a non-negative number; 0 is used"));
+                        ctx.warn(node, format!("weight {w} is not a non-negative number; 0 is used"));
                     }
                 } else {
                     x.weight = w;
@@ -133,7 +145,7 @@ pub(super) fn xform(
                 let mut c: Coefs = [0.0; 6];
                 c.copy_from_slice(&v);
                 if c.iter().any(|v| !v.is_finite()) {
-                    ctx.warn(node, format!("{label}: {name} has a value that is not finite; the identity is used"));
+                    ctx.warn(node, format!("{name} has a value that is not finite; the identity is used"));
                     c = IDENTITY;
                 }
                 if name == "coefs" {
@@ -146,7 +158,7 @@ pub(super) fn xform(
                 let row = numbers(attr.value())
                     .ok_or_else(|| ctx.attr_error(&attr, format!("'{}' is not a list of numbers", attr.value())))?;
                 if is_final {
-                    ctx.warn(node, "final xform: chaos ignored (the final xform is applied after every step)");
+                    ctx.warn(node, "chaos ignored (the final xform is applied after every step)");
                 } else {
                     chaos = Some(row);
                 }
@@ -184,7 +196,7 @@ pub(super) fn xform(
         }
     }
     if is_final && weight_given && x.weight != 0.0 {
-        ctx.warn(node, "final xform: weight ignored (flam3 refuses a weight on a final xform)");
+        ctx.warn(node, "weight ignored (flam3 refuses a weight on a final xform)");
     }
     if is_final {
         x.weight = 0.0;
@@ -195,7 +207,7 @@ pub(super) fn xform(
         }
         let info = &VARIATIONS[j];
         if !w.is_finite() {
-            ctx.warn(node, format!("{label}: {} weight {w} left out", info.name));
+            ctx.warn(node, format!("{} weight {w} left out", info.name));
             continue;
         }
         let params = info
@@ -207,7 +219,7 @@ pub(super) fn xform(
         x.variations.push(VariationTerm { variation: Variation(j as u8), weight: w, params });
     }
     if !unknown.is_empty() {
-        ctx.warn(node, format!("{label}: unknown variations or parameters, left out: {}", unknown.join(", ")));
+        ctx.warn(node, format!("unknown variations or parameters, left out: {}", unknown.join(", ")));
     }
     Ok(XformRead { xform: x, chaos })
 }
