@@ -141,7 +141,7 @@ enum RenderBackend {
 }
 
 pub fn render(args: RenderArgs) -> anyhow::Result<()> {
-    if super::render_flame::is_flame_file(&args.scene) {
+    if nlifs::flame::xml::is_flame_path(&args.scene) {
         if args.raw.is_some() || args.points.is_some() || args.mode.is_some() || args.backend == RenderBackend::Gpu {
             return Err(BadInput(
                 "--part, --raw, --points, --mode and --backend gpu are for scenes, not flame files".into(),

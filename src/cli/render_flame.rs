@@ -3,7 +3,7 @@
 //! flames through `nlifs render` and through `flam3-render` side by side in CPU seconds.
 
 use std::path::{Path, PathBuf};
-use std::process::Command;
+use std::process::{Command, Stdio};
 
 use anyhow::Context;
 
@@ -11,14 +11,6 @@ use nlifs::flame::Flame;
 use nlifs::flame::render::{FlameImage, sample_count};
 
 use super::{BadInput, probe_output, progress_bar};
-
-/// Whether `path` names a flame file (`.flame`, `.flam3`), which `nlifs render` renders with
-/// the flame renderer instead of reading it as a scene.
-pub fn is_flame_file(path: &Path) -> bool {
-    path.extension()
-        .and_then(|e| e.to_str())
-        .is_some_and(|e| e.eq_ignore_ascii_case("flame") || e.eq_ignore_ascii_case("flam3"))
-}
 
 /// What `nlifs render` was asked for a flame file.
 pub struct FlameRequest<'a> {
@@ -128,7 +120,8 @@ pub fn bench(file: &Path, out: &Path) -> anyhow::Result<()> {
     let exe = std::env::current_exe().context("cannot find the nlifs executable")?;
     let child_cpu = |cmd: &mut Command, what: &str| -> anyhow::Result<f64> {
         let before = nlifs::cpu_time::cpu_secs().1;
-        let status = cmd.status().with_context(|| format!("cannot run {what}"))?;
+        let status =
+            cmd.stdout(Stdio::null()).stderr(Stdio::null()).status().with_context(|| format!("cannot run {what}"))?;
         if !status.success() {
             anyhow::bail!("{what} failed ({status})");
         }

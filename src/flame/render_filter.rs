@@ -143,8 +143,28 @@ pub(super) struct SpatialFilter {
     pub coefs: Vec<f64>,
 }
 
+/// The kernel flam3 evaluates for a `filter_shape` name. Its parser gives the names numbers
+/// from `flam3.h` (lanczos3 6, lanczos2 7, mitchell 8, blackman 9, catrom 10, hamming 11,
+/// hanning 12) while `filters.c` numbers its kernels and supports in another order (mitchell 6,
+/// blackman 7, catrom 8, hanning 9, hamming 10, lanczos3 11, lanczos2 12): `mitchell` in a file
+/// is rendered with the Catmull-Rom kernel, `catrom` with sinc·Hamming, and so on. flam3-render
+/// 3.1.1's pictures are made so, so these are too.
+fn as_flam3_evaluates(shape: FilterShape) -> FilterShape {
+    match shape {
+        FilterShape::Lanczos3 => FilterShape::Mitchell,
+        FilterShape::Lanczos2 => FilterShape::Blackman,
+        FilterShape::Mitchell => FilterShape::Catrom,
+        FilterShape::Blackman => FilterShape::Hanning,
+        FilterShape::Catrom => FilterShape::Hamming,
+        FilterShape::Hamming => FilterShape::Lanczos3,
+        FilterShape::Hanning => FilterShape::Lanczos2,
+        other => other,
+    }
+}
+
 impl SpatialFilter {
-    pub fn new(shape: FilterShape, radius: f64, oversample: usize) -> Result<Self, RenderError> {
+    pub fn new(named: FilterShape, radius: f64, oversample: usize) -> Result<Self, RenderError> {
+        let shape = as_flam3_evaluates(named);
         let supp = support(shape);
         let fw = 2.0 * supp * oversample as f64 * radius.max(0.0);
         let mut width = fw as usize + 1;
