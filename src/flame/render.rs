@@ -375,19 +375,20 @@ impl ChaosGame {
             p = q;
             color = next_color;
             let (mut shown, mut shown_color) = (p, color);
-            if let Some(f) = &self.final_xform {
-                if f.opacity == 1.0 || rng.next_f64() < f.opacity {
-                    shown_color = f.color_of(color);
-                    shown = f.map.apply(p, &mut rng);
-                    if is_bad(shown) {
-                        shown = [uniform11(&mut rng), uniform11(&mut rng)];
-                    }
+            if let Some(f) = &self.final_xform
+                && (f.opacity == 1.0 || rng.next_f64() < f.opacity)
+            {
+                shown_color = f.color_of(color);
+                shown = f.map.apply(p, &mut rng);
+                if is_bad(shown) {
+                    shown = [uniform11(&mut rng), uniform11(&mut rng)];
                 }
             }
-            if i >= 0 && x.plotted_weight != 0.0 {
-                if let Some(b) = self.camera.bucket(shown) {
-                    self.plot(&mut histogram[b], shown_color, x.plotted_weight);
-                }
+            if i >= 0
+                && x.plotted_weight != 0.0
+                && let Some(b) = self.camera.bucket(shown)
+            {
+                self.plot(&mut histogram[b], shown_color, x.plotted_weight);
             }
             i += 1;
         }

@@ -365,7 +365,7 @@ fn estimate_band(
     let (w, h) = (layout.hist_width, layout.hist_height);
     let os = layout.oversample;
     let ss = (os / 2) as i64;
-    let neighbourhood_scale = if os % 2 == 0 { (os as f64 / (os as f64 + 1.0)).powi(2) } else { 1.0 };
+    let neighbourhood_scale = if os.is_multiple_of(2) { (os as f64 / (os as f64 + 1.0)).powi(2) } else { 1.0 };
     let first_row = band.start.saturating_sub(de.reach);
     let last_row = (band.end + de.reach).min(h);
     let mut buf = vec![[0.0; 4]; (last_row - first_row) * w];
