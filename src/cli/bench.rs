@@ -130,6 +130,14 @@ pub enum BenchCommand {
     /// CPU render accumulation on all threads: per-thread framebuffers against one shared
     /// framebuffer, points/s per splat mode, side by side.
     Render(super::bench_render::BenchRenderArgs),
+    /// A flame file's flames rendered once by `nlifs render` and by `flam3-render` (one
+    /// thread), the same samples: CPU seconds of each whole process, samples per CPU second.
+    Flame {
+        file: PathBuf,
+        /// Where the images go.
+        #[arg(long, default_value = "target/bench-flame")]
+        out: PathBuf,
+    },
 }
 
 pub fn run(command: BenchCommand) -> anyhow::Result<()> {
@@ -157,6 +165,7 @@ pub fn run(command: BenchCommand) -> anyhow::Result<()> {
             record(&scene, frames, width, height, points_per_frame, &out)
         }
         BenchCommand::Render(args) => super::bench_render::run(args),
+        BenchCommand::Flame { file, out } => super::render_flame::bench(&file, &out),
         BenchCommand::Look { scene, width, height, points, repeats } => {
             super::bench_look::run(&scene, width, height, points, repeats)
         }

@@ -21,6 +21,7 @@ mod merge;
 mod record;
 mod render;
 mod render_cpu;
+mod render_flame;
 mod snapshot;
 mod tone_args;
 mod view;

@@ -87,6 +87,18 @@ pub struct RenderArgs {
     /// Colour by function or by a palette (`--color`, `--palette`).
     #[command(flatten)]
     color: super::color_args::ColorArgs,
+    /// Flame files: samples per output pixel (default: the flame's `quality`).
+    #[arg(long)]
+    quality: Option<f64>,
+    /// Flame files: render threads (default: all cores; the bytes are the same).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=1024))]
+    threads: Option<u32>,
+    /// Flame files: the flame to render, numbered from 0 (default: the first).
+    #[arg(long, conflicts_with = "name")]
+    index: Option<usize>,
+    /// Flame files: the flame to render by its `name`.
+    #[arg(long)]
+    name: Option<String>,
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -129,6 +141,31 @@ enum RenderBackend {
 }
 
 pub fn render(args: RenderArgs) -> anyhow::Result<()> {
+    if nlifs::flame::xml::is_flame_path(&args.scene) {
+        if args.raw.is_some() || args.points.is_some() || args.mode.is_some() || args.backend == RenderBackend::Gpu {
+            return Err(BadInput(
+                "--part, --raw, --points, --mode and --backend gpu are for scenes, not flame files".into(),
+            )
+            .into());
+        }
+        let output = args.output.clone().expect("clap requires --output without --raw");
+        return super::render_flame::render(super::render_flame::FlameRequest {
+            file: &args.scene,
+            output: &output,
+            width: args.width,
+            height: args.height,
+            quality: args.quality,
+            seed: args.seed,
+            threads: args.threads.map(|n| n as usize),
+            index: args.index,
+            name: args.name.as_deref(),
+        });
+    }
+    if args.quality.is_some() || args.threads.is_some() || args.index.is_some() || args.name.is_some() {
+        return Err(
+            BadInput("--quality, --threads, --index and --name are for flame files (.flame, .flam3)".into()).into()
+        );
+    }
     let scene = load(&args.scene)?;
     let mut settings = scene.render_at(args.time);
     if let Some(w) = args.width {

@@ -13,6 +13,9 @@
 //! estimation, spatial filter and tone map (flam3's `rect.c`, `filters.c`).
 
 pub mod palette;
+pub mod render;
+pub mod render_filter;
+pub mod render_tone;
 pub mod variations;
 pub mod xml;
 mod xml_palette;

@@ -1,0 +1,474 @@
+//! A flame rendered as flam3 renders it (its `rect.c`): the chaos game into a supersampled
+//! histogram, then density estimation, the spatial filter and the log-density tone map
+//! (`render_filter.rs`, `render_tone.rs`).
+//!
+//! The chaos game keeps flam3's semantics so that the pictures agree: the next xform is drawn
+//! from a table of 16384 entries built from the weights (one row per previous xform when the
+//! flame has xaos); each run of 10 000 samples starts from a random point in [−1, 1]² and drops
+//! its first 15 iterations; a point that leaves the plane (NaN or |v| > 1e10) is re-seeded at
+//! random and its step retried up to four times; the final xform maps a plotted copy while the
+//! orbit goes on from the point before it; an xform's `opacity` weighs its points by
+//! 10^(log₂ opacity) as flam3's does. The histogram holds flam3's integer buckets (palette
+//! colour × 255 × weight, rounded down, and 255 × weight for the count), so the sum over
+//! chains is exact and the picture is the same bytes for a seed whatever the thread count:
+//! run `k` draws from `Pcg32::for_stream(seed, 0, k)`, and threads take runs in any order.
+
+use std::sync::atomic::{AtomicU64, Ordering};
+
+use rayon::prelude::*;
+
+use super::render_filter::{DensityFilters, SpatialFilter};
+use super::variations::CompiledXform;
+use super::{Flame, PaletteMode, Xform};
+use crate::rng::Pcg32;
+
+/// Samples of one run of the chaos game (flam3's `sub_batch_size`).
+pub const RUN_SAMPLES: u64 = 10_000;
+/// Iterations dropped at the start of every run (flam3's `FUSE_27`).
+pub const FUSE_ITERATIONS: i64 = 15;
+/// Entries of the xform choice table (flam3's `CHOOSE_XFORM_GRAIN`).
+const CHOICE_ENTRIES: usize = 16_384;
+/// flam3's white level: palette colours are scaled to 0..255 in the histogram.
+pub(super) const WHITE_LEVEL: f64 = 255.0;
+/// The largest histogram this renderer allocates per thread.
+const MAX_HISTOGRAM_BYTES: u64 = 8 << 30;
+
+#[derive(Debug, thiserror::Error, PartialEq)]
+pub enum RenderError {
+    #[error("flame `{0}` has no xform with a positive weight: there is nothing to iterate")]
+    Empty(String),
+    #[error("xform {index} has the negative weight {weight}; weights must be ≥ 0")]
+    NegativeWeight { index: usize, weight: f64 },
+    #[error("size {0}×{1}: both must be at least 1 pixel")]
+    BadSize(u32, u32),
+    #[error("quality {0}: it must be greater than 0")]
+    BadQuality(f64),
+    #[error("supersample {0}: it must be at least 1")]
+    BadSupersample(u32),
+    #[error("scale {0}: pixels per unit must be greater than 0")]
+    BadScale(f64),
+    #[error("the palette has {0} entries; flam3's palettes have 256")]
+    BadPalette(usize),
+    #[error("{0}")]
+    BadEstimator(String),
+    #[error("the spatial filter of radius {0} is zero everywhere")]
+    BadFilter(f64),
+    #[error("the histogram ({width}×{height} buckets, {bytes} bytes) is too large")]
+    TooLarge { width: usize, height: usize, bytes: u64 },
+}
+
+/// An 8-bit RGBA picture, rows top to bottom (flam3-render's PNG: alpha 255, the background
+/// composited).
+#[derive(Clone, Debug, PartialEq)]
+pub struct FlameImage {
+    pub width: u32,
+    pub height: u32,
+    pub rgba: Vec<u8>,
+    /// Samples plotted or thrown (after the fuse), as flam3 counts them.
+    pub samples: u64,
+    /// Points re-seeded because an xform sent them out of the plane.
+    pub bad_values: u64,
+}
+
+/// The samples flam3 draws for a flame: quality × 4^zoom × width × height.
+pub fn sample_count(flame: &Flame) -> u64 {
+    let density = flame.quality * 4f64.powf(flame.zoom);
+    (density * f64::from(flame.size[0]) * f64::from(flame.size[1])).max(0.0) as u64
+}
+
+/// Renders `flame` with the chaos game seeded by `seed` on rayon's current pool;
+/// `progress(samples)` is called as runs finish, from any thread.
+pub fn render(flame: &Flame, seed: u32, progress: &(dyn Fn(u64) + Sync)) -> Result<FlameImage, RenderError> {
+    let layout = Layout::new(flame)?;
+    let game = ChaosGame::new(flame, &layout)?;
+    let samples = sample_count(flame);
+    let (histogram, bad_values) = game.run(seed, samples, &layout, progress);
+    let accumulated = super::render_filter::accumulate(flame, &layout, &histogram)?;
+    let rgba = super::render_tone::tone_map(flame, &layout, &accumulated);
+    Ok(FlameImage { width: flame.size[0], height: flame.size[1], rgba, samples, bad_values })
+}
+
+/// The histogram's geometry: the image supersampled, with a gutter around it wide enough for
+/// the spatial filter and the density estimator (flam3's `gutter_width`, `de_offset`).
+pub(super) struct Layout {
+    pub width: usize,
+    pub height: usize,
+    pub oversample: usize,
+    pub filter: SpatialFilter,
+    pub density: Option<DensityFilters>,
+    pub gutter: usize,
+    /// Where the spatial filter of the image's first pixel starts in the histogram.
+    pub filter_offset: usize,
+    pub hist_width: usize,
+    pub hist_height: usize,
+}
+
+impl Layout {
+    pub fn new(flame: &Flame) -> Result<Self, RenderError> {
+        let [w, h] = flame.size;
+        if w == 0 || h == 0 {
+            return Err(RenderError::BadSize(w, h));
+        }
+        if !(flame.quality > 0.0) {
+            return Err(RenderError::BadQuality(flame.quality));
+        }
+        if flame.supersample == 0 {
+            return Err(RenderError::BadSupersample(flame.supersample));
+        }
+        if !(flame.scale > 0.0) || !flame.scale.is_finite() {
+            return Err(RenderError::BadScale(flame.scale));
+        }
+        if flame.palette.len() != 256 {
+            return Err(RenderError::BadPalette(flame.palette.len()));
+        }
+        let oversample = flame.supersample as usize;
+        let filter = SpatialFilter::new(flame.filter_shape, flame.filter, oversample)?;
+        let density = DensityFilters::for_flame(flame, oversample)?;
+        let mut gutter = (filter.width - oversample) / 2;
+        let mut de_width = (flame.estimator_radius.ceil() as usize) * oversample;
+        if density.is_some() && de_width > 0 {
+            de_width += oversample - 1;
+        } else {
+            de_width = 0;
+        }
+        let filter_offset = if de_width > gutter {
+            let offset = de_width - gutter;
+            gutter = de_width;
+            offset
+        } else {
+            0
+        };
+        let hist_width = oversample * w as usize + 2 * gutter;
+        let hist_height = oversample * h as usize + 2 * gutter;
+        let bytes = (hist_width * hist_height) as u64 * std::mem::size_of::<Bucket>() as u64;
+        if bytes > MAX_HISTOGRAM_BYTES {
+            return Err(RenderError::TooLarge { width: hist_width, height: hist_height, bytes });
+        }
+        Ok(Self {
+            width: w as usize,
+            height: h as usize,
+            oversample,
+            filter,
+            density,
+            gutter,
+            filter_offset,
+            hist_width,
+            hist_height,
+        })
+    }
+}
+
+/// One histogram cell: palette colour sums (R, G, B, A, each × 255) and the count × 255.
+pub(super) type Bucket = [u32; 5];
+
+/// flam3's camera: pixels per unit scale·2^zoom, rotation about the center, +y down; maps a
+/// point of the plane to its bucket.
+struct Camera {
+    bounds: [f64; 4],
+    /// Buckets per unit and the first bucket's offset, each axis.
+    x_scale: f64,
+    x_offset: f64,
+    y_scale: f64,
+    y_offset: f64,
+    rotation: Option<[[f64; 2]; 2]>,
+    center: [f64; 2],
+    hist_width: usize,
+    hist_height: usize,
+}
+
+impl Camera {
+    fn new(flame: &Flame, layout: &Layout) -> Self {
+        let ppu = flame.scale * 2f64.powf(flame.zoom);
+        let gutter_units = layout.gutter as f64 / (layout.oversample as f64 * ppu);
+        let corner =
+            [flame.center[0] - layout.width as f64 / ppu / 2.0, flame.center[1] - layout.height as f64 / ppu / 2.0];
+        let bounds = [
+            corner[0] - gutter_units,
+            corner[1] - gutter_units,
+            corner[0] + layout.width as f64 / ppu + gutter_units,
+            corner[1] + layout.height as f64 / ppu + gutter_units,
+        ];
+        let x_scale = layout.hist_width as f64 / (bounds[2] - bounds[0]);
+        let y_scale = layout.hist_height as f64 / (bounds[3] - bounds[1]);
+        let rotation = (flame.rotate != 0.0).then(|| {
+            let (s, c) = flame.rotate.to_radians().sin_cos();
+            [[c, -s], [s, c]]
+        });
+        Self {
+            bounds,
+            x_scale,
+            x_offset: x_scale * bounds[0],
+            y_scale,
+            y_offset: y_scale * bounds[1],
+            rotation,
+            center: flame.center,
+            hist_width: layout.hist_width,
+            hist_height: layout.hist_height,
+        }
+    }
+
+    #[inline(always)]
+    fn bucket(&self, p: [f64; 2]) -> Option<usize> {
+        let [x, y] = match &self.rotation {
+            Some(r) => {
+                let d = [p[0] - self.center[0], p[1] - self.center[1]];
+                [d[0] * r[0][0] + d[1] * r[0][1] + self.center[0], d[0] * r[1][0] + d[1] * r[1][1] + self.center[1]]
+            }
+            None => p,
+        };
+        let b = &self.bounds;
+        if !(x >= b[0] && y >= b[1] && x <= b[2] && y <= b[3]) {
+            return None;
+        }
+        // On the far edge (x = bounds[2]) flam3 steps into the next row; this stays in the last.
+        let i = ((self.x_scale * x - self.x_offset) as usize).min(self.hist_width - 1);
+        let j = ((self.y_scale * y - self.y_offset) as usize).min(self.hist_height - 1);
+        Some(i + j * self.hist_width)
+    }
+}
+
+/// An xform as the chaos game uses it.
+struct GameXform {
+    map: CompiledXform,
+    color: f64,
+    color_speed: f64,
+    /// flam3's `vis_adjusted`: the weight of its points in the histogram.
+    plotted_weight: f64,
+    /// The final xform's chance of being applied (its raw opacity).
+    opacity: f64,
+}
+
+impl GameXform {
+    fn new(x: &Xform) -> Self {
+        let plotted_weight = if x.opacity == 0.0 { 0.0 } else { 10f64.powf(x.opacity.log2()) };
+        Self {
+            map: CompiledXform::new(x),
+            color: x.color,
+            color_speed: x.color_speed,
+            plotted_weight,
+            opacity: x.opacity,
+        }
+    }
+
+    #[inline(always)]
+    fn color_of(&self, c: f64) -> f64 {
+        self.color_speed * self.color + (1.0 - self.color_speed) * c
+    }
+}
+
+/// The chaos game of one flame: its xforms, choice tables, camera and palette.
+struct ChaosGame {
+    xforms: Vec<GameXform>,
+    final_xform: Option<GameXform>,
+    /// Row 0: by weight; row i + 1 (with xaos): after xform i.
+    choice: Vec<u16>,
+    xaos: bool,
+    camera: Camera,
+    palette_mode: PaletteMode,
+    /// The palette × 255 (flam3's `dmap`).
+    dmap: Vec<[f64; 4]>,
+    /// The buckets' increments of a point of weight 1 at each palette entry (step mode).
+    step_increments: Vec<Bucket>,
+}
+
+impl ChaosGame {
+    fn new(flame: &Flame, layout: &Layout) -> Result<Self, RenderError> {
+        for (index, x) in flame.xforms.iter().enumerate() {
+            if x.weight < 0.0 || x.weight.is_nan() {
+                return Err(RenderError::NegativeWeight { index, weight: x.weight });
+            }
+        }
+        let weights: Vec<f64> = flame.xforms.iter().map(|x| x.weight).collect();
+        let first = choice_row(&weights).ok_or_else(|| RenderError::Empty(flame.name.clone()))?;
+        let n = flame.xforms.len();
+        let chaos = |i: usize, j: usize| flame.xforms[i].chaos.get(j).copied().unwrap_or(1.0);
+        let xaos = (0..n).any(|i| (0..n).any(|j| (chaos(i, j) - 1.0).abs() > 1e-10));
+        let mut choice = first;
+        if xaos {
+            for i in 0..n {
+                let row_weights: Vec<f64> = (0..n).map(|j| weights[j] * chaos(i, j).max(0.0)).collect();
+                // A row with nothing to go to: flam3 refuses the flame; this falls back to the
+                // weights, so that such an xform behaves as without xaos.
+                let row = choice_row(&row_weights).unwrap_or_else(|| choice[..CHOICE_ENTRIES].to_vec());
+                choice.extend_from_slice(&row);
+            }
+        }
+        let dmap: Vec<[f64; 4]> = flame.palette.iter().map(|c| c.map(|v| v * WHITE_LEVEL)).collect();
+        let step_increments = dmap.iter().map(|c| increments(*c, 1.0)).collect();
+        Ok(Self {
+            xforms: flame.xforms.iter().map(GameXform::new).collect(),
+            final_xform: flame.final_xform.as_ref().map(GameXform::new),
+            choice,
+            xaos,
+            camera: Camera::new(flame, layout),
+            palette_mode: flame.palette_mode,
+            dmap,
+            step_increments,
+        })
+    }
+
+    /// All runs of `samples`, on rayon's pool: the summed histogram and the re-seeds.
+    fn run(&self, seed: u32, samples: u64, layout: &Layout, progress: &(dyn Fn(u64) + Sync)) -> (Vec<Bucket>, u64) {
+        let runs = samples.div_ceil(RUN_SAMPLES);
+        let next_run = AtomicU64::new(0);
+        let cells = layout.hist_width * layout.hist_height;
+        let workers = rayon::current_num_threads().max(1).min(runs.max(1) as usize);
+        let parts: Vec<(Vec<Bucket>, u64)> = (0..workers)
+            .into_par_iter()
+            .map(|_| {
+                let mut histogram = vec![[0u32; 5]; cells];
+                let mut bad = 0;
+                loop {
+                    let run = next_run.fetch_add(1, Ordering::Relaxed);
+                    if run >= runs {
+                        break;
+                    }
+                    let n = RUN_SAMPLES.min(samples - run * RUN_SAMPLES);
+                    bad += self.run_one(seed, run as u32, n, &mut histogram);
+                    progress(n);
+                }
+                (histogram, bad)
+            })
+            .collect();
+        let mut parts = parts.into_iter();
+        let (mut total, mut bad) = parts.next().unwrap_or_else(|| (vec![[0u32; 5]; cells], 0));
+        for (part, part_bad) in parts {
+            bad += part_bad;
+            total.par_iter_mut().zip(part.par_iter()).for_each(|(t, p)| {
+                for k in 0..5 {
+                    t[k] = t[k].saturating_add(p[k]);
+                }
+            });
+        }
+        (total, bad)
+    }
+
+    /// One run: `n` samples after the fuse, from its own stream. Returns the re-seeds.
+    fn run_one(&self, seed: u32, run: u32, n: u64, histogram: &mut [Bucket]) -> u64 {
+        let mut rng = Pcg32::for_stream(seed, 0, run);
+        let mut p = [uniform11(&mut rng), uniform11(&mut rng)];
+        let mut color = rng.next_f64();
+        let mut last = 0usize;
+        let mut consecutive_bad = 0;
+        let mut bad = 0;
+        let mut i = -FUSE_ITERATIONS;
+        let n = n as i64;
+        while i < n {
+            let entry = rng.next_u32() as usize & (CHOICE_ENTRIES - 1);
+            let row = if self.xaos { last } else { 0 };
+            let k = self.choice[row * CHOICE_ENTRIES + entry] as usize;
+            let x = &self.xforms[k];
+            let next_color = x.color_of(color);
+            let mut q = x.map.apply(p, &mut rng);
+            if is_bad(q) {
+                q = [uniform11(&mut rng), uniform11(&mut rng)];
+                bad += 1;
+                consecutive_bad += 1;
+                if consecutive_bad < 5 {
+                    p = q;
+                    color = next_color;
+                    continue;
+                }
+            }
+            consecutive_bad = 0;
+            last = k + 1;
+            p = q;
+            color = next_color;
+            let (mut shown, mut shown_color) = (p, color);
+            if let Some(f) = &self.final_xform
+                && (f.opacity == 1.0 || rng.next_f64() < f.opacity)
+            {
+                shown_color = f.color_of(color);
+                shown = f.map.apply(p, &mut rng);
+                if is_bad(shown) {
+                    shown = [uniform11(&mut rng), uniform11(&mut rng)];
+                }
+            }
+            if i >= 0
+                && x.plotted_weight != 0.0
+                && let Some(b) = self.camera.bucket(shown)
+            {
+                self.plot(&mut histogram[b], shown_color, x.plotted_weight);
+            }
+            i += 1;
+        }
+        bad
+    }
+
+    #[inline(always)]
+    fn plot(&self, bucket: &mut Bucket, color: f64, weight: f64) {
+        let index = color * 256.0;
+        let inc = match self.palette_mode {
+            PaletteMode::Step => {
+                let i = (index.clamp(0.0, 255.0)) as usize;
+                if weight == 1.0 { self.step_increments[i] } else { increments(self.dmap[i], weight) }
+            }
+            PaletteMode::Linear => {
+                let (i, frac) = if index < 0.0 || index.is_nan() {
+                    (0, 0.0)
+                } else if index >= 255.0 {
+                    (254, 1.0)
+                } else {
+                    let i = index as usize;
+                    (i, index - i as f64)
+                };
+                let (a, b) = (self.dmap[i], self.dmap[i + 1]);
+                increments(std::array::from_fn(|c| a[c] * (1.0 - frac) + b[c] * frac), weight)
+            }
+        };
+        for k in 0..5 {
+            bucket[k] = bucket[k].saturating_add(inc[k]);
+        }
+    }
+}
+
+/// flam3's integer bucket increments of a colour (× 255) at a plotted weight.
+#[inline(always)]
+fn increments(color: [f64; 4], weight: f64) -> Bucket {
+    if weight == 1.0 {
+        [color[0] as u32, color[1] as u32, color[2] as u32, color[3] as u32, WHITE_LEVEL as u32]
+    } else {
+        [
+            (weight * color[0]) as u32,
+            (weight * color[1]) as u32,
+            (weight * color[2]) as u32,
+            (weight * color[3]) as u32,
+            (weight * WHITE_LEVEL) as u32,
+        ]
+    }
+}
+
+/// flam3's choice table: entry e picks the xform whose cumulative weight interval holds
+/// e · total / 16384. `None` when the weights sum to 0.
+fn choice_row(weights: &[f64]) -> Option<Vec<u16>> {
+    let total: f64 = weights.iter().sum();
+    if !(total > 0.0) || weights.is_empty() {
+        return None;
+    }
+    let step = total / CHOICE_ENTRIES as f64;
+    let mut row = Vec::with_capacity(CHOICE_ENTRIES);
+    let mut j = 0;
+    let mut t = weights[0];
+    let mut r = 0.0;
+    for _ in 0..CHOICE_ENTRIES {
+        while r >= t && j + 1 < weights.len() {
+            j += 1;
+            t += weights[j];
+        }
+        row.push(j as u16);
+        r += step;
+    }
+    Some(row)
+}
+
+#[inline(always)]
+fn uniform11(rng: &mut Pcg32) -> f64 {
+    rng.next_f64() * 2.0 - 1.0
+}
+
+/// flam3's `badvalue`: NaN or beyond ±1e10.
+#[inline(always)]
+fn is_bad(p: [f64; 2]) -> bool {
+    let bad = |v: f64| v.is_nan() || !(-1e10..=1e10).contains(&v);
+    bad(p[0]) || bad(p[1])
+}

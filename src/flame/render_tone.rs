@@ -1,0 +1,188 @@
+//! flam3's last step (the end of its `rect.c`, `flam3_calc_alpha` and `flam3_calc_newrgb` of
+//! `palettes.c`): the spatial filter takes the accumulation buffer down to one value per output
+//! pixel, then the tone map gives its 8-bit colour. The alpha is the filtered density raised to
+//! 1/gamma (linear below gamma_threshold); vibrancy mixes the colour scaled by that alpha with
+//! each channel raised to 1/gamma on its own; highlight_power ≥ 0 desaturates a channel past
+//! white instead of clipping it; the background fills what the alpha leaves, and the PNG's
+//! alpha is 255 as in flam3-render without `transparency`.
+
+use rayon::prelude::*;
+
+use super::Flame;
+use super::render::{Layout, WHITE_LEVEL};
+
+/// flam3's `PREFILTER_WHITE`.
+const PREFILTER_WHITE: f64 = 255.0;
+
+/// The RGBA8 pixels of the image from the accumulation buffer.
+pub(super) fn tone_map(flame: &Flame, layout: &Layout, acc: &[[f64; 4]]) -> Vec<u8> {
+    let tone = Tone::new(flame);
+    let filter = &layout.filter;
+    let (w, os) = (layout.hist_width, layout.oversample);
+    let mut rgba = vec![0u8; layout.width * layout.height * 4];
+    rgba.par_chunks_mut(layout.width * 4).enumerate().for_each(|(j, row)| {
+        let y = layout.filter_offset + j * os;
+        for (i, px) in row.chunks_exact_mut(4).enumerate() {
+            let x = layout.filter_offset + i * os;
+            let mut t = [0.0; 4];
+            for jj in 0..filter.width {
+                let line = &acc[x + (y + jj) * w..x + (y + jj) * w + filter.width];
+                let coefs = &filter.coefs[jj * filter.width..(jj + 1) * filter.width];
+                for (k, a) in coefs.iter().zip(line) {
+                    for c in 0..4 {
+                        t[c] += k * a[c];
+                    }
+                }
+            }
+            let [r, g, b] = tone.pixel(t);
+            px.copy_from_slice(&[r, g, b, 255]);
+        }
+    });
+    rgba
+}
+
+/// The tone map's constants.
+struct Tone {
+    inverse_gamma: f64,
+    linear_range: f64,
+    vibrancy: f64,
+    highlight_power: f64,
+    /// The background × 256, as flam3 scales it.
+    background: [f64; 3],
+}
+
+impl Tone {
+    fn new(flame: &Flame) -> Self {
+        Self {
+            inverse_gamma: 1.0 / flame.gamma,
+            linear_range: flame.gamma_threshold,
+            vibrancy: flame.vibrancy,
+            highlight_power: flame.highlight_power,
+            background: flame.background.map(|c| c * 256.0),
+        }
+    }
+
+    fn pixel(&self, t: [f64; 4]) -> [u8; 3] {
+        let density = t[3] / PREFILTER_WHITE;
+        let (alpha, ls) = if t[3] <= 0.0 {
+            (0.0, 0.0)
+        } else {
+            let alpha = calc_alpha(density, self.inverse_gamma, self.linear_range);
+            (alpha.clamp(0.0, 1.0), self.vibrancy * 256.0 * alpha / density)
+        };
+        let vivid = calc_newrgb(t, ls, self.highlight_power);
+        std::array::from_fn(|c| {
+            let a = vivid[c]
+                + (1.0 - self.vibrancy) * 256.0 * (t[c] / PREFILTER_WHITE).powf(self.inverse_gamma)
+                + (1.0 - alpha) * self.background[c];
+            // A channel a filter's negative lobe took below 0 is NaN here (its power 1/gamma);
+            // flam3-render's clamps (compiled to minsd/maxsd) turn NaN into 255, the white
+            // fringe of its Mitchell and Lanczos pictures, and so does this.
+            if a.is_nan() { 255 } else { a.clamp(0.0, 255.0) as u8 }
+        })
+    }
+}
+
+/// The density raised to `gamma` (here 1/gamma), blended linearly below `linear_range`.
+fn calc_alpha(density: f64, gamma: f64, linear_range: f64) -> f64 {
+    if density <= 0.0 {
+        return 0.0;
+    }
+    if density < linear_range {
+        let frac = density / linear_range;
+        (1.0 - frac) * density * (linear_range.powf(gamma) / linear_range) + frac * density.powf(gamma)
+    } else {
+        density.powf(gamma)
+    }
+}
+
+/// The colour scaled by `ls`, with flam3's highlight handling of a channel past 255.
+fn calc_newrgb(t: [f64; 4], ls: f64, highlight_power: f64) -> [f64; 3] {
+    if ls == 0.0 || (t[0] == 0.0 && t[1] == 0.0 && t[2] == 0.0) {
+        return [0.0; 3];
+    }
+    let mut max_scaled = -1.0;
+    let mut max_channel = 0.0;
+    for c in t.iter().take(3) {
+        let a = ls * (c / PREFILTER_WHITE);
+        if a > max_scaled {
+            max_scaled = a;
+            max_channel = c / PREFILTER_WHITE;
+        }
+    }
+    let new_ls = WHITE_LEVEL / max_channel;
+    if max_scaled > 255.0 && highlight_power >= 0.0 {
+        let ratio = (new_ls / ls).powf(highlight_power);
+        let rgb: [f64; 3] = std::array::from_fn(|c| new_ls * (t[c] / PREFILTER_WHITE) / 255.0);
+        let mut hsv = rgb_to_hsv(rgb);
+        hsv[1] *= ratio;
+        hsv_to_rgb(hsv).map(|v| v * 255.0)
+    } else {
+        let blend = if max_scaled <= 255.0 { 1.0 } else { (-highlight_power).min(1.0) };
+        std::array::from_fn(|c| ((1.0 - blend) * new_ls + blend * ls) * (t[c] / PREFILTER_WHITE))
+    }
+}
+
+/// h in [0, 6), s and v in [0, 1] (flam3's `rgb2hsv`).
+fn rgb_to_hsv([r, g, b]: [f64; 3]) -> [f64; 3] {
+    let max = r.max(g).max(b);
+    let min = r.min(g).min(b);
+    let delta = max - min;
+    let s = if max != 0.0 { delta / max } else { 0.0 };
+    let mut h = 0.0;
+    if s != 0.0 {
+        let (rc, gc, bc) = ((max - r) / delta, (max - g) / delta, (max - b) / delta);
+        h = if r == max {
+            bc - gc
+        } else if g == max {
+            2.0 + rc - bc
+        } else {
+            4.0 + gc - rc
+        };
+        if h < 0.0 {
+            h += 6.0;
+        }
+    }
+    [h, s, max]
+}
+
+/// flam3's `hsv2rgb`.
+fn hsv_to_rgb([h, s, v]: [f64; 3]) -> [f64; 3] {
+    let h = h.rem_euclid(6.0);
+    let sector = h.floor();
+    let f = h - sector;
+    let (p, q, t) = (v * (1.0 - s), v * (1.0 - s * f), v * (1.0 - s * (1.0 - f)));
+    match sector as u8 {
+        1 => [q, v, p],
+        2 => [p, v, t],
+        3 => [p, q, v],
+        4 => [t, p, v],
+        5 => [v, p, q],
+        _ => [v, t, p],
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn hsv_round_trip() {
+        for rgb in [[0.2, 0.5, 0.9], [1.0, 0.0, 0.0], [0.3, 0.3, 0.3], [0.9, 0.8, 0.1]] {
+            let back = hsv_to_rgb(rgb_to_hsv(rgb));
+            for c in 0..3 {
+                assert!((back[c] - rgb[c]).abs() < 1e-12, "{rgb:?} -> {back:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn alpha_is_linear_below_the_threshold_and_a_power_above() {
+        let g = 1.0 / 4.0;
+        assert!((calc_alpha(0.5, g, 0.01) - 0.5f64.powf(g)).abs() < 1e-15);
+        // Below the threshold the curve runs from the line through 0 to the power at the threshold.
+        let near_zero = calc_alpha(1e-6, g, 0.01);
+        assert!((near_zero - 1e-6 * 0.01f64.powf(g) / 0.01).abs() < 1e-9);
+        assert_eq!(calc_alpha(0.0, g, 0.01), 0.0);
+    }
+}
