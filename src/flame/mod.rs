@@ -14,7 +14,10 @@
 
 pub mod palette;
 pub mod render;
+mod render_base;
+mod render_density;
 pub mod render_filter;
+mod render_layout;
 pub mod render_tone;
 pub mod variations;
 pub mod xml;

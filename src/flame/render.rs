@@ -1,6 +1,7 @@
 //! A flame rendered as flam3 renders it (its `rect.c`): the chaos game into a supersampled
 //! histogram, then density estimation, the spatial filter and the log-density tone map
-//! (`render_filter.rs`, `render_tone.rs`).
+//! (`render_density.rs`, `render_filter.rs`, `render_tone.rs`; the histogram's geometry in
+//! `render_layout.rs`, what the stages share in `render_base.rs`).
 //!
 //! The chaos game keeps flam3's semantics so that the pictures agree: the next xform is drawn
 //! from a table of 16384 entries built from the weights (one row per previous xform when the
@@ -17,7 +18,9 @@ use std::sync::atomic::{AtomicU64, Ordering};
 
 use rayon::prelude::*;
 
-use super::render_filter::{DensityFilters, SpatialFilter};
+pub use super::render_base::RenderError;
+use super::render_base::{Bucket, WHITE_LEVEL};
+use super::render_layout::Layout;
 use super::variations::CompiledXform;
 use super::{Flame, PaletteMode, Xform};
 use crate::rng::Pcg32;
@@ -28,34 +31,6 @@ pub const RUN_SAMPLES: u64 = 10_000;
 pub const FUSE_ITERATIONS: i64 = 15;
 /// Entries of the xform choice table (flam3's `CHOOSE_XFORM_GRAIN`).
 const CHOICE_ENTRIES: usize = 16_384;
-/// flam3's white level: palette colours are scaled to 0..255 in the histogram.
-pub(super) const WHITE_LEVEL: f64 = 255.0;
-/// The largest histogram this renderer allocates per thread.
-const MAX_HISTOGRAM_BYTES: u64 = 8 << 30;
-
-#[derive(Debug, thiserror::Error, PartialEq)]
-pub enum RenderError {
-    #[error("flame `{0}` has no xform with a positive weight: there is nothing to iterate")]
-    Empty(String),
-    #[error("xform {index} has the negative weight {weight}; weights must be ≥ 0")]
-    NegativeWeight { index: usize, weight: f64 },
-    #[error("size {0}×{1}: both must be at least 1 pixel")]
-    BadSize(u32, u32),
-    #[error("quality {0}: it must be greater than 0")]
-    BadQuality(f64),
-    #[error("supersample {0}: it must be at least 1")]
-    BadSupersample(u32),
-    #[error("scale {0}: pixels per unit must be greater than 0")]
-    BadScale(f64),
-    #[error("the palette has {0} entries; flam3's palettes have 256")]
-    BadPalette(usize),
-    #[error("{0}")]
-    BadEstimator(String),
-    #[error("the spatial filter of radius {0} is zero everywhere")]
-    BadFilter(f64),
-    #[error("the histogram ({width}×{height} buckets, {bytes} bytes) is too large")]
-    TooLarge { width: usize, height: usize, bytes: u64 },
-}
 
 /// An 8-bit RGBA picture, rows top to bottom (flam3-render's PNG: alpha 255, the background
 /// composited).
@@ -83,83 +58,10 @@ pub fn render(flame: &Flame, seed: u32, progress: &(dyn Fn(u64) + Sync)) -> Resu
     let game = ChaosGame::new(flame, &layout)?;
     let samples = sample_count(flame);
     let (histogram, bad_values) = game.run(seed, samples, &layout, progress);
-    let accumulated = super::render_filter::accumulate(flame, &layout, &histogram)?;
+    let accumulated = super::render_density::accumulate(flame, &layout, &histogram)?;
     let rgba = super::render_tone::tone_map(flame, &layout, &accumulated);
     Ok(FlameImage { width: flame.size[0], height: flame.size[1], rgba, samples, bad_values })
 }
-
-/// The histogram's geometry: the image supersampled, with a gutter around it wide enough for
-/// the spatial filter and the density estimator (flam3's `gutter_width`, `de_offset`).
-pub(super) struct Layout {
-    pub width: usize,
-    pub height: usize,
-    pub oversample: usize,
-    pub filter: SpatialFilter,
-    pub density: Option<DensityFilters>,
-    pub gutter: usize,
-    /// Where the spatial filter of the image's first pixel starts in the histogram.
-    pub filter_offset: usize,
-    pub hist_width: usize,
-    pub hist_height: usize,
-}
-
-impl Layout {
-    pub fn new(flame: &Flame) -> Result<Self, RenderError> {
-        let [w, h] = flame.size;
-        if w == 0 || h == 0 {
-            return Err(RenderError::BadSize(w, h));
-        }
-        if !(flame.quality > 0.0) {
-            return Err(RenderError::BadQuality(flame.quality));
-        }
-        if flame.supersample == 0 {
-            return Err(RenderError::BadSupersample(flame.supersample));
-        }
-        if !(flame.scale > 0.0) || !flame.scale.is_finite() {
-            return Err(RenderError::BadScale(flame.scale));
-        }
-        if flame.palette.len() != 256 {
-            return Err(RenderError::BadPalette(flame.palette.len()));
-        }
-        let oversample = flame.supersample as usize;
-        let filter = SpatialFilter::new(flame.filter_shape, flame.filter, oversample)?;
-        let density = DensityFilters::for_flame(flame, oversample)?;
-        let mut gutter = (filter.width - oversample) / 2;
-        let mut de_width = (flame.estimator_radius.ceil() as usize) * oversample;
-        if density.is_some() && de_width > 0 {
-            de_width += oversample - 1;
-        } else {
-            de_width = 0;
-        }
-        let filter_offset = if de_width > gutter {
-            let offset = de_width - gutter;
-            gutter = de_width;
-            offset
-        } else {
-            0
-        };
-        let hist_width = oversample * w as usize + 2 * gutter;
-        let hist_height = oversample * h as usize + 2 * gutter;
-        let bytes = (hist_width * hist_height) as u64 * std::mem::size_of::<Bucket>() as u64;
-        if bytes > MAX_HISTOGRAM_BYTES {
-            return Err(RenderError::TooLarge { width: hist_width, height: hist_height, bytes });
-        }
-        Ok(Self {
-            width: w as usize,
-            height: h as usize,
-            oversample,
-            filter,
-            density,
-            gutter,
-            filter_offset,
-            hist_width,
-            hist_height,
-        })
-    }
-}
-
-/// One histogram cell: palette colour sums (R, G, B, A, each × 255) and the count × 255.
-pub(super) type Bucket = [u32; 5];
 
 /// flam3's camera: pixels per unit scale·2^zoom, rotation about the center, +y down; maps a
 /// point of the plane to its bucket.

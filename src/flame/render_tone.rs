@@ -9,7 +9,8 @@
 use rayon::prelude::*;
 
 use super::Flame;
-use super::render::{Layout, WHITE_LEVEL};
+use super::render_base::WHITE_LEVEL;
+use super::render_layout::Layout;
 
 /// flam3's `PREFILTER_WHITE`.
 const PREFILTER_WHITE: f64 = 255.0;
