@@ -27,18 +27,26 @@ fn fixture_library(dir: &Path) -> PathBuf {
     path
 }
 
+/// A folder of its own for each call: the tests run in parallel and `common::temp_dir` empties
+/// a folder of the same name.
+fn fresh_dir(tag: &str) -> PathBuf {
+    static CALLS: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+    let n = CALLS.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    common::temp_dir(&format!("{tag}-{n}"))
+}
+
 fn options(dir: &Path) -> ReadOptions {
     ReadOptions { palette_library: fixture_library(dir) }
 }
 
 /// Reads `text` as `t.flame` with the fixture library; an error fails the test with its message.
 fn read(text: &str) -> FlameFile {
-    let dir = common::temp_dir("flame-reader");
+    let dir = fresh_dir("flame-reader");
     read_str_with(text, "t.flame", &options(&dir)).unwrap_or_else(|e| panic!("{e}"))
 }
 
 fn read_err(text: &str) -> String {
-    let dir = common::temp_dir("flame-reader-err");
+    let dir = fresh_dir("flame-reader-err");
     match read_str_with(text, "t.flame", &options(&dir)) {
         Ok(f) => panic!("read without error: {} flames, warnings {:?}", f.flames.len(), f.warnings),
         Err(e) => e.to_string(),

@@ -182,8 +182,10 @@ mod tests {
         let g = 1.0 / 4.0;
         assert!((calc_alpha(0.5, g, 0.01) - 0.5f64.powf(g)).abs() < 1e-15);
         // Below the threshold the curve runs from the line through 0 to the power at the threshold.
-        let near_zero = calc_alpha(1e-6, g, 0.01);
-        assert!((near_zero - 1e-6 * 0.01f64.powf(g) / 0.01).abs() < 1e-9);
+        // Near 0 its slope is the line's, 0.01^g / 0.01; at the threshold it meets the power.
+        let slope = calc_alpha(1e-12, g, 0.01) / 1e-12;
+        assert!((slope / (0.01f64.powf(g) / 0.01) - 1.0).abs() < 1e-2, "slope {slope}");
+        assert!((calc_alpha(0.01 - 1e-12, g, 0.01) - 0.01f64.powf(g)).abs() < 1e-9);
         assert_eq!(calc_alpha(0.0, g, 0.01), 0.0);
     }
 }
