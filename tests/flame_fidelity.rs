@@ -35,9 +35,9 @@ fn palette() -> Vec<[f64; 4]> {
     (0..256)
         .map(|i| {
             let t = i as f64 / 255.0;
-            let r = (0.5 + 0.5 * (6.283 * t).cos()) * 255.0;
-            let g = (0.5 + 0.5 * (6.283 * t + 2.1).cos()) * 255.0;
-            let b = (0.5 + 0.5 * (6.283 * t + 4.2).cos()) * 255.0;
+            let r = (0.5 + 0.5 * (std::f64::consts::TAU * t).cos()) * 255.0;
+            let g = (0.5 + 0.5 * (std::f64::consts::TAU * t + 2.1).cos()) * 255.0;
+            let b = (0.5 + 0.5 * (std::f64::consts::TAU * t + 4.2).cos()) * 255.0;
             // Whole byte values, as palettes in files hold them.
             [r.round() / 255.0, g.round() / 255.0, b.round() / 255.0, 1.0]
         })

@@ -311,6 +311,16 @@ mod tests {
     use super::*;
 
     #[test]
+    fn hsv_round_trip() {
+        for rgb in [[0.2, 0.5, 0.9], [1.0, 0.0, 0.0], [0.3, 0.3, 0.3], [0.9, 0.8, 0.1]] {
+            let back = hsv_to_rgb(rgb_to_hsv(rgb));
+            for c in 0..3 {
+                assert!((back[c] - rgb[c]).abs() < 1e-12, "{rgb:?} -> {back:?}");
+            }
+        }
+    }
+
+    #[test]
     fn missing_entries_blend_between_neighbours_and_wrap() {
         let mut p = PaletteEntries::default();
         p.entries[10] = Some([1.0, 0.0, 0.0, 1.0]);

@@ -9,6 +9,7 @@
 use rayon::prelude::*;
 
 use super::Flame;
+use super::palette::{hsv_to_rgb, rgb_to_hsv};
 use super::render_base::WHITE_LEVEL;
 use super::render_layout::Layout;
 
@@ -124,58 +125,9 @@ fn calc_newrgb(t: [f64; 4], ls: f64, highlight_power: f64) -> [f64; 3] {
     }
 }
 
-/// h in [0, 6), s and v in [0, 1] (flam3's `rgb2hsv`).
-fn rgb_to_hsv([r, g, b]: [f64; 3]) -> [f64; 3] {
-    let max = r.max(g).max(b);
-    let min = r.min(g).min(b);
-    let delta = max - min;
-    let s = if max != 0.0 { delta / max } else { 0.0 };
-    let mut h = 0.0;
-    if s != 0.0 {
-        let (rc, gc, bc) = ((max - r) / delta, (max - g) / delta, (max - b) / delta);
-        h = if r == max {
-            bc - gc
-        } else if g == max {
-            2.0 + rc - bc
-        } else {
-            4.0 + gc - rc
-        };
-        if h < 0.0 {
-            h += 6.0;
-        }
-    }
-    [h, s, max]
-}
-
-/// flam3's `hsv2rgb`.
-fn hsv_to_rgb([h, s, v]: [f64; 3]) -> [f64; 3] {
-    let h = h.rem_euclid(6.0);
-    let sector = h.floor();
-    let f = h - sector;
-    let (p, q, t) = (v * (1.0 - s), v * (1.0 - s * f), v * (1.0 - s * (1.0 - f)));
-    match sector as u8 {
-        1 => [q, v, p],
-        2 => [p, v, t],
-        3 => [p, q, v],
-        4 => [t, p, v],
-        5 => [v, p, q],
-        _ => [v, t, p],
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn hsv_round_trip() {
-        for rgb in [[0.2, 0.5, 0.9], [1.0, 0.0, 0.0], [0.3, 0.3, 0.3], [0.9, 0.8, 0.1]] {
-            let back = hsv_to_rgb(rgb_to_hsv(rgb));
-            for c in 0..3 {
-                assert!((back[c] - rgb[c]).abs() < 1e-12, "{rgb:?} -> {back:?}");
-            }
-        }
-    }
 
     #[test]
     fn alpha_is_linear_below_the_threshold_and_a_power_above() {
