@@ -66,31 +66,16 @@ fn base(name: &str, variations: &[(&str, f64)]) -> Flame {
     Flame {
         name: name.to_string(),
         size: [96, 72],
-        center: [0.0, 0.0],
         scale: 24.0,
-        rotate: 0.0,
-        zoom: 0.0,
         quality: 60.0,
-        supersample: 1,
-        filter: 0.5,
-        filter_shape: FilterShape::Gaussian,
-        brightness: 4.0,
-        gamma: 4.0,
-        gamma_threshold: 0.01,
-        vibrancy: 1.0,
-        highlight_power: -1.0,
-        background: [0.0, 0.0, 0.0],
         estimator_radius: 0.0,
-        estimator_minimum: 0.0,
-        estimator_curve: 0.4,
-        palette_mode: PaletteMode::Step,
         palette: palette(),
         xforms: vec![
             xform(0.5, 0.0, [0.55, 0.1, -0.1, 0.55, -0.6, -0.4], terms()),
             xform(0.3, 0.5, [0.5, -0.2, 0.2, 0.5, 0.6, -0.4], terms()),
             xform(0.2, 1.0, [0.45, 0.0, 0.0, 0.45, 0.0, 0.6], terms()),
         ],
-        final_xform: None,
+        ..Flame::default()
     }
 }
 

@@ -8,7 +8,7 @@ mod common;
 
 use common::{run_nlifs, temp_dir};
 use nlifs::flame::render::{RenderError, render, sample_count};
-use nlifs::flame::{FilterShape, Flame, PaletteMode, Variation, VariationTerm, Xform};
+use nlifs::flame::{Flame, PaletteMode, Variation, VariationTerm, Xform};
 
 fn flame() -> Flame {
     let term = |name: &str, weight: f64| {
@@ -28,23 +28,12 @@ fn flame() -> Flame {
     Flame {
         name: "test".into(),
         size: [48, 40],
-        center: [0.0, 0.0],
         scale: 14.0,
         rotate: 10.0,
-        zoom: 0.0,
         quality: 40.0,
         supersample: 2,
         filter: 0.6,
-        filter_shape: FilterShape::Gaussian,
-        brightness: 4.0,
-        gamma: 4.0,
-        gamma_threshold: 0.01,
-        vibrancy: 1.0,
-        highlight_power: -1.0,
-        background: [0.0, 0.0, 0.0],
         estimator_radius: 4.0,
-        estimator_minimum: 0.0,
-        estimator_curve: 0.4,
         palette_mode: PaletteMode::Linear,
         palette: (0..256).map(|i| [i as f64 / 255.0, 1.0 - i as f64 / 255.0, 0.5, 1.0]).collect(),
         xforms: vec![
@@ -52,7 +41,7 @@ fn flame() -> Flame {
             xform(0.5, 1.0, [0.5, 0.2, -0.2, 0.5, 0.5, 0.3]),
             xform(0.3, 0.5, [0.4, 0.0, 0.0, 0.4, 0.0, 0.6]),
         ],
-        final_xform: None,
+        ..Flame::default()
     }
 }
 

@@ -131,3 +131,34 @@ pub struct Flame {
     pub xforms: Vec<Xform>,
     pub final_xform: Option<Xform>,
 }
+
+/// flam3's defaults (`clear_cp` with defaults on) for everything but the xforms and palette.
+impl Default for Flame {
+    fn default() -> Self {
+        Flame {
+            name: String::new(),
+            size: [100, 100],
+            center: [0.0, 0.0],
+            scale: 50.0,
+            rotate: 0.0,
+            zoom: 0.0,
+            quality: 1.0,
+            supersample: 1,
+            filter: 0.5,
+            filter_shape: FilterShape::Gaussian,
+            brightness: 4.0,
+            gamma: 4.0,
+            gamma_threshold: 0.01,
+            vibrancy: 1.0,
+            highlight_power: -1.0,
+            background: [0.0; 3],
+            estimator_radius: 9.0,
+            estimator_minimum: 0.0,
+            estimator_curve: 0.4,
+            palette_mode: PaletteMode::Step,
+            palette: vec![[0.0; 4]; palette::PALETTE_LEN],
+            xforms: Vec::new(),
+            final_xform: None,
+        }
+    }
+}

@@ -136,35 +136,6 @@ pub fn read_str_with(text: &str, file_name: &str, options: &ReadOptions) -> Resu
     Ok(reader.out)
 }
 
-/// flam3's defaults (`clear_cp` with defaults on) for everything but the xforms and palette.
-fn default_flame() -> Flame {
-    Flame {
-        name: String::new(),
-        size: [100, 100],
-        center: [0.0, 0.0],
-        scale: 50.0,
-        rotate: 0.0,
-        zoom: 0.0,
-        quality: 1.0,
-        supersample: 1,
-        filter: 0.5,
-        filter_shape: FilterShape::Gaussian,
-        brightness: 4.0,
-        gamma: 4.0,
-        gamma_threshold: 0.01,
-        vibrancy: 1.0,
-        highlight_power: -1.0,
-        background: [0.0; 3],
-        estimator_radius: 9.0,
-        estimator_minimum: 0.0,
-        estimator_curve: 0.4,
-        palette_mode: PaletteMode::Step,
-        palette: vec![[0.0; 4]; palette::PALETTE_LEN],
-        xforms: Vec::new(),
-        final_xform: None,
-    }
-}
-
 /// flam3's `filter_shape` names.
 fn filter_shape(name: &str) -> Option<FilterShape> {
     use FilterShape::*;
@@ -259,7 +230,7 @@ impl Reader<'_> {
     }
 
     fn flame_in(&mut self, node: roxmltree::Node, ctx: &mut Ctx) -> Result<(Flame, PaletteSource), FlameError> {
-        let mut f = default_flame();
+        let mut f = Flame::default();
         let mut library_number: Option<i32> = None;
         let mut hue_turns = 0.0;
         let mut solo_xform: Option<i64> = None;
