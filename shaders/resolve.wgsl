@@ -70,6 +70,8 @@ override ENCODE_SRGB: bool = false;
 override LIGHT_CACHED: bool = false;
 // Cast shadows: the shadow map is read (`shadow_at`).
 override SHADOWS: bool = false;
+// Ambient occlusion: its samples are taken (`occlusion_at`).
+override OCCLUSION: bool = false;
 
 const MODE_CLOSEST: u32 = 0u;
 const MODE_AVERAGE: u32 = 1u;
@@ -364,7 +366,7 @@ fn light_factors(x: i32, y: i32, key: u32) -> vec2<f32> {
     let s16 = s8 * s8;
     let specular = SPECULAR * (s16 * s16) * key_visible;
     var visible = 1.0;
-    if params.occlusion > 0.0 {
+    if OCCLUSION && params.occlusion > 0.0 {
         visible = 1.0 - params.occlusion * occlusion_at(x, y, key, slopes);
     }
     let factor = (1.0 - params.shading) + diffuse * params.shading;

@@ -103,17 +103,22 @@ fn playback_through_a_key_reconverges() {
             ..LiveSettings::default()
         };
         let references: Vec<Vec<f64>> = times.iter().map(|&t| reference(&ctx, base, &compiled(t), &view)).collect();
-        for backend in [ChaosBackend::Gpu, ChaosBackend::Cpu] {
+        // The viewer plays navigating (`LiveView::set_navigating`: fewer settle steps).
+        for (backend, navigating) in
+            [ChaosBackend::Gpu, ChaosBackend::Cpu].into_iter().flat_map(|b| [(b, false), (b, true)])
+        {
             let settings = LiveSettings { chaos_backend: backend, ..base };
             let mut live = LiveView::new(&ctx, settings, W, H).unwrap();
+            live.set_navigating(&ctx, navigating).unwrap();
             live.set_ifs(&ctx, &compiled(t0), bounds, true);
             live.set_camera(&view.camera);
             for _ in 0..4 {
                 frame(&ctx, &mut live);
             }
             println!(
-                "{} route, playback dt = {dt:.4} s (frames before/after the key at 2 s): d_play / d_fresh",
-                backend.name()
+                "{} route{}, playback dt = {dt:.4} s (frames before/after the key at 2 s): d_play / d_fresh",
+                backend.name(),
+                if navigating { " navigating" } else { "" },
             );
             let mut worst: f64 = 0.0;
             for (k, (&t, reference)) in times.iter().zip(&references).enumerate() {

@@ -146,8 +146,9 @@ pub struct Progressive {
     has_ifs: bool,
     /// The solid look's light (normals, occlusion) refreshed in this many bands of rows, one
     /// per draw, while the view rests (0 or 1: computed in every draw for every pixel). The
-    /// first [`LIGHT_FULL_FRAMES`] frames after a clear and any change of the resolve's
-    /// arguments refresh it whole. Snapshots always compute it whole.
+    /// first [`LIGHT_FULL_FRAMES`] frames after a clear compute it in the draw, the next one
+    /// and any change of the resolve's arguments refresh it whole. Snapshots always compute it
+    /// whole.
     pub light_bands: u32,
     /// The next band to refresh, and the arguments the light cache was last refreshed with.
     light_band: u32,
@@ -472,8 +473,16 @@ impl Progressive {
             return LightRows::Inline;
         }
         let height = self.game.height;
+        if self.frames_since_clear <= LIGHT_FULL_FRAMES {
+            // Lit in the draw itself: the same pixels as a whole refresh in one pass instead of
+            // two (a playing timeline or a dragged camera clears every frame and never reads
+            // the cache back). The first banded draw after these frames refreshes it whole.
+            self.light_args = None;
+            self.bands_since_change = self.light_bands;
+            return LightRows::Inline;
+        }
         let same_args = self.light_args.is_some_and(|a| ResolveArgs { origin_px: a.origin_px, ..*args } == a);
-        if !same_args || self.frames_since_clear <= LIGHT_FULL_FRAMES {
+        if !same_args {
             self.light_args = Some(*args);
             self.bands_since_change = self.light_bands;
             return LightRows::Refresh { start: 0, end: height };

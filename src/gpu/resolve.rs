@@ -20,8 +20,24 @@ fn entry(binding: u32, buffer: &wgpu::Buffer) -> wgpu::BindGroupEntry<'_> {
 const COLORS_BYTES: u64 = 256 * 16;
 
 /// What a draw pipeline is specialized for: target format, splat mode, lighting (shading or
-/// occlusion) on, light read from the light cache, shadow map read.
-type DrawKey = (wgpu::TextureFormat, SplatMode, bool, bool, bool);
+/// occlusion) on, light read from the light cache, which light terms run.
+type DrawKey = (wgpu::TextureFormat, SplatMode, bool, bool, LightTerms);
+
+/// Which of the solid look's costly terms a light pipeline runs: the shadow map's lookups and
+/// the ambient occlusion's samples. Pipeline constants, not uniform branches: a SIMD software
+/// rasterizer runs a branch it cannot prove uniform on every lane, so with occlusion at 0 (a
+/// dragged camera, a playing timeline) its 16 samples a pixel still ran, most of the resolve.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct LightTerms {
+    shadows: bool,
+    occlusion: bool,
+}
+
+impl LightTerms {
+    fn constants(self) -> [(&'static str, f64); 2] {
+        [("SHADOWS", self.shadows as u32 as f64), ("OCCLUSION", self.occlusion as u32 as f64)]
+    }
+}
 /// A bind group with the generation of the chaos game's buffers and of the light cache it binds.
 type Bound = Option<((u64, u64), wgpu::BindGroup)>;
 
@@ -57,8 +73,8 @@ pub struct GpuResolve {
     light: Option<LightCache>,
     light_generations: u64,
     /// The light pass's pipeline, its bind group (with the chaos game's generation) and
-    /// whether it reads the shadow map.
-    light_pipeline: Option<(wgpu::RenderPipeline, Bound, bool)>,
+    /// the terms it runs.
+    light_pipeline: Option<(wgpu::RenderPipeline, Bound, LightTerms)>,
 }
 
 impl GpuResolve {
@@ -122,13 +138,15 @@ impl GpuResolve {
         if let Some(i) = self.draw_pipelines.iter().position(|(k, _, _)| *k == key) {
             return i;
         }
-        let (format, mode, shaded, cached, shadows) = key;
+        let (format, mode, shaded, cached, terms) = key;
+        let [shadows, occlusion] = terms.constants();
         let constants = [
             ("RESOLVE_MODE", mode.index() as f64),
             ("SHADED", shaded as u32 as f64),
             ("ENCODE_SRGB", !format.is_srgb() as u32 as f64),
             ("LIGHT_CACHED", cached as u32 as f64),
-            ("SHADOWS", shadows as u32 as f64),
+            shadows,
+            occlusion,
         ];
         let pipeline = fullscreen_pipeline(device, &self.module, "resolve", &constants, format);
         self.draw_pipelines.push((key, pipeline, None));
@@ -142,20 +160,17 @@ impl GpuResolve {
         encoder: &mut wgpu::CommandEncoder,
         game: &GpuChaosGame,
         rows: (u32, u32),
-        shadows: bool,
+        terms: LightTerms,
     ) {
         if rows.0 >= rows.1 {
             return;
         }
-        if self.light_pipeline.as_ref().is_none_or(|(_, _, s)| *s != shadows) {
-            let constants = [
-                ("RESOLVE_MODE", SplatMode::Closest.index() as f64),
-                ("SHADED", 1.0),
-                ("SHADOWS", shadows as u32 as f64),
-            ];
+        if self.light_pipeline.as_ref().is_none_or(|(_, _, t)| *t != terms) {
+            let [shadows, occlusion] = terms.constants();
+            let constants = [("RESOLVE_MODE", SplatMode::Closest.index() as f64), ("SHADED", 1.0), shadows, occlusion];
             let pipeline =
                 fullscreen_pipeline(device, &self.module, "light_pass", &constants, wgpu::TextureFormat::Rg32Uint);
-            self.light_pipeline = Some((pipeline, None, shadows));
+            self.light_pipeline = Some((pipeline, None, terms));
         }
         let Some((pipeline, bound, _)) = &mut self.light_pipeline else { return };
         if bound.as_ref().is_none_or(|b| b.0.0 != game.generation) {
@@ -209,13 +224,14 @@ impl GpuResolve {
         let cached = shaded && matches!(light, LightRows::Refresh { .. });
         // The shadow map must be the view's: the chaos game sized it (`GpuChaosGame::encode`).
         let shadows = params.shadows > 0.0 && game.shadow_side == params.shadow_side_px;
+        let terms = LightTerms { shadows, occlusion: params.occlusion > 0.0 };
         let light_generation = self.light_cache(device, game.width, game.height).generation;
         if let LightRows::Refresh { start, end } = light
             && cached
         {
-            self.refresh_light(device, encoder, game, (start.min(game.height), end.min(game.height)), shadows);
+            self.refresh_light(device, encoder, game, (start.min(game.height), end.min(game.height)), terms);
         }
-        let pipeline_index = self.draw_pipeline(device, (format, args.mode, shaded, cached, shadows));
+        let pipeline_index = self.draw_pipeline(device, (format, args.mode, shaded, cached, terms));
         if self.bound.as_ref().is_none_or(|b| b.0 != game.generation) {
             let max_layout = self.max_pipeline.get_bind_group_layout(0);
             let max_input = device.create_bind_group(&wgpu::BindGroupDescriptor {

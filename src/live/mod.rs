@@ -60,6 +60,9 @@ impl From<&LiveSettings> for ProgressiveSettings {
 /// view rests ([`Progressive::light_bands`]): the look's cost a frame drops about fourfold.
 pub const LIGHT_BANDS: u32 = 4;
 
+/// Settle steps after an edit while navigating ([`LiveView::set_navigating`]).
+pub const NAVIGATING_SETTLE_STEPS: u32 = 2;
+
 pub struct LiveView {
     gpu: Progressive,
     settings: LiveSettings,
@@ -95,7 +98,19 @@ impl LiveView {
             p.shadows = 0.0;
             p.occlusion = 0.0;
         }
+        p.settle_steps = self.settle_steps();
         p
+    }
+
+    /// Steps the kept points run unsplatted after an edit: fewer while navigating, where the
+    /// edits come every frame (a playing timeline) and each moves the attractor by one frame's
+    /// change, which `NAVIGATING_SETTLE_STEPS` contractions shrink below what a moving view
+    /// shows; the settle steps were most of a playing frame's chaos game.
+    fn settle_steps(&self) -> u32 {
+        match self.navigating {
+            true => self.settings.settle_steps.min(NAVIGATING_SETTLE_STEPS),
+            false => self.settings.settle_steps,
+        }
     }
 
     /// While the camera is dragged (orbit, pan) the view draws without the key light's shadows
@@ -130,7 +145,7 @@ impl LiveView {
     /// kept and skip `settle_steps`).
     pub fn set_ifs(&mut self, ctx: &GpuContext, ifs: &CompiledIfs, bounds: (DVec3, DVec3), restart: bool) {
         self.gpu.set_ifs(ctx, ifs, bounds, restart);
-        self.cpu.set_ifs(ifs, restart, self.settings.settle_steps);
+        self.cpu.set_ifs(ifs, restart, self.settle_steps());
     }
 
     pub fn set_camera(&mut self, camera: &OrbitCamera) {
