@@ -221,12 +221,13 @@ pub fn palette_file_for(path: &Path) -> String {
 
 /// Reads the flame file `path` and imports the flame `name` names, else the one at `index`
 /// (from 0), else the first; the warnings are the reader's and the import's. The scene's path
-/// is the flame file's and its palette `palette_file_for(path)` (written when it is saved).
+/// is the flame file's and its palette `palette_file_for(path)` (`<stem>-<k>.palette.png` for
+/// the flame at k > 0; written when the scene is saved).
 pub fn load_flame(path: &Path, index: Option<usize>, name: Option<&str>) -> Result<FlameImport, LoadError> {
     let read = crate::flame::read_file(path).map_err(|e| LoadError::Flame(e.to_string()))?;
     let count = read.flames.len();
-    let flame = match name {
-        Some(name) => read.flames.iter().find(|f| f.name == name).ok_or_else(|| {
+    let k = match name {
+        Some(name) => read.flames.iter().position(|f| f.name == name).ok_or_else(|| {
             let names: Vec<String> = read.flames.iter().map(|f| format!("`{}`", f.name)).collect();
             LoadError::Flame(format!(
                 "{} has no flame named `{name}` (its flames: {})",
@@ -236,13 +237,23 @@ pub fn load_flame(path: &Path, index: Option<usize>, name: Option<&str>) -> Resu
         })?,
         None => {
             let k = index.unwrap_or(0);
-            read.flames.get(k).ok_or_else(|| {
-                LoadError::Flame(format!("flame {k}: {} has {count} flame(s), numbered from 0", path.display()))
-            })?
+            if k >= count {
+                return Err(LoadError::Flame(format!(
+                    "flame {k}: {} has {count} flame(s), numbered from 0",
+                    path.display()
+                )));
+            }
+            k
         }
     };
-    let mut import = scene_of_flame(flame, &palette_file_for(path))
-        .map_err(|e| LoadError::Flame(format!("{}: {e}", path.display())))?;
+    let flame = &read.flames[k];
+    // The flames of one file have palettes of their own: the first's keeps the plain name.
+    let palette_file = match k {
+        0 => palette_file_for(path),
+        k => palette_file_for(path).replace(".palette.png", &format!("-{k}.palette.png")),
+    };
+    let mut import =
+        scene_of_flame(flame, &palette_file).map_err(|e| LoadError::Flame(format!("{}: {e}", path.display())))?;
     if flame.name.is_empty()
         && let Some(stem) = path.file_stem()
     {
