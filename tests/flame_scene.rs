@@ -268,3 +268,46 @@ fn import_command_writes_the_scene_and_its_palette() {
     assert!(String::from_utf8_lossy(&unnamed.stderr).contains("no flame named `nope`"));
     std::fs::remove_dir_all(&dir).ok();
 }
+
+#[test]
+fn the_viewer_edits_a_flame_undoably_and_saves_it() {
+    use nlifs::viewer::command::Command;
+    use nlifs::viewer::state::ViewerState;
+    let dir = temp_dir("flame-scene-viewer");
+    let file = write_flames(&dir);
+    // Opened as a flame file is: through the import, never saved over the flame.
+    let mut s = ViewerState::new(ViewerState::default_scene(), None, nlifs::live::LiveSettings::default());
+    s.apply([Command::OpenScene(file.clone())]);
+    assert!(s.error.is_none(), "{:?}", s.error);
+    assert!(s.scene.has_flames());
+    let original = s.scene.clone();
+    let FunctionDef::Flame(mut def) = s.scene.functions[1].def.clone() else { panic!("a flame") };
+    def.coefs[4] += 0.25;
+    def.variations[0].weight = 0.3;
+    def.variations[0].params[0] = 5.0;
+    def.color_speed = 0.8;
+    // One drag: two steps of it, then the release.
+    let mut half = def.clone();
+    half.coefs[4] -= 0.1;
+    s.apply([Command::SetFlame { function: 1, value: half }]);
+    s.apply([Command::SetFlame { function: 1, value: def.clone() }, Command::EndGesture]);
+    assert_eq!(s.scene.functions[1].def, FunctionDef::Flame(def.clone()));
+    s.apply([Command::Undo]);
+    assert_eq!(s.scene, original, "one undo step undoes the drag");
+    s.apply([Command::Redo]);
+    assert_eq!(s.scene.functions[1].def, FunctionDef::Flame(def.clone()));
+    // A change of structure is not an edit of numbers.
+    let mut other = def.clone();
+    other.post = None;
+    s.apply([Command::SetFlame { function: 1, value: other }]);
+    assert_eq!(s.scene.functions[1].def, FunctionDef::Flame(def.clone()));
+    s.apply([Command::SaveScene(file.clone())]);
+    assert!(s.error.as_deref().is_some_and(|e| e.contains("cannot save over the flame file")), "{:?}", s.error);
+    assert_eq!(std::fs::read_to_string(&file).expect("flame"), FILE, "the flame file is untouched");
+    let out = dir.join("edited.toml");
+    s.apply([Command::SaveScene(out.clone())]);
+    let back = Scene::load(&out).expect("reopen");
+    assert_eq!(back.functions[1].def, FunctionDef::Flame(def));
+    assert_eq!(without_path(&back), without_path(&s.scene));
+    std::fs::remove_dir_all(&dir).ok();
+}
