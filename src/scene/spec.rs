@@ -565,4 +565,25 @@ mod tests {
         };
         assert_eq!(unflatten(&def, &flatten(&def)), Some(def));
     }
+
+    #[test]
+    fn unflatten_inverts_flatten_for_a_flame() {
+        use crate::flame::{Variation, VariationTerm};
+        let julian = Variation::by_name("julian").unwrap();
+        let def = FunctionDef::Flame(FlameDef {
+            coefs: [0.5, 0.1, -0.2, 0.6, 0.3, -0.4],
+            post: Some([1.0, 0.0, 0.2, -1.0, 0.0, 0.5]),
+            variations: vec![
+                VariationTerm { variation: Variation::LINEAR, weight: 0.25, params: vec![] },
+                VariationTerm { variation: julian, weight: 0.75, params: vec![3.0, 1.5] },
+            ],
+            color_speed: 0.3,
+        });
+        // 6 coefs, 6 post, (1 + 0) + (1 + 2) variation numbers, 1 speed.
+        assert_eq!(flatten(&def).len(), 17);
+        assert_eq!(unflatten(&def, &flatten(&def)), Some(def.clone()));
+        let shifted: Vec<f64> = flatten(&def).iter().map(|v| v + 1.0).collect();
+        let FunctionDef::Flame(f) = unflatten(&def, &shifted).unwrap() else { panic!("a flame") };
+        assert_eq!((f.coefs[0], f.variations[1].params[1], f.color_speed), (1.5, 2.5, 1.3));
+    }
 }
