@@ -153,7 +153,7 @@ impl ChaosBackend {
 }
 
 /// Why an IFS with flame functions takes the CPU route (the viewer's statistics show it).
-pub const FLAMES_ON_CPU: &str = "cpu: flame functions have no GPU chaos game (their variations run on the CPU only)";
+pub const FLAMES_ON_CPU: &str = "flame functions run on the CPU only (their variations have no GPU twin)";
 
 /// Where the chaos game runs, and why (the viewer's statistics show both).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
