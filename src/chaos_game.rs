@@ -35,6 +35,7 @@ use crate::rng::Pcg32;
 mod color_coord;
 mod compile;
 mod fast;
+mod flame;
 mod lanes;
 pub mod plan;
 mod run;
@@ -44,8 +45,9 @@ mod tests;
 #[cfg(target_arch = "x86_64")]
 mod x86;
 
-pub use color_coord::{C_START, step_color};
+pub use color_coord::{C_START, step_color, step_color_speed};
 pub use compile::SelectionTable;
+pub use flame::FlameTable;
 pub use plan::{ChunkPlan, PlanError};
 pub use run::{
     ChunkChains, attractor_bounds, attractor_sample, continue_chunk, run_chunk, run_parallel, run_per_thread,
@@ -70,6 +72,9 @@ pub const ADAPTIVE_CELLS_2D: u32 = 48;
 
 pub const KIND_MULTILINEAR: u32 = 0;
 pub const KIND_JULIA: u32 = 1;
+/// A flame function (`chaos_game/flame.rs`): the CPU maps it by its xform; the kernel table holds
+/// its pre-affine as one affine cell.
+pub const KIND_FLAME: u32 = 2;
 
 /// One function of the compiled IFS. Mirrors `struct KernelFunction` in
 /// `shaders/chaos_game.wgsl`: keep the two in sync.
@@ -129,6 +134,10 @@ pub struct CompiledIfs {
     // Palette colour (`chaos_game/color_coord.rs`):
     /// Each compiled function's colour coordinate c_i in [0, 1]; None: function colour.
     pub color_coords: Option<Vec<f32>>,
+    /// Each compiled function's colour speed, when a flame function has one other than ½.
+    pub color_speeds: Option<Vec<f32>>,
+    /// The flame functions' xforms (`chaos_game/flame.rs`); None: the IFS has none.
+    pub flames: Option<FlameTable>,
 }
 
 impl CompiledIfs {
@@ -148,8 +157,18 @@ impl CompiledIfs {
         let domain_lo = ifs.domain.min().as_vec3();
         let domain_hi = ifs.domain.max().as_vec3();
         let selection = selection_table(ifs, &active, domain_lo, domain_hi);
+        let flames = FlameTable::new(
+            active
+                .iter()
+                .map(|&i| match &ifs.functions[i].map {
+                    crate::model::Map::Flame(f) => Some(f.xform.clone()),
+                    _ => None,
+                })
+                .collect(),
+        );
+        let color_speeds = flames.as_ref().map(FlameTable::color_speeds).filter(|s| s.iter().any(|&s| s != 0.5));
         let fast = FastKernel::new(&functions, &coords, &cells);
-        let lanes = LaneKernel::new(&fast, &selection, &cells);
+        let lanes = if flames.is_some() { None } else { LaneKernel::new(&fast, &selection, &cells) };
         #[cfg(target_arch = "x86_64")]
         let simd = lanes.as_ref().and_then(|_| x86::SimdKernel::new(&fast, &selection));
         let worst = active
@@ -174,6 +193,8 @@ impl CompiledIfs {
             #[cfg(target_arch = "x86_64")]
             simd,
             color_coords: None,
+            color_speeds,
+            flames,
         })
     }
 

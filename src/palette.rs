@@ -132,6 +132,27 @@ impl Palette {
             .collect())
     }
 
+    /// The palette as a strip image: [`SAMPLES`] × 1 pixels, the entries encoded to sRGB bytes
+    /// (a palette read from such a strip reads back exactly, each entry the pixel itself).
+    pub fn strip_image(&self) -> image::RgbImage {
+        image::RgbImage::from_fn(self.samples.len() as u32, 1, |x, _| {
+            image::Rgb(self.samples[x as usize].map(color::linear_to_srgb8))
+        })
+    }
+
+    /// Where this palette's image is, relative to `base_dir` (a scene's directory); None for
+    /// a built-in one.
+    pub fn image_path(&self, base_dir: &Path) -> Option<PathBuf> {
+        if Self::builtin(&self.source).is_some() {
+            return None;
+        }
+        Some(if Path::new(&self.source).is_relative() {
+            base_dir.join(&self.source)
+        } else {
+            PathBuf::from(&self.source)
+        })
+    }
+
     /// The entry for colour coordinate `c` (see [`index_of`]).
     pub fn at(&self, c: f32) -> [f32; 3] {
         self.samples[index_of(c.clamp(0.0, 1.0)) as usize]

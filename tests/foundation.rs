@@ -127,7 +127,7 @@ fn linear_ifs_points_lie_in_w_n_of_a() {
                     let m = DMat3::from_cols(ex / size.x, ey / size.y, DVec3::Z);
                     (m, o - m * g.grid.min())
                 }
-                Map::Julia(_) => unreachable!(),
+                Map::Julia(_) | Map::Flame(_) => unreachable!(),
             })
             .collect();
         let n = 5;

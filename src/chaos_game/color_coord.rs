@@ -13,6 +13,9 @@
 //! with `skip` rows. c starts at [`C_START`]; after the transient (≥ 24 steps) its start
 //! weighs less than 2^-24.
 //!
+//! A flame function (`chaos_game/flame.rs`) has its own colour speed s and the step is flam3's
+//! c' = s·c_i + (1 − s)·c ([`step_color_speed`]); it has no GPU twin (flames run on the CPU).
+//!
 //! The GPU twin is the palette branch of `shaders/chaos_game.wgsl` (the same update in f32,
 //! the same quantization).
 
@@ -29,11 +32,20 @@ pub fn step_color(c: f32, c_i: f32) -> f32 {
     (c + c_i) * 0.5
 }
 
+/// One step of the colour coordinate with colour speed `s` (a flame function's; flam3's
+/// c' = s·c_i + (1 − s)·c).
+#[inline(always)]
+pub fn step_color_speed(c: f32, c_i: f32, s: f32) -> f32 {
+    s * c_i + (1.0 - s) * c
+}
+
 /// Wraps a sink: turns the function indices of a chunk's batches into quantized colour
 /// coordinates, dropping the first `skip` rows (see the module comment).
 pub(super) struct ColorCoordSink<'a, S: PointSink> {
     /// c_i by function index, padded to every u8 (no bounds checks in the loop).
     coords: Box<[f32; 256]>,
+    /// The colour speed by function index (flame functions'), when a function has one.
+    speeds: Option<Box<[f32; 256]>>,
     c: &'a mut [f32; ORBITS_PER_CHUNK],
     skip: usize,
     inner: &'a mut S,
@@ -41,9 +53,16 @@ pub(super) struct ColorCoordSink<'a, S: PointSink> {
 }
 
 impl<'a, S: PointSink> ColorCoordSink<'a, S> {
-    pub(super) fn new(coords: &[f32], c: &'a mut [f32; ORBITS_PER_CHUNK], skip: usize, inner: &'a mut S) -> Self {
+    pub(super) fn new(
+        coords: &[f32],
+        speeds: Option<&[f32]>,
+        c: &'a mut [f32; ORBITS_PER_CHUNK],
+        skip: usize,
+        inner: &'a mut S,
+    ) -> Self {
         let coords = Box::new(std::array::from_fn(|i| coords.get(i).copied().unwrap_or(0.0)));
-        Self { coords, c, skip, inner, indices: vec![0; ORBITS_PER_CHUNK * STEPS_PER_BATCH] }
+        let speeds = speeds.map(|s| Box::new(std::array::from_fn(|i| s.get(i).copied().unwrap_or(0.5))));
+        Self { coords, speeds, c, skip, inner, indices: vec![0; ORBITS_PER_CHUNK * STEPS_PER_BATCH] }
     }
 }
 
@@ -59,10 +78,22 @@ impl<S: PointSink> PointSink for ColorCoordSink<'_, S> {
         }
         // On copies, so that the compiler sees that c, the table and the output do not alias.
         let (mut c, coords) = (*self.c, &*self.coords);
-        for (fs, out) in batch.functions.chunks_exact(K).zip(self.indices.chunks_exact_mut(K)) {
-            for ((c, &f), out) in c.iter_mut().zip(fs).zip(out) {
-                *c = step_color(*c, coords[f as usize]);
-                *out = palette::index_of(*c);
+        match self.speeds.as_deref() {
+            None => {
+                for (fs, out) in batch.functions.chunks_exact(K).zip(self.indices.chunks_exact_mut(K)) {
+                    for ((c, &f), out) in c.iter_mut().zip(fs).zip(out) {
+                        *c = step_color(*c, coords[f as usize]);
+                        *out = palette::index_of(*c);
+                    }
+                }
+            }
+            Some(speeds) => {
+                for (fs, out) in batch.functions.chunks_exact(K).zip(self.indices.chunks_exact_mut(K)) {
+                    for ((c, &f), out) in c.iter_mut().zip(fs).zip(out) {
+                        *c = step_color_speed(*c, coords[f as usize], speeds[f as usize]);
+                        *out = palette::index_of(*c);
+                    }
+                }
             }
         }
         *self.c = c;

@@ -4,8 +4,10 @@
 
 use glam::{DVec3, Vec3};
 
-use super::{ADAPTIVE_CELLS_2D, ADAPTIVE_CELLS_3D, Cell, KIND_JULIA, KIND_MULTILINEAR, KernelFunction, SELECT_BITS};
-use crate::model::{Ifs, Map, ProbabilityMode};
+use super::{
+    ADAPTIVE_CELLS_2D, ADAPTIVE_CELLS_3D, Cell, KIND_FLAME, KIND_JULIA, KIND_MULTILINEAR, KernelFunction, SELECT_BITS,
+};
+use crate::model::{AffineMap, Ifs, Map, ProbabilityMode};
 
 /// Bounds used for unbounded (affine) maps.
 const UNBOUNDED: f32 = 3.0e38;
@@ -136,6 +138,15 @@ pub(super) fn compile_map(map: &Map, dim: usize, coords: &mut Vec<[f32; 2]>, cel
                 coord_offset,
                 julia: [0.0; 4],
             }
+        }
+        Map::Flame(f) => {
+            // The pre-affine as an affine cell (the CPU maps the xform itself, `flame.rs`).
+            let [a, b, c, d, e, g] = f.xform.coefs;
+            let matrix = glam::DMat3::from_cols(DVec3::new(a, b, 0.0), DVec3::new(c, d, 0.0), DVec3::Z);
+            let affine = Map::Affine(AffineMap { matrix, offset: DVec3::new(e, g, 0.0) });
+            let mut k = compile_map(&affine, dim, coords, cells);
+            k.coord_offset[3] = KIND_FLAME;
+            k
         }
         Map::Affine(a) => {
             let mut coord_offset = [0u32; 4];

@@ -5,7 +5,7 @@
 use glam::{DVec3, Vec3, Vec3A};
 use rayon::prelude::*;
 
-use super::color_coord::{C_START, ColorCoordSink, step_color};
+use super::color_coord::{C_START, ColorCoordSink};
 use super::lanes::LaneKernel;
 use super::plan::ChunkPlan;
 use super::sink::{CollectSink, PointBatch, PointSink};
@@ -67,7 +67,7 @@ fn run_chains(
     match &ifs.color_coords {
         None => run_kernel(ifs, path, rngs, pos, skip, steps, sink),
         Some(coords) => {
-            let mut colored = ColorCoordSink::new(coords, colors, skip as usize, sink);
+            let mut colored = ColorCoordSink::new(coords, ifs.color_speeds.as_deref(), colors, skip as usize, sink);
             run_kernel(ifs, path, rngs, pos, 0, skip as usize + steps, &mut colored);
         }
     }
@@ -110,10 +110,21 @@ fn run_kernel(
 }
 
 /// The portable kernels on `orbits`: the lane kernel where the IFS has one, else the general
-/// loop (per-cell selection for adaptive probabilities).
+/// loop (per-cell selection for adaptive probabilities; flame functions with the orbit's
+/// generator, `chaos_game/flame.rs`).
 fn run_orbits(ifs: &CompiledIfs, orbits: Orbits<'_>, sink: &mut impl PointSink) {
     match &ifs.lanes {
         Some(lanes) => run_lanes(lanes, orbits, sink),
+        None if ifs.has_flames() => {
+            let sel = &ifs.selection;
+            let adaptive = sel.cells != [1, 1, 1];
+            orbits.run_shown(sink, |rng, p| {
+                let cell = if adaptive { sel.cell_of(p.into()) } else { 0 };
+                let fi = sel.select(cell, rng.next_u32());
+                let (next, shown) = ifs.map_with_rng(fi, p.into(), rng);
+                (next.into(), shown.into(), fi)
+            })
+        }
         None => {
             let sel = &ifs.selection;
             let adaptive = sel.cells != [1, 1, 1];
@@ -138,6 +149,20 @@ pub(super) struct Orbits<'a> {
 impl Orbits<'_> {
     #[inline(always)]
     pub(super) fn run(self, sink: &mut impl PointSink, step: impl Fn(&mut Pcg32, Vec3A) -> (Vec3A, usize)) {
+        self.run_shown(sink, |rng, p| {
+            let (q, fi) = step(rng, p);
+            (q, q, fi)
+        })
+    }
+
+    /// [`Self::run`] with a step that gives the orbit's next point and the point to emit apart
+    /// (they differ where a flame function re-seeds the orbit).
+    #[inline(always)]
+    pub(super) fn run_shown(
+        self,
+        sink: &mut impl PointSink,
+        step: impl Fn(&mut Pcg32, Vec3A) -> (Vec3A, Vec3A, usize),
+    ) {
         const K: usize = ORBITS_PER_CHUNK;
         for _ in 0..self.transient {
             for (rng, p) in self.rngs.iter_mut().zip(self.pos.iter_mut()) {
@@ -156,9 +181,9 @@ impl Orbits<'_> {
                 let (xs, ys, zs, fs) =
                     (&mut out_x[row.clone()], &mut out_y[row.clone()], &mut out_z[row.clone()], &mut out_fn[row]);
                 for (k, (rng, p)) in self.rngs.iter_mut().zip(self.pos.iter_mut()).enumerate() {
-                    let (q, fi) = step(rng, *p);
+                    let (q, shown, fi) = step(rng, *p);
                     *p = q;
-                    (xs[k], ys[k], zs[k]) = (q.x, q.y, q.z);
+                    (xs[k], ys[k], zs[k]) = (shown.x, shown.y, shown.z);
                     fs[k] = fi as u8;
                 }
             }
@@ -308,9 +333,9 @@ impl ChunkChains {
         for _ in 0..ifs.transient {
             let cell = if adaptive { sel.cell_of(p) } else { 0 };
             let fi = sel.select(cell, rng.next_u32());
-            p = ifs.map_fast(fi, p);
+            p = ifs.map_with_rng(fi, p, &mut rng).0;
             if let Some(coords) = &ifs.color_coords {
-                c = step_color(c, coords[fi]);
+                c = ifs.step_color_of(c, fi, coords);
             }
         }
         self.rngs[lane] = rng;

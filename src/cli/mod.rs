@@ -13,6 +13,7 @@ mod bench_render;
 mod color_args;
 mod export;
 mod image_args;
+mod import;
 mod info;
 mod info_flame;
 mod lens_args;
@@ -72,6 +73,9 @@ enum Command {
     /// Benchmarks (throughput figures for the README).
     #[command(subcommand)]
     Bench(bench::BenchCommand),
+    /// Make a scene of another program's file (a flam3 flame).
+    #[command(subcommand)]
+    Import(import::ImportCommand),
 }
 
 /// An error caused by the user's input: exit code 2.
@@ -187,10 +191,20 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         Some(Command::Merge(args)) => merge::merge(args),
         Some(Command::Snapshot(args)) => snapshot::snapshot(args),
         Some(Command::Bench(command)) => bench::run(command),
+        Some(Command::Import(command)) => import::run(command),
     }
 }
 
+/// The scene file `path`, or the scene of the first flame of a flame file (`.flame`, `.flam3`;
+/// the import of `nlifs import flame`), whose reader's and import's warnings are printed here.
 fn load(path: &Path) -> anyhow::Result<Scene> {
+    if nlifs::flame::xml::is_flame_path(path) {
+        let import = nlifs::scene::flame_import::load_flame(path, None, None)?;
+        for warning in &import.warnings {
+            eprintln!("warning: {warning}");
+        }
+        return Ok(import.scene);
+    }
     Ok(Scene::load(path)?)
 }
 

@@ -44,7 +44,7 @@ pub struct ViewArgs {
 }
 
 /// The viewer's [`ChaosBackend`], in the order the help lists them.
-#[derive(Clone, Copy, ValueEnum)]
+#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
 enum ChaosBackendArg {
     Auto,
     Gpu,
@@ -75,7 +75,11 @@ pub fn view(args: ViewArgs) -> anyhow::Result<()> {
             eprintln!("opened the scene inside {} (made at t = {t_secs} s) as {}", path.display(), toml.display());
             args.scene = Some(toml);
         } else {
-            nlifs::scene::Scene::load(path)?;
+            // A flame file opens as its imported scene; its warnings are printed here, once.
+            let scene = super::load(path)?;
+            if scene.has_flames() && args.chaos_backend == Some(ChaosBackendArg::Gpu) {
+                eprintln!("note: {}", nlifs::live::FLAMES_ON_CPU);
+            }
         }
     }
     if let Some(path) = &args.screenshot {

@@ -42,13 +42,13 @@ impl FunctionKind {
         }
     }
 
-    /// The kind of `def`; None for a Julia map.
+    /// The kind of `def`; None for a Julia map or a flame.
     pub fn of(def: &FunctionDef) -> Option<FunctionKind> {
         match def {
             FunctionDef::Grid { .. } => Some(FunctionKind::Grid),
             FunctionDef::Builder { .. } => Some(FunctionKind::Builder),
             FunctionDef::Affine(_) => Some(FunctionKind::Affine),
-            FunctionDef::Julia(_) => None,
+            FunctionDef::Julia(_) | FunctionDef::Flame(_) => None,
         }
     }
 
@@ -110,7 +110,7 @@ pub fn convert(scene: &Scene, def: &FunctionDef, to: FunctionKind) -> Option<Fun
                 let to: Vec<DVec3> = from.iter().map(|&p| builder.apply(p)).collect();
                 fit_affine(&from, &to, dim)
             }
-            FunctionDef::Julia(_) => None,
+            FunctionDef::Julia(_) | FunctionDef::Flame(_) => None,
         }
     };
     let from = FunctionKind::of(def)?;
@@ -161,6 +161,7 @@ impl Edit {
             function,
             kind: match &spec.def {
                 FunctionDef::Julia(_) => "julia",
+                FunctionDef::Flame(_) => "flame",
                 _ => "degenerate",
             },
         };

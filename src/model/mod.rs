@@ -6,9 +6,11 @@
 
 pub mod builder;
 pub mod fit;
+pub mod flame_map;
 pub mod grid;
 pub mod nesting;
 
+pub use flame_map::FlameMap;
 use glam::{DMat3, DVec3};
 pub use grid::{GridMap, RectGrid};
 
@@ -47,6 +49,8 @@ pub enum Map {
     Grid(GridMap),
     Affine(AffineMap),
     Julia(JuliaMap),
+    /// One of flam3's xforms (`flame_map.rs`).
+    Flame(FlameMap),
 }
 
 impl Map {
@@ -55,17 +59,28 @@ impl Map {
             Map::Grid(g) => g.eval(p),
             Map::Affine(a) => a.matrix * p + a.offset,
             Map::Julia(j) => j.eval(p),
+            Map::Flame(f) => f.eval(p),
+        }
+    }
+
+    /// The function's `kind` as the scene file and `nlifs info` name it.
+    pub fn kind(&self) -> &'static str {
+        match self {
+            Map::Grid(_) => "grid",
+            Map::Affine(_) => "affine",
+            Map::Julia(_) => "julia",
+            Map::Flame(_) => "flame",
         }
     }
 
     /// Figure-8 measure (see [`GridMap::grid_ratio`]); for an affine map the same measure on
     /// any grid, the longest image of a unit axis vector. None for the Julia maps, whose
-    /// derivative is unbounded near c.
+    /// derivative is unbounded near c, and for flames.
     pub fn grid_ratio(&self, dim: usize) -> Option<f64> {
         match self {
             Map::Grid(g) => Some(g.grid_ratio()),
             Map::Affine(a) => Some((0..dim).map(|k| a.matrix.col(k).length()).fold(0.0, f64::max)),
-            Map::Julia(_) => None,
+            Map::Julia(_) | Map::Flame(_) => None,
         }
     }
 
@@ -74,7 +89,7 @@ impl Map {
         match self {
             Map::Grid(g) => Some(g.lipschitz_bound()),
             Map::Affine(a) => Some(grid::spectral_norm_bound(a.matrix)),
-            Map::Julia(_) => None,
+            Map::Julia(_) | Map::Flame(_) => None,
         }
     }
 
@@ -96,6 +111,7 @@ impl Map {
                 let r = ((p.x - j.c[0]).powi(2) + (p.y - j.c[1]).powi(2)).sqrt();
                 1.0 / (4.0 * r.max(1e-12))
             }
+            Map::Flame(f) => f.volume_ratio_at(p),
         }
     }
 
@@ -106,6 +122,7 @@ impl Map {
             Map::Grid(g) => g.mean_volume_ratio(),
             Map::Affine(a) => grid::volume_ratio(a.matrix, dim),
             Map::Julia(_) => 0.5, // the pair splits the plane's measure evenly
+            Map::Flame(f) => f.mean_volume_ratio(domain.min(), domain.max()),
         }
     }
 }
@@ -197,7 +214,8 @@ impl Ifs {
     }
 
     /// Points of function `i`'s image that leave the domain box (grid points for grid maps, box
-    /// corners for affine maps); None for the Julia maps, which are not box-to-box maps.
+    /// corners for affine maps); None for the Julia maps and flames, which are not box-to-box
+    /// maps.
     pub fn outside_points(&self, i: usize) -> Option<Vec<(usize, DVec3)>> {
         let tol = self.containment_tol();
         match &self.functions[i].map {
@@ -222,7 +240,7 @@ impl Ifs {
                         .collect(),
                 )
             }
-            Map::Julia(_) => None,
+            Map::Julia(_) | Map::Flame(_) => None,
         }
     }
 
@@ -289,11 +307,7 @@ impl Ifs {
                 let outside = self.outside_points(i);
                 FunctionReport {
                     name: f.name.clone(),
-                    kind: match f.map {
-                        Map::Grid(_) => "grid",
-                        Map::Affine(_) => "affine",
-                        Map::Julia(_) => "julia",
-                    },
+                    kind: f.map.kind(),
                     grid_ratio: f.map.grid_ratio(dim),
                     lipschitz_bound: f.map.lipschitz_bound(),
                     contained: outside.as_ref().map(|o| o.is_empty()),

@@ -6,6 +6,8 @@
 //! ("data did not match any variant of untagged enum …") names a Rust type and not the shapes
 //! the user may write; `check/words.rs` puts serde's remaining messages in the user's words.
 
+use std::collections::BTreeMap;
+
 use serde::Deserialize;
 use serde::de::{Deserializer, SeqAccess, Visitor};
 use toml::Spanned;
@@ -60,6 +62,66 @@ pub(super) struct KeyFunctionToml {
     pub(super) matrix: Option<Spanned<Vec<Vec<f64>>>>,
     pub(super) offset: Option<Spanned<Vec<f64>>>,
     pub(super) c: Option<Spanned<Vec<f64>>>,
+    // A flame's (`kind = "flame"`): flam3's xform.
+    pub(super) coefs: Option<Spanned<Vec<f64>>>,
+    pub(super) post: Option<Spanned<Vec<f64>>>,
+    /// Weight by variation name (flam3's names).
+    pub(super) variations: Option<NamedNumbers>,
+    /// Parameter by flam3's attribute name (`julian_power`).
+    pub(super) params: Option<NamedNumbers>,
+    pub(super) color_speed: Option<Spanned<f64>>,
+}
+
+/// Numbers by name, each name and number with its place (a flame's `variations` and `params`).
+pub(super) type NamedNumbers = Spanned<BTreeMap<Spanned<String>, Spanned<f64>>>;
+
+/// The flame fields of a function or of a key's override, borrowed.
+pub(super) struct FlameFields<'a> {
+    pub(super) coefs: &'a Option<Spanned<Vec<f64>>>,
+    pub(super) post: &'a Option<Spanned<Vec<f64>>>,
+    pub(super) variations: &'a Option<NamedNumbers>,
+    pub(super) params: &'a Option<NamedNumbers>,
+    pub(super) color_speed: &'a Option<Spanned<f64>>,
+}
+
+impl FunctionToml {
+    pub(super) fn flame(&self) -> FlameFields<'_> {
+        FlameFields {
+            coefs: &self.coefs,
+            post: &self.post,
+            variations: &self.variations,
+            params: &self.params,
+            color_speed: &self.color_speed,
+        }
+    }
+}
+
+impl KeyFunctionToml {
+    pub(super) fn flame(&self) -> FlameFields<'_> {
+        FlameFields {
+            coefs: &self.coefs,
+            post: &self.post,
+            variations: &self.variations,
+            params: &self.params,
+            color_speed: &self.color_speed,
+        }
+    }
+}
+
+impl FlameFields<'_> {
+    /// The fields with their names and places, those present.
+    pub(super) fn present(&self) -> Vec<(&'static str, std::ops::Range<usize>)> {
+        [
+            ("coefs", self.coefs.as_ref().map(|v| v.span())),
+            ("post", self.post.as_ref().map(|v| v.span())),
+            ("variations", self.variations.as_ref().map(|v| v.span())),
+            ("params", self.params.as_ref().map(|v| v.span())),
+            ("color_speed", self.color_speed.as_ref().map(|v| v.span())),
+        ]
+        .into_iter()
+        .filter_map(|(n, s)| s.map(|s| (n, s)))
+        .collect()
+    }
 }
 
 #[derive(Deserialize)]
@@ -185,6 +247,14 @@ pub(super) struct FunctionToml {
     pub(super) sign: Option<Spanned<f64>>,
     // Palette colour:
     pub(super) palette_index: Option<Spanned<f64>>,
+    // A flame's (`kind = "flame"`): flam3's xform.
+    pub(super) coefs: Option<Spanned<Vec<f64>>>,
+    pub(super) post: Option<Spanned<Vec<f64>>>,
+    /// Weight by variation name (flam3's names).
+    pub(super) variations: Option<NamedNumbers>,
+    /// Parameter by flam3's attribute name (`julian_power`).
+    pub(super) params: Option<NamedNumbers>,
+    pub(super) color_speed: Option<Spanned<f64>>,
 }
 
 #[derive(Deserialize)]

@@ -21,6 +21,7 @@ use crate::scene::timeline::Timeline;
 
 mod check;
 pub mod file;
+pub mod flame_import;
 mod rewrite;
 pub mod spec;
 pub mod timeline;
@@ -50,6 +51,10 @@ pub enum LoadError {
     TooLarge { path: String, limit_bytes: u64 },
     #[error(transparent)]
     Scene(#[from] SceneError),
+    /// A flame file (`.flame`, `.flam3`) that cannot be read or made a scene
+    /// (`flame_import.rs`).
+    #[error("{0}")]
+    Flame(String),
 }
 
 #[derive(Clone, Debug, PartialEq)]
@@ -165,6 +170,11 @@ impl Scene {
         out
     }
 
+    /// Whether a function is a flame (`kind = "flame"`), which only the CPU chaos game runs.
+    pub fn has_flames(&self) -> bool {
+        self.functions.iter().any(|f| matches!(f.def, FunctionDef::Flame(_)))
+    }
+
     /// Turns one definition into a map over the scene's grid.
     pub fn resolve(&self, def: &FunctionDef) -> Map {
         match def {
@@ -175,6 +185,7 @@ impl Scene {
             }
             FunctionDef::Affine(a) => Map::Affine(a.clone()),
             FunctionDef::Julia(j) => Map::Julia(j.clone()),
+            FunctionDef::Flame(f) => Map::Flame(crate::model::FlameMap { xform: f.xform() }),
         }
     }
 

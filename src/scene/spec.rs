@@ -9,6 +9,7 @@ use glam::DVec3;
 
 use crate::camera::Projection;
 use crate::color;
+use crate::flame::{Coefs, VariationTerm, Xform};
 use crate::model::builder::{Builder, Step};
 use crate::model::{AffineMap, JuliaMap};
 use crate::palette::Palette;
@@ -99,6 +100,44 @@ pub enum FunctionDef {
     },
     Affine(AffineMap),
     Julia(JuliaMap),
+    /// One of flam3's xforms (`kind = "flame"`).
+    Flame(FlameDef),
+}
+
+/// A flame function as the scene holds it: flam3's xform without the fields the scene keeps
+/// elsewhere (its weight is the function's `probability`, its colour coordinate the function's
+/// `palette_index`). The variations are in flam3's order (by variation number), each with all
+/// of its parameters.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FlameDef {
+    /// flam3's `coefs` `[a, b, c, d, e, f]`: x' = a·x + c·y + e, y' = b·x + d·y + f.
+    pub coefs: Coefs,
+    /// flam3's `post`, the same form; None: none.
+    pub post: Option<Coefs>,
+    pub variations: Vec<VariationTerm>,
+    /// s in c' = s·c_i + (1 − s)·c, in [0, 1] (flam3's `color_speed`; the other kinds' rule is
+    /// s = ½).
+    pub color_speed: f64,
+}
+
+impl FlameDef {
+    /// The default colour speed (flam3's, and the other kinds' (c + c_i) / 2).
+    pub const DEFAULT_COLOR_SPEED: f64 = 0.5;
+
+    /// The xform this definition is, with selection weight 1 and colour coordinate 0 (the
+    /// scene function's own are used where they matter).
+    pub fn xform(&self) -> Xform {
+        Xform {
+            weight: 1.0,
+            color: 0.0,
+            color_speed: self.color_speed,
+            opacity: 1.0,
+            coefs: self.coefs,
+            post: self.post,
+            variations: self.variations.clone(),
+            chaos: Vec::new(),
+        }
+    }
 }
 
 impl FunctionDef {
@@ -109,6 +148,7 @@ impl FunctionDef {
             FunctionDef::Builder { .. } => "builder",
             FunctionDef::Affine(_) => "affine",
             FunctionDef::Julia(_) => "julia",
+            FunctionDef::Flame(_) => "flame",
         }
     }
 }
@@ -369,6 +409,17 @@ pub fn flatten(def: &FunctionDef) -> Vec<f64> {
             push3(&mut out, a.offset);
         }
         FunctionDef::Julia(j) => out.extend_from_slice(&j.c),
+        FunctionDef::Flame(f) => {
+            out.extend_from_slice(&f.coefs);
+            if let Some(post) = &f.post {
+                out.extend_from_slice(post);
+            }
+            for t in &f.variations {
+                out.push(t.weight);
+                out.extend_from_slice(&t.params);
+            }
+            out.push(f.color_speed);
+        }
     }
     out
 }
@@ -418,6 +469,17 @@ pub fn unflatten(template: &FunctionDef, values: &[f64]) -> Option<FunctionDef> 
             a.offset = v3(&mut next);
         }
         FunctionDef::Julia(j) => j.c = [next(), next()],
+        FunctionDef::Flame(f) => {
+            f.coefs = std::array::from_fn(|_| next());
+            if let Some(post) = &mut f.post {
+                *post = std::array::from_fn(|_| next());
+            }
+            for t in f.variations.iter_mut() {
+                t.weight = next();
+                t.params.iter_mut().for_each(|p| *p = next());
+            }
+            f.color_speed = next();
+        }
     }
     Some(def)
 }
@@ -453,6 +515,24 @@ pub fn same_structure(a: &FunctionDef, b: &FunctionDef) -> Result<(), String> {
             }
             Ok(())
         }
+        (FunctionDef::Flame(fa), FunctionDef::Flame(fb)) => {
+            let names = |f: &FlameDef| f.variations.iter().map(|t| t.variation.name()).collect::<Vec<_>>().join(", ");
+            if fa.post.is_some() != fb.post.is_some() {
+                Err(format!(
+                    "{} a post-affine and the function {}; keys may change only numbers",
+                    if fb.post.is_some() { "has" } else { "has no" },
+                    if fa.post.is_some() { "has one" } else { "has none" }
+                ))
+            } else if names(fa) != names(fb) {
+                Err(format!(
+                    "uses the variations {}, the function {}; keys may change only numbers",
+                    names(fb),
+                    names(fa)
+                ))
+            } else {
+                Ok(())
+            }
+        }
         _ if discriminant(a) != discriminant(b) => Err("is not of the function's kind".into()),
         _ => Ok(()),
     }
@@ -484,5 +564,26 @@ mod tests {
             },
         };
         assert_eq!(unflatten(&def, &flatten(&def)), Some(def));
+    }
+
+    #[test]
+    fn unflatten_inverts_flatten_for_a_flame() {
+        use crate::flame::{Variation, VariationTerm};
+        let julian = Variation::by_name("julian").unwrap();
+        let def = FunctionDef::Flame(FlameDef {
+            coefs: [0.5, 0.1, -0.2, 0.6, 0.3, -0.4],
+            post: Some([1.0, 0.0, 0.2, -1.0, 0.0, 0.5]),
+            variations: vec![
+                VariationTerm { variation: Variation::LINEAR, weight: 0.25, params: vec![] },
+                VariationTerm { variation: julian, weight: 0.75, params: vec![3.0, 1.5] },
+            ],
+            color_speed: 0.3,
+        });
+        // 6 coefs, 6 post, (1 + 0) + (1 + 2) variation numbers, 1 speed.
+        assert_eq!(flatten(&def).len(), 17);
+        assert_eq!(unflatten(&def, &flatten(&def)), Some(def.clone()));
+        let shifted: Vec<f64> = flatten(&def).iter().map(|v| v + 1.0).collect();
+        let FunctionDef::Flame(f) = unflatten(&def, &shifted).unwrap() else { panic!("a flame") };
+        assert_eq!((f.coefs[0], f.variations[1].params[1], f.color_speed), (1.5, 2.5, 1.3));
     }
 }

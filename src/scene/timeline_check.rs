@@ -74,7 +74,7 @@ fn bound_cost(def: &FunctionDef, scene: &Scene) -> u64 {
     match def {
         FunctionDef::Grid { .. } => cells(scene.domain.dims()) * combos,
         FunctionDef::Builder { resolution, .. } => cells(*resolution) * combos,
-        FunctionDef::Affine(_) | FunctionDef::Julia(_) => 1,
+        FunctionDef::Affine(_) | FunctionDef::Julia(_) | FunctionDef::Flame(_) => 1,
     }
 }
 
@@ -164,7 +164,7 @@ pub fn check_timeline_capped(
                     };
                     let bound = ifs.functions[0].map.lipschitz_bound();
                     let outside = match &ifs.functions[0].map {
-                        Map::Julia(_) => 0,
+                        Map::Julia(_) | Map::Flame(_) => 0,
                         _ => ifs.outside_points(0).map_or(0, |o| o.len()),
                     };
                     last[fi] = Some((def, bound, outside));

@@ -120,6 +120,26 @@ fn def_fields(def: &FunctionDef, dim: usize) -> String {
         FunctionDef::Julia(j) => {
             let _ = writeln!(out, "c = {}", nums(&j.c));
         }
+        FunctionDef::Flame(f) => {
+            let _ = writeln!(out, "coefs = {}", nums(&f.coefs));
+            if let Some(post) = &f.post {
+                let _ = writeln!(out, "post = {}", nums(post));
+            }
+            let weights: Vec<String> =
+                f.variations.iter().map(|t| format!("{} = {}", t.variation.name(), num(t.weight))).collect();
+            let _ = writeln!(out, "variations = {{ {} }}", weights.join(", "));
+            let params: Vec<String> = f
+                .variations
+                .iter()
+                .flat_map(|t| {
+                    t.variation.info().params.iter().zip(&t.params).map(|((n, _), v)| format!("{n} = {}", num(*v)))
+                })
+                .collect();
+            if !params.is_empty() {
+                let _ = writeln!(out, "params = {{ {} }}", params.join(", "));
+            }
+            let _ = writeln!(out, "color_speed = {}", num(f.color_speed));
+        }
     }
     out
 }
@@ -152,12 +172,20 @@ impl Scene {
 
     /// Writes the scene to `path` atomically: as `original` (the text of the file the scene
     /// was read from) edited where the scene differs from it ([`Scene::to_toml_over`]), or in
-    /// full without one. Returns the text written.
+    /// full without one. Returns the text written. A palette image the scene names that is not
+    /// on disk next to it (the palette of a flame imported in memory) is written there, as the
+    /// strip of its entries, so that the saved scene reads back with its palette.
     pub fn save_over(&self, path: &Path, original: Option<&str>) -> std::io::Result<String> {
         let text = match original {
             Some(original) => self.to_toml_over(original),
             None => self.to_toml(),
         };
+        if let Some(palette) = &self.render.palette
+            && let Some(image) = palette.image_path(path.parent().unwrap_or(Path::new("")))
+            && !image.exists()
+        {
+            crate::io::save_png(&image, &palette.strip_image())?;
+        }
         crate::io::write_atomic(path, |w| std::io::Write::write_all(w, text.as_bytes()))?;
         Ok(text)
     }
@@ -189,13 +217,7 @@ impl Scene {
         for f in &self.functions {
             out += "\n[[function]]\n";
             let _ = writeln!(out, "name = {}", toml_string(&f.name));
-            let kind = match &f.def {
-                FunctionDef::Grid { .. } => "grid",
-                FunctionDef::Builder { .. } => "builder",
-                FunctionDef::Affine(_) => "affine",
-                FunctionDef::Julia(_) => "julia",
-            };
-            let _ = writeln!(out, "kind = \"{kind}\"");
+            let _ = writeln!(out, "kind = \"{}\"", f.def.kind());
             let _ = writeln!(out, "color = {}", color_text(f.color));
             if let Some(p) = f.probability {
                 let _ = writeln!(out, "probability = {}", num(p));

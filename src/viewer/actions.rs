@@ -29,6 +29,11 @@ impl ViewerState {
             self.error = Some("cannot save: no file name".into());
             return;
         }
+        if crate::flame::xml::is_flame_path(path) {
+            self.error =
+                Some(format!("cannot save over the flame file {}: save the scene as a .toml file", path.display()));
+            return;
+        }
         let mut saved = self.scene.clone();
         saved.path = Some(path.to_path_buf());
         // Over the text of the scene's file, so that its comments and spellings stay (also

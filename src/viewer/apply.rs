@@ -80,6 +80,7 @@ impl ViewerState {
                 Command::SetBuilderStep { function, step, value } => {
                     edited |= self.set_builder_step(function, step, value);
                 }
+                Command::SetFlame { function, value } => edited |= self.set_flame(function, value),
                 Command::SetLiveSettings(live) => {
                     self.live = live;
                     changes.live_settings = true;
@@ -571,6 +572,22 @@ impl ViewerState {
         let Some(s) = builder.steps.get_mut(step) else { return false };
         *s = value;
         self.set_definition(function, def)
+    }
+
+    /// Sets flame function `function`'s numbers (at the playhead); its structure stays.
+    fn set_flame(&mut self, function: usize, value: crate::scene::spec::FlameDef) -> bool {
+        if function >= self.scene.functions.len() {
+            return false;
+        }
+        let def = self.scene.function_def_at(function, self.t_secs);
+        let value = FunctionDef::Flame(value);
+        if def == value
+            || !matches!(def, FunctionDef::Flame(_))
+            || crate::scene::spec::same_structure(&def, &value).is_err()
+        {
+            return false;
+        }
+        self.set_definition(function, value)
     }
 
     /// Adds a key at the playhead holding every grid and builder function's current value, or

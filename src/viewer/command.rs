@@ -40,6 +40,11 @@ pub enum Command {
         step: usize,
         value: Step,
     },
+    /// A flame function's numbers (same variations, same post-affine or none).
+    SetFlame {
+        function: usize,
+        value: crate::scene::spec::FlameDef,
+    },
     SetLiveSettings(LiveSettings),
     SetProjection(Projection),
     Orbit {

@@ -14,6 +14,10 @@ use super::command::Command;
 use super::state::ViewerState;
 use super::widgets::slider;
 
+// Here and not in `viewer/mod.rs`, which is at its length limit.
+#[path = "flame_ui.rs"]
+pub mod flame_ui;
+
 /// What the "p" of a function means here, shown when the pointer rests on it. (Only glyphs
 /// that the bundled font draws: it has Σ and ≈ but no arrows and no ∝.)
 pub const PROBABILITY_HELP: &str = "p: how often the chaos game applies this function.\n\

@@ -410,7 +410,12 @@ impl ViewerState {
 
     /// The default path the scene is saved to: its file, else a new file.
     pub(super) fn default_save_text(&self) -> String {
-        self.scene_path.as_ref().map_or_else(|| "nlifs-scene.toml".into(), |p| p.display().to_string())
+        match &self.scene_path {
+            None => "nlifs-scene.toml".into(),
+            // A flame file opened as its scene is saved as a scene beside it, never over it.
+            Some(p) if crate::flame::xml::is_flame_path(p) => p.with_extension("toml").display().to_string(),
+            Some(p) => p.display().to_string(),
+        }
     }
 
     /// Time on the timeline at the current scene time (where keys are added and edited).

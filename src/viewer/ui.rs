@@ -44,6 +44,7 @@ pub fn panels_ui(
             super::grid_edit_ui::grid_edit_ui(ui, state, commands);
             super::nesting_ui::nesting_ui(ui, state, commands);
             super::functions_ui::builder_ui(ui, state, commands);
+            super::functions_ui::flame_ui::flame_ui(ui, state, commands);
             render_ui(ui, state, commands);
             statistics_ui(ui, state);
             screenshot_ui(ui, state, commands);

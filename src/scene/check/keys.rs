@@ -137,6 +137,7 @@ impl Checker<'_> {
                 FunctionDef::Builder { .. } => ("builder", &["steps"]),
                 FunctionDef::Affine(_) => ("affine", &["matrix", "offset"]),
                 FunctionDef::Julia(_) => ("julia", &["c"]),
+                FunctionDef::Flame(_) => ("flame", &super::flame::FLAME_FIELDS),
             };
             let present: [(&str, Option<Range<usize>>); 5] = [
                 ("points", f.points.as_ref().map(|v| v.span())),
@@ -145,7 +146,8 @@ impl Checker<'_> {
                 ("offset", f.offset.as_ref().map(|v| v.span())),
                 ("c", f.c.as_ref().map(|v| v.span())),
             ];
-            for (field_name, s) in present {
+            let flame_fields = f.flame().present().into_iter().map(|(n, s)| (n, Some(s)));
+            for (field_name, s) in present.into_iter().chain(flame_fields) {
                 if let Some(s) = s
                     && !allowed.contains(&field_name)
                 {
@@ -209,6 +211,9 @@ impl Checker<'_> {
                         }
                     };
                     FunctionDef::Julia(JuliaMap { c, sign: jm.sign })
+                }
+                FunctionDef::Flame(fd) => {
+                    FunctionDef::Flame(self.flame_def(&prefix, span.clone(), f.flame(), Some(fd))?)
                 }
             };
             if let Err(msg) = spec::same_structure(base, &def) {

@@ -21,6 +21,7 @@ use crate::scene::spec::{
 };
 use crate::scene::{Scene, SceneError};
 
+mod flame;
 mod keys;
 mod lens;
 mod numbers;
@@ -242,11 +243,14 @@ impl Checker<'_> {
             "builder" => &["resolution", "steps"],
             "affine" => &["matrix", "offset"],
             "julia" => &["c", "sign"],
+            "flame" => &flame::FLAME_FIELDS,
             other => {
                 return Err(self.err(
                     f.kind.span(),
                     &field("kind"),
-                    format!("`{other}` is not a function kind; use \"grid\", \"builder\", \"affine\" or \"julia\""),
+                    format!(
+                        "`{other}` is not a function kind; use \"grid\", \"builder\", \"affine\", \"julia\" or \"flame\""
+                    ),
                 ));
             }
         };
@@ -260,7 +264,8 @@ impl Checker<'_> {
             ("sign", f.sign.as_ref().map(|v| v.span())),
             ("kind", None),
         ];
-        for (name, s) in present {
+        let flame_fields = f.flame().present().into_iter().map(|(n, s)| (n, Some(s)));
+        for (name, s) in present.into_iter().chain(flame_fields) {
             if let Some(s) = s
                 && !allowed.contains(&name)
             {
@@ -333,6 +338,7 @@ impl Checker<'_> {
                 };
                 FunctionDef::Affine(AffineMap { matrix, offset })
             }
+            "flame" => FunctionDef::Flame(self.flame_def(&format!("function[{i}]"), span.clone(), f.flame(), None)?),
             _ => {
                 if dim != 2 {
                     return Err(self.err(

@@ -20,9 +20,16 @@ impl Scene {
     }
 
     /// [`Scene::load`], with the file's text (what a save over the file edits,
-    /// [`Scene::save_over`]).
+    /// [`Scene::save_over`]). A flame file (`.flame`, `.flam3`) is read as the scene of its
+    /// first flame (`flame_import.rs`), its text the scene's TOML; its warnings are not shown
+    /// here (`flame_import::load_flame` gives them).
     pub fn load_with_text(path: &Path) -> Result<(Self, String), LoadError> {
         use std::io::Read;
+        if crate::flame::xml::is_flame_path(path) {
+            let scene = crate::scene::flame_import::load_flame(path, None, None)?.scene;
+            let text = scene.to_toml();
+            return Ok((scene, text));
+        }
         let file = path.display().to_string();
         let io_error = |cause: std::io::Error| LoadError::Io { path: file.clone(), cause };
         let mut bytes = Vec::new();

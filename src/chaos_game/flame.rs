@@ -1,0 +1,97 @@
+//! Flame functions (`kind = "flame"`, flam3's xforms) in the chaos game: their xforms compiled
+//! once ([`FlameTable`]), applied in f64 to the orbit's f32 point with the orbit's own generator
+//! (some variations draw random numbers) by [`CompiledIfs::map_with_rng`], and each one's colour
+//! speed for the colour coordinate.
+//!
+//! flam3's rule for a point that leaves the plane (NaN, or a coordinate beyond ±10¹⁰) is kept:
+//! the orbit is re-seeded at a random point of [−1, 1]², and that step is not drawn (its emitted
+//! point is NaN, which the splat skips), as flam3 retries such a step without plotting it.
+//!
+//! An IFS with a flame function runs on the general path (the lane and vector kernels take only
+//! multilinear and affine maps); its other functions are mapped there as always. There is no
+//! GPU twin of the variations: the live view and the GPU renders take the CPU route for such a
+//! scene ([`CompiledIfs::has_flames`]). The kernel table holds, for a flame function, its
+//! pre-affine as one affine cell, so that the tables stay well formed for every consumer.
+
+use glam::Vec3;
+
+use super::CompiledIfs;
+use crate::flame::Xform;
+use crate::flame::variations::CompiledXform;
+use crate::rng::Pcg32;
+
+/// flam3's limit of a coordinate in the plane (`badvalue`).
+const BAD_VALUE: f64 = 1e10;
+
+/// The compiled IFS's flame functions, by compiled function index (None: not a flame).
+#[derive(Clone, Debug)]
+pub struct FlameTable {
+    xforms: Vec<Option<Xform>>,
+    compiled: Vec<Option<CompiledXform>>,
+}
+
+impl PartialEq for FlameTable {
+    /// The compiled forms follow from the xforms.
+    fn eq(&self, other: &Self) -> bool {
+        self.xforms == other.xforms
+    }
+}
+
+impl FlameTable {
+    /// The table of `xforms` (one entry per compiled function); None when none is a flame.
+    pub(super) fn new(xforms: Vec<Option<Xform>>) -> Option<Self> {
+        if xforms.iter().all(Option::is_none) {
+            return None;
+        }
+        let compiled = xforms.iter().map(|x| x.as_ref().map(CompiledXform::new)).collect();
+        Some(Self { xforms, compiled })
+    }
+
+    /// The colour speeds of the compiled functions: a flame's `color_speed`, ½ for the others.
+    pub(super) fn color_speeds(&self) -> Vec<f32> {
+        self.xforms.iter().map(|x| x.as_ref().map_or(0.5, |x| x.color_speed as f32)).collect()
+    }
+}
+
+#[inline(always)]
+fn is_bad(v: [f64; 2]) -> bool {
+    !(v[0].abs() <= BAD_VALUE && v[1].abs() <= BAD_VALUE)
+}
+
+impl CompiledIfs {
+    /// Whether a function of this IFS is a flame (no GPU twin: the CPU route runs it).
+    pub fn has_flames(&self) -> bool {
+        self.flames.is_some()
+    }
+
+    /// Maps `p` by compiled function `fi` with the orbit's generator `rng`: returns the orbit's
+    /// next point and the point to draw. For a flame function the xform (z unchanged), with
+    /// flam3's re-seed of a point that leaves the plane (drawn as NaN, skipped); any other
+    /// function as [`Self::map_fast`], both points the same.
+    #[inline(always)]
+    pub fn map_with_rng(&self, fi: usize, p: Vec3, rng: &mut Pcg32) -> (Vec3, Vec3) {
+        if let Some(table) = &self.flames
+            && let Some(x) = &table.compiled[fi]
+        {
+            let q = x.apply([p.x as f64, p.y as f64], rng);
+            if is_bad(q) {
+                let next = Vec3::new((rng.next_f64() * 2.0 - 1.0) as f32, (rng.next_f64() * 2.0 - 1.0) as f32, p.z);
+                return (next, Vec3::NAN);
+            }
+            let q = Vec3::new(q[0] as f32, q[1] as f32, p.z);
+            return (q, q);
+        }
+        let q = self.map_fast(fi, p);
+        (q, q)
+    }
+
+    /// One step of an orbit's colour coordinate after compiled function `fi`:
+    /// s·c_i + (1 − s)·c with the function's colour speed s (flames), else (c + c_i) / 2.
+    #[inline(always)]
+    pub(super) fn step_color_of(&self, c: f32, fi: usize, coords: &[f32]) -> f32 {
+        match &self.color_speeds {
+            Some(s) => super::color_coord::step_color_speed(c, coords[fi], s[fi]),
+            None => super::step_color(c, coords[fi]),
+        }
+    }
+}
