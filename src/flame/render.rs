@@ -13,6 +13,11 @@
 //! colour × 255 × weight, rounded down, and 255 × weight for the count), so the sum over
 //! chains is exact and the picture is the same bytes for a seed whatever the thread count:
 //! run `k` draws from `Pcg32::for_stream(seed, 0, k)`, and threads take runs in any order.
+//!
+//! A worker interleaves eight runs (its lanes), one iteration of each in turn: one run's
+//! iterations depend on each other, the lanes' do not, so the core overlaps their arithmetic,
+//! and each sample's bucket is prefetched when it is computed and added a round later, when it
+//! is in cache. The sums, and so the picture, are the same as one run after another.
 
 use std::sync::atomic::{AtomicU64, Ordering};
 
@@ -31,6 +36,9 @@ pub const RUN_SAMPLES: u64 = 10_000;
 pub const FUSE_ITERATIONS: i64 = 15;
 /// Entries of the xform choice table (flam3's `CHOOSE_XFORM_GRAIN`).
 const CHOICE_ENTRIES: usize = 16_384;
+/// Runs one worker interleaves: their iterations are independent, so the core overlaps them,
+/// and each sample's bucket is prefetched a round of lanes before its add.
+const LANES: usize = 8;
 
 /// An 8-bit RGBA picture, rows top to bottom (flam3-render's PNG: alpha 255, the background
 /// composited).
@@ -214,21 +222,12 @@ impl ChaosGame {
         let runs = samples.div_ceil(RUN_SAMPLES);
         let next_run = AtomicU64::new(0);
         let cells = layout.hist_width * layout.hist_height;
-        let workers = rayon::current_num_threads().max(1).min(runs.max(1) as usize);
+        let workers = rayon::current_num_threads().max(1).min(runs.div_ceil(LANES as u64).max(1) as usize);
         let parts: Vec<(Vec<Bucket>, u64)> = (0..workers)
             .into_par_iter()
             .map(|_| {
                 let mut histogram = vec![[0u32; 5]; cells];
-                let mut bad = 0;
-                loop {
-                    let run = next_run.fetch_add(1, Ordering::Relaxed);
-                    if run >= runs {
-                        break;
-                    }
-                    let n = RUN_SAMPLES.min(samples - run * RUN_SAMPLES);
-                    bad += self.run_one(seed, run as u32, n, &mut histogram);
-                    progress(n);
-                }
+                let bad = self.run_lanes(seed, samples, &next_run, &mut histogram, progress);
                 (histogram, bad)
             })
             .collect();
@@ -245,62 +244,107 @@ impl ChaosGame {
         (total, bad)
     }
 
-    /// One run: `n` samples after the fuse, from its own stream. Returns the re-seeds.
-    fn run_one(&self, seed: u32, run: u32, n: u64, histogram: &mut [Bucket]) -> u64 {
-        let mut rng = Pcg32::for_stream(seed, 0, run);
-        let mut p = [uniform11(&mut rng), uniform11(&mut rng)];
-        let mut color = rng.next_f64();
-        let mut last = 0usize;
-        let mut consecutive_bad = 0;
+    /// The lane that starts the next run not yet taken, if any.
+    fn start_lane(&self, seed: u32, samples: u64, next_run: &AtomicU64) -> Option<Lane> {
+        let runs = samples.div_ceil(RUN_SAMPLES);
+        let run = next_run.fetch_add(1, Ordering::Relaxed);
+        if run >= runs {
+            return None;
+        }
+        let mut rng = Pcg32::for_stream(seed, 0, run as u32);
+        let p = [uniform11(&mut rng), uniform11(&mut rng)];
+        let color = rng.next_f64();
+        let n = RUN_SAMPLES.min(samples - run * RUN_SAMPLES);
+        Some(Lane { rng, p, color, last: 0, consecutive_bad: 0, i: -FUSE_ITERATIONS, n: n as i64, pending: None })
+    }
+
+    /// One worker: [`LANES`] runs interleaved, each lane taking the next run when its own is
+    /// done, until no run is left. Returns the re-seeds.
+    fn run_lanes(
+        &self,
+        seed: u32,
+        samples: u64,
+        next_run: &AtomicU64,
+        histogram: &mut [Bucket],
+        progress: &(dyn Fn(u64) + Sync),
+    ) -> u64 {
+        let mut lanes: [Option<Lane>; LANES] = std::array::from_fn(|_| self.start_lane(seed, samples, next_run));
+        let mut active = lanes.iter().filter(|l| l.is_some()).count();
         let mut bad = 0;
-        let mut i = -FUSE_ITERATIONS;
-        let n = n as i64;
-        while i < n {
-            let entry = rng.next_u32() as usize & (CHOICE_ENTRIES - 1);
-            let row = if self.xaos { last } else { 0 };
-            let k = self.choice[row * CHOICE_ENTRIES + entry] as usize;
-            let x = &self.xforms[k];
-            let next_color = x.color_of(color);
-            let mut q = x.map.apply(p, &mut rng);
-            if is_bad(q) {
-                q = [uniform11(&mut rng), uniform11(&mut rng)];
-                bad += 1;
-                consecutive_bad += 1;
-                if consecutive_bad < 5 {
-                    p = q;
-                    color = next_color;
+        while active > 0 {
+            for slot in lanes.iter_mut() {
+                let Some(lane) = slot else { continue };
+                if let Some((b, inc)) = lane.pending.take() {
+                    add(&mut histogram[b], &inc);
+                }
+                if lane.i >= lane.n {
+                    progress(lane.n as u64);
+                    *slot = self.start_lane(seed, samples, next_run);
+                    if slot.is_none() {
+                        active -= 1;
+                    }
                     continue;
                 }
+                bad += self.step(lane, histogram);
             }
-            consecutive_bad = 0;
-            last = k + 1;
-            p = q;
-            color = next_color;
-            let (mut shown, mut shown_color) = (p, color);
-            if let Some(f) = &self.final_xform
-                && (f.opacity == 1.0 || rng.next_f64() < f.opacity)
-            {
-                shown_color = f.color_of(color);
-                shown = f.map.apply(p, &mut rng);
-                if is_bad(shown) {
-                    shown = [uniform11(&mut rng), uniform11(&mut rng)];
-                }
-            }
-            if i >= 0
-                && x.plotted_weight != 0.0
-                && let Some(b) = self.camera.bucket(shown)
-            {
-                self.plot(&mut histogram[b], shown_color, x.plotted_weight);
-            }
-            i += 1;
         }
         bad
     }
 
+    /// One iteration of a lane's run (flam3's loop body): the next xform, its image (re-seeded
+    /// and retried when it leaves the plane), the final xform's plotted copy. The sample's
+    /// bucket is prefetched and its increments left in `lane.pending`, added at the lane's next
+    /// turn. Returns the re-seeds (0 or 1).
     #[inline(always)]
-    fn plot(&self, bucket: &mut Bucket, color: f64, weight: f64) {
+    fn step(&self, lane: &mut Lane, histogram: &[Bucket]) -> u64 {
+        let rng = &mut lane.rng;
+        let entry = rng.next_u32() as usize & (CHOICE_ENTRIES - 1);
+        let row = if self.xaos { lane.last } else { 0 };
+        let k = self.choice[row * CHOICE_ENTRIES + entry] as usize;
+        let x = &self.xforms[k];
+        let next_color = x.color_of(lane.color);
+        let mut q = x.map.apply(lane.p, rng);
+        let mut bad = 0;
+        if is_bad(q) {
+            q = [uniform11(rng), uniform11(rng)];
+            bad = 1;
+            lane.consecutive_bad += 1;
+            if lane.consecutive_bad < 5 {
+                lane.p = q;
+                lane.color = next_color;
+                return bad;
+            }
+        }
+        lane.consecutive_bad = 0;
+        lane.last = k + 1;
+        lane.p = q;
+        lane.color = next_color;
+        let (mut shown, mut shown_color) = (q, next_color);
+        if let Some(f) = &self.final_xform
+            && (f.opacity == 1.0 || rng.next_f64() < f.opacity)
+        {
+            shown_color = f.color_of(next_color);
+            shown = f.map.apply(q, rng);
+            if is_bad(shown) {
+                shown = [uniform11(rng), uniform11(rng)];
+            }
+        }
+        if lane.i >= 0
+            && x.plotted_weight != 0.0
+            && let Some(b) = self.camera.bucket(shown)
+        {
+            prefetch(&histogram[b]);
+            lane.pending = Some((b, self.increments_of(shown_color, x.plotted_weight)));
+        }
+        lane.i += 1;
+        bad
+    }
+
+    /// The buckets' increments of a sample of palette coordinate `color` plotted with `weight`.
+    #[inline(always)]
+    fn increments_of(&self, color: f64, weight: f64) -> Bucket {
         let index = color * 256.0;
-        let inc = match self.palette_mode {
+        match self.palette_mode {
             PaletteMode::Step => {
                 let i = (index.clamp(0.0, 255.0)) as usize;
                 if weight == 1.0 { self.step_increments[i] } else { increments(self.dmap[i], weight) }
@@ -317,11 +361,50 @@ impl ChaosGame {
                 let (a, b) = (self.dmap[i], self.dmap[i + 1]);
                 increments(std::array::from_fn(|c| a[c] * (1.0 - frac) + b[c] * frac), weight)
             }
-        };
-        for k in 0..5 {
-            bucket[k] = bucket[k].saturating_add(inc[k]);
         }
     }
+}
+
+/// A run of the chaos game in progress, one of the [`LANES`] a worker interleaves.
+struct Lane {
+    rng: Pcg32,
+    p: [f64; 2],
+    color: f64,
+    /// The previous xform + 1 (0 at the start): the xaos row.
+    last: usize,
+    consecutive_bad: u32,
+    /// The iteration, from −[`FUSE_ITERATIONS`]; the run ends at `n`.
+    i: i64,
+    n: i64,
+    /// The previous sample's bucket (prefetched) and increments, not yet added.
+    pending: Option<(usize, Bucket)>,
+}
+
+#[inline(always)]
+fn add(bucket: &mut Bucket, inc: &Bucket) {
+    for k in 0..5 {
+        bucket[k] = bucket[k].saturating_add(inc[k]);
+    }
+}
+
+/// Asks for `bucket`'s cache lines ahead of the add (a bucket of 20 bytes may span two).
+#[inline(always)]
+fn prefetch(bucket: &Bucket) {
+    #[cfg(target_arch = "x86_64")]
+    {
+        use std::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
+        let first: *const i8 = bucket.as_ptr().cast();
+        let last: *const i8 = bucket[4..].as_ptr().cast();
+        #[expect(unsafe_code, reason = "a prefetch is a hint: it reads nothing and cannot fault")]
+        // SAFETY: both pointers are into `bucket`, a live reference; prefetching never
+        // dereferences them.
+        unsafe {
+            _mm_prefetch::<_MM_HINT_T0>(first);
+            _mm_prefetch::<_MM_HINT_T0>(last);
+        }
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = bucket;
 }
 
 /// flam3's integer bucket increments of a colour (× 255) at a plotted weight.
