@@ -117,8 +117,10 @@ impl Camera {
         }
     }
 
+    /// The bucket of `p` and whether `p` is in view; out of view the bucket is some bucket
+    /// of the histogram (the chaos game adds nothing there), so that no branch is needed.
     #[inline(always)]
-    fn bucket(&self, p: [f64; 2]) -> Option<usize> {
+    fn bucket(&self, p: [f64; 2]) -> (usize, bool) {
         let [x, y] = match &self.rotation {
             Some(r) => {
                 let d = [p[0] - self.center[0], p[1] - self.center[1]];
@@ -127,13 +129,13 @@ impl Camera {
             None => p,
         };
         let b = &self.bounds;
-        if !(x >= b[0] && y >= b[1] && x <= b[2] && y <= b[3]) {
-            return None;
-        }
+        let inside = (x >= b[0]) & (y >= b[1]) & (x <= b[2]) & (y <= b[3]);
+        // In view the scaled coordinates are ≥ 0 (truncated toward 0 as flam3 does); out of
+        // view (NaN included, which converts to 0) the clamps keep the bucket in the histogram.
         // On the far edge (x = bounds[2]) flam3 steps into the next row; this stays in the last.
-        let i = ((self.x_scale * x - self.x_offset) as usize).min(self.hist_width - 1);
-        let j = ((self.y_scale * y - self.y_offset) as usize).min(self.hist_height - 1);
-        Some(i + j * self.hist_width)
+        let i = ((self.x_scale * x - self.x_offset) as i64).clamp(0, self.hist_width as i64 - 1) as usize;
+        let j = ((self.y_scale * y - self.y_offset) as i64).clamp(0, self.hist_height as i64 - 1) as usize;
+        (i + j * self.hist_width, inside)
     }
 }
 
@@ -255,7 +257,16 @@ impl ChaosGame {
         let p = [uniform11(&mut rng), uniform11(&mut rng)];
         let color = rng.next_f64();
         let n = RUN_SAMPLES.min(samples - run * RUN_SAMPLES);
-        Some(Lane { rng, p, color, last: 0, consecutive_bad: 0, i: -FUSE_ITERATIONS, n: n as i64, pending: None })
+        Some(Lane {
+            rng,
+            p,
+            color,
+            last: 0,
+            consecutive_bad: 0,
+            i: -FUSE_ITERATIONS,
+            n: n as i64,
+            pending: NOTHING_PENDING,
+        })
     }
 
     /// One worker: [`LANES`] runs interleaved, each lane taking the next run when its own is
@@ -274,9 +285,8 @@ impl ChaosGame {
         while active > 0 {
             for slot in lanes.iter_mut() {
                 let Some(lane) = slot else { continue };
-                if let Some((b, inc)) = lane.pending.take() {
-                    add(&mut histogram[b], &inc);
-                }
+                let (b, inc) = std::mem::replace(&mut lane.pending, NOTHING_PENDING);
+                add(&mut histogram[b], &inc);
                 if lane.i >= lane.n {
                     progress(lane.n as u64);
                     *slot = self.start_lane(seed, samples, next_run);
@@ -329,13 +339,14 @@ impl ChaosGame {
                 shown = [uniform11(rng), uniform11(rng)];
             }
         }
-        if lane.i >= 0
-            && x.plotted_weight != 0.0
-            && let Some(b) = self.camera.bucket(shown)
-        {
-            prefetch(&histogram[b]);
-            lane.pending = Some((b, self.increments_of(shown_color, x.plotted_weight)));
-        }
+        // Without branches (whether a sample is in view is as good as random): a sample that
+        // is not plotted adds 0 to bucket 0.
+        let (b, inside) = self.camera.bucket(shown);
+        let plotted = inside & (lane.i >= 0) & (x.plotted_weight != 0.0);
+        let mask = 0u32.wrapping_sub(u32::from(plotted));
+        let b = b & (mask as usize);
+        prefetch(&histogram[b]);
+        lane.pending = (b, self.increments_of(shown_color, x.plotted_weight).map(|v| v & mask));
         lane.i += 1;
         bad
     }
@@ -365,6 +376,9 @@ impl ChaosGame {
     }
 }
 
+/// A lane's `pending` when nothing is: 0 added to bucket 0.
+const NOTHING_PENDING: (usize, Bucket) = (0, [0; 5]);
+
 /// A run of the chaos game in progress, one of the [`LANES`] a worker interleaves.
 struct Lane {
     rng: Pcg32,
@@ -377,7 +391,7 @@ struct Lane {
     i: i64,
     n: i64,
     /// The previous sample's bucket (prefetched) and increments, not yet added.
-    pending: Option<(usize, Bucket)>,
+    pending: (usize, Bucket),
 }
 
 #[inline(always)]
