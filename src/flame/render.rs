@@ -229,7 +229,7 @@ impl ChaosGame {
             .into_par_iter()
             .map(|_| {
                 let mut histogram = vec![[0u32; 5]; cells];
-                let bad = self.run_lanes(seed, samples, &next_run, &mut histogram, progress);
+                let bad = self.run_lanes_dispatch(seed, samples, &next_run, &mut histogram, progress);
                 (histogram, bad)
             })
             .collect();
@@ -269,8 +269,40 @@ impl ChaosGame {
         })
     }
 
+    /// [`Self::run_lanes`] compiled for AVX2 when the CPU has it (no FMA: the same bits).
+    fn run_lanes_dispatch(
+        &self,
+        seed: u32,
+        samples: u64,
+        next_run: &AtomicU64,
+        histogram: &mut [Bucket],
+        progress: &(dyn Fn(u64) + Sync),
+    ) -> u64 {
+        #[cfg(target_arch = "x86_64")]
+        if crate::simd::SimdLevel::detect().avx2() {
+            #[expect(unsafe_code, reason = "an AVX2 function, entered after the CPU check")]
+            // SAFETY: the CPU runs AVX2 (checked just above).
+            return unsafe { self.run_lanes_avx2(seed, samples, next_run, histogram, progress) };
+        }
+        self.run_lanes(seed, samples, next_run, histogram, progress)
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    fn run_lanes_avx2(
+        &self,
+        seed: u32,
+        samples: u64,
+        next_run: &AtomicU64,
+        histogram: &mut [Bucket],
+        progress: &(dyn Fn(u64) + Sync),
+    ) -> u64 {
+        self.run_lanes(seed, samples, next_run, histogram, progress)
+    }
+
     /// One worker: [`LANES`] runs interleaved, each lane taking the next run when its own is
     /// done, until no run is left. Returns the re-seeds.
+    #[inline(always)]
     fn run_lanes(
         &self,
         seed: u32,
