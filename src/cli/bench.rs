@@ -130,8 +130,9 @@ pub enum BenchCommand {
     /// CPU render accumulation on all threads: per-thread framebuffers against one shared
     /// framebuffer, points/s per splat mode, side by side.
     Render(super::bench_render::BenchRenderArgs),
-    /// A flame file's flames rendered once by `nlifs render` and by `flam3-render` (one
-    /// thread), the same samples: CPU seconds of each whole process, samples per CPU second.
+    /// A flame file's flames rendered once by `nlifs render` (one thread, then all) and by
+    /// `flam3-render` (one thread), the same samples: CPU seconds of each whole process,
+    /// samples per CPU second, nlifs / flam3.
     Flame {
         file: PathBuf,
         /// Where the images go.

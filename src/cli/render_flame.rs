@@ -110,38 +110,61 @@ fn write_png(path: &Path, image: &FlameImage) -> anyhow::Result<()> {
     nlifs::io::write_atomic(path, |w| w.write_all(&bytes)).with_context(|| format!("cannot write {}", path.display()))
 }
 
-/// `nlifs bench flame FILE`: every flame of the file rendered once by `nlifs render` (all
-/// threads) and by `flam3-render` (one thread), each a child process; CPU seconds of each
-/// whole process and samples per CPU second.
+/// `nlifs bench flame FILE`: every flame of the file rendered once by `nlifs render` on one
+/// thread and on all threads, and by `flam3-render` on one thread (`nthreads=1`), each a child
+/// process; CPU seconds of each whole process, samples per CPU second, and the ratio of nlifs
+/// to flam3 at one thread each (the headline) and with nlifs on all threads.
 pub fn bench(file: &Path, out: &Path) -> anyhow::Result<()> {
     let read = nlifs::flame::read_file(file).map_err(|e| BadInput(e.to_string()))?;
     let samples: u64 = read.flames.iter().map(sample_count).sum();
     std::fs::create_dir_all(out).with_context(|| format!("cannot create {}", out.display()))?;
     let exe = std::env::current_exe().context("cannot find the nlifs executable")?;
-    let child_cpu = |cmd: &mut Command, what: &str| -> anyhow::Result<f64> {
+    // CPU seconds of the children and wall seconds.
+    let child_cpu = |cmd: &mut Command, what: &str| -> anyhow::Result<(f64, f64)> {
         let before = nlifs::cpu_time::cpu_secs().1;
+        let start = std::time::Instant::now();
         let status =
             cmd.stdout(Stdio::null()).stderr(Stdio::null()).status().with_context(|| format!("cannot run {what}"))?;
         if !status.success() {
             anyhow::bail!("{what} failed ({status})");
         }
-        Ok(nlifs::cpu_time::cpu_secs().1 - before)
+        Ok((nlifs::cpu_time::cpu_secs().1 - before, start.elapsed().as_secs_f64()))
     };
-    let mut ours = 0.0;
-    for k in 0..read.flames.len() {
-        let png: PathBuf = out.join(format!("nlifs-{k}.png"));
-        ours += child_cpu(
-            Command::new(&exe).arg("render").arg(file).arg("-o").arg(&png).arg("--index").arg(k.to_string()),
-            "nlifs render",
-        )?;
-    }
+    let all_threads = rayon::current_num_threads();
+    let ours = |threads: usize| -> anyhow::Result<(f64, f64)> {
+        let (mut cpu, mut wall) = (0.0, 0.0);
+        for k in 0..read.flames.len() {
+            let png: PathBuf = out.join(format!("nlifs-{k}-t{threads}.png"));
+            let (c, w) = child_cpu(
+                Command::new(&exe)
+                    .arg("render")
+                    .arg(file)
+                    .arg("-o")
+                    .arg(&png)
+                    .arg("--index")
+                    .arg(k.to_string())
+                    .arg("--threads")
+                    .arg(threads.to_string()),
+                "nlifs render",
+            )?;
+            cpu += c;
+            wall += w;
+        }
+        Ok((cpu, wall))
+    };
+    let (one_cpu, one_wall) = ours(1)?;
+    let (all_cpu, all_wall) = ours(all_threads)?;
     println!(
-        "{}: {} flame(s), {samples} samples; CPU seconds of the whole process, one run each",
+        "{}: {} flame(s), {samples} samples; CPU seconds of the whole processes, one run each",
         file.display(),
         read.flames.len()
     );
     let rate = |secs: f64| if secs > 0.0 { samples as f64 / secs } else { f64::INFINITY };
-    println!("  nlifs ({} threads): {ours:8.2} s CPU, {:12.0} samples/CPU-s", rayon::current_num_threads(), rate(ours));
+    let row = |what: &str, cpu: f64, wall: f64| {
+        println!("  {what:<28} {cpu:8.2} s CPU {wall:8.2} s wall {:14.0} samples/CPU-s", rate(cpu));
+    };
+    row("nlifs (1 thread)", one_cpu, one_wall);
+    row(&format!("nlifs ({all_threads} threads)"), all_cpu, all_wall);
     let theirs = child_cpu(
         Command::new("flam3-render")
             .env("nthreads", "1")
@@ -153,9 +176,14 @@ pub fn bench(file: &Path, out: &Path) -> anyhow::Result<()> {
         "flam3-render (apt install flam3-utils)",
     );
     match theirs {
-        Ok(theirs) => {
-            println!("  flam3-render (1 thread): {theirs:8.2} s CPU, {:12.0} samples/CPU-s", rate(theirs));
-            println!("  nlifs / flam3: {:.2}× the samples per CPU second", theirs / ours.max(1e-9));
+        Ok((cpu, wall)) => {
+            row("flam3-render (1 thread)", cpu, wall);
+            let ratio = |ours: f64| cpu / ours.max(1e-9);
+            println!(
+                "  nlifs / flam3, samples per CPU second: {:.2}× (1 thread each), {:.2}× (nlifs on {all_threads} threads)",
+                ratio(one_cpu),
+                ratio(all_cpu)
+            );
         }
         Err(e) => println!("  flam3-render: not measured ({e:#})"),
     }

@@ -13,6 +13,11 @@
 //! colour × 255 × weight, rounded down, and 255 × weight for the count), so the sum over
 //! chains is exact and the picture is the same bytes for a seed whatever the thread count:
 //! run `k` draws from `Pcg32::for_stream(seed, 0, k)`, and threads take runs in any order.
+//!
+//! A worker interleaves eight runs (its lanes), one iteration of each in turn: one run's
+//! iterations depend on each other, the lanes' do not, so the core overlaps their arithmetic,
+//! and each sample's bucket is prefetched when it is computed and added a round later, when it
+//! is in cache. The sums, and so the picture, are the same as one run after another.
 
 use std::sync::atomic::{AtomicU64, Ordering};
 
@@ -31,6 +36,9 @@ pub const RUN_SAMPLES: u64 = 10_000;
 pub const FUSE_ITERATIONS: i64 = 15;
 /// Entries of the xform choice table (flam3's `CHOOSE_XFORM_GRAIN`).
 const CHOICE_ENTRIES: usize = 16_384;
+/// Runs one worker interleaves: their iterations are independent, so the core overlaps them,
+/// and each sample's bucket is prefetched a round of lanes before its add.
+const LANES: usize = 8;
 
 /// An 8-bit RGBA picture, rows top to bottom (flam3-render's PNG: alpha 255, the background
 /// composited).
@@ -109,8 +117,10 @@ impl Camera {
         }
     }
 
+    /// The bucket of `p` and whether `p` is in view; out of view the bucket is some bucket
+    /// of the histogram (the chaos game adds nothing there), so that no branch is needed.
     #[inline(always)]
-    fn bucket(&self, p: [f64; 2]) -> Option<usize> {
+    fn bucket(&self, p: [f64; 2]) -> (usize, bool) {
         let [x, y] = match &self.rotation {
             Some(r) => {
                 let d = [p[0] - self.center[0], p[1] - self.center[1]];
@@ -119,13 +129,13 @@ impl Camera {
             None => p,
         };
         let b = &self.bounds;
-        if !(x >= b[0] && y >= b[1] && x <= b[2] && y <= b[3]) {
-            return None;
-        }
+        let inside = (x >= b[0]) & (y >= b[1]) & (x <= b[2]) & (y <= b[3]);
+        // In view the scaled coordinates are ≥ 0 (truncated toward 0 as flam3 does); out of
+        // view (NaN included, which converts to 0) the clamps keep the bucket in the histogram.
         // On the far edge (x = bounds[2]) flam3 steps into the next row; this stays in the last.
-        let i = ((self.x_scale * x - self.x_offset) as usize).min(self.hist_width - 1);
-        let j = ((self.y_scale * y - self.y_offset) as usize).min(self.hist_height - 1);
-        Some(i + j * self.hist_width)
+        let i = ((self.x_scale * x - self.x_offset) as i64).clamp(0, self.hist_width as i64 - 1) as usize;
+        let j = ((self.y_scale * y - self.y_offset) as i64).clamp(0, self.hist_height as i64 - 1) as usize;
+        (i + j * self.hist_width, inside)
     }
 }
 
@@ -214,21 +224,12 @@ impl ChaosGame {
         let runs = samples.div_ceil(RUN_SAMPLES);
         let next_run = AtomicU64::new(0);
         let cells = layout.hist_width * layout.hist_height;
-        let workers = rayon::current_num_threads().max(1).min(runs.max(1) as usize);
+        let workers = rayon::current_num_threads().max(1).min(runs.div_ceil(LANES as u64).max(1) as usize);
         let parts: Vec<(Vec<Bucket>, u64)> = (0..workers)
             .into_par_iter()
             .map(|_| {
                 let mut histogram = vec![[0u32; 5]; cells];
-                let mut bad = 0;
-                loop {
-                    let run = next_run.fetch_add(1, Ordering::Relaxed);
-                    if run >= runs {
-                        break;
-                    }
-                    let n = RUN_SAMPLES.min(samples - run * RUN_SAMPLES);
-                    bad += self.run_one(seed, run as u32, n, &mut histogram);
-                    progress(n);
-                }
+                let bad = self.run_lanes_dispatch(seed, samples, &next_run, &mut histogram, progress);
                 (histogram, bad)
             })
             .collect();
@@ -245,62 +246,148 @@ impl ChaosGame {
         (total, bad)
     }
 
-    /// One run: `n` samples after the fuse, from its own stream. Returns the re-seeds.
-    fn run_one(&self, seed: u32, run: u32, n: u64, histogram: &mut [Bucket]) -> u64 {
-        let mut rng = Pcg32::for_stream(seed, 0, run);
-        let mut p = [uniform11(&mut rng), uniform11(&mut rng)];
-        let mut color = rng.next_f64();
-        let mut last = 0usize;
-        let mut consecutive_bad = 0;
+    /// The lane that starts the next run not yet taken, if any.
+    fn start_lane(&self, seed: u32, samples: u64, next_run: &AtomicU64) -> Option<Lane> {
+        let runs = samples.div_ceil(RUN_SAMPLES);
+        let run = next_run.fetch_add(1, Ordering::Relaxed);
+        if run >= runs {
+            return None;
+        }
+        let mut rng = Pcg32::for_stream(seed, 0, run as u32);
+        let p = [uniform11(&mut rng), uniform11(&mut rng)];
+        let color = rng.next_f64();
+        let n = RUN_SAMPLES.min(samples - run * RUN_SAMPLES);
+        Some(Lane {
+            rng,
+            p,
+            color,
+            last: 0,
+            consecutive_bad: 0,
+            i: -FUSE_ITERATIONS,
+            n: n as i64,
+            pending: NOTHING_PENDING,
+        })
+    }
+
+    /// [`Self::run_lanes`] compiled for AVX2 when the CPU has it (no FMA: the same bits).
+    fn run_lanes_dispatch(
+        &self,
+        seed: u32,
+        samples: u64,
+        next_run: &AtomicU64,
+        histogram: &mut [Bucket],
+        progress: &(dyn Fn(u64) + Sync),
+    ) -> u64 {
+        #[cfg(target_arch = "x86_64")]
+        if crate::simd::SimdLevel::detect().avx2() {
+            #[expect(unsafe_code, reason = "an AVX2 function, entered after the CPU check")]
+            // SAFETY: the CPU runs AVX2 (checked just above).
+            return unsafe { self.run_lanes_avx2(seed, samples, next_run, histogram, progress) };
+        }
+        self.run_lanes(seed, samples, next_run, histogram, progress)
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    fn run_lanes_avx2(
+        &self,
+        seed: u32,
+        samples: u64,
+        next_run: &AtomicU64,
+        histogram: &mut [Bucket],
+        progress: &(dyn Fn(u64) + Sync),
+    ) -> u64 {
+        self.run_lanes(seed, samples, next_run, histogram, progress)
+    }
+
+    /// One worker: [`LANES`] runs interleaved, each lane taking the next run when its own is
+    /// done, until no run is left. Returns the re-seeds.
+    #[inline(always)]
+    fn run_lanes(
+        &self,
+        seed: u32,
+        samples: u64,
+        next_run: &AtomicU64,
+        histogram: &mut [Bucket],
+        progress: &(dyn Fn(u64) + Sync),
+    ) -> u64 {
+        let mut lanes: [Option<Lane>; LANES] = std::array::from_fn(|_| self.start_lane(seed, samples, next_run));
+        let mut active = lanes.iter().filter(|l| l.is_some()).count();
         let mut bad = 0;
-        let mut i = -FUSE_ITERATIONS;
-        let n = n as i64;
-        while i < n {
-            let entry = rng.next_u32() as usize & (CHOICE_ENTRIES - 1);
-            let row = if self.xaos { last } else { 0 };
-            let k = self.choice[row * CHOICE_ENTRIES + entry] as usize;
-            let x = &self.xforms[k];
-            let next_color = x.color_of(color);
-            let mut q = x.map.apply(p, &mut rng);
-            if is_bad(q) {
-                q = [uniform11(&mut rng), uniform11(&mut rng)];
-                bad += 1;
-                consecutive_bad += 1;
-                if consecutive_bad < 5 {
-                    p = q;
-                    color = next_color;
+        while active > 0 {
+            for slot in lanes.iter_mut() {
+                let Some(lane) = slot else { continue };
+                let (b, inc) = std::mem::replace(&mut lane.pending, NOTHING_PENDING);
+                add(&mut histogram[b], &inc);
+                if lane.i >= lane.n {
+                    progress(lane.n as u64);
+                    *slot = self.start_lane(seed, samples, next_run);
+                    if slot.is_none() {
+                        active -= 1;
+                    }
                     continue;
                 }
+                bad += self.step(lane, histogram);
             }
-            consecutive_bad = 0;
-            last = k + 1;
-            p = q;
-            color = next_color;
-            let (mut shown, mut shown_color) = (p, color);
-            if let Some(f) = &self.final_xform
-                && (f.opacity == 1.0 || rng.next_f64() < f.opacity)
-            {
-                shown_color = f.color_of(color);
-                shown = f.map.apply(p, &mut rng);
-                if is_bad(shown) {
-                    shown = [uniform11(&mut rng), uniform11(&mut rng)];
-                }
-            }
-            if i >= 0
-                && x.plotted_weight != 0.0
-                && let Some(b) = self.camera.bucket(shown)
-            {
-                self.plot(&mut histogram[b], shown_color, x.plotted_weight);
-            }
-            i += 1;
         }
         bad
     }
 
+    /// One iteration of a lane's run (flam3's loop body): the next xform, its image (re-seeded
+    /// and retried when it leaves the plane), the final xform's plotted copy. The sample's
+    /// bucket is prefetched and its increments left in `lane.pending`, added at the lane's next
+    /// turn. Returns the re-seeds (0 or 1).
     #[inline(always)]
-    fn plot(&self, bucket: &mut Bucket, color: f64, weight: f64) {
+    fn step(&self, lane: &mut Lane, histogram: &[Bucket]) -> u64 {
+        let rng = &mut lane.rng;
+        let entry = rng.next_u32() as usize & (CHOICE_ENTRIES - 1);
+        let row = if self.xaos { lane.last } else { 0 };
+        let k = self.choice[row * CHOICE_ENTRIES + entry] as usize;
+        let x = &self.xforms[k];
+        let next_color = x.color_of(lane.color);
+        let mut q = x.map.apply(lane.p, rng);
+        let mut bad = 0;
+        if is_bad(q) {
+            q = [uniform11(rng), uniform11(rng)];
+            bad = 1;
+            lane.consecutive_bad += 1;
+            if lane.consecutive_bad < 5 {
+                lane.p = q;
+                lane.color = next_color;
+                return bad;
+            }
+        }
+        lane.consecutive_bad = 0;
+        lane.last = k + 1;
+        lane.p = q;
+        lane.color = next_color;
+        let (mut shown, mut shown_color) = (q, next_color);
+        if let Some(f) = &self.final_xform
+            && (f.opacity == 1.0 || rng.next_f64() < f.opacity)
+        {
+            shown_color = f.color_of(next_color);
+            shown = f.map.apply(q, rng);
+            if is_bad(shown) {
+                shown = [uniform11(rng), uniform11(rng)];
+            }
+        }
+        // Without branches (whether a sample is in view is as good as random): a sample that
+        // is not plotted adds 0 to bucket 0.
+        let (b, inside) = self.camera.bucket(shown);
+        let plotted = inside & (lane.i >= 0) & (x.plotted_weight != 0.0);
+        let mask = 0u32.wrapping_sub(u32::from(plotted));
+        let b = b & (mask as usize);
+        prefetch(&histogram[b]);
+        lane.pending = (b, self.increments_of(shown_color, x.plotted_weight).map(|v| v & mask));
+        lane.i += 1;
+        bad
+    }
+
+    /// The buckets' increments of a sample of palette coordinate `color` plotted with `weight`.
+    #[inline(always)]
+    fn increments_of(&self, color: f64, weight: f64) -> Bucket {
         let index = color * 256.0;
-        let inc = match self.palette_mode {
+        match self.palette_mode {
             PaletteMode::Step => {
                 let i = (index.clamp(0.0, 255.0)) as usize;
                 if weight == 1.0 { self.step_increments[i] } else { increments(self.dmap[i], weight) }
@@ -317,11 +404,53 @@ impl ChaosGame {
                 let (a, b) = (self.dmap[i], self.dmap[i + 1]);
                 increments(std::array::from_fn(|c| a[c] * (1.0 - frac) + b[c] * frac), weight)
             }
-        };
-        for k in 0..5 {
-            bucket[k] = bucket[k].saturating_add(inc[k]);
         }
     }
+}
+
+/// A lane's `pending` when nothing is: 0 added to bucket 0.
+const NOTHING_PENDING: (usize, Bucket) = (0, [0; 5]);
+
+/// A run of the chaos game in progress, one of the [`LANES`] a worker interleaves.
+struct Lane {
+    rng: Pcg32,
+    p: [f64; 2],
+    color: f64,
+    /// The previous xform + 1 (0 at the start): the xaos row.
+    last: usize,
+    consecutive_bad: u32,
+    /// The iteration, from −[`FUSE_ITERATIONS`]; the run ends at `n`.
+    i: i64,
+    n: i64,
+    /// The previous sample's bucket (prefetched) and increments, not yet added.
+    pending: (usize, Bucket),
+}
+
+#[inline(always)]
+fn add(bucket: &mut Bucket, inc: &Bucket) {
+    for k in 0..5 {
+        bucket[k] = bucket[k].saturating_add(inc[k]);
+    }
+}
+
+/// Asks for `bucket`'s cache lines ahead of the add (a bucket of 20 bytes may span two).
+#[inline(always)]
+fn prefetch(bucket: &Bucket) {
+    #[cfg(target_arch = "x86_64")]
+    {
+        use std::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
+        let first: *const i8 = bucket.as_ptr().cast();
+        let last: *const i8 = bucket[4..].as_ptr().cast();
+        #[expect(unsafe_code, reason = "a prefetch is a hint: it reads nothing and cannot fault")]
+        // SAFETY: both pointers are into `bucket`, a live reference; prefetching never
+        // dereferences them.
+        unsafe {
+            _mm_prefetch::<_MM_HINT_T0>(first);
+            _mm_prefetch::<_MM_HINT_T0>(last);
+        }
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = bucket;
 }
 
 /// flam3's integer bucket increments of a colour (× 255) at a plotted weight.
@@ -373,4 +502,115 @@ fn uniform11(rng: &mut Pcg32) -> f64 {
 fn is_bad(p: [f64; 2]) -> bool {
     let bad = |v: f64| v.is_nan() || !(-1e10..=1e10).contains(&v);
     bad(p[0]) || bad(p[1])
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::flame::{Variation, VariationTerm};
+
+    /// Three xforms with xaos, an opacity, a spherical term that sends points out of the plane
+    /// now and then, a final xform plotted half the time, a rotated camera, a linear palette.
+    fn flame() -> Flame {
+        let term = |name: &str, weight: f64| {
+            let variation = Variation::by_name(name).expect("variation");
+            VariationTerm { variation, weight, params: variation.default_params() }
+        };
+        let xform = |weight: f64, color: f64, coefs: [f64; 6], chaos: Vec<f64>| Xform {
+            weight,
+            color,
+            color_speed: 0.5,
+            opacity: 1.0,
+            coefs,
+            post: None,
+            variations: vec![term("linear", 0.6), term("spherical", 0.4)],
+            chaos,
+        };
+        let mut xforms = vec![
+            xform(0.5, 0.0, [0.5, 0.0, 0.0, 0.5, -0.5, -0.3], vec![1.0, 2.0, 0.0]),
+            xform(0.5, 1.0, [0.5, 0.2, -0.2, 0.5, 0.5, 0.3], vec![]),
+            xform(0.3, 0.5, [0.4, 0.0, 0.0, 0.4, 0.0, 0.6], vec![0.5, 1.0, 1.0]),
+        ];
+        xforms[1].opacity = 0.6;
+        let mut final_xform = xform(0.0, 0.8, [0.9, 0.1, -0.1, 0.9, 0.0, 0.1], vec![]);
+        final_xform.opacity = 0.5;
+        Flame {
+            size: [40, 30],
+            scale: 12.0,
+            rotate: 20.0,
+            quality: 30.0,
+            palette_mode: PaletteMode::Linear,
+            palette: (0..256).map(|i| [i as f64 / 255.0, 1.0 - i as f64 / 255.0, 0.5, 1.0]).collect(),
+            xforms,
+            final_xform: Some(final_xform),
+            ..Flame::default()
+        }
+    }
+
+    /// The oracle: flam3's loop, one run after another, each sample added at once.
+    fn one_run_after_another(game: &ChaosGame, seed: u32, samples: u64, cells: usize) -> (Vec<Bucket>, u64) {
+        let mut histogram = vec![[0u32; 5]; cells];
+        let mut bad = 0;
+        for run in 0..samples.div_ceil(RUN_SAMPLES) {
+            let n = RUN_SAMPLES.min(samples - run * RUN_SAMPLES) as i64;
+            let mut rng = Pcg32::for_stream(seed, 0, run as u32);
+            let mut p = [uniform11(&mut rng), uniform11(&mut rng)];
+            let mut color = rng.next_f64();
+            let (mut last, mut consecutive_bad, mut i) = (0, 0, -FUSE_ITERATIONS);
+            while i < n {
+                let entry = rng.next_u32() as usize & (CHOICE_ENTRIES - 1);
+                let row = if game.xaos { last } else { 0 };
+                let k = game.choice[row * CHOICE_ENTRIES + entry] as usize;
+                let x = &game.xforms[k];
+                color = x.color_of(color);
+                p = x.map.apply(p, &mut rng);
+                if is_bad(p) {
+                    p = [uniform11(&mut rng), uniform11(&mut rng)];
+                    bad += 1;
+                    consecutive_bad += 1;
+                    if consecutive_bad < 5 {
+                        continue;
+                    }
+                }
+                consecutive_bad = 0;
+                last = k + 1;
+                let (mut shown, mut shown_color) = (p, color);
+                if let Some(f) = &game.final_xform
+                    && (f.opacity == 1.0 || rng.next_f64() < f.opacity)
+                {
+                    shown_color = f.color_of(color);
+                    shown = f.map.apply(p, &mut rng);
+                    if is_bad(shown) {
+                        shown = [uniform11(&mut rng), uniform11(&mut rng)];
+                    }
+                }
+                if let (b, true) = game.camera.bucket(shown)
+                    && i >= 0
+                    && x.plotted_weight != 0.0
+                {
+                    add(&mut histogram[b], &game.increments_of(shown_color, x.plotted_weight));
+                }
+                i += 1;
+            }
+        }
+        (histogram, bad)
+    }
+
+    /// The interleaved, prefetching workers sum exactly what one run after another does, on
+    /// one thread and on three, for a sample count that ends in a partial run.
+    #[test]
+    fn interleaved_lanes_sum_what_one_run_after_another_sums() {
+        let flame = flame();
+        let layout = Layout::new(&flame).expect("layout");
+        let game = ChaosGame::new(&flame, &layout).expect("game");
+        let samples = 8 * RUN_SAMPLES + 1234;
+        let cells = layout.hist_width * layout.hist_height;
+        let expected = one_run_after_another(&game, 5, samples, cells);
+        assert!(expected.0.iter().any(|b| b[4] != 0), "nothing plotted");
+        for threads in [1, 3] {
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().expect("pool");
+            let got = pool.install(|| game.run(5, samples, &layout, &|_| {}));
+            assert!(got == expected, "{threads} thread(s): the histograms or re-seed counts differ");
+        }
+    }
 }

@@ -2,7 +2,8 @@
 //! `rect.c`) per bucket, or the adaptive density estimator with the kernels of
 //! `render_filter.rs` (see that file for flam3's index rule). The estimator runs on bands of
 //! rows in parallel, each into its own buffer, and the bands are added in their order, so the
-//! sums are the same whatever the thread count.
+//! sums are the same whatever the thread count. Each kernel is spread out once to its whole
+//! square, so a bucket's spread is a few contiguous row updates (the compiler vectorizes them).
 
 use rayon::prelude::*;
 
@@ -59,10 +60,13 @@ pub(super) fn accumulate(flame: &Flame, layout: &Layout, histogram: &[Bucket]) -
     let rows = (os - 1)..((os - 1) + (h + 1).saturating_sub(2 * (os - 1))).min(h);
     let bands: Vec<std::ops::Range<usize>> =
         rows.clone().step_by(DE_BAND_ROWS).map(|start| start..(start + DE_BAND_ROWS).min(rows.end)).collect();
+    let squares = kernel_squares(de);
     let group = 2 * rayon::current_num_threads().max(1);
     for chunk in bands.chunks(group) {
-        let parts: Vec<(usize, Vec<[f64; 4]>)> =
-            chunk.par_iter().map(|band| estimate_band(de, &scale, layout, histogram, band.clone())).collect();
+        let parts: Vec<(usize, Vec<[f64; 4]>)> = chunk
+            .par_iter()
+            .map(|band| estimate_band_dispatch(&squares, de, &scale, layout, histogram, band.clone()))
+            .collect();
         for (first_row, part) in parts {
             let start = first_row * w;
             acc[start..start + part.len()].iter_mut().zip(&part).for_each(|(a, p)| {
@@ -75,9 +79,72 @@ pub(super) fn accumulate(flame: &Flame, layout: &Layout, histogram: &[Bucket]) -
     Ok(acc)
 }
 
+/// A density kernel spread out to its whole square (side 2·reach + 1, rows top to bottom), so
+/// that a bucket's spread is a few contiguous row updates.
+struct KernelSquare {
+    reach: usize,
+    coefs: Vec<f64>,
+}
+
+/// The squares of `de`'s kernels, each to the reach flam3 spreads it (⌈width⌉ − 1).
+fn kernel_squares(de: &DensityFilters) -> Vec<KernelSquare> {
+    (0..de.widths.len())
+        .map(|k| {
+            let octant = &de.coefs[k * de.kernel_size..(k + 1) * de.kernel_size];
+            let reach = ((de.widths[k].ceil() as i64 - 1).max(0) as usize).min(de.reach);
+            let side = 2 * reach + 1;
+            let coefs = (0..side * side)
+                .map(|n| {
+                    let (u, v) = ((n % side).abs_diff(reach), (n / side).abs_diff(reach));
+                    let (dy, dx) = (u.max(v), u.min(v));
+                    octant[dy * (dy + 1) / 2 + dx]
+                })
+                .collect();
+            KernelSquare { reach, coefs }
+        })
+        .collect()
+}
+
+/// [`estimate_band`] compiled for AVX2 when the CPU has it (four channels in one vector; no
+/// FMA, so the sums are the same bits).
+fn estimate_band_dispatch(
+    squares: &[KernelSquare],
+    de: &DensityFilters,
+    scale: &LogScale,
+    layout: &Layout,
+    histogram: &[Bucket],
+    band: std::ops::Range<usize>,
+) -> (usize, Vec<[f64; 4]>) {
+    #[cfg(target_arch = "x86_64")]
+    if crate::simd::SimdLevel::detect().avx2() {
+        #[expect(unsafe_code, reason = "an AVX2 function, entered after the CPU check")]
+        // SAFETY: the CPU runs AVX2 (checked just above).
+        return unsafe { estimate_band_avx2(squares, de, scale, layout, histogram, band) };
+    }
+    estimate_band(squares, de, scale, layout, histogram, band)
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn estimate_band_avx2(
+    squares: &[KernelSquare],
+    de: &DensityFilters,
+    scale: &LogScale,
+    layout: &Layout,
+    histogram: &[Bucket],
+    band: std::ops::Range<usize>,
+) -> (usize, Vec<[f64; 4]>) {
+    estimate_band(squares, de, scale, layout, histogram, band)
+}
+
 /// The estimator over the rows `band`: the first row of its buffer and the buffer (the band's
-/// rows and the kernels' reach above and below, clipped to the histogram).
+/// rows and the kernels' reach above and below, clipped to the histogram). Each bucket adds
+/// its colour × kernel × log scale to the buckets of its kernel's square; a target's sum takes
+/// the buckets in row order, one term each, as flam3's octant-by-octant spread does (a zero
+/// coefficient adds +0, which changes no sum of non-negative terms).
+#[inline(always)]
 fn estimate_band(
+    squares: &[KernelSquare],
     de: &DensityFilters,
     scale: &LogScale,
     layout: &Layout,
@@ -86,71 +153,42 @@ fn estimate_band(
 ) -> (usize, Vec<[f64; 4]>) {
     let (w, h) = (layout.hist_width, layout.hist_height);
     let os = layout.oversample;
-    let ss = (os / 2) as i64;
+    let ss = os / 2;
     let neighbourhood_scale = if os.is_multiple_of(2) { (os as f64 / (os as f64 + 1.0)).powi(2) } else { 1.0 };
     let first_row = band.start.saturating_sub(de.reach);
     let last_row = (band.end + de.reach).min(h);
     let mut buf = vec![[0.0; 4]; (last_row - first_row) * w];
-    let mut add = |x: i64, y: i64, c: &[f64; 4]| {
-        if x >= 0 && (x as usize) < w && y >= first_row as i64 && (y as usize) < last_row {
-            let a = &mut buf[(y as usize - first_row) * w + x as usize];
-            for k in 0..4 {
-                a[k] += c[k];
-            }
-        }
-    };
     for j in band {
+        let rows_hit = j.saturating_sub(ss)..(j + ss + 1).min(h);
         for i in (os - 1)..w.saturating_sub(os - 1) {
             let b = &histogram[i + j * w];
             if b[4] == 0 || b[3] == 0 {
                 continue;
             }
             let mut hits = 0.0;
-            for dy in -ss..=ss {
-                let y = j as i64 + dy;
-                if y < 0 || y as usize >= h {
-                    continue;
-                }
-                for dx in -ss..=ss {
-                    hits += f64::from(histogram[(i as i64 + dx) as usize + y as usize * w][4]) / WHITE_LEVEL;
+            for y in rows_hit.clone() {
+                for cell in &histogram[i - ss + y * w..=i + ss + y * w] {
+                    hits += f64::from(cell[4]) / WHITE_LEVEL;
                 }
             }
             hits *= neighbourhood_scale;
-            let k = de.index(hits);
-            let coefs = &de.coefs[k * de.kernel_size..(k + 1) * de.kernel_size];
-            let reach = (de.widths[k].ceil() as i64 - 1).max(0);
+            let square = &squares[de.index(hits)];
+            let reach = square.reach;
+            let side = 2 * reach + 1;
             let alpha = f64::from(b[3]);
             let ls = scale.of(alpha);
             let colour = [f64::from(b[0]), f64::from(b[1]), f64::from(b[2]), alpha];
-            let (x, y) = (i as i64, j as i64);
-            let mut idx = 0;
-            for dy in 0..=reach {
-                for dx in 0..=dy {
-                    let coef = coefs[idx];
-                    idx += 1;
-                    if coef == 0.0 {
-                        continue;
-                    }
-                    let c = colour.map(|v| v * coef * ls);
-                    if dy == 0 {
-                        add(x, y, &c);
-                    } else if dx == 0 {
-                        add(x + dy, y, &c);
-                        add(x - dy, y, &c);
-                        add(x, y + dy, &c);
-                        add(x, y - dy, &c);
-                    } else if dx == dy {
-                        add(x + dx, y + dy, &c);
-                        add(x - dx, y + dy, &c);
-                        add(x + dx, y - dy, &c);
-                        add(x - dx, y - dy, &c);
-                    } else {
-                        for (u, v) in [(dx, dy), (dy, dx)] {
-                            add(x + u, y + v, &c);
-                            add(x - u, y + v, &c);
-                            add(x + u, y - v, &c);
-                            add(x - u, y - v, &c);
-                        }
+            // The square's columns and rows inside the buffer.
+            let (u0, u1) = (reach.saturating_sub(i), side.min(w + reach - i));
+            let (v0, v1) = (reach.saturating_sub(j - first_row), side.min(last_row + reach - j));
+            let (x0, x1) = (i + u0 - reach, i + u1 - reach);
+            for v in v0..v1 {
+                let row_start = (j + v - reach - first_row) * w;
+                let targets = &mut buf[row_start + x0..row_start + x1];
+                let coefs = &square.coefs[v * side + u0..v * side + u1];
+                for (t, &coef) in targets.iter_mut().zip(coefs) {
+                    for c in 0..4 {
+                        t[c] += colour[c] * coef * ls;
                     }
                 }
             }

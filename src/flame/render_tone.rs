@@ -74,9 +74,14 @@ impl Tone {
         };
         let vivid = calc_newrgb(t, ls, self.highlight_power);
         std::array::from_fn(|c| {
-            let a = vivid[c]
-                + (1.0 - self.vibrancy) * 256.0 * (t[c] / PREFILTER_WHITE).powf(self.inverse_gamma)
-                + (1.0 - alpha) * self.background[c];
+            // At vibrancy 1 the per-channel power is multiplied by 0: it adds +0 (no power to
+            // compute) unless the channel is negative, where it is NaN and makes the byte 255.
+            let per_channel = if self.vibrancy == 1.0 && t[c] >= 0.0 && t[c].is_finite() {
+                0.0
+            } else {
+                (1.0 - self.vibrancy) * 256.0 * (t[c] / PREFILTER_WHITE).powf(self.inverse_gamma)
+            };
+            let a = vivid[c] + per_channel + (1.0 - alpha) * self.background[c];
             // A channel a filter's negative lobe took below 0 is NaN here (its power 1/gamma);
             // flam3-render's clamps (compiled to minsd/maxsd) turn NaN into 255, the white
             // fringe of its Mitchell and Lanczos pictures, and so does this.

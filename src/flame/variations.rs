@@ -357,7 +357,7 @@ impl CompiledXform {
 
     /// The xform's image of `p` (may be NaN or huge: the caller re-seeds such points, as flam3
     /// does).
-    #[inline]
+    #[inline(always)]
     pub fn apply(&self, p: [f64; 2], rng: &mut Pcg32) -> [f64; 2] {
         let [mut tx, mut ty] = apply_coefs(&self.coefs, p);
         if self.pre_blur != 0.0 {
@@ -380,7 +380,9 @@ impl CompiledXform {
         }
         let mut out = [0.0, 0.0];
         for t in &self.terms {
-            let d = if t.variation < plugins::FIRST {
+            let d = if let Some(d) = basic::eval_arithmetic(t.variation, t.weight, &pt) {
+                d
+            } else if t.variation < plugins::FIRST {
                 basic::eval(t.variation, t.weight, &t.k, &pt, rng)
             } else {
                 plugins::eval(t.variation, t.weight, &t.k, &pt, rng)

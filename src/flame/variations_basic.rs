@@ -119,27 +119,20 @@ pub(super) fn pseudo_gaussian(rng: &mut Pcg32) -> f64 {
     rng.next_f64() + rng.next_f64() + rng.next_f64() + rng.next_f64() - 2.0
 }
 
-/// w · V(t) for variation `v` (0–49) with constants `k`.
-// Not inlined into `CompiledXform::apply`: inlined, LLVM hoists the arms' transcendental
-// functions of the point out of the loop over the terms and computes them all for every point
-// (measured: 220 ns instead of 20 for one linear term).
-#[inline(never)]
-pub(super) fn eval(v: u8, w: f64, k: &[f64; 8], pt: &Point, rng: &mut Pcg32) -> [f64; 2] {
-    let Point { tx: x, ty: y, sumsq: r2, sqrt: r, atan_xy: a, sina: sa, cosa: ca, atan_yx: ayx } = *pt;
-    match v {
+/// w · V(t) for the variations that are a few arithmetic operations on [`Point`]'s
+/// quantities (linear, spherical, horseshoe, polar, hyperbolic); `None` for the others.
+/// Inlined into `CompiledXform::apply` (no transcendental function for LLVM to hoist), so
+/// these cost no call; [`eval`] answers them through here too.
+#[inline(always)]
+pub(super) fn eval_arithmetic(v: u8, w: f64, pt: &Point) -> Option<[f64; 2]> {
+    let Point { tx: x, ty: y, sumsq: r2, sqrt: r, atan_xy: a, sina: sa, cosa: ca, .. } = *pt;
+    Some(match v {
         // linear
         0 => [w * x, w * y],
-        // sinusoidal
-        1 => [w * x.sin(), w * y.sin()],
         // spherical
         2 => {
             let f = w / (r2 + EPS);
             [f * x, f * y]
-        }
-        // swirl
-        3 => {
-            let (s, c) = r2.sin_cos();
-            [w * (s * x - c * y), w * (c * x + s * y)]
         }
         // horseshoe
         4 => {
@@ -148,6 +141,33 @@ pub(super) fn eval(v: u8, w: f64, k: &[f64; 8], pt: &Point, rng: &mut Pcg32) -> 
         }
         // polar
         5 => [w * (a * FRAC_1_PI), w * (r - 1.0)],
+        // hyperbolic
+        10 => {
+            let rr = r + EPS;
+            [w * sa / rr, w * ca * rr]
+        }
+        _ => return None,
+    })
+}
+
+/// w · V(t) for variation `v` (0–49) with constants `k`.
+// Not inlined into `CompiledXform::apply`: inlined, LLVM hoists the arms' transcendental
+// functions of the point out of the loop over the terms and computes them all for every point
+// (measured: 220 ns instead of 20 for one linear term).
+#[inline(never)]
+pub(super) fn eval(v: u8, w: f64, k: &[f64; 8], pt: &Point, rng: &mut Pcg32) -> [f64; 2] {
+    if let Some(d) = eval_arithmetic(v, w, pt) {
+        return d;
+    }
+    let Point { tx: x, ty: y, sumsq: r2, sqrt: r, atan_xy: a, sina: sa, cosa: ca, atan_yx: ayx } = *pt;
+    match v {
+        // sinusoidal
+        1 => [w * x.sin(), w * y.sin()],
+        // swirl
+        3 => {
+            let (s, c) = r2.sin_cos();
+            [w * (s * x - c * y), w * (c * x + s * y)]
+        }
         // handkerchief
         6 => [w * r * (a + r).sin(), w * r * (a - r).cos()],
         // heart
@@ -168,11 +188,6 @@ pub(super) fn eval(v: u8, w: f64, k: &[f64; 8], pt: &Point, rng: &mut Pcg32) -> 
             let f = w / rr;
             let (s, c) = rr.sin_cos();
             [f * (ca + s), f * (sa - c)]
-        }
-        // hyperbolic
-        10 => {
-            let rr = r + EPS;
-            [w * sa / rr, w * ca * rr]
         }
         // diamond
         11 => {
