@@ -15,6 +15,7 @@ mod gltf_input;
 pub mod hierarchy;
 pub mod mesh;
 pub mod search;
+mod stream;
 pub mod tracer;
 pub mod wide;
 
