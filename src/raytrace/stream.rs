@@ -289,11 +289,17 @@ impl<'a> RowTracer<'a> {
             let s = &mut self.s;
             let [ox, oy, oz] = &s.origin;
             let [dx, dy, dz] = &s.dir;
+            let (ox, oy, oz, dx, dy, dz) = (&ox[..n], &oy[..n], &oz[..n], &dx[..n], &dy[..n], &dz[..n]);
             let [px, py, pz] = &mut s.point;
+            let (px, py, pz) = (&mut px[..n], &mut py[..n], &mut pz[..n]);
             let [nx, ny, nz] = &mut s.normal;
+            let (nx, ny, nz) = (&mut nx[..n], &mut ny[..n], &mut nz[..n]);
             let [ar, ag, ab] = &mut s.albedo;
+            let (ar, ag, ab) = (&mut ar[..n], &mut ag[..n], &mut ab[..n]);
+            let (t_ground, specular) = (&s.t_ground[..n], &mut s.specular[..n]);
+            let (lit, on_ground) = (&mut s.lit[..n], &mut s.on_ground[..n]);
             for k in 0..n {
-                let tg = s.t_ground[k];
+                let tg = t_ground[k];
                 let finite = tg.is_finite();
                 px[k] = ox[k] + tg * dx[k];
                 py[k] = oy[k] + tg * dy[k];
@@ -301,9 +307,9 @@ impl<'a> RowTracer<'a> {
                 (nx[k], ny[k], nz[k]) = (0.0, 1.0, 0.0);
                 let a = if finite { GROUND_ALBEDO } else { 0.0 };
                 (ar[k], ag[k], ab[k]) = (a, a, a);
-                s.specular[k] = 0.0;
-                s.lit[k] = finite;
-                s.on_ground[k] = finite;
+                specular[k] = 0.0;
+                lit[k] = finite;
+                on_ground[k] = finite;
             }
         }
         for k in 0..n {
@@ -331,7 +337,9 @@ impl<'a> RowTracer<'a> {
         }
         let s = &mut self.s;
         let [ar, ag, ab] = &s.albedo;
+        let (ar, ag, ab) = (&ar[..n], &ag[..n], &ab[..n]);
         let [cr, cg, cb] = &mut s.colour;
+        let (cr, cg, cb) = (&mut cr[..n], &mut cg[..n], &mut cb[..n]);
         let ambient = self.shading.ambient;
         for k in 0..n {
             cr[k] = ar[k] * ambient;
@@ -356,22 +364,27 @@ impl<'a> RowTracer<'a> {
     fn shadow_rays(&mut self, n: usize, to_light: Vec3) {
         let s = &mut self.s;
         let [px, py, pz] = &s.point;
+        let (px, py, pz) = (&px[..n], &py[..n], &pz[..n]);
         let [nx, ny, nz] = &s.normal;
+        let (nx, ny, nz) = (&nx[..n], &ny[..n], &nz[..n]);
         let [sx, sy, sz] = &mut s.shadow_origin;
+        let (sx, sy, sz) = (&mut sx[..n], &mut sy[..n], &mut sz[..n]);
+        let (cos_out, lit) = (&mut s.cos[..n], &s.lit[..n]);
+        let (facing_out, shaded, shadow_entry) = (&mut s.facing[..n], &mut s.shaded[..n], &mut s.shadow_entry[..n]);
         let eps = self.frame.eps;
         let (root_centre, root_radius) =
             self.hierarchy.nodes.first().map_or(([0.0; 3], f32::NAN), |r| (r.centre.to_array(), r.radius));
         let l = to_light.to_array();
         for k in 0..n {
             let cos = nx[k] * l[0] + ny[k] * l[1] + nz[k] * l[2];
-            s.cos[k] = cos;
-            let facing = s.lit[k] & (cos > 0.0);
-            s.facing[k] = facing;
-            s.shaded[k] = facing;
+            cos_out[k] = cos;
+            let facing = lit[k] & (cos > 0.0);
+            facing_out[k] = facing;
+            shaded[k] = facing;
             let o = [px[k] + nx[k] * eps, py[k] + ny[k] * eps, pz[k] + nz[k] * eps];
             (sx[k], sy[k], sz[k]) = (o[0], o[1], o[2]);
             let entry = sphere_entry(o, l, root_centre, root_radius, 0.0, f32::INFINITY);
-            s.shadow_entry[k] = if facing { entry } else { f32::INFINITY };
+            shadow_entry[k] = if facing { entry } else { f32::INFINITY };
         }
     }
 
@@ -401,15 +414,20 @@ impl<'a> RowTracer<'a> {
     fn shade(&mut self, n: usize, to_light: Vec3, intensity: Vec3) {
         let s = &mut self.s;
         let [dx, dy, dz] = &s.dir;
+        let (dx, dy, dz) = (&dx[..n], &dy[..n], &dz[..n]);
         let [nx, ny, nz] = &s.normal;
+        let (nx, ny, nz) = (&nx[..n], &ny[..n], &nz[..n]);
         let [ar, ag, ab] = &s.albedo;
+        let (ar, ag, ab) = (&ar[..n], &ag[..n], &ab[..n]);
         let [cr, cg, cb] = &mut s.colour;
+        let (cr, cg, cb) = (&mut cr[..n], &mut cg[..n], &mut cb[..n]);
+        let (cos, specular, shaded) = (&s.cos[..n], &s.specular[..n], &s.shaded[..n]);
         let l = to_light.to_array();
         let i = intensity.to_array();
         for k in 0..n {
-            let cos = s.cos[k];
+            let cos = cos[k];
             let mut lk = [ar[k] * cos, ag[k] * cos, ab[k] * cos];
-            let spec = s.specular[k];
+            let spec = specular[k];
             let h = [l[0] - dx[k], l[1] - dy[k], l[2] - dz[k]];
             let rcp = 1.0 / (h[0] * h[0] + h[1] * h[1] + h[2] * h[2]).sqrt();
             let h = [h[0] * rcp, h[1] * rcp, h[2] * rcp];
@@ -423,7 +441,7 @@ impl<'a> RowTracer<'a> {
             if spec > 0.0 {
                 lk = [lk[0] + add, lk[1] + add, lk[2] + add];
             }
-            if s.shaded[k] {
+            if shaded[k] {
                 cr[k] += i[0] * lk[0];
                 cg[k] += i[1] * lk[1];
                 cb[k] += i[2] * lk[2];
@@ -436,24 +454,37 @@ impl<'a> RowTracer<'a> {
     fn finish(&mut self, n: usize) {
         let s = &mut self.s;
         let [px, py, pz] = &s.point;
+        let (px, py, pz) = (&px[..n], &py[..n], &pz[..n]);
         let [cr, cg, cb] = &s.colour;
+        let (cr, cg, cb) = (&cr[..n], &cg[..n], &cb[..n]);
         let [rr, rg, rb] = &mut s.radiance;
+        let (rr, rg, rb) = (&mut rr[..n], &mut rg[..n], &mut rb[..n]);
+        let (lit, on_ground, fade) = (&s.lit[..n], &s.on_ground[..n], &mut s.cos[..n]);
         let bg = self.shading.background.to_array();
         let c = self.frame.centre.to_array();
         let scale = 2.5 * self.frame.radius;
+        // The fade's distance (a vector loop), then its exp on the ground samples alone.
         for k in 0..n {
-            let (mut r, mut g, mut b) = (bg[0], bg[1], bg[2]);
-            if s.on_ground[k] {
-                let d = [px[k] - c[0], py[k] - c[1], pz[k] - c[2]];
-                let d = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt() / scale;
-                let fade = (-d * d).exp();
-                r = bg[0] * (1.0 - fade) + cr[k] * fade;
-                g = bg[1] * (1.0 - fade) + cg[k] * fade;
-                b = bg[2] * (1.0 - fade) + cb[k] * fade;
-            } else if s.lit[k] {
-                (r, g, b) = (cr[k], cg[k], cb[k]);
+            let d = [px[k] - c[0], py[k] - c[1], pz[k] - c[2]];
+            let d = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt() / scale;
+            fade[k] = -d * d;
+        }
+        for k in 0..n {
+            if on_ground[k] {
+                fade[k] = fade[k].exp();
             }
-            (rr[k], rg[k], rb[k]) = (r, g, b);
+        }
+        for k in 0..n {
+            let f = fade[k];
+            let ground = [bg[0] * (1.0 - f) + cr[k] * f, bg[1] * (1.0 - f) + cg[k] * f, bg[2] * (1.0 - f) + cb[k] * f];
+            let v = if on_ground[k] {
+                ground
+            } else if lit[k] {
+                [cr[k], cg[k], cb[k]]
+            } else {
+                bg
+            };
+            (rr[k], rg[k], rb[k]) = (v[0], v[1], v[2]);
         }
     }
 }
