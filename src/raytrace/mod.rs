@@ -14,6 +14,7 @@ pub mod geometry;
 mod gltf_input;
 pub mod hierarchy;
 pub mod mesh;
+mod packet;
 pub mod search;
 mod stream;
 pub mod tracer;

@@ -11,17 +11,21 @@
 //! operations in the same order as shading one sample alone (no fused multiply-add, glam's
 //! `normalize` as `1 / sqrt` then a product), so the picture is bit for bit the one a
 //! sample-at-a-time tracer makes. They are compiled once per vector width the CPU may run
-//! ([`SimdLevel`]), so the compiler vectorises them for AVX-512 or AVX2.
+//! ([`Simd`]), so the compiler vectorises them for AVX-512 or AVX2; the searches are the packet
+//! searches of `packet`, up to 16 neighbouring samples that enter the root bound at a time.
 
 use glam::Vec3;
 
 use super::geometry::{Hit, Ray};
 use super::hierarchy::Hierarchy;
+use super::packet::PACKET;
 use super::search::Scratch;
 use super::tracer::{CameraRays, ColorMode, Frame, Shading, TraceStats, depth_color};
+#[cfg(target_arch = "x86_64")]
+use super::wide::Avx512;
+use super::wide::{Lanes, Portable, Simd};
 use crate::color::Srgb8Table;
 use crate::rng::Pcg32;
-use crate::simd::SimdLevel;
 
 /// Pixels of a run: their samples' arrays (about 30 floats a sample) stay in the L1 and L2
 /// caches.
@@ -149,44 +153,60 @@ impl<'a> RowTracer<'a> {
     }
 
     fn run(&mut self, y: usize, pixels: std::ops::Range<usize>, row: &mut [u8]) {
-        match SimdLevel::detect() {
+        match self.hierarchy.simd() {
             #[cfg(target_arch = "x86_64")]
             #[expect(unsafe_code, reason = "entered after runtime CPU feature detection")]
-            // SAFETY: the CPU runs AVX-512F (detected).
-            SimdLevel::Avx512 => unsafe { self.run_avx512(y, pixels, row) },
+            // SAFETY: `simd` is only ever set to a form that `Simd::detect` found the CPU runs.
+            Simd::Avx512 => unsafe { self.run_avx512(y, pixels, row) },
             #[cfg(target_arch = "x86_64")]
             #[expect(unsafe_code, reason = "entered after runtime CPU feature detection")]
-            // SAFETY: the CPU runs AVX2 (detected).
-            SimdLevel::Avx2 => unsafe { self.run_avx2(y, pixels, row) },
-            _ => self.run_any(y, pixels, row),
+            // SAFETY: as above.
+            Simd::Avx2 => unsafe { self.run_avx2(y, pixels, row) },
+            #[expect(unsafe_code, reason = "entered after runtime CPU feature detection")]
+            // SAFETY: the portable lanes use only the baseline target's instructions.
+            _ => unsafe { self.run_any::<Portable>(y, pixels, row) },
         }
     }
 
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx512f")]
     fn run_avx512(&mut self, y: usize, pixels: std::ops::Range<usize>, row: &mut [u8]) {
-        self.run_any(y, pixels, row)
+        #[expect(unsafe_code, reason = "entered after runtime CPU feature detection")]
+        // SAFETY: this function only runs where AVX-512F is enabled.
+        unsafe {
+            self.run_any::<Avx512>(y, pixels, row)
+        }
     }
 
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
     fn run_avx2(&mut self, y: usize, pixels: std::ops::Range<usize>, row: &mut [u8]) {
-        self.run_any(y, pixels, row)
+        #[expect(unsafe_code, reason = "entered after runtime CPU feature detection")]
+        // SAFETY: the portable lanes need nothing beyond the baseline target.
+        unsafe {
+            self.run_any::<Portable>(y, pixels, row)
+        }
     }
 
     /// One run, every phase (compiled into each vector width's copy).
+    ///
+    /// # Safety
+    /// The CPU must run the instructions of `L`.
+    #[expect(unsafe_code, reason = "entered after runtime CPU feature detection")]
     #[inline(always)]
-    fn run_any(&mut self, y: usize, pixels: std::ops::Range<usize>, row: &mut [u8]) {
+    unsafe fn run_any<L: Lanes>(&mut self, y: usize, pixels: std::ops::Range<usize>, row: &mut [u8]) {
         let spp = self.shading.spp.max(1) as usize;
         let n = pixels.len() * spp;
         self.s.resize(n);
         self.positions(y, pixels.clone(), spp);
         self.camera_rays(n);
-        self.primary(n);
+        // SAFETY: the caller guarantees L's instructions.
+        unsafe { self.primary::<L>(n) };
         for (index, light) in self.shading.lights.iter().enumerate() {
             self.shadow_rays(n, light.to_light);
             if self.shading.shadows {
-                self.occlusion(n, index, light.to_light);
+                // SAFETY: as above.
+                unsafe { self.occlusion::<L>(n, index, light.to_light) };
             } else {
                 self.s.shaded[..n].copy_from_slice(&self.s.facing[..n]);
             }
@@ -282,8 +302,12 @@ impl<'a> RowTracer<'a> {
 
     /// What each sample sees: the ground (one loop), then the nearest leaf for the rays that
     /// enter the root bound, in sample order.
+    ///
+    /// # Safety
+    /// The CPU must run the instructions of `L`.
+    #[expect(unsafe_code, reason = "entered after runtime CPU feature detection")]
     #[inline(always)]
-    fn primary(&mut self, n: usize) {
+    unsafe fn primary<L: Lanes>(&mut self, n: usize) {
         self.stats.primary_rays += n as u64;
         {
             let s = &mut self.s;
@@ -312,28 +336,55 @@ impl<'a> RowTracer<'a> {
                 on_ground[k] = finite;
             }
         }
-        for k in 0..n {
-            if self.s.entry[k] == f32::INFINITY {
-                continue;
+        // The rays that enter the root bound, a packet of neighbouring samples at a time.
+        let mut k = 0;
+        while k < n {
+            let mut members = [0usize; PACKET];
+            let mut rays = [Ray { origin: Vec3::ZERO, dir: Vec3::Z }; PACKET];
+            let (mut t_max, mut entry) = ([0.0f32; PACKET], [0.0f32; PACKET]);
+            let mut count = 0;
+            while k < n && count < PACKET {
+                if self.s.entry[k] != f32::INFINITY {
+                    (members[count], rays[count]) = (k, self.ray(k));
+                    (t_max[count], entry[count]) = (self.s.t_ground[k], self.s.entry[k]);
+                    count += 1;
+                }
+                k += 1;
             }
-            let ray = self.ray(k);
-            let (t_ground, entry) = (self.s.t_ground[k], self.s.entry[k]);
-            let Some(hit) =
-                self.hierarchy.intersect_entered(&ray, 0.0, t_ground, entry, self.last_hit, &mut self.stacks)
-            else {
-                continue;
+            if count == 0 {
+                break;
+            }
+            let mut hits = [Hit { t: 0.0, node: u32::MAX, triangle: u32::MAX, u: 0.0, v: 0.0 }; PACKET];
+            // SAFETY: the caller guarantees L's instructions.
+            unsafe {
+                self.hierarchy.closest_packet::<L>(
+                    &rays[..count],
+                    0.0,
+                    &t_max[..count],
+                    &entry[..count],
+                    self.last_hit,
+                    &mut self.stacks,
+                    &mut hits[..count],
+                )
             };
-            self.last_hit = hit.node;
-            self.stats.leaf_hits += 1;
-            let (p, normal) = self.hierarchy.surface(&ray, &hit);
-            let a = self.albedo(&hit);
-            let s = &mut self.s;
-            (s.point[0][k], s.point[1][k], s.point[2][k]) = (p.x, p.y, p.z);
-            (s.normal[0][k], s.normal[1][k], s.normal[2][k]) = (normal.x, normal.y, normal.z);
-            (s.albedo[0][k], s.albedo[1][k], s.albedo[2][k]) = (a.x, a.y, a.z);
-            s.specular[k] = LEAF_SPECULAR;
-            s.lit[k] = true;
-            s.on_ground[k] = false;
+            for j in 0..count {
+                let hit = hits[j];
+                if hit.node == u32::MAX {
+                    continue;
+                }
+                let k = members[j];
+                self.last_hit = hit.node;
+                self.stats.leaf_hits += 1;
+                let (p, normal) = self.hierarchy.surface(&rays[j], &hit);
+                let a = self.albedo(&hit);
+                let s = &mut self.s;
+                (s.point[0][k], s.point[1][k], s.point[2][k]) = (p.x, p.y, p.z);
+                (s.normal[0][k], s.normal[1][k], s.normal[2][k]) = (normal.x, normal.y, normal.z);
+                (s.albedo[0][k], s.albedo[1][k], s.albedo[2][k]) = (a.x, a.y, a.z);
+                s.specular[k] = LEAF_SPECULAR;
+                s.lit[k] = true;
+                s.on_ground[k] = false;
+            }
         }
         let s = &mut self.s;
         let [ar, ag, ab] = &s.albedo;
@@ -388,23 +439,50 @@ impl<'a> RowTracer<'a> {
         }
     }
 
-    /// The any-hit search for the shadow rays that enter the root bound.
+    /// The any-hit search for the shadow rays that enter the root bound, a packet of
+    /// neighbouring samples at a time.
+    ///
+    /// # Safety
+    /// The CPU must run the instructions of `L`.
+    #[expect(unsafe_code, reason = "entered after runtime CPU feature detection")]
     #[inline(always)]
-    fn occlusion(&mut self, n: usize, index: usize, to_light: Vec3) {
+    unsafe fn occlusion<L: Lanes>(&mut self, n: usize, index: usize, to_light: Vec3) {
         self.stats.shadow_rays += self.s.facing[..n].iter().filter(|&&f| f).count() as u64;
-        for k in 0..n {
-            if self.s.shadow_entry[k] == f32::INFINITY {
-                continue;
+        let mut k = 0;
+        while k < n {
+            let mut members = [0usize; PACKET];
+            let mut rays = [Ray { origin: Vec3::ZERO, dir: to_light }; PACKET];
+            let mut count = 0;
+            while k < n && count < PACKET {
+                if self.s.shadow_entry[k] != f32::INFINITY {
+                    let s = &self.s;
+                    members[count] = k;
+                    rays[count].origin = Vec3::new(s.shadow_origin[0][k], s.shadow_origin[1][k], s.shadow_origin[2][k]);
+                    count += 1;
+                }
+                k += 1;
             }
-            let s = &self.s;
-            let ray = Ray {
-                origin: Vec3::new(s.shadow_origin[0][k], s.shadow_origin[1][k], s.shadow_origin[2][k]),
-                dir: to_light,
-            };
+            if count == 0 {
+                break;
+            }
             let cached = self.last_occluder[index];
-            if let Some(leaf) = self.hierarchy.occluder_entered(&ray, 0.0, f32::INFINITY, cached, &mut self.stacks) {
-                self.last_occluder[index] = leaf;
-                self.s.shaded[k] = false;
+            let mut last = cached;
+            // SAFETY: the caller guarantees L's instructions.
+            let blocked = unsafe {
+                self.hierarchy.occluded_packet::<L>(
+                    &rays[..count],
+                    0.0,
+                    f32::INFINITY,
+                    cached,
+                    &mut self.stacks,
+                    &mut last,
+                )
+            };
+            self.last_occluder[index] = last;
+            for (j, &k) in members[..count].iter().enumerate() {
+                if blocked & (1 << j) != 0 {
+                    self.s.shaded[k] = false;
+                }
             }
         }
     }
