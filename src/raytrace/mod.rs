@@ -3,9 +3,11 @@
 //!
 //! The split follows pbrt: `geometry` holds the node, ray and hit types and the ray–sphere
 //! roots; `hierarchy` builds the nodes (it knows only spheres and triangles), `wide` collapses
-//! them into the wide nodes that `search` traverses; `tracer` makes camera rays, shades and
-//! samples, `mesh` provides the mesh initial objects (grid surface, glTF), `export` writes
-//! W^n(A) as glTF or as a POV-Ray scene.
+//! them into the wide nodes that `search` traverses one ray at a time and `packet` up to 16
+//! rays at a time; `tracer` makes camera rays and lights and drives the rows, `stream` traces
+//! a run of pixels' samples phase by phase (camera rays, searches, shading), `mesh` provides
+//! the mesh initial objects (grid surface, glTF), `export` writes W^n(A) as glTF or as a
+//! POV-Ray scene.
 //! [`render`] is the entry point for the command line and for a viewer's background thread.
 
 mod error;

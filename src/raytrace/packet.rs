@@ -13,10 +13,13 @@
 use super::geometry::{Hit, NodeKind, Ray};
 use super::hierarchy::Hierarchy;
 use super::search::{Scratch, TILE};
-use super::wide::{LANES, Lanes};
+#[cfg(target_arch = "x86_64")]
+use super::wide::Avx512;
+use super::wide::{LANES, Lanes, Portable, Simd};
 
 /// Most rays of a packet (a bit each in the stack entries' masks).
 pub const PACKET: usize = 16;
+const _: () = assert!(LANES <= 32 && PACKET <= 32, "lane and ray masks fit in u32");
 
 impl Hierarchy {
     /// The nearest hit of each of `rays` with t in (t_min, t_max[i]), for rays that enter the
@@ -108,10 +111,13 @@ impl Hierarchy {
                     hits[i] = Hit { t, node: w.target[lane], ..none };
                 }
                 union |= lanes.enter;
+                let (enter, bit) = (lanes.enter as u32, 1u32 << i);
+                // Branch-free over u32 lanes, so that it is a few vector instructions.
                 for l in 0..LANES {
-                    let inside = (lanes.enter >> l) & 1 != 0;
-                    entered[l] |= (inside as u32) << i;
-                    entry[l] = if inside { entry[l].min(lanes.entry[l]) } else { entry[l] };
+                    let inside = ((enter >> l) & 1).wrapping_neg();
+                    entered[l] |= inside & bit;
+                    let nearer = lanes.entry[l] < entry[l];
+                    entry[l] = if (inside != 0) & nearer { lanes.entry[l] } else { entry[l] };
                 }
             }
             let mut found = 0usize;
@@ -215,8 +221,10 @@ impl Hierarchy {
                     continue;
                 }
                 union |= enter;
+                let (lanes, bit) = (enter as u32, 1u32 << i);
+                // Branch-free over u32 lanes, so that it is a few vector instructions.
                 for (l, e) in entered.iter_mut().enumerate() {
-                    *e |= (((enter >> l) & 1) as u32) << i;
+                    *e |= ((lanes >> l) & 1).wrapping_neg() & bit;
                 }
             }
             if blocked == all {
@@ -230,5 +238,107 @@ impl Hierarchy {
             }
         }
         blocked
+    }
+}
+
+impl Hierarchy {
+    /// The nearest hit of each of `rays` with t in (t_min, t_max), traced as packets of up to
+    /// [`PACKET`] rays by the compiled form [`Self::simd`] selects; what the tracer's primary
+    /// rays run, here for rays from anywhere (the tests compare it with brute force).
+    pub fn intersect_packets(&self, rays: &[Ray], t_min: f32, t_max: f32, scratch: &mut Scratch) -> Vec<Option<Hit>> {
+        let mut out = vec![None; rays.len()];
+        for (first, group) in rays.chunks(PACKET).enumerate() {
+            let entry: Vec<f32> = group.iter().map(|r| self.root_entry(r, t_min, t_max)).collect();
+            let members: Vec<usize> = (0..group.len()).filter(|&i| entry[i] != f32::INFINITY).collect();
+            let packed: Vec<Ray> = members.iter().map(|&i| group[i]).collect();
+            let entries: Vec<f32> = members.iter().map(|&i| entry[i]).collect();
+            let limits = vec![t_max; packed.len()];
+            let mut hits = vec![Hit { t: 0.0, node: u32::MAX, triangle: u32::MAX, u: 0.0, v: 0.0 }; packed.len()];
+            match self.simd() {
+                #[cfg(target_arch = "x86_64")]
+                #[expect(unsafe_code, reason = "entered after runtime CPU feature detection")]
+                // SAFETY: `simd` is only ever set to a form that `Simd::detect` found the CPU runs.
+                Simd::Avx512 => unsafe {
+                    self.closest_packet_avx512(&packed, t_min, &limits, &entries, scratch, &mut hits)
+                },
+                #[expect(unsafe_code, reason = "entered after runtime CPU feature detection")]
+                // SAFETY: the portable lanes use only the baseline target's instructions.
+                _ => unsafe {
+                    self.closest_packet::<Portable>(&packed, t_min, &limits, &entries, u32::MAX, scratch, &mut hits)
+                },
+            }
+            for (&i, hit) in members.iter().zip(hits) {
+                out[first * PACKET + i] = (hit.node != u32::MAX).then_some(hit);
+            }
+        }
+        out
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx512f")]
+    fn closest_packet_avx512(
+        &self,
+        rays: &[Ray],
+        t_min: f32,
+        t_max: &[f32],
+        entry: &[f32],
+        scratch: &mut Scratch,
+        hits: &mut [Hit],
+    ) {
+        #[expect(unsafe_code, reason = "entered after runtime CPU feature detection")]
+        // SAFETY: this function only runs where AVX-512F is enabled.
+        unsafe {
+            self.closest_packet::<Avx512>(rays, t_min, t_max, entry, u32::MAX, scratch, hits)
+        }
+    }
+
+    /// Whether each of `rays` hits anything with t in (t_min, t_max), traced as packets with
+    /// leaf `hint` tried first (the shadow cache); what the tracer's shadow rays run.
+    pub fn occluded_packets(
+        &self,
+        rays: &[Ray],
+        t_min: f32,
+        t_max: f32,
+        hint: u32,
+        scratch: &mut Scratch,
+    ) -> Vec<bool> {
+        let mut out = vec![false; rays.len()];
+        for (first, group) in rays.chunks(PACKET).enumerate() {
+            let members: Vec<usize> =
+                (0..group.len()).filter(|&i| self.root_entry(&group[i], t_min, t_max) != f32::INFINITY).collect();
+            let packed: Vec<Ray> = members.iter().map(|&i| group[i]).collect();
+            let mut last = hint;
+            let blocked = match self.simd() {
+                #[cfg(target_arch = "x86_64")]
+                #[expect(unsafe_code, reason = "entered after runtime CPU feature detection")]
+                // SAFETY: `simd` is only ever set to a form that `Simd::detect` found the CPU runs.
+                Simd::Avx512 => unsafe { self.occluded_packet_avx512(&packed, t_min, t_max, hint, scratch, &mut last) },
+                #[expect(unsafe_code, reason = "entered after runtime CPU feature detection")]
+                // SAFETY: the portable lanes use only the baseline target's instructions.
+                _ => unsafe { self.occluded_packet::<Portable>(&packed, t_min, t_max, hint, scratch, &mut last) },
+            };
+            for (j, &i) in members.iter().enumerate() {
+                out[first * PACKET + i] = blocked & (1 << j) != 0;
+            }
+        }
+        out
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx512f")]
+    fn occluded_packet_avx512(
+        &self,
+        rays: &[Ray],
+        t_min: f32,
+        t_max: f32,
+        hint: u32,
+        scratch: &mut Scratch,
+        last: &mut u32,
+    ) -> u32 {
+        #[expect(unsafe_code, reason = "entered after runtime CPU feature detection")]
+        // SAFETY: this function only runs where AVX-512F is enabled.
+        unsafe {
+            self.occluded_packet::<Avx512>(rays, t_min, t_max, hint, scratch, last)
+        }
     }
 }

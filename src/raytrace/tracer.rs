@@ -1,7 +1,9 @@
-//! Camera rays, shading and sampling: stratified (Latin hypercube) jittered samples per pixel
-//! from the seeded PCG stream of that pixel, Lambert plus a little Blinn–Phong under
-//! directional lights with shadow rays, an optional ground plane that fades into the
-//! background, linear accumulation and one sRGB encode per pixel at the end.
+//! Camera rays, lights and the row-parallel driver of the tracer: stratified (Latin hypercube)
+//! jittered samples per pixel from the seeded PCG stream of that pixel, Lambert plus a little
+//! Blinn–Phong under directional lights with shadow rays, an optional ground plane that fades
+//! into the background, linear accumulation and one sRGB encode per pixel at the end. The
+//! samples themselves are traced by `stream`, a run of pixels at a time; this file also
+//! writes what the tracer uses as text for a comparison program (`tools/embree/`).
 
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 
