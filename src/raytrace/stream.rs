@@ -1,5 +1,6 @@
-//! The tracer's inner loop: the samples of a run of pixels, traced phase by phase as structure
-//! of arrays, so that everything but the searches runs as vector loops.
+//! The tracer's loops: the image row by row on rayon's pool, and in a row the samples of a run
+//! of pixels traced phase by phase as structure of arrays, so that everything but the searches
+//! runs as vector loops.
 //!
 //! How it works. A run of up to [`RUN_PIXELS`] pixels of one row draws its samples (the seeded
 //! PCG stream per pixel, Latin hypercube strata) into image-plane positions, then every phase
@@ -14,8 +15,12 @@
 //! ([`Simd`]), so the compiler vectorises them for AVX-512 or AVX2; the searches are the packet
 //! searches of `packet`, up to 16 neighbouring samples that enter the root bound at a time.
 
-use glam::Vec3;
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 
+use glam::Vec3;
+use rayon::prelude::*;
+
+use super::error::RaytraceError;
 use super::geometry::{Hit, Ray};
 use super::hierarchy::Hierarchy;
 use super::packet::PACKET;
@@ -24,6 +29,7 @@ use super::tracer::{CameraRays, ColorMode, Frame, Shading, TraceStats, depth_col
 #[cfg(target_arch = "x86_64")]
 use super::wide::Avx512;
 use super::wide::{Lanes, Portable, Simd};
+use crate::camera::OrbitCamera;
 use crate::color::Srgb8Table;
 use crate::rng::Pcg32;
 
@@ -39,8 +45,50 @@ const LEAF_SPECULAR: f32 = 0.25;
 /// Albedo of the ground plane.
 const GROUND_ALBEDO: f32 = 0.55;
 
+/// Traces the image row by row on rayon's pool. `progress(rows_done, rows)`; `cancel` is
+/// checked before each row.
+pub fn trace(
+    hierarchy: &Hierarchy,
+    camera: &OrbitCamera,
+    shading: &Shading,
+    progress: &(dyn Fn(u64, u64) + Sync),
+    cancel: &AtomicBool,
+) -> Result<(image::RgbImage, TraceStats), RaytraceError> {
+    let (w, h) = (shading.width, shading.height);
+    let frame = Frame::new(hierarchy);
+    let rays = CameraRays::new(camera, w, h, frame.radius);
+    let done = AtomicU64::new(0);
+    let primary = AtomicU64::new(0);
+    let shadow = AtomicU64::new(0);
+    let hits = AtomicU64::new(0);
+    let srgb = Srgb8Table::new();
+    let mut pixels = vec![0u8; w as usize * h as usize * 3];
+    pixels.par_chunks_mut(w as usize * 3).enumerate().try_for_each(|(y, row)| {
+        if cancel.load(Ordering::Relaxed) {
+            return Err(RaytraceError::Cancelled);
+        }
+        let mut tracer = RowTracer::new(hierarchy, shading, &rays, frame, &srgb);
+        tracer.row(y, row);
+        let stats = tracer.stats;
+        primary.fetch_add(stats.primary_rays, Ordering::Relaxed);
+        shadow.fetch_add(stats.shadow_rays, Ordering::Relaxed);
+        hits.fetch_add(stats.leaf_hits, Ordering::Relaxed);
+        progress(done.fetch_add(1, Ordering::Relaxed) + 1, h as u64);
+        Ok(())
+    })?;
+    let image = image::RgbImage::from_raw(w, h, pixels).ok_or(RaytraceError::TooLarge("image buffer".into()))?;
+    Ok((
+        image,
+        TraceStats {
+            primary_rays: primary.into_inner(),
+            shadow_rays: shadow.into_inner(),
+            leaf_hits: hits.into_inner(),
+        },
+    ))
+}
+
 /// One row's state: the run's sample arrays, traversal stacks, and the searches' hints.
-pub struct RowTracer<'a> {
+struct RowTracer<'a> {
     hierarchy: &'a Hierarchy,
     shading: &'a Shading,
     rays: &'a CameraRays,
@@ -54,7 +102,7 @@ pub struct RowTracer<'a> {
     /// The y-strata permutation, shuffled again for each pixel of the row.
     strata: Vec<u32>,
     s: Samples,
-    pub stats: TraceStats,
+    stats: TraceStats,
 }
 
 /// Per-sample arrays of a run (structure of arrays).
@@ -121,7 +169,7 @@ fn sphere_entry(o: [f32; 3], d: [f32; 3], centre: [f32; 3], radius: f32, t_min: 
 }
 
 impl<'a> RowTracer<'a> {
-    pub fn new(
+    fn new(
         hierarchy: &'a Hierarchy,
         shading: &'a Shading,
         rays: &'a CameraRays,
@@ -144,7 +192,7 @@ impl<'a> RowTracer<'a> {
     }
 
     /// Traces row `y` into `row` (RGB bytes), run by run.
-    pub fn row(&mut self, y: usize, row: &mut [u8]) {
+    fn row(&mut self, y: usize, row: &mut [u8]) {
         let width = self.shading.width as usize;
         for first in (0..width).step_by(RUN_PIXELS) {
             let pixels = first..(first + RUN_PIXELS).min(width);

@@ -1,21 +1,15 @@
-//! Camera rays, lights and the row-parallel driver of the tracer: stratified (Latin hypercube)
+//! Camera rays, lights and shading settings of the tracer: stratified (Latin hypercube)
 //! jittered samples per pixel from the seeded PCG stream of that pixel, Lambert plus a little
 //! Blinn–Phong under directional lights with shadow rays, an optional ground plane that fades
 //! into the background, linear accumulation and one sRGB encode per pixel at the end. The
-//! samples themselves are traced by `stream`, a run of pixels at a time; this file also
+//! image is traced by `stream`, row by row, a run of pixels at a time; this file also
 //! writes what the tracer uses as text for a comparison program (`tools/embree/`).
 
-use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
-
 use glam::Vec3;
-use rayon::prelude::*;
 
-use super::error::RaytraceError;
 use super::geometry::Ray;
 use super::hierarchy::Hierarchy;
-use super::stream::RowTracer;
 use crate::camera::{OrbitCamera, Projection};
-use crate::color::Srgb8Table;
 
 /// How surfaces are coloured.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
@@ -199,46 +193,4 @@ pub(super) fn depth_color(depth: u8, max_depth: u32) -> Vec3 {
     let x = s * 2.0;
     let k = (x as usize).min(1);
     stops[k].lerp(stops[k + 1], x - k as f32)
-}
-
-/// Traces the image row by row on rayon's pool. `progress(rows_done, rows)`; `cancel` is
-/// checked before each row.
-pub fn trace(
-    hierarchy: &Hierarchy,
-    camera: &OrbitCamera,
-    shading: &Shading,
-    progress: &(dyn Fn(u64, u64) + Sync),
-    cancel: &AtomicBool,
-) -> Result<(image::RgbImage, TraceStats), RaytraceError> {
-    let (w, h) = (shading.width, shading.height);
-    let frame = Frame::new(hierarchy);
-    let rays = CameraRays::new(camera, w, h, frame.radius);
-    let done = AtomicU64::new(0);
-    let primary = AtomicU64::new(0);
-    let shadow = AtomicU64::new(0);
-    let hits = AtomicU64::new(0);
-    let srgb = Srgb8Table::new();
-    let mut pixels = vec![0u8; w as usize * h as usize * 3];
-    pixels.par_chunks_mut(w as usize * 3).enumerate().try_for_each(|(y, row)| {
-        if cancel.load(Ordering::Relaxed) {
-            return Err(RaytraceError::Cancelled);
-        }
-        let mut tracer = RowTracer::new(hierarchy, shading, &rays, frame, &srgb);
-        tracer.row(y, row);
-        let stats = tracer.stats;
-        primary.fetch_add(stats.primary_rays, Ordering::Relaxed);
-        shadow.fetch_add(stats.shadow_rays, Ordering::Relaxed);
-        hits.fetch_add(stats.leaf_hits, Ordering::Relaxed);
-        progress(done.fetch_add(1, Ordering::Relaxed) + 1, h as u64);
-        Ok(())
-    })?;
-    let image = image::RgbImage::from_raw(w, h, pixels).ok_or(RaytraceError::TooLarge("image buffer".into()))?;
-    Ok((
-        image,
-        TraceStats {
-            primary_rays: primary.into_inner(),
-            shadow_rays: shadow.into_inner(),
-            leaf_hits: hits.into_inner(),
-        },
-    ))
 }
