@@ -29,6 +29,7 @@ impl Hierarchy {
     /// # Safety
     /// The CPU must run the instructions of `L`.
     #[expect(unsafe_code, reason = "entered after runtime CPU feature detection")]
+    #[expect(clippy::too_many_arguments, reason = "the one-ray search's arguments, per ray where they differ")]
     #[inline(always)]
     pub(super) unsafe fn closest_packet<L: Lanes>(
         &self,

@@ -6,14 +6,14 @@
 //! PCG stream per pixel, Latin hypercube strata) into image-plane positions, then every phase
 //! goes over all the run's samples at once: camera rays, the ground plane and the root bound's
 //! entry (one branch-free loop); the nearest-hit search for the few rays that enter the root
-//! bound (in sample order, each trying the previous hit first); per light the shadow rays'
-//! origins and root entries (one loop), the any-hit search for those that enter, and the
-//! shading (one loop); the ground's fade; the per-pixel sums. The loops hold the same
-//! operations in the same order as shading one sample alone (no fused multiply-add, glam's
-//! `normalize` as `1 / sqrt` then a product), so the picture is bit for bit the one a
-//! sample-at-a-time tracer makes. They are compiled once per vector width the CPU may run
-//! ([`Simd`]), so the compiler vectorises them for AVX-512 or AVX2; the searches are the packet
-//! searches of `packet`, up to 16 neighbouring samples that enter the root bound at a time.
+//! bound (packets of up to 16 neighbouring samples, `packet`, each ray trying the previous
+//! hit first); per light the shadow rays' origins and root entries (one loop), the packet
+//! any-hit search for those that enter, and the shading (one loop); the ground's fade; the
+//! per-pixel sums. The loops hold the same operations in the same order as shading one sample
+//! alone (no fused multiply-add, glam's `normalize` as `1 / sqrt` then a product), so a sample's
+//! colour is bit for bit that of tracing it alone, except where two leaves are hit at exactly
+//! the same t and the packet search keeps the other one. They are compiled once per vector
+//! width the CPU may run ([`Simd`]), so the compiler vectorises them for AVX-512 or AVX2.
 
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 
@@ -263,8 +263,8 @@ impl<'a> RowTracer<'a> {
         self.finish(n);
         let s = &self.s;
         for (p, x) in pixels.enumerate() {
-            // Summed in batches of BATCH samples, then the batches: the order the
-            // sample-at-a-time tracer summed in (the same bits for any spp).
+            // Summed in batches of BATCH samples, then the batches, the order nlifs has always
+            // summed in, so that pictures with any spp keep their bytes.
             let mut sum = Vec3::ZERO;
             for batch in (p * spp..(p + 1) * spp).step_by(BATCH) {
                 let mut part = Vec3::ZERO;
@@ -292,9 +292,9 @@ impl<'a> RowTracer<'a> {
                 let j = ((rng.next_u32() as u64 * (i as u64 + 1)) >> 32) as usize;
                 strata.swap(i, j);
             }
-            for i in 0..spp {
+            for (i, &stratum) in strata.iter().enumerate() {
                 let sx = (i as f32 + rng.next_f32()) / spp as f32;
-                let sy = (strata[i] as f32 + rng.next_f32()) / spp as f32;
+                let sy = (stratum as f32 + rng.next_f32()) / spp as f32;
                 self.s.x[p * spp + i] = x as f32 + sx;
                 self.s.y[p * spp + i] = y as f32 + sy;
             }
