@@ -52,7 +52,18 @@ fn seeded_rays(h: &Hierarchy, seed: u32, count: u32) -> Vec<Ray> {
 /// intersection routine runs on the same leaf) and the same leaf unless two leaves tie.
 fn check_against_brute_force(h: &Hierarchy, what: &str, seed: u32) -> usize {
     let mut hits = 0;
-    for (i, ray) in seeded_rays(h, seed, 10_000).iter().enumerate() {
+    let rays = seeded_rays(h, seed, 10_000);
+    // The packet searches (16 rays at a time, what the tracer runs): the same nearest t and
+    // the same occlusion, with a leaf as the shadow cache's guess.
+    let packets = h.intersect_packets(&rays, 0.0, f32::INFINITY, &mut Scratch::default());
+    let hint = (0..h.nodes.len() as u32).find(|&k| h.nodes[k as usize].kind != NodeKind::Inner).unwrap_or(u32::MAX);
+    let blocked = h.occluded_packets(&rays, 0.0, f32::INFINITY, hint, &mut Scratch::default());
+    for (i, ray) in rays.iter().enumerate() {
+        let slow = h.intersect_brute_force(ray, 0.0, f32::INFINITY);
+        assert_eq!(packets[i].map(|x| x.t), slow.map(|x| x.t), "{what}: ray {i} (seed {seed}): packet search");
+        assert_eq!(blocked[i], slow.is_some(), "{what}: ray {i} (seed {seed}): packet occlusion");
+    }
+    for (i, ray) in rays.iter().enumerate() {
         let fast = h.intersect(ray, 0.0, f32::INFINITY);
         let slow = h.intersect_brute_force(ray, 0.0, f32::INFINITY);
         match (fast, slow) {

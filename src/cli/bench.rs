@@ -39,6 +39,10 @@ pub enum BenchCommand {
         /// Where to keep the images and .pov files.
         #[arg(long, default_value = "target/bench-raytrace")]
         out: PathBuf,
+        /// Also write each scene's spheres, camera, lights and shading as `NAME_nN.trace` in
+        /// the output folder, the input of the Embree comparison in tools/embree/.
+        #[arg(long)]
+        describe: bool,
     },
     /// GPU chaos game: points/s (map + splat) and frames/s at 1280×720, and frames to converge
     /// after a scene edit.
@@ -143,8 +147,8 @@ pub enum BenchCommand {
 
 pub fn run(command: BenchCommand) -> anyhow::Result<()> {
     match command {
-        BenchCommand::Raytrace { scenes, width, height, spp, no_povray, out } => {
-            raytrace(&scenes, width, height, spp, no_povray, &out)
+        BenchCommand::Raytrace { scenes, width, height, spp, no_povray, out, describe } => {
+            raytrace(&scenes, width, height, spp, no_povray, describe, &out)
         }
         BenchCommand::Gpu { scene, points, steps, frames } => {
             let scene = load(&scene)?;
@@ -325,7 +329,15 @@ fn cpu(path: &Path, points: u64, repeats: usize) -> anyhow::Result<()> {
     Ok(())
 }
 
-fn raytrace(scenes: &Path, width: u32, height: u32, spp: u32, no_povray: bool, out: &Path) -> anyhow::Result<()> {
+fn raytrace(
+    scenes: &Path,
+    width: u32,
+    height: u32,
+    spp: u32,
+    no_povray: bool,
+    describe: bool,
+    out: &Path,
+) -> anyhow::Result<()> {
     super::probe_output(&out.join("tapering_n6_nlifs.png"))?;
     let threads = rayon::current_num_threads();
     println!(
@@ -335,6 +347,18 @@ fn raytrace(scenes: &Path, width: u32, height: u32, spp: u32, no_povray: bool, o
     for (name, depth) in [("tapering", 6u32), ("plant2", 7)] {
         let scene = load(&scenes.join(format!("{name}.toml")))?;
         let settings = RaytraceSettings { width, height, spp, depth, ..Default::default() };
+        if describe {
+            let ifs = scene.at(0.0);
+            let (hierarchy, camera) = raytrace::build(&scene, &ifs, 0.0, None, &settings)?;
+            let shading = raytrace::shading_for(&scene, &ifs, &camera, &settings);
+            let path = out.join(format!("{name}_n{depth}.trace"));
+            let mut file = std::io::BufWriter::new(
+                std::fs::File::create(&path).with_context(|| format!("cannot write {}", path.display()))?,
+            );
+            raytrace::tracer::write_trace_description(&hierarchy, &camera, &shading, &mut file)
+                .and_then(|()| std::io::Write::flush(&mut file))
+                .with_context(|| format!("cannot write {}", path.display()))?;
+        }
         let cancel = AtomicBool::new(false);
         let cpu_before = cpu_secs().0;
         let traced = raytrace::render(&scene, 0.0, None, &settings, &|_, _| {}, &cancel)?;

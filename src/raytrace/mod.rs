@@ -3,9 +3,11 @@
 //!
 //! The split follows pbrt: `geometry` holds the node, ray and hit types and the ray–sphere
 //! roots; `hierarchy` builds the nodes (it knows only spheres and triangles), `wide` collapses
-//! them into the wide nodes that `search` traverses; `tracer` makes camera rays, shades and
-//! samples, `mesh` provides the mesh initial objects (grid surface, glTF), `export` writes
-//! W^n(A) as glTF or as a POV-Ray scene.
+//! them into the wide nodes that `search` traverses one ray at a time and `packet` up to 16
+//! rays at a time; `tracer` makes camera rays and lights, `stream` traces the rows, each a
+//! run of pixels' samples at a time, phase by phase (camera rays, searches, shading), `mesh` provides
+//! the mesh initial objects (grid surface, glTF), `export` writes W^n(A) as glTF or as a
+//! POV-Ray scene.
 //! [`render`] is the entry point for the command line and for a viewer's background thread.
 
 mod error;
@@ -14,7 +16,9 @@ pub mod geometry;
 mod gltf_input;
 pub mod hierarchy;
 pub mod mesh;
+mod packet;
 pub mod search;
+mod stream;
 pub mod tracer;
 pub mod wide;
 
@@ -191,7 +195,7 @@ pub fn render(
     let build_secs = start.elapsed().as_secs_f64();
     let shading = shading_for(scene, &ifs, &camera, settings);
     let start = std::time::Instant::now();
-    let (image, stats) = tracer::trace(&hierarchy, &camera, &shading, progress, cancel)?;
+    let (image, stats) = stream::trace(&hierarchy, &camera, &shading, progress, cancel)?;
     Ok(Traced {
         image,
         camera,

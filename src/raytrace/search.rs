@@ -15,13 +15,16 @@ use super::wide::Avx512;
 use super::wide::{LANES, Lanes, Portable, Simd};
 
 /// Marks a traversal stack entry as a triangle tile (a node index) rather than a wide node.
-const TILE: u32 = 1 << 31;
+pub(super) const TILE: u32 = 1 << 31;
 
 /// Traversal stacks, kept between rays to avoid allocating per ray.
 #[derive(Clone, Debug, Default)]
 pub struct Scratch {
     closest: Vec<(u32, f32)>,
     any: Vec<u32>,
+    /// The packet searches' stacks (`packet`): node, nearest entry, rays that entered it.
+    pub(super) packet_closest: Vec<(u32, f32, u32)>,
+    pub(super) packet_any: Vec<(u32, u32)>,
 }
 
 impl Hierarchy {
@@ -129,7 +132,7 @@ impl Hierarchy {
     /// The CPU must run the instructions of `L`.
     #[expect(unsafe_code, reason = "entered after runtime CPU feature detection")]
     #[inline(always)]
-    unsafe fn closest<L: Lanes>(
+    pub(super) unsafe fn closest<L: Lanes>(
         &self,
         ray: &Ray,
         t_min: f32,
@@ -207,7 +210,7 @@ impl Hierarchy {
 
     /// Tests the triangles of tile `index` against `best`.
     #[inline]
-    fn tile_closest(&self, ray: &Ray, index: u32, t_min: f32, best: &mut Hit) {
+    pub(super) fn tile_closest(&self, ray: &Ray, index: u32, t_min: f32, best: &mut Hit) {
         let node = &self.nodes[index as usize];
         for tri in node.first..node.first + node.count as u32 {
             if let Some((t, u, v)) = self.triangle_hit(ray, tri, t_min, best.t) {
