@@ -123,7 +123,9 @@ fn probability_mode_ui(ui: &mut egui::Ui, state: &ViewerState, commands: &mut Ve
 /// map is kept.
 fn kind_ui(ui: &mut egui::Ui, function: usize, def: &FunctionDef, commands: &mut Vec<Command>) {
     let Some(current) = FunctionKind::of(def) else {
-        ui.small("julia").on_hover_text("a Julia map has no grid, builder or affine form");
+        // Julia and flame maps have no exact grid, builder or affine form: the kind is shown,
+        // not offered for change.
+        ui.small(def.kind()).on_hover_text(format!("a {} map has no grid, builder or affine form", def.kind()));
         return;
     };
     let mut kind = current;
