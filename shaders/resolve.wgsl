@@ -54,7 +54,9 @@ struct ResolveParams {
     shadow_side_px: u32,
     shadow_texel_world: f32,
     shadow_inv_depth_world: f32,
-    _pad0: u32,
+    // The normal's plane fit reads the (2r + 1)² window of this radius (the pipeline constant
+    // NORMAL_RADIUS_PX below holds the same value).
+    normal_radius_px: u32,
 }
 
 // Pipeline constants (src/gpu/resolve.rs makes one pipeline per target format, mode and
@@ -72,6 +74,9 @@ override LIGHT_CACHED: bool = false;
 override SHADOWS: bool = false;
 // Ambient occlusion: its samples are taken (`occlusion_at`).
 override OCCLUSION: bool = false;
+// The radius of the normals' plane fit (`params.normal_radius_px`), a constant so that the
+// window's loops unroll.
+override NORMAL_RADIUS_PX: i32 = 2;
 
 const MODE_CLOSEST: u32 = 0u;
 const MODE_AVERAGE: u32 = 1u;
@@ -87,7 +92,6 @@ const AMBIENT: f32 = 0.15;
 const KEY: f32 = 0.9;
 const FILL: f32 = 0.25;
 const SPECULAR: f32 = 0.2;
-const NORMAL_RADIUS_PX: i32 = 2;
 const SLOPE_SCALE: f32 = 2.0;
 const RIDGE: f32 = 1.0;
 const SLOPE_MAX: f32 = 8.0;

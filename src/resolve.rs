@@ -84,8 +84,12 @@ pub const KEY: f32 = 0.9;
 pub const FILL: f32 = 0.25;
 /// The key light's Blinn-Phong highlight strength (white, exponent 32).
 pub const SPECULAR: f32 = 0.2;
-/// The normal's plane fit reads the (2r + 1)² window of this radius.
-pub const NORMAL_RADIUS_PX: i32 = 2;
+/// The normal's plane fit reads the (2r + 1)² window of this radius (the largest the resolve
+/// takes; the live view fits in a window of [`NAVIGATING_NORMAL_RADIUS_PX`] while navigating).
+pub const NORMAL_RADIUS_PX: u32 = 2;
+/// The plane fit's radius while the live view navigates (a dragged camera, a playing timeline):
+/// 9 keys a pixel instead of 25, the normals a little rougher, the lit frame cheaper.
+pub const NAVIGATING_NORMAL_RADIUS_PX: u32 = 1;
 /// The plane fit weighs a neighbour half at this slope from the centre (tan 63°).
 pub const SLOPE_SCALE: f32 = 2.0;
 /// Ridge of the plane fit, in the units of one full-weight neighbour one pixel away.
@@ -169,7 +173,8 @@ pub struct ResolveParams {
     /// World size of a texel, and one over the world length of the map's depth range.
     pub shadow_texel_world: f32,
     pub shadow_inv_depth_world: f32,
-    pub _pad: u32,
+    /// The normal's plane fit reads the (2r + 1)² window of this radius, 1 ..= [`NORMAL_RADIUS_PX`].
+    pub normal_radius_px: u32,
 }
 const _: () = assert!(std::mem::size_of::<ResolveParams>() == 192);
 
@@ -279,6 +284,8 @@ pub struct ResolveArgs {
     pub key_light: [f32; 3],
     /// The splat's shadow map, if it has one.
     pub shadow: Option<ShadowView>,
+    /// The radius of the normals' plane fit (clamped to 1 ..= [`NORMAL_RADIUS_PX`]).
+    pub normal_radius_px: u32,
 }
 
 /// View-space size of one of `height_px` pixel rows at unit distance (perspective) or
@@ -310,6 +317,7 @@ impl ResolveArgs {
             shadows: style.shadows,
             key_light: style.key_light().to_array(),
             shadow: view.shadow,
+            normal_radius_px: NORMAL_RADIUS_PX,
         }
     }
 
@@ -347,7 +355,7 @@ impl ResolveArgs {
             shadow_side_px: 0,
             shadow_texel_world: 0.0,
             shadow_inv_depth_world: 0.0,
-            _pad: 0,
+            normal_radius_px: self.normal_radius_px.clamp(1, NORMAL_RADIUS_PX),
         }
         .with_shadow(self, closest)
     }

@@ -110,6 +110,7 @@ fn depth_field(perspective: bool) -> Accumulation {
             shadows: 0.0,
             key_light: nlifs::resolve::KEY_LIGHT,
             shadow: None,
+            normal_radius_px: nlifs::resolve::NORMAL_RADIUS_PX,
         },
         shadow: Vec::new(),
     }
@@ -402,6 +403,11 @@ fn resolve_matches_cpu() {
         field,
         &ResolveArgs { shading: 0.7, occlusion: 0.6, point_radius_px: 1, origin_px: [5, 3], ..field.args },
     );
+    // The live view's smaller plane fit while navigating (3×3 keys instead of 5×5).
+    for acc in accumulations.iter().filter(|a| a.args.mode == SplatMode::Closest) {
+        let navigating = nlifs::resolve::NAVIGATING_NORMAL_RADIUS_PX;
+        compare(&mut gpu, acc, &ResolveArgs { shading: 1.0, normal_radius_px: navigating, ..acc.args });
+    }
 }
 
 /// Every combination of flam3's tone settings on the average and density accumulations:

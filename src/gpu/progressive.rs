@@ -54,6 +54,8 @@ pub struct ProgressiveSettings {
     pub occlusion: f32,
     /// Drawn point radius in pixels (closest mode: the nearest key within the radius).
     pub point_radius_px: u32,
+    /// The radius of the normals' plane fit (the solid look), 1 ..= `resolve::NORMAL_RADIUS_PX`.
+    pub normal_radius_px: u32,
     /// Splats after which accumulation stops (keeps the u32 sums far from overflow).
     pub max_splats: u64,
     /// Steps not splatted after a scene edit while the kept points settle on the new attractor.
@@ -106,6 +108,7 @@ impl Default for ProgressiveSettings {
             shading: 0.0,
             occlusion: 0.0,
             point_radius_px: 0,
+            normal_radius_px: crate::resolve::NORMAL_RADIUS_PX,
             max_splats: 1 << 30,
             settle_steps: 8,
             shadows: 0.0,
@@ -421,6 +424,7 @@ impl Progressive {
             shadows: s.shadows,
             key_light: crate::resolve::shadow::key_light(s.light_yaw_deg, s.light_pitch_deg),
             shadow: self.view.and_then(|v| v.shadow),
+            normal_radius_px: s.normal_radius_px,
         };
         let due = self.estimate_due();
         if matches!(due, EstimateDue::Keep | EstimateDue::Make(_)) {

@@ -31,11 +31,17 @@ type DrawKey = (wgpu::TextureFormat, SplatMode, bool, bool, LightTerms);
 struct LightTerms {
     shadows: bool,
     occlusion: bool,
+    /// The normals' plane fit radius (`ResolveParams::normal_radius_px`): its loops unroll.
+    normal_radius_px: u32,
 }
 
 impl LightTerms {
-    fn constants(self) -> [(&'static str, f64); 2] {
-        [("SHADOWS", self.shadows as u32 as f64), ("OCCLUSION", self.occlusion as u32 as f64)]
+    fn constants(self) -> [(&'static str, f64); 3] {
+        [
+            ("SHADOWS", self.shadows as u32 as f64),
+            ("OCCLUSION", self.occlusion as u32 as f64),
+            ("NORMAL_RADIUS_PX", self.normal_radius_px as f64),
+        ]
     }
 }
 /// A bind group with the generation of the chaos game's buffers and of the light cache it binds.
@@ -139,7 +145,7 @@ impl GpuResolve {
             return i;
         }
         let (format, mode, shaded, cached, terms) = key;
-        let [shadows, occlusion] = terms.constants();
+        let [shadows, occlusion, normal_radius] = terms.constants();
         let constants = [
             ("RESOLVE_MODE", mode.index() as f64),
             ("SHADED", shaded as u32 as f64),
@@ -147,6 +153,7 @@ impl GpuResolve {
             ("LIGHT_CACHED", cached as u32 as f64),
             shadows,
             occlusion,
+            normal_radius,
         ];
         let pipeline = fullscreen_pipeline(device, &self.module, "resolve", &constants, format);
         self.draw_pipelines.push((key, pipeline, None));
@@ -166,8 +173,14 @@ impl GpuResolve {
             return;
         }
         if self.light_pipeline.as_ref().is_none_or(|(_, _, t)| *t != terms) {
-            let [shadows, occlusion] = terms.constants();
-            let constants = [("RESOLVE_MODE", SplatMode::Closest.index() as f64), ("SHADED", 1.0), shadows, occlusion];
+            let [shadows, occlusion, normal_radius] = terms.constants();
+            let constants = [
+                ("RESOLVE_MODE", SplatMode::Closest.index() as f64),
+                ("SHADED", 1.0),
+                shadows,
+                occlusion,
+                normal_radius,
+            ];
             let pipeline =
                 fullscreen_pipeline(device, &self.module, "light_pass", &constants, wgpu::TextureFormat::Rg32Uint);
             self.light_pipeline = Some((pipeline, None, terms));
@@ -224,7 +237,8 @@ impl GpuResolve {
         let cached = shaded && matches!(light, LightRows::Refresh { .. });
         // The shadow map must be the view's: the chaos game sized it (`GpuChaosGame::encode`).
         let shadows = params.shadows > 0.0 && game.shadow_side == params.shadow_side_px;
-        let terms = LightTerms { shadows, occlusion: params.occlusion > 0.0 };
+        let terms =
+            LightTerms { shadows, occlusion: params.occlusion > 0.0, normal_radius_px: params.normal_radius_px };
         let light_generation = self.light_cache(device, game.width, game.height).generation;
         if let LightRows::Refresh { start, end } = light
             && cached

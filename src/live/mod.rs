@@ -43,6 +43,7 @@ impl From<&LiveSettings> for ProgressiveSettings {
             shading: s.shading,
             occlusion: s.occlusion,
             point_radius_px: s.point_radius_px,
+            normal_radius_px: crate::resolve::NORMAL_RADIUS_PX,
             max_splats: s.max_splats,
             settle_steps: s.settle_steps,
             shadows: s.shadows,
@@ -93,13 +94,14 @@ impl LiveView {
         })
     }
 
-    /// What the GPU side runs for `settings`: the same, without shadows and occlusion while
-    /// navigating.
+    /// What the GPU side runs for `settings`: the same, without shadows and occlusion and with
+    /// the normals fitted in a smaller window while navigating.
     fn progressive_settings(&self, settings: &LiveSettings) -> ProgressiveSettings {
         let mut p = ProgressiveSettings::from(settings);
         if self.navigating {
             p.shadows = 0.0;
             p.occlusion = 0.0;
+            p.normal_radius_px = crate::resolve::NAVIGATING_NORMAL_RADIUS_PX;
         }
         p.settle_steps = self.settle_steps();
         p
@@ -117,7 +119,8 @@ impl LiveView {
     }
 
     /// While the camera is dragged (orbit, pan) the view draws without the key light's shadows
-    /// and without ambient occlusion (normals, key, fill and highlight stay), as 3D viewports
+    /// and without ambient occlusion, its normals fitted to 3×3 keys instead of 5×5 (key, fill
+    /// and highlight stay), as 3D viewports
     /// lower their quality while navigating: every frame of a moving camera starts afresh and
     /// lights every pixel, and on lavapipe the shadow map, its lookups and the 16 occlusion
     /// samples a pixel take it below 20 fps. Both come back, with a fresh accumulation, when

@@ -250,8 +250,9 @@ fn light8<L: Lanes>(
     let zero = L::splat(0.0);
     let (mut sw, mut sx, mut sy, mut sz) = (one, zero, zero, zero);
     let (mut sxx, mut sxy, mut syy, mut sxz, mut syz) = (zero, zero, zero, zero, zero);
-    for dy in -NORMAL_RADIUS_PX..=NORMAL_RADIUS_PX {
-        for dx in -NORMAL_RADIUS_PX..=NORMAL_RADIUS_PX {
+    let r = p.normal_radius_px as i32;
+    for dy in -r..=r {
+        for dx in -r..=r {
             if dx == 0 && dy == 0 {
                 continue;
             }

@@ -42,6 +42,7 @@ fn params(width: u32, height: u32, perspective: bool, shadows: f32) -> ResolvePa
         shadows: 0.0,
         key_light: shadow::key_light(40.0, 25.0),
         shadow: None,
+        normal_radius_px: NORMAL_RADIUS_PX,
     };
     let side = 24u32;
     // A map from view space: texels across x and y, depth along z, turned a little.

@@ -40,13 +40,14 @@ pub fn fitted_slopes(p: &ResolveParams, accum: &[u32], x: i32, y: i32, key: u32)
     let z_per_unit = footprints_per_unit(p, key);
     let depth0 = (key >> 8) as i32;
     // Weighted least-squares plane z = z̄ + slope · (offset − offset̄) through the keys of the
-    // (2 NORMAL_RADIUS_PX + 1)² window: empty pixels do not count, and a neighbour's weight
+    // (2 r + 1)² window (r = `p.normal_radius_px`): empty pixels do not count, and a neighbour's weight
     // falls with its slope from the centre (half at SLOPE_SCALE), so that a silhouette's far
     // side does not tilt the near side's normal. The centre counts with weight 1 at z = 0.
     let (mut sw, mut sx, mut sy, mut sz) = (1.0f32, 0.0f32, 0.0f32, 0.0f32);
     let (mut sxx, mut sxy, mut syy, mut sxz, mut syz) = (0.0f32, 0.0f32, 0.0f32, 0.0f32, 0.0f32);
-    for dy in -NORMAL_RADIUS_PX..=NORMAL_RADIUS_PX {
-        for dx in -NORMAL_RADIUS_PX..=NORMAL_RADIUS_PX {
+    let r = p.normal_radius_px as i32;
+    for dy in -r..=r {
+        for dx in -r..=r {
             let k = key_at(p, accum, x + dx, y + dy);
             if k != EMPTY && (dx != 0 || dy != 0) {
                 let z = ((k >> 8) as i32 - depth0) as f32 * z_per_unit;

@@ -22,6 +22,7 @@ fn params(size: u32, style: ResolveStyle) -> ResolveParams {
         shadows: style.shadows,
         key_light: style.key_light().to_array(),
         shadow: None,
+        normal_radius_px: NORMAL_RADIUS_PX,
     };
     args.params(size, size, false)
 }
