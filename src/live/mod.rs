@@ -43,6 +43,7 @@ impl From<&LiveSettings> for ProgressiveSettings {
             shading: s.shading,
             occlusion: s.occlusion,
             point_radius_px: s.point_radius_px,
+            // The full fit; `LiveView::progressive_settings` narrows it while navigating.
             normal_radius_px: crate::resolve::NORMAL_RADIUS_PX,
             max_splats: s.max_splats,
             settle_steps: s.settle_steps,
@@ -120,11 +121,10 @@ impl LiveView {
 
     /// While the camera is dragged (orbit, pan) the view draws without the key light's shadows
     /// and without ambient occlusion, its normals fitted to 3×3 keys instead of 5×5 (key, fill
-    /// and highlight stay), as 3D viewports
-    /// lower their quality while navigating: every frame of a moving camera starts afresh and
-    /// lights every pixel, and on lavapipe the shadow map, its lookups and the 16 occlusion
-    /// samples a pixel take it below 20 fps. Both come back, with a fresh accumulation, when
-    /// the drag ends.
+    /// and highlight stay), as 3D viewports lower their quality while navigating: every frame
+    /// of a moving camera starts afresh and lights every pixel, and on lavapipe the shadow map,
+    /// its lookups, the 16 occlusion samples and the 25-key plane fit a pixel take it below
+    /// 20 fps. All come back, with a fresh accumulation, when the drag ends.
     pub fn set_navigating(&mut self, ctx: &GpuContext, navigating: bool) -> Result<(), GpuError> {
         if navigating == self.navigating {
             return Ok(());
