@@ -9,8 +9,8 @@ use nlifs::live::LiveSettings;
 use nlifs::scene::Scene;
 use nlifs::viewer::command::Command;
 use nlifs::viewer::jobs::JobView;
-use nlifs::viewer::overlay_ui::{SHORTCUTS, WARNING_SIGN};
 use nlifs::viewer::state::ViewerState;
+use nlifs::viewer::ui::overlay::{SHORTCUTS, WARNING_SIGN};
 
 const BAD: &str = r#"
 version = 1

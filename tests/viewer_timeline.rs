@@ -9,7 +9,7 @@ use nlifs::scene::Scene;
 use nlifs::viewer::command::Command;
 use nlifs::viewer::jobs::JobView;
 use nlifs::viewer::state::ViewerState;
-use nlifs::viewer::timeline_ui::{HANDLE_RADIUS, PLAYHEAD_COLOR, TimeTrack, snap_time};
+use nlifs::viewer::ui::timeline::{HANDLE_RADIUS, PLAYHEAD_COLOR, TimeTrack, snap_time};
 
 fn twist_anim() -> ViewerState {
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/twist-anim.toml");
@@ -193,7 +193,7 @@ fn layers_at(
             layout = Some(nlifs::viewer::ui::panels_ui(ui, state, &JobView::default(), 1.0, &mut commands));
         });
         let strip = layout.and_then(|l| l.timeline).expect("twist-anim has a timeline strip");
-        out = Some(nlifs::viewer::ui_layer::split_strip(output.shapes, strip));
+        out = Some(nlifs::viewer::ui::layer::split_strip(output.shapes, strip));
     }
     out.unwrap()
 }

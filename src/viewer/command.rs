@@ -248,7 +248,7 @@ pub enum Command {
         aperture: f32,
         focus_distance: Option<f32>,
     },
-    // Palette colour (`palette_ui.rs`, applied in `palette_edit.rs`).
+    // Palette colour (`ui/palette.rs`, applied in `palette_edit.rs`).
     /// Function `function`'s colour coordinate c_i (None: the default spread); part of the
     /// running gesture, so that a slider drag is one undo step.
     SetPaletteIndex {

@@ -2,7 +2,7 @@
 //! `exposure` … `highlight_power`, `estimator_*`). The live view takes them from the scene at
 //! the current time ([`ViewerState::take_scene_imaging`], keyed `[key.render]` values included),
 //! so that it looks as `render` and `record` draw the same scene; the render panel's edits
-//! ([`Imaging`], sent as `Command::SetImaging`, UI in `tone_ui.rs`) are scene edits, undoable
+//! ([`Imaging`], sent as `Command::SetImaging`, UI in `ui/tone.rs`) are scene edits, undoable
 //! and saved with the scene, that do not clear the accumulation (the resolve alone changes).
 
 use crate::edit::Edit;

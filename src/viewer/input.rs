@@ -13,7 +13,7 @@ use super::{App, Command, ViewerState};
 
 impl App {
     /// A key pressed while no text field has the keyboard (egui's own shortcuts, undo, redo,
-    /// save, axis lock and play, are in `ui.rs`).
+    /// save, axis lock and play, are in `ui/mod.rs`).
     pub(super) fn key(&mut self, event: &winit::event::KeyEvent) {
         use winit::keyboard::{KeyCode, PhysicalKey};
         let Some(gfx) = &self.gfx else { return };

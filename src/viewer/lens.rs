@@ -2,7 +2,7 @@
 //! in the scene's `[render]` (saved with it, one undo step per change, keys may animate it) and
 //! the live view's settings follow the scene at the playhead. Focus by click reads the depth of
 //! the nearest splatted point under the cursor from the closest-mode keys
-//! ([`focus_depth_at`]); `lens_ui.rs` holds the panel and the gesture.
+//! ([`focus_depth_at`]); `ui/lens.rs` holds the panel and the gesture.
 
 use crate::edit::Edit;
 use crate::splat::{DEPTH_BITS, EMPTY, SplatView};

@@ -1,7 +1,7 @@
 //! The interactive viewer: a winit window showing the live GPU chaos game with egui panels.
 //!
 //! How a frame goes: window events go to egui first; what egui did not consume drives the
-//! orbit camera as [`Command`]s. Once per frame the egui panels (`ui.rs`) emit more commands,
+//! orbit camera as [`Command`]s. Once per frame the egui panels (`ui/`) emit more commands,
 //! [`ViewerState::apply`] applies them all and reports what changed, the [`LiveView`] is told
 //! (scene edits keep the points, view changes clear the accumulation), one chaos-game frame is
 //! recorded, resolved onto the surface with the same `draw` that screenshots use, and egui is
@@ -16,9 +16,8 @@
 //! The files: `state.rs` (plain data), `command.rs` (what can change it), `apply.rs` (the
 //! command logic, with `authoring.rs` for kinds, probabilities, builder steps and key times,
 //! and `files.rs` for open, save and drops), `picking.rs` (projection, picking and drag maths on
-//! a `SplatView`), the UI files that read the state and emit commands (`ui.rs` with the side
-//! panel, `functions_ui.rs`, `grid_edit_ui.rs`, `nesting_ui.rs`, `jobs_ui.rs`, `timeline_ui.rs`,
-//! `overlay_ui.rs`), `ui_layer.rs` (egui on wgpu), `jobs.rs` with the forms' checks in
+//! a `SplatView`), the UI files that read the state and emit commands (the `ui/` folder: the side
+//! panel in `ui/mod.rs`, a file a section or overlay, `ui/layer.rs` for egui on wgpu), `jobs.rs` with the forms' checks in
 //! `job_plan.rs`, `recent.rs` (the recent files list, its state in `files_state.rs`) and
 //! `dialogs.rs` (native dialogs on a thread of their own) and `redraw.rs` (when a frame is drawn: a
 //! view at rest is not redrawn). State, command and apply import no
@@ -34,20 +33,12 @@ pub mod files;
 pub mod files_state;
 mod frame_log;
 pub mod framing;
-pub mod functions_ui;
-pub mod grid_edit_ui;
 pub mod imaging;
 mod input;
 pub mod job_plan;
 pub mod jobs;
-pub mod jobs_ui;
 pub mod lens;
-pub mod lens_ui;
-pub mod light_ui;
-pub mod nesting_ui;
-pub mod overlay_ui;
 mod palette_edit;
-pub mod palette_ui;
 pub mod picking;
 pub mod pointer;
 pub mod recent;
@@ -55,11 +46,7 @@ pub mod recovery;
 mod redraw;
 mod screenshot;
 pub mod state;
-pub mod timeline_ui;
-pub mod tone_ui;
 pub mod ui;
-pub mod ui_layer;
-pub mod widgets;
 
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -195,7 +182,7 @@ struct Gfx {
     egui_ctx: egui::Context,
     egui_state: egui_winit::State,
     egui_renderer: egui_wgpu::Renderer,
-    ui_layer: ui_layer::UiLayer,
+    ui_layer: ui::layer::UiLayer,
 }
 
 struct App {
@@ -280,7 +267,7 @@ impl Gfx {
             Some(ctx.device.limits().max_texture_dimension_2d as usize),
         );
         let egui_renderer = egui_wgpu::Renderer::new(&ctx.device, config.format, egui_wgpu::RendererOptions::default());
-        let ui_layer = ui_layer::UiLayer::new(&ctx.device, config.format);
+        let ui_layer = ui::layer::UiLayer::new(&ctx.device, config.format);
         Ok(Self { window, surface, config, ctx, live, egui_ctx, egui_state, egui_renderer, ui_layer })
     }
 
@@ -360,7 +347,7 @@ impl ApplicationHandler for App {
                 let ctx = pointer_context(&self.state, &gfx.egui_ctx, self.cursor);
                 if self.router.route(event, &ctx) == Route::Camera {
                     let ctrl = self.modifiers.control_key() && pressed == ElementState::Pressed;
-                    if let Some(c) = lens_ui::focus_click(&self.state, &gfx.live, &gfx.ctx, button, ctrl, self.cursor) {
+                    if let Some(c) = ui::lens::focus_click(&self.state, &gfx.live, &gfx.ctx, button, ctrl, self.cursor) {
                         self.commands.push(c);
                     } else if pressed == ElementState::Pressed {
                         let picked = (button == MouseButton::Left)
@@ -491,7 +478,7 @@ impl App {
         }
         let raw_input = gfx.egui_state.take_egui_input(&gfx.window);
         // While the timeline plays untouched the side panel's animated values may lag the
-        // playhead by a few frames (`ui_layer.rs`); any input shows them at once.
+        // playhead by a few frames (`ui/layer.rs`); any input shows them at once.
         let panels_lag_secs =
             (self.state.playback.playing && raw_input.events.is_empty()).then_some(PLAYING_PANELS_LAG_SECS);
         let state = &self.state;
@@ -622,7 +609,7 @@ impl App {
             &gfx.ctx.queue,
             &mut gfx.egui_renderer,
             &gfx.egui_ctx,
-            ui_layer::EguiFrame {
+            ui::layer::EguiFrame {
                 shapes: full_output.shapes,
                 pixels_per_point: full_output.pixels_per_point,
                 textures_changed,
@@ -682,7 +669,7 @@ impl App {
 /// Seconds a toast stays on screen.
 const TOAST_SECS: f64 = 4.0;
 
-/// How long the side panel may lag the playhead while playing (its re-render is costly: ui_layer.rs).
+/// How long the side panel may lag the playhead while playing (its re-render is costly: ui/layer.rs).
 const PLAYING_PANELS_LAG_SECS: f64 = 0.25;
 
 /// The window pixels (origin, size) of `rect` (egui points at `ppp` pixels per point) inside a

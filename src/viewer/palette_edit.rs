@@ -1,4 +1,4 @@
-//! Applying the palette-colour commands (`palette_ui.rs`): a function's colour coordinate (a
+//! Applying the palette-colour commands (`ui/palette.rs`): a function's colour coordinate (a
 //! slider: part of the running gesture, one undo step per drag), the colour mode and the
 //! palette (one undo step each). Each is a whole-scene edit, so the IFS is recompiled with the
 //! new colours (`Shot::prepare`) and the accumulation restarts.

@@ -8,7 +8,7 @@
 //! the screen image of that world axis instead. The moved coordinates are rounded to the
 //! shortest decimal of their f32 (the precision the drag was worked out in), so that a saved
 //! file holds short numbers. Nothing here reads the viewer's state: the
-//! state gathers the grids and the view, the overlay (`grid_edit_ui.rs`) draws with the same
+//! state gathers the grids and the view, the overlay (`ui/grid_edit.rs`) draws with the same
 //! functions.
 
 use glam::{DVec3, Vec2};

@@ -1,6 +1,6 @@
 //! The viewer's state as plain data: the scene and what is derived from it (compiled IFS,
 //! bounds, report), the camera, the live view's settings, grid editing, playback, the job forms
-//! and the view's rectangle. UI code (`ui.rs` and the `*_ui.rs` files) and input handling read
+//! and the view's rectangle. UI code (the `ui/` folder) and input handling read
 //! it and emit [`Command`]s; `apply.rs` applies them. Nothing here touches the GPU or reads a
 //! clock, so it can be tested headless; the queries below (grids, playhead, picking) only read.
 

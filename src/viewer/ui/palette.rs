@@ -6,8 +6,8 @@
 use crate::palette::{self, BUILTIN};
 use crate::scene::spec::ColorMode;
 
-use super::command::Command;
-use super::state::ViewerState;
+use super::super::command::Command;
+use super::super::state::ViewerState;
 use super::widgets::slider;
 
 /// What the colour coordinate is, shown when the pointer rests on a control.

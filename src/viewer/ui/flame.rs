@@ -10,7 +10,7 @@ use crate::scene::spec::{FlameDef, FunctionDef};
 
 use super::super::command::Command;
 use super::super::state::ViewerState;
-use super::super::widgets::slider;
+use super::widgets::slider;
 
 /// flam3's names of the six coefficients, in its order.
 const COEF_NAMES: [&str; 6] = ["a", "b", "c", "d", "e", "f"];

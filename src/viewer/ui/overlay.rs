@@ -9,8 +9,8 @@
 
 use egui::{Align2, Color32, RichText};
 
-use super::command::{CloseChoice, Command, JobConfirm};
-use super::state::ViewerState;
+use super::super::command::{CloseChoice, Command, JobConfirm};
+use super::super::state::ViewerState;
 
 /// The mark in text that warns (the Statistics table): a glyph the bundled font draws. The
 /// viewer's egui has no emoji font, so U+26A0 ⚠ drew as an empty box; the banner paints its

@@ -8,9 +8,9 @@ use glam::{DVec3, Vec2};
 
 use crate::splat::SplatView;
 
-use super::command::Command;
-use super::picking::{FunctionGrid, definition_grid, grid_lines, project};
-use super::state::ViewerState;
+use super::super::command::Command;
+use super::super::picking::{FunctionGrid, definition_grid, grid_lines, project};
+use super::super::state::ViewerState;
 
 pub fn grid_edit_ui(ui: &mut egui::Ui, state: &ViewerState, commands: &mut Vec<Command>) {
     egui::CollapsingHeader::new("Grid editing").default_open(true).show(ui, |ui| {

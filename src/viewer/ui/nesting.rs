@@ -12,10 +12,10 @@ use crate::model::Ifs;
 use crate::model::nesting::{self, NestedBox};
 use crate::splat::SplatView;
 
-use super::command::{Command, NestingView};
-use super::grid_edit_ui::srgb;
-use super::picking::project;
-use super::state::ViewerState;
+use super::super::command::{Command, NestingView};
+use super::super::picking::project;
+use super::super::state::ViewerState;
+use super::grid_edit::srgb;
 
 /// The panel section: show, k (up to what the box budget allows), outline or translucent.
 pub fn nesting_ui(ui: &mut egui::Ui, state: &ViewerState, commands: &mut Vec<Command>) {

@@ -16,8 +16,8 @@ use egui::{Color32, Sense, Stroke};
 
 use crate::scene::timeline::{Ease, Interpolation, LoopMode};
 
-use super::command::Command;
-use super::state::ViewerState;
+use super::super::command::Command;
+use super::super::state::ViewerState;
 
 const INTERPOLATIONS: [Interpolation; 3] = [Interpolation::Hold, Interpolation::Linear, Interpolation::CatmullRom];
 const EASES: [Ease; 4] = [Ease::None, Ease::In, Ease::Out, Ease::InOut];

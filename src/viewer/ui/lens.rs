@@ -11,9 +11,9 @@ use crate::live::LiveView;
 use crate::scene::spec::SplatMode;
 use crate::splat::SplatView;
 
-use super::command::Command;
-use super::lens::focus_depth_at;
-use super::state::ViewerState;
+use super::super::command::Command;
+use super::super::lens::focus_depth_at;
+use super::super::state::ViewerState;
 use super::widgets::slider;
 
 /// The render panel's depth-of-field controls.

@@ -1,5 +1,7 @@
 //! The viewer's egui panels. Each `*_ui` function reads the [`ViewerState`] and pushes
-//! [`Command`]s; none of them changes the state directly.
+//! [`Command`]s; none of them changes the state directly. This file lays out the side panel
+//! and holds its small sections (scene, render, statistics, screenshot); a section or overlay
+//! with more to it has a file of its own here, and `layer.rs` draws egui on wgpu.
 
 use egui::Color32;
 
@@ -10,7 +12,21 @@ use crate::scene::spec::SplatMode;
 use super::command::{Command, FileDialogKind};
 use super::jobs::JobView;
 use super::state::ViewerState;
-use super::widgets::slider;
+use widgets::slider;
+
+pub mod flame;
+pub mod functions;
+pub mod grid_edit;
+pub mod jobs;
+pub mod layer;
+pub mod lens;
+pub mod light;
+pub mod nesting;
+pub mod overlay;
+pub mod palette;
+pub mod timeline;
+pub mod tone;
+pub mod widgets;
 
 /// The left side panel with every section, the timeline at the bottom, the grid overlay, the
 /// ray-traced image window and the keyboard shortcuts. `ppp`: pixels per egui point. Returns
@@ -26,7 +42,7 @@ pub fn panels_ui(
     let timeline = state.scene.timeline.is_some().then(|| {
         egui::Panel::bottom("nlifs_timeline")
             .resizable(false)
-            .show(ui, |ui| super::timeline_ui::timeline_ui(ui, state, commands))
+            .show(ui, |ui| timeline::timeline_ui(ui, state, commands))
             .response
             .rect
     });
@@ -40,17 +56,17 @@ pub fn panels_ui(
                 file_menu_ui(ui, state, commands);
             });
             scene_ui(ui, state, commands);
-            super::functions_ui::functions_ui(ui, state, commands);
-            super::grid_edit_ui::grid_edit_ui(ui, state, commands);
-            super::nesting_ui::nesting_ui(ui, state, commands);
-            super::functions_ui::builder_ui(ui, state, commands);
-            super::functions_ui::flame_ui::flame_ui(ui, state, commands);
+            functions::functions_ui(ui, state, commands);
+            grid_edit::grid_edit_ui(ui, state, commands);
+            nesting::nesting_ui(ui, state, commands);
+            functions::builder_ui(ui, state, commands);
+            flame::flame_ui(ui, state, commands);
             render_ui(ui, state, commands);
             statistics_ui(ui, state);
             screenshot_ui(ui, state, commands);
-            super::jobs_ui::raytrace_ui(ui, state, jobs, commands);
+            jobs::raytrace_ui(ui, state, jobs, commands);
             if state.scene.timeline.is_some() {
-                super::jobs_ui::record_ui(ui, state, jobs, commands);
+                jobs::record_ui(ui, state, jobs, commands);
             }
         });
     });
@@ -59,10 +75,10 @@ pub fn panels_ui(
     }
     // The overlay is clipped to what the panels leave of the view.
     let view_rect = ui.available_rect_before_wrap();
-    super::grid_edit_ui::grid_overlay_ui(ui.ctx(), view_rect, state, ppp);
-    super::nesting_ui::nesting_overlay_ui(ui.ctx(), view_rect, state, ppp);
-    super::jobs_ui::raytrace_window_ui(ui.ctx(), jobs, commands);
-    super::overlay_ui::overlays_ui(ui.ctx(), view_rect, state, commands);
+    grid_edit::grid_overlay_ui(ui.ctx(), view_rect, state, ppp);
+    nesting::nesting_overlay_ui(ui.ctx(), view_rect, state, ppp);
+    jobs::raytrace_window_ui(ui.ctx(), jobs, commands);
+    overlay::overlays_ui(ui.ctx(), view_rect, state, commands);
     PanelLayout { view: view_rect, timeline }
 }
 
@@ -72,7 +88,7 @@ pub struct PanelLayout {
     /// What the panels leave to the view of the attractor.
     pub view: egui::Rect,
     /// The timeline strip at the bottom, when the scene has a timeline (it changes every frame
-    /// while playing: `ui_layer.rs` renders it apart from the other panels).
+    /// while playing: `ui/layer.rs` renders it apart from the other panels).
     pub timeline: Option<egui::Rect>,
 }
 
@@ -222,8 +238,8 @@ fn render_ui(ui: &mut egui::Ui, state: &ViewerState, commands: &mut Vec<Command>
         changed |= ui.add(slider(&mut live.point_radius_px, 0..=3).text("point size (radius px)")).changed();
         changed |= ui.add(slider(&mut live.shading, 0.0..=1.0).text("shading (closest)")).changed();
         changed |= ui.add(slider(&mut live.occlusion, 0.0..=1.0).text("occlusion (closest)")).changed();
-        super::lens_ui::lens_ui(ui, state, commands);
-        changed |= super::light_ui::light_ui(ui, &mut live);
+        lens::lens_ui(ui, state, commands);
+        changed |= light::light_ui(ui, &mut live);
         ui.horizontal(|ui| {
             changed |= ui.color_edit_button_rgb(&mut live.background).changed();
             ui.label("background");
@@ -231,7 +247,7 @@ fn render_ui(ui: &mut egui::Ui, state: &ViewerState, commands: &mut Vec<Command>
         if changed && live != state.live {
             commands.push(Command::SetLiveSettings(live));
         }
-        super::tone_ui::imaging_ui(ui, state, commands);
+        tone::imaging_ui(ui, state, commands);
         let mut perspective = state.camera.projection == Projection::Perspective;
         ui.horizontal(|ui| {
             if ui.checkbox(&mut perspective, "perspective (P)").changed() {
@@ -261,7 +277,7 @@ fn render_ui(ui: &mut egui::Ui, state: &ViewerState, commands: &mut Vec<Command>
                 commands.push(Command::KeyCamera);
             }
         });
-        super::palette_ui::color_mode_ui(ui, state, commands);
+        palette::color_mode_ui(ui, state, commands);
         ui.small("left-drag: orbit (pan in 2D) · right/middle-drag: pan · wheel: zoom · F1: every key");
     });
 }
@@ -281,10 +297,9 @@ fn statistics_ui(ui: &mut egui::Ui, state: &ViewerState) {
             for f in &report.functions {
                 ui.label(&f.name);
                 match f.lipschitz_bound {
-                    Some(l) if l >= 1.0 => ui.colored_label(
-                        Color32::from_rgb(255, 110, 90),
-                        format!("{l:.3} {}", super::overlay_ui::WARNING_SIGN),
-                    ),
+                    Some(l) if l >= 1.0 => {
+                        ui.colored_label(Color32::from_rgb(255, 110, 90), format!("{l:.3} {}", overlay::WARNING_SIGN))
+                    }
                     Some(l) => ui.label(format!("{l:.3}")),
                     None => ui.label("—"),
                 };

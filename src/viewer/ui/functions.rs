@@ -10,13 +10,11 @@ use crate::model::ProbabilityMode;
 use crate::model::builder::{Step, StepKind};
 use crate::scene::spec::FunctionDef;
 
-use super::command::Command;
-use super::state::ViewerState;
+use super::super::command::Command;
+use super::super::state::ViewerState;
 use super::widgets::slider;
 
 // Here and not in `viewer/mod.rs`, which is at its length limit.
-#[path = "flame_ui.rs"]
-pub mod flame_ui;
 
 /// What the "p" of a function means here, shown when the pointer rests on it. (Only glyphs
 /// that the bundled font draws: it has Σ and ≈ but no arrows and no ∝.)
@@ -86,7 +84,7 @@ pub fn functions_ui(ui: &mut egui::Ui, state: &ViewerState, commands: &mut Vec<C
                         commands.push(Command::DeleteFunction(i));
                     }
                 });
-                super::palette_ui::palette_index_ui(ui, state, i, commands);
+                super::palette::palette_index_ui(ui, state, i, commands);
                 ui.end_row();
             }
         });

@@ -8,10 +8,10 @@ use egui::{Color32, RichText};
 
 use crate::output::Format;
 
-use super::command::{Command, RaytraceForm, RecordForm};
-use super::job_plan::{self, NODE_BUDGET};
-use super::jobs::{JobProgress, JobView, format_secs};
-use super::state::ViewerState;
+use super::super::command::{Command, RaytraceForm, RecordForm};
+use super::super::job_plan::{self, NODE_BUDGET};
+use super::super::jobs::{JobProgress, JobView, format_secs};
+use super::super::state::ViewerState;
 
 const ERROR_COLOR: Color32 = Color32::from_rgb(255, 110, 90);
 

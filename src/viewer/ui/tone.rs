@@ -4,9 +4,9 @@
 
 use crate::scene::spec::{DensityEstimation, SplatMode, TONE_FIELDS};
 
-use super::command::Command;
-use super::imaging::DEFAULT_DENSITY_ESTIMATION;
-use super::state::ViewerState;
+use super::super::command::Command;
+use super::super::imaging::DEFAULT_DENSITY_ESTIMATION;
+use super::super::state::ViewerState;
 use super::widgets::slider;
 
 /// The labels of the tone fields, in the order of `TONE_FIELDS`.
