@@ -92,10 +92,20 @@ fn file_name(path: &Path) -> String {
 
 /// Writes `path` atomically: `write` fills a buffered temporary file, which is flushed, synced
 /// and renamed onto `path`. On any error nothing is left behind; the error is a [`WriteError`].
+///
+/// In the browser, where there are no files, the bytes are offered as a download named as
+/// `path`'s file name (`platform::web::download`): every save is one there.
 pub fn write_atomic(path: &Path, write: impl FnOnce(&mut dyn Write) -> std::io::Result<()>) -> std::io::Result<()> {
+    #[cfg(target_arch = "wasm32")]
+    return crate::platform::web::download(&file_name(path), write).map_err(|e| WriteError::wrap(path, e));
+    #[cfg(not(target_arch = "wasm32"))]
     write_atomic_inner(path, write).map_err(|e| WriteError::wrap(path, e))
 }
 
+#[cfg_attr(
+    target_arch = "wasm32",
+    expect(dead_code, reason = "the browser offers downloads instead (its callees too)")
+)]
 fn write_atomic_inner(path: &Path, write: impl FnOnce(&mut dyn Write) -> std::io::Result<()>) -> std::io::Result<()> {
     if path.is_dir() || path.as_os_str().is_empty() || path.file_name().is_none() {
         return Err(ErrorKind::IsADirectory.into());

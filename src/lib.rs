@@ -17,6 +17,7 @@ pub mod live;
 pub mod model;
 pub mod output;
 pub mod palette;
+pub mod platform;
 pub mod raytrace;
 pub mod record;
 pub mod render;
@@ -27,3 +28,5 @@ pub mod shot;
 pub mod simd;
 pub mod splat;
 pub mod viewer;
+#[cfg(target_arch = "wasm32")]
+pub mod web;

@@ -31,6 +31,7 @@ impl Pcg32 {
 
     /// The generator's state, for kernels that advance many generators as vectors (the same
     /// steps as [`Self::next_u32`]).
+    #[cfg_attr(not(target_arch = "x86_64"), allow(dead_code, reason = "used by the x86-64 vector kernels only"))]
     pub(crate) fn state(self) -> u32 {
         self.state
     }

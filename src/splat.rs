@@ -218,6 +218,7 @@ pub(crate) trait Pixels {
     /// Closest mode: the keys themselves, one per pixel, where this target holds them (the
     /// vector splat then reads them a vector at a time and writes only the keys that fall);
     /// None: updates go through [`Self::min_key`] only.
+    #[cfg_attr(not(target_arch = "x86_64"), allow(dead_code, reason = "used by the x86-64 vector splat only"))]
     fn own_keys(&mut self) -> Option<&mut [u32]> {
         None
     }
@@ -250,6 +251,7 @@ impl Pixels for OwnPixels<'_> {
         }
     }
 
+    #[cfg_attr(not(target_arch = "x86_64"), allow(dead_code, reason = "used by the x86-64 vector splat only"))]
     fn own_keys(&mut self) -> Option<&mut [u32]> {
         Some(self.closest)
     }

@@ -45,6 +45,8 @@ const LAYERS: &[(&str, Layer)] = &[
     ("simd", Layer::Base),
     ("camera", Layer::Base),
     ("palette", Layer::Base),
+    // What differs between the desktop and the browser: clock, downloads, canvas, waiting.
+    ("platform", Layer::Base),
     // The IFS: maps, grids, builders; flam3's flames (their data, variations and reader).
     ("model", Layer::Model),
     ("flame", Layer::Model),
@@ -70,6 +72,8 @@ const LAYERS: &[(&str, Layer)] = &[
     ("viewer", Layer::Viewer),
     // The binary: src/main.rs, src/cli/.
     ("main", Layer::Cli),
+    // The browser page's entry point (wasm32 only), the binary's counterpart there.
+    ("web", Layer::Cli),
 ];
 
 fn layer_of(module: &str) -> Option<Layer> {

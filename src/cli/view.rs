@@ -105,6 +105,7 @@ pub fn view(args: ViewArgs) -> anyhow::Result<()> {
         nesting_level: args.nesting,
         play: args.play,
         log_fps: args.log_fps,
+        host: Default::default(),
     };
     nlifs::viewer::run(options).context("viewer")?;
     Ok(())

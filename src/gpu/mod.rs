@@ -68,20 +68,29 @@ impl GpuContext {
 
     /// A context on `instance` whose adapter can present to `surface` when given.
     pub fn with_instance(instance: wgpu::Instance, surface: Option<&wgpu::Surface<'_>>) -> Result<Self, GpuError> {
-        let adapter = pollster::block_on(wgpu::util::initialize_adapter_from_env_or_default(&instance, surface))
+        pollster::block_on(Self::request(instance, surface))
+    }
+
+    /// [`Self::with_instance`] as a future: the browser cannot block on the adapter and device
+    /// requests (`platform::run_async`).
+    pub async fn request(instance: wgpu::Instance, surface: Option<&wgpu::Surface<'_>>) -> Result<Self, GpuError> {
+        let adapter = wgpu::util::initialize_adapter_from_env_or_default(&instance, surface)
+            .await
             .map_err(|_| GpuError::NoAdapter)?;
         // The chaos game binds 7 storage buffers (more than the downlevel defaults' 4) and its
         // point buffer wants the largest binding the device has: ask for what it offers.
         let required_limits = adapter.limits();
-        let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
-            label: Some("nlifs"),
-            required_features: wgpu::Features::empty(),
-            required_limits,
-            experimental_features: wgpu::ExperimentalFeatures::disabled(),
-            memory_hints: wgpu::MemoryHints::Performance,
-            trace: wgpu::Trace::Off,
-        }))
-        .map_err(|e| GpuError::Device(e.to_string()))?;
+        let (device, queue) = adapter
+            .request_device(&wgpu::DeviceDescriptor {
+                label: Some("nlifs"),
+                required_features: wgpu::Features::empty(),
+                required_limits,
+                experimental_features: wgpu::ExperimentalFeatures::disabled(),
+                memory_hints: wgpu::MemoryHints::Performance,
+                trace: wgpu::Trace::Off,
+            })
+            .await
+            .map_err(|e| GpuError::Device(e.to_string()))?;
         Ok(Self { instance, adapter, device, queue })
     }
 

@@ -508,10 +508,28 @@ impl Progressive {
         image
     }
 
+    /// [`Self::snapshot`] up to the submission; the image comes when the copy maps (the
+    /// browser awaits it).
+    pub fn snapshot_start(&mut self, ctx: &GpuContext) -> super::readback::OffscreenCopy {
+        let (width, height) = self.size();
+        let bands = std::mem::replace(&mut self.light_bands, 0);
+        let copy = super::readback::draw_offscreen_start(ctx, width, height, |encoder, target, format| {
+            self.draw(ctx, encoder, target, format, [0, 0])
+        });
+        self.light_bands = bands;
+        copy
+    }
+
     /// Reads the accumulation buffer back (four u32 per pixel, as `Framebuffer` after a
     /// fashion: closest keys in slot 0, or r, g, b sums and the count). Tests and benchmarks.
     pub fn read_accum(&self, ctx: &GpuContext) -> Result<Vec<u32>, GpuError> {
         let bytes = super::readback::read_buffer(ctx, &self.game.accum)?;
+        Ok(bytemuck::pod_collect_to_vec(&bytes))
+    }
+
+    /// [`Self::read_accum`] that also works in the browser (awaits the map).
+    pub async fn read_accum_async(&self, ctx: &GpuContext) -> Result<Vec<u32>, GpuError> {
+        let bytes = super::readback::read_buffer_async(ctx, &self.game.accum).await?;
         Ok(bytemuck::pod_collect_to_vec(&bytes))
     }
 }

@@ -35,10 +35,65 @@ fn map_and_read(ctx: &GpuContext, staging: &wgpu::Buffer) -> Result<Vec<u8>, Gpu
     ctx.device
         .poll(wgpu::PollType::Wait { submission_index: None, timeout: None })
         .map_err(|e| GpuError::Readback(e.to_string()))?;
-    rx.recv().map_err(|e| GpuError::Readback(e.to_string()))?.map_err(|e| GpuError::Readback(e.to_string()))?;
+    // The wait has called the map callback on the desktop; in the browser buffers map later,
+    // on the page's event loop, and blocking here would hang the page: an error instead.
+    rx.try_recv()
+        .map_err(|_| {
+            GpuError::Readback("the buffer was not mapped after the wait (a browser maps buffers later)".into())
+        })?
+        .map_err(|e| GpuError::Readback(e.to_string()))?;
     let bytes = staging.get_mapped_range(..).map_err(|e| GpuError::Readback(e.to_string()))?.to_vec();
     staging.unmap();
     Ok(bytes)
+}
+
+/// [`read_buffer`] that also works in the browser, where a buffer maps on the page's event loop
+/// and cannot be waited for: the map is awaited. On the desktop the device wait inside maps it,
+/// so the future is ready when polled.
+pub async fn read_buffer_async(ctx: &GpuContext, buffer: &wgpu::Buffer) -> Result<Vec<u8>, GpuError> {
+    let staging = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("readback"),
+        size: buffer.size(),
+        usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+        mapped_at_creation: false,
+    });
+    let mut encoder = ctx.device.create_command_encoder(&Default::default());
+    encoder.copy_buffer_to_buffer(buffer, 0, &staging, 0, buffer.size());
+    ctx.queue.submit([encoder.finish()]);
+    map_async(&ctx.device, &staging).await?;
+    let bytes = staging.get_mapped_range(..).map_err(|e| GpuError::Readback(e.to_string()))?.to_vec();
+    staging.unmap();
+    Ok(bytes)
+}
+
+/// Maps `staging` for reading and waits for it without blocking the browser's thread.
+async fn map_async(device: &wgpu::Device, staging: &wgpu::Buffer) -> Result<(), GpuError> {
+    use std::sync::{Arc, Mutex};
+    type Slot = Arc<Mutex<(Option<Result<(), wgpu::BufferAsyncError>>, Option<std::task::Waker>)>>;
+    let slot: Slot = Arc::default();
+    let filled = slot.clone();
+    staging.slice(..).map_async(wgpu::MapMode::Read, move |r| {
+        let mut s = filled.lock().unwrap_or_else(|e| e.into_inner());
+        s.0 = Some(r);
+        if let Some(waker) = s.1.take() {
+            waker.wake();
+        }
+    });
+    // The desktop maps here; the browser ignores the wait and maps on its own.
+    device
+        .poll(wgpu::PollType::Wait { submission_index: None, timeout: None })
+        .map_err(|e| GpuError::Readback(e.to_string()))?;
+    std::future::poll_fn(|cx| {
+        let mut s = slot.lock().unwrap_or_else(|e| e.into_inner());
+        match s.0.take() {
+            Some(r) => std::task::Poll::Ready(r.map_err(|e| GpuError::Readback(e.to_string()))),
+            None => {
+                s.1 = Some(cx.waker().clone());
+                std::task::Poll::Pending
+            }
+        }
+    })
+    .await
 }
 
 /// Records `draw` onto an offscreen RGBA8 texture of `width`×`height` (its arguments: the
@@ -49,6 +104,29 @@ pub fn draw_offscreen(
     height: u32,
     draw: impl FnOnce(&mut wgpu::CommandEncoder, &wgpu::TextureView, wgpu::TextureFormat),
 ) -> Result<image::RgbImage, GpuError> {
+    let copy = draw_offscreen_start(ctx, width, height, draw);
+    let bytes = map_and_read(ctx, &copy.staging)?;
+    Ok(copy.image_of(&bytes))
+}
+
+/// An offscreen drawing submitted with its copy to a mappable buffer ([`draw_offscreen_start`]),
+/// to be read back as an image when the buffer maps.
+pub struct OffscreenCopy {
+    device: wgpu::Device,
+    staging: wgpu::Buffer,
+    width: u32,
+    height: u32,
+    bytes_per_row: u32,
+}
+
+/// [`draw_offscreen`] up to the submission: the image comes from [`OffscreenCopy::image`],
+/// which the browser can await.
+pub fn draw_offscreen_start(
+    ctx: &GpuContext,
+    width: u32,
+    height: u32,
+    draw: impl FnOnce(&mut wgpu::CommandEncoder, &wgpu::TextureView, wgpu::TextureFormat),
+) -> OffscreenCopy {
     let format = wgpu::TextureFormat::Rgba8Unorm;
     let texture = offscreen_texture(ctx, "snapshot", width, height, format, wgpu::TextureUsages::COPY_SRC);
     let view = texture.create_view(&Default::default());
@@ -79,15 +157,30 @@ pub fn draw_offscreen(
         wgpu::Extent3d { width, height, depth_or_array_layers: 1 },
     );
     ctx.queue.submit([encoder.finish()]);
-    let bytes = map_and_read(ctx, &staging)?;
-    let mut image = image::RgbImage::new(width, height);
-    for (y, row) in bytes.chunks(bytes_per_row as usize).take(height as usize).enumerate() {
-        for x in 0..width as usize {
-            let p = &row[4 * x..4 * x + 3];
-            image.put_pixel(x as u32, y as u32, image::Rgb([p[0], p[1], p[2]]));
-        }
+    OffscreenCopy { device: ctx.device.clone(), staging, width, height, bytes_per_row }
+}
+
+impl OffscreenCopy {
+    /// The drawing as an RGB image, once the copy has mapped (awaited in the browser; ready at
+    /// once on the desktop, where the device wait maps it).
+    pub async fn image(self) -> Result<image::RgbImage, GpuError> {
+        map_async(&self.device, &self.staging).await?;
+        let bytes = self.staging.get_mapped_range(..).map_err(|e| GpuError::Readback(e.to_string()))?.to_vec();
+        self.staging.unmap();
+        Ok(self.image_of(&bytes))
     }
-    Ok(image)
+
+    /// The RGB image in the copy's rows (padded to the copy alignment, RGBA).
+    fn image_of(&self, bytes: &[u8]) -> image::RgbImage {
+        let mut image = image::RgbImage::new(self.width, self.height);
+        for (y, row) in bytes.chunks(self.bytes_per_row as usize).take(self.height as usize).enumerate() {
+            for x in 0..self.width as usize {
+                let p = &row[4 * x..4 * x + 3];
+                image.put_pixel(x as u32, y as u32, image::Rgb([p[0], p[1], p[2]]));
+            }
+        }
+        image
+    }
 }
 
 /// A 2D render target of `width`×`height` for offscreen drawing (snapshots, benchmarks), with

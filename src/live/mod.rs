@@ -273,9 +273,19 @@ impl LiveView {
         self.gpu.snapshot(ctx)
     }
 
+    /// [`Self::snapshot`] as a submitted copy whose image can be awaited (the browser's way).
+    pub fn snapshot_start(&mut self, ctx: &GpuContext) -> crate::gpu::readback::OffscreenCopy {
+        self.gpu.snapshot_start(ctx)
+    }
+
     /// Reads the accumulation buffer back (see [`Progressive::read_accum`]). Tests.
     pub fn read_accum(&self, ctx: &GpuContext) -> Result<Vec<u32>, GpuError> {
         self.gpu.read_accum(ctx)
+    }
+
+    /// [`Self::read_accum`] that also works in the browser (awaits the map). Tests.
+    pub async fn read_accum_async(&self, ctx: &GpuContext) -> Result<Vec<u32>, GpuError> {
+        self.gpu.read_accum_async(ctx).await
     }
 }
 

@@ -206,7 +206,12 @@ pub fn text_chunks(png: &[u8], path: &Path) -> Result<Vec<(String, String)>, Out
 /// The provenance nlifs wrote into the PNG at `path`: its scene's TOML, time and settings.
 pub fn scene_from_png(path: &Path) -> Result<Provenance, OutputError> {
     let bytes = std::fs::read(path).map_err(|source| OutputError::Read { path: path.display().to_string(), source })?;
-    let chunks = text_chunks(&bytes, path)?;
+    scene_from_png_bytes(&bytes, path)
+}
+
+/// [`scene_from_png`] of a PNG's bytes (a file the browser read); `path` names it in errors.
+pub fn scene_from_png_bytes(bytes: &[u8], path: &Path) -> Result<Provenance, OutputError> {
+    let chunks = text_chunks(bytes, path)?;
     let find = |kw: &str| chunks.iter().find(|(k, _)| k == kw).map(|(_, t)| t.clone());
     let scene_toml = find(SCENE_KEYWORD).ok_or_else(|| OutputError::Invalid {
         path: path.display().to_string(),
@@ -236,6 +241,11 @@ pub fn scene_from_png(path: &Path) -> Result<Provenance, OutputError> {
         })?,
     };
     Ok(Provenance { scene_toml, t_secs, settings })
+}
+
+/// Whether `bytes` begin with the PNG signature.
+pub fn is_png_bytes(bytes: &[u8]) -> bool {
+    bytes.starts_with(&SIGNATURE)
 }
 
 /// Whether `path` is a PNG file (by its signature), for commands that take a scene or an image.

@@ -15,7 +15,9 @@ use super::hierarchy::Hierarchy;
 use super::search::{Scratch, TILE};
 #[cfg(target_arch = "x86_64")]
 use super::wide::Avx512;
-use super::wide::{LANES, Lanes, Portable, Simd};
+#[cfg(target_arch = "x86_64")]
+use super::wide::Simd;
+use super::wide::{LANES, Lanes, Portable};
 
 /// Most rays of a packet (a bit each in the stack entries' masks).
 pub const PACKET: usize = 16;

@@ -12,7 +12,9 @@ use super::geometry::{Hit, NodeKind, Ray, sphere_surface};
 use super::hierarchy::Hierarchy;
 #[cfg(target_arch = "x86_64")]
 use super::wide::Avx512;
-use super::wide::{LANES, Lanes, Portable, Simd};
+#[cfg(target_arch = "x86_64")]
+use super::wide::Simd;
+use super::wide::{LANES, Lanes, Portable};
 
 /// Marks a traversal stack entry as a triangle tile (a node index) rather than a wide node.
 pub(super) const TILE: u32 = 1 << 31;

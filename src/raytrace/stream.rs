@@ -28,7 +28,9 @@ use super::search::Scratch;
 use super::tracer::{CameraRays, ColorMode, Frame, Shading, TraceStats, depth_color};
 #[cfg(target_arch = "x86_64")]
 use super::wide::Avx512;
-use super::wide::{Lanes, Portable, Simd};
+#[cfg(target_arch = "x86_64")]
+use super::wide::Simd;
+use super::wide::{Lanes, Portable};
 use crate::camera::OrbitCamera;
 use crate::color::Srgb8Table;
 use crate::rng::Pcg32;

@@ -26,6 +26,7 @@ mod rewrite;
 pub mod spec;
 pub mod timeline;
 pub mod timeline_check;
+pub mod url;
 pub mod warnings;
 mod write;
 

@@ -396,6 +396,7 @@ impl ViewerState {
                 | Command::ShowFileDialog(_)
                 | Command::FileDialogDone { .. }
                 | Command::OpenFile(_)
+                | Command::OpenBytes { .. }
                 | Command::SetConfigDir(_)
                 | Command::SetToolSupport { .. }
                 | Command::DismissViewError => self.file_command(command, &mut changes),
@@ -426,44 +427,34 @@ impl ViewerState {
     /// Opens the scene at `path` in place of this one (its unsaved edits are gone).
     pub(super) fn open_scene(&mut self, path: &Path, changes: &mut Changes) {
         if self.load(path) {
-            let s = &self.scene.render;
-            self.live.seed = s.seed;
-            self.live.mode = s.mode;
-            self.live.depth_cue = s.depth_cue;
-            self.live.background = s.background;
-            self.take_scene_look();
-            self.camera = self.framed_camera();
-            self.camera_moved = false;
-            self.camera_fit = CameraFit::Scene;
-            changes.scene_replaced = true;
-            changes.camera = true;
-            changes.live_settings = true;
+            self.show_opened(changes);
             self.message = Some(format!("opened {}", path.display()));
             self.remember_recent(path);
             self.check_recovery();
         }
     }
 
+    /// Takes the live settings and the camera of the scene just loaded.
+    pub(super) fn show_opened(&mut self, changes: &mut Changes) {
+        let s = &self.scene.render;
+        self.live.seed = s.seed;
+        self.live.mode = s.mode;
+        self.live.depth_cue = s.depth_cue;
+        self.live.background = s.background;
+        self.take_scene_look();
+        self.camera = self.framed_camera();
+        self.camera_moved = false;
+        self.camera_fit = CameraFit::Scene;
+        changes.scene_replaced = true;
+        changes.camera = true;
+        changes.live_settings = true;
+    }
+
     /// Loads `path`; on failure keeps the current scene and records the error.
     fn load(&mut self, path: &Path) -> bool {
         match Scene::load_with_text(path) {
             Ok((scene, text)) => {
-                self.scene = scene;
-                self.files.scene_text = Some(text);
-                self.scene_as_saved = self.scene.clone();
-                self.ui.file_changed_on_disk = false;
-                self.scene_path = Some(path.to_path_buf());
-                self.scene_mtime = mtime(path);
-                self.path_text = path.display().to_string();
-                // Edits made for the old file no longer apply.
-                self.history = History::default();
-                self.edit.gesture = None;
-                self.edit.selected_function = self.edit.selected_function.filter(|&f| f < self.scene.functions.len());
-                self.edit.selected_point = None;
-                self.edit.save_text = self.default_save_text();
-                self.playback.playing &= self.scene.timeline.is_some();
-                self.files.view_error = None;
-                self.recompile();
+                self.install_scene(scene, text, Some(path));
                 true
             }
             Err(e) => {
@@ -474,6 +465,26 @@ impl ViewerState {
                 false
             }
         }
+    }
+
+    /// Puts `scene` (read from `text`, at `path` if it has one) in place of this one.
+    pub(super) fn install_scene(&mut self, scene: Scene, text: String, path: Option<&Path>) {
+        self.scene = scene;
+        self.files.scene_text = Some(text);
+        self.scene_as_saved = self.scene.clone();
+        self.ui.file_changed_on_disk = false;
+        self.scene_path = path.map(Path::to_path_buf);
+        self.scene_mtime = path.and_then(mtime);
+        self.path_text = path.map(|p| p.display().to_string()).unwrap_or_default();
+        // Edits made for the old file no longer apply.
+        self.history = History::default();
+        self.edit.gesture = None;
+        self.edit.selected_function = self.edit.selected_function.filter(|&f| f < self.scene.functions.len());
+        self.edit.selected_point = None;
+        self.edit.save_text = self.default_save_text();
+        self.playback.playing &= self.scene.timeline.is_some();
+        self.files.view_error = None;
+        self.recompile();
     }
 
     /// Applies `edit` as a gesture of its own (one undo step).

@@ -9,7 +9,7 @@
 //!
 //! [`Command::Tick`]: super::Command::Tick
 
-use std::time::Instant;
+use crate::platform::Instant;
 
 /// A source of monotonic seconds.
 pub trait Clock {

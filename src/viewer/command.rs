@@ -231,6 +231,12 @@ pub enum Command {
     /// A file dropped onto the window, picked in Open or in the recent files: a scene, or a
     /// PNG that nlifs wrote (its scene opens). Anything else is an error shown in the view.
     OpenFile(PathBuf),
+    /// A file's contents, without a path (the browser's file input and drops): a scene's TOML
+    /// or a PNG that nlifs wrote; `name` names it in messages and errors.
+    OpenBytes {
+        name: String,
+        bytes: Vec<u8>,
+    },
     /// Where the recent files list lives (None: nowhere); reads it.
     SetConfigDir(Option<PathBuf>),
     /// What this machine offers: native file dialogs, ffmpeg (the event loop finds out).

@@ -40,6 +40,9 @@ impl ViewerState {
             Command::FileDialogDone { kind, path } => {
                 self.files.dialog_open = false;
                 match (kind, path) {
+                    // The browser's file chooser answers with the file's bytes (OpenBytes), or
+                    // not at all when cancelled (`dialogs_web.rs`).
+                    (FileDialogKind::Open, None) if !crate::platform::DESKTOP => {}
                     (_, None) => {
                         self.message =
                             Some("no file chosen (if no dialog appeared, type the path in the Scene section)".into())
@@ -53,6 +56,7 @@ impl ViewerState {
                 }
             }
             Command::OpenFile(path) => self.open_file(&path, changes),
+            Command::OpenBytes { name, bytes } => self.open_bytes(&name, &bytes, changes),
             Command::SetConfigDir(dir) => {
                 self.files.recent = dir.as_deref().map(RecentFiles::load).unwrap_or_default();
                 self.files.config_dir = dir;
@@ -132,6 +136,35 @@ impl ViewerState {
                 "cannot open {}: not a scene file (.toml) or a PNG that nlifs wrote",
                 path.display()
             ));
+        }
+    }
+
+    /// Opens a file's contents (the browser's file input and drops): a scene's TOML or a PNG
+    /// that nlifs wrote. Errors are located in `name` and shown over the view, the scene stays.
+    /// There is no path: a save afterwards asks for a name.
+    pub(super) fn open_bytes(&mut self, name: &str, bytes: &[u8], changes: &mut Changes) {
+        let opened = if crate::output::png::is_png_bytes(bytes) {
+            let origin = format!("{name} (embedded scene)");
+            crate::output::png::scene_from_png_bytes(bytes, Path::new(name))
+                .and_then(|p| Ok((p.scene(&origin)?, p.scene_toml)))
+                .map_err(|e| e.to_string())
+        } else {
+            match std::str::from_utf8(bytes) {
+                Ok(text) => crate::scene::Scene::parse(text, name)
+                    .map(|scene| (scene, text.to_string()))
+                    .map_err(|e| e.to_string()),
+                Err(e) => {
+                    Err(format!("cannot open {name}: not a scene file (TOML text) or a PNG that nlifs wrote ({e})"))
+                }
+            }
+        };
+        match opened {
+            Ok((scene, text)) => {
+                self.install_scene(scene, text, None);
+                self.show_opened(changes);
+                self.message = Some(format!("opened {name}"));
+            }
+            Err(e) => self.set_view_error(e),
         }
     }
 

@@ -1,7 +1,7 @@
 //! `--log-fps`: frame rate, process CPU per frame and the wall time of each stage of a frame,
 //! printed to stderr once a second (measuring the viewer under Xvfb).
 
-use std::time::Instant;
+use crate::platform::Instant;
 
 use crate::live::ChaosRoute;
 

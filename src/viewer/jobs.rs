@@ -6,11 +6,11 @@
 //! (`job_plan.rs`): its frames, their format, then the video through ffmpeg; another renderer
 //! for the frames would be one more field of that plan, chosen where the frames are made below.
 
+use crate::platform::Instant;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::{Arc, OnceLock};
 use std::thread::JoinHandle;
-use std::time::Instant;
 
 use crate::raytrace::{RaytraceSettings, Traced};
 use crate::record::Recorder;

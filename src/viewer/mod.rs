@@ -28,11 +28,14 @@ pub mod apply;
 mod authoring;
 pub mod clock;
 pub mod command;
+// The browser's Open and Save As are the page's file input and downloads (`platform/`).
+#[cfg_attr(target_arch = "wasm32", path = "dialogs_web.rs")]
 pub mod dialogs;
 pub mod files;
 pub mod files_state;
 mod frame_log;
 pub mod framing;
+pub mod host;
 pub mod imaging;
 mod input;
 pub mod job_plan;
@@ -45,12 +48,15 @@ pub mod recent;
 pub mod recovery;
 mod redraw;
 mod screenshot;
+mod start;
 pub mod state;
 pub mod ui;
 
 use std::path::PathBuf;
 use std::sync::Arc;
-use std::time::{Duration, Instant};
+use std::time::Duration;
+
+use crate::platform::Instant;
 
 use winit::application::ApplicationHandler;
 use winit::event::{ElementState, MouseButton, MouseScrollDelta, WindowEvent};
@@ -60,6 +66,7 @@ use winit::window::{Window, WindowId};
 
 use crate::gpu::{GpuContext, GpuError};
 use crate::live::{LiveSettings, LiveView};
+use start::Starting;
 
 use clock::{Clock, PlaybackClock, WallClock};
 use frame_log::FrameLog;
@@ -79,6 +86,8 @@ pub enum ViewerError {
     Window(String),
     #[error(transparent)]
     Gpu(#[from] GpuError),
+    #[error("the adapter {0} has no compute shaders (a browser's WebGL2): the viewer needs WebGPU there")]
+    NoCompute(String),
 }
 
 /// How the viewer starts.
@@ -100,6 +109,9 @@ pub struct ViewerOptions {
     /// Print frames per second, process CPU per frame and the wall time of each stage of a
     /// frame to stderr, once a second (measuring the viewer under Xvfb).
     pub log_fps: bool,
+    /// Shared with the page that embeds the viewer (the browser build): its commands are
+    /// applied before the first frame and then once per frame.
+    pub host: host::Host,
 }
 
 /// Opens the viewer and runs until the window closes.
@@ -126,11 +138,14 @@ pub fn run(options: ViewerOptions) -> Result<(), ViewerError> {
         Command::SetPlaying(options.play),
         Command::SetRecoveryDir(recovery::recovery_dir()),
     ]);
+    state.apply(options.host.with(|h| std::mem::take(&mut h.inbox)));
     let event_loop = EventLoop::new()?;
-    let mut app = App {
+    let app = App {
         state,
         options,
         gfx: None,
+        starting: None,
+        screenshot: None,
         commands: Vec::with_capacity(64),
         drag: None,
         drag_start_camera: crate::camera::OrbitCamera::framing((glam::DVec3::ZERO, glam::DVec3::ONE), 3),
@@ -156,7 +171,8 @@ pub fn run(options: ViewerOptions) -> Result<(), ViewerError> {
         log: FrameLog::default(),
         fatal: None,
     };
-    event_loop.run_app(&mut app)?;
+    // In the browser the page runs the loop and this returns at once, with no app to report on.
+    let Some(app) = crate::platform::run_app(event_loop, app)? else { return Ok(()) };
     if app.options.exit_after_secs.is_some() {
         let secs = app.started.elapsed().as_secs_f64();
         eprintln!(
@@ -189,6 +205,8 @@ struct App {
     state: ViewerState,
     options: ViewerOptions,
     gfx: Option<Gfx>,
+    starting: Option<Starting>,
+    screenshot: Option<screenshot::PendingShot>,
     commands: Vec<Command>,
     /// The camera drag (orbit, pan) in progress and the camera at its press (Esc restores it).
     drag: Option<MouseButton>,
@@ -224,16 +242,13 @@ struct App {
 }
 
 impl Gfx {
-    fn new(event_loop: &ActiveEventLoop, state: &ViewerState) -> Result<Self, ViewerError> {
-        let attributes = Window::default_attributes()
-            .with_title(state.window_title())
-            .with_inner_size(winit::dpi::PhysicalSize::new(1280u32, 720u32));
-        let window = Arc::new(event_loop.create_window(attributes).map_err(|e| ViewerError::Window(e.to_string()))?);
-        let instance = wgpu::Instance::new(wgpu::InstanceDescriptor::new_with_display_handle_from_env(Box::new(
-            event_loop.owned_display_handle(),
-        )));
-        let surface = instance.create_surface(window.clone()).map_err(|e| ViewerError::Window(e.to_string()))?;
-        let ctx = GpuContext::with_instance(instance, Some(&surface))?;
+    /// The window's drawing state once its GPU context is there.
+    fn new(
+        window: Arc<Window>,
+        ctx: GpuContext,
+        surface: wgpu::Surface<'static>,
+        state: &ViewerState,
+    ) -> Result<Self, ViewerError> {
         let size = window.inner_size();
         let (width, height) = (size.width.max(1), size.height.max(1));
         let mut config = surface
@@ -280,22 +295,18 @@ impl Gfx {
 
 impl ApplicationHandler for App {
     fn resumed(&mut self, event_loop: &ActiveEventLoop) {
-        if self.gfx.is_some() {
+        if self.gfx.is_some() || self.starting.is_some() {
             return;
         }
-        match Gfx::new(event_loop, &self.state) {
-            Ok(gfx) => {
-                gfx.window.request_redraw();
-                self.gfx = Some(gfx);
-            }
-            Err(e) => {
-                self.fatal = Some(e);
-                event_loop.exit();
-            }
+        match Gfx::start(event_loop, &self.state) {
+            Ok(starting) => self.starting = Some(starting),
+            Err(e) => self.fail(event_loop, e),
         }
+        self.finish_start(event_loop);
     }
 
-    fn window_event(&mut self, _event_loop: &ActiveEventLoop, _id: WindowId, event: WindowEvent) {
+    fn window_event(&mut self, event_loop: &ActiveEventLoop, _id: WindowId, event: WindowEvent) {
+        self.finish_start(event_loop);
         let Some(gfx) = &mut self.gfx else { return };
         let text_focus = gfx.egui_ctx.egui_wants_keyboard_input();
         // Tab hides the panel rather than moving egui's keyboard focus (unless a text field
@@ -347,7 +358,8 @@ impl ApplicationHandler for App {
                 let ctx = pointer_context(&self.state, &gfx.egui_ctx, self.cursor);
                 if self.router.route(event, &ctx) == Route::Camera {
                     let ctrl = self.modifiers.control_key() && pressed == ElementState::Pressed;
-                    if let Some(c) = ui::lens::focus_click(&self.state, &gfx.live, &gfx.ctx, button, ctrl, self.cursor) {
+                    if let Some(c) = ui::lens::focus_click(&self.state, &gfx.live, &gfx.ctx, button, ctrl, self.cursor)
+                    {
                         self.commands.push(c);
                     } else if pressed == ElementState::Pressed {
                         let picked = (button == MouseButton::Left)
@@ -454,6 +466,7 @@ impl ApplicationHandler for App {
 
 impl App {
     fn frame(&mut self) {
+        self.commands.extend(self.options.host.with(|h| std::mem::take(&mut h.inbox)));
         let Some(gfx) = &mut self.gfx else { return };
         let t_start = Instant::now();
         // Playback: scene time advances by the wall-clock interval since the last frame
@@ -496,7 +509,7 @@ impl App {
             .get(&egui::ViewportId::ROOT)
             .and_then(|v| Instant::now().checked_add(v.repaint_delay));
         // The attractor is drawn and framed in what the panels leave, in whole window pixels.
-        let (origin_px, size_px) = view_pixels(view_rect, ppp, [gfx.config.width, gfx.config.height]);
+        let (origin_px, size_px) = ui::view_pixels(view_rect, ppp, [gfx.config.width, gfx.config.height]);
         let minimized = gfx.config.width == 0 || gfx.config.height == 0;
         if !minimized {
             self.commands.push(Command::SetViewRect {
@@ -541,17 +554,9 @@ impl App {
         }
         gfx.live.set_camera(&self.state.camera);
         if let Some(path) = changes.screenshot {
-            let message = match gfx.live.snapshot(&gfx.ctx) {
-                Ok(image) => match screenshot::save_screenshot(&self.state, &path, &image) {
-                    // Where it went, in full (F12 names the file itself).
-                    Ok(()) => format!("saved the screenshot {}", recent::absolute(&path).display()),
-                    Err(e) => e.to_string(),
-                },
-                Err(e) => format!("screenshot failed: {e}"),
-            };
-            self.state.apply([Command::SetToast(Some(message.clone()))]);
-            self.state.message = Some(message);
+            self.screenshot = Some(screenshot::start(gfx, path));
         }
+        screenshot::finish(&mut self.state, &mut self.screenshot);
 
         // Textures must be applied every frame even when nothing is drawn.
         let textures_changed =
@@ -663,6 +668,7 @@ impl App {
         self.last_frame = Some(now);
         self.frames += 1;
         self.splats += splats;
+        self.report_to_host();
     }
 }
 
@@ -671,17 +677,3 @@ const TOAST_SECS: f64 = 4.0;
 
 /// How long the side panel may lag the playhead while playing (its re-render is costly: ui/layer.rs).
 const PLAYING_PANELS_LAG_SECS: f64 = 0.25;
-
-/// The window pixels (origin, size) of `rect` (egui points at `ppp` pixels per point) inside a
-/// window of `window_px`; at least one pixel wide and tall.
-fn view_pixels(rect: egui::Rect, ppp: f32, window_px: [u32; 2]) -> ([u32; 2], [u32; 2]) {
-    let [w, h] = window_px.map(|v| v.max(1));
-    if !rect.is_positive() || !rect.is_finite() {
-        return ([0, 0], [w, h]);
-    }
-    let x0 = ((rect.min.x * ppp).round().max(0.0) as u32).min(w - 1);
-    let y0 = ((rect.min.y * ppp).round().max(0.0) as u32).min(h - 1);
-    let x1 = ((rect.max.x * ppp).round().max(0.0) as u32).clamp(x0 + 1, w);
-    let y1 = ((rect.max.y * ppp).round().max(0.0) as u32).clamp(y0 + 1, h);
-    ([x0, y0], [x1 - x0, y1 - y0])
-}

@@ -4,7 +4,9 @@
 //! after each batch of events and sleeps until the instant it gives or [`App::next_wake`];
 //! [`App::wake`] does between frames what needs no frame.
 
-use std::time::{Duration, Instant};
+use std::time::Duration;
+
+use crate::platform::Instant;
 
 use super::{App, Command, Gfx, TOAST_SECS, recovery};
 use crate::viewer::clock::Clock;

@@ -55,6 +55,13 @@ fn progress_ui(
     }
 }
 
+/// Where the job panels were, in a build without threads, files or ffmpeg (the browser).
+pub fn desktop_only_ui(ui: &mut egui::Ui, has_timeline: bool) {
+    let jobs = if has_timeline { "Ray-trace this view and Record timeline" } else { "Ray-trace this view" };
+    ui.separator();
+    ui.label(format!("{jobs}: in the desktop viewer only (`nlifs view`)."));
+}
+
 pub fn raytrace_ui(ui: &mut egui::Ui, state: &ViewerState, jobs: &JobView, commands: &mut Vec<Command>) {
     egui::CollapsingHeader::new("Ray-trace this view").default_open(false).show(ui, |ui| {
         let mut form: RaytraceForm = state.raytrace_form.clone();

@@ -64,9 +64,13 @@ pub fn panels_ui(
             render_ui(ui, state, commands);
             statistics_ui(ui, state);
             screenshot_ui(ui, state, commands);
-            jobs::raytrace_ui(ui, state, jobs, commands);
-            if state.scene.timeline.is_some() {
-                jobs::record_ui(ui, state, jobs, commands);
+            if crate::platform::DESKTOP {
+                jobs::raytrace_ui(ui, state, jobs, commands);
+                if state.scene.timeline.is_some() {
+                    jobs::record_ui(ui, state, jobs, commands);
+                }
+            } else {
+                jobs::desktop_only_ui(ui, state.scene.timeline.is_some());
             }
         });
     });
@@ -334,4 +338,18 @@ fn screenshot_ui(ui: &mut egui::Ui, state: &ViewerState, commands: &mut Vec<Comm
             commands.push(Command::SaveScreenshot(text.trim().into()));
         }
     });
+}
+
+/// The window pixels (origin, size) of `rect` (egui points at `ppp` pixels per point) inside a
+/// window of `window_px`; at least one pixel wide and tall.
+pub(super) fn view_pixels(rect: egui::Rect, ppp: f32, window_px: [u32; 2]) -> ([u32; 2], [u32; 2]) {
+    let [w, h] = window_px.map(|v| v.max(1));
+    if !rect.is_positive() || !rect.is_finite() {
+        return ([0, 0], [w, h]);
+    }
+    let x0 = ((rect.min.x * ppp).round().max(0.0) as u32).min(w - 1);
+    let y0 = ((rect.min.y * ppp).round().max(0.0) as u32).min(h - 1);
+    let x1 = ((rect.max.x * ppp).round().max(0.0) as u32).clamp(x0 + 1, w);
+    let y1 = ((rect.max.y * ppp).round().max(0.0) as u32).clamp(y0 + 1, h);
+    ([x0, y0], [x1 - x0, y1 - y0])
 }

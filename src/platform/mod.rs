@@ -1,0 +1,92 @@
+//! What differs between the desktop and the browser (`wasm32-unknown-unknown`), in one place, so
+//! that the rest of the program reads the same on both.
+//!
+//! - **Clock**: [`Instant`] is `std::time::Instant` itself on the desktop (the `web-time` crate
+//!   re-exports it, so native builds keep their code) and `performance.now()` in the browser,
+//!   where std's clock panics.
+//! - **Desktop tools**: threads, files, child processes (ffmpeg, a file manager) and native
+//!   dialogs exist on the desktop only; [`DESKTOP`] says which build this is, and the viewer
+//!   offers the ray-trace and recording jobs, file paths and the file watcher only there. In the
+//!   browser std answers such calls with an error ("unsupported"), never a panic, except
+//!   `std::process::id`, which nothing on the browser's paths calls.
+//! - **Threads for the CPU route**: rayon runs on the calling thread where threads cannot be
+//!   spawned (rayon-core's fallback), so the CPU chaos game, splat and resolve run unchanged,
+//!   single-threaded, in the page.
+//! - **CPU features**: `simd.rs` detects AVX2 / AVX-512F on x86-64 only; other targets take the
+//!   portable lane kernels.
+//! - **Files**: in the browser `io::write_atomic`, through which every file is written, offers
+//!   the bytes as a download instead (`web.rs`); files are opened from their bytes (a file
+//!   input, a drop), never by path.
+//! - **The window**: in the browser the viewer draws into the page's canvas ([`window_attributes`]).
+//! - **Waiting for the GPU**: adapter and device requests are futures; [`run_async`] blocks on
+//!   them on the desktop and hands them to the page's event loop in the browser, where blocking
+//!   would never let them finish.
+
+#[cfg(target_arch = "wasm32")]
+pub mod web;
+
+use std::cell::RefCell;
+use std::future::Future;
+use std::rc::Rc;
+
+pub use web_time::Instant;
+
+/// True on the desktop, false in the browser: background jobs (threads), files by path,
+/// child processes and native dialogs are available.
+pub const DESKTOP: bool = cfg!(not(target_arch = "wasm32"));
+
+/// The result of [`run_async`], once its future has finished.
+pub struct Pending<T>(Rc<RefCell<Option<T>>>);
+
+impl<T> Pending<T> {
+    /// The result, the first time it is asked for after the future finished; None before.
+    pub fn take(&self) -> Option<T> {
+        self.0.borrow_mut().take()
+    }
+}
+
+/// Runs `future`: to completion before returning on the desktop; on the page's event loop in the
+/// browser (the result appears in the [`Pending`] later; call `wake` there to be told).
+pub fn run_async<T: 'static>(future: impl Future<Output = T> + 'static, wake: impl FnOnce() + 'static) -> Pending<T> {
+    let slot = Rc::new(RefCell::new(None));
+    let filled = slot.clone();
+    let finish = async move {
+        let value = future.await;
+        *filled.borrow_mut() = Some(value);
+        wake();
+    };
+    #[cfg(not(target_arch = "wasm32"))]
+    pollster::block_on(finish);
+    #[cfg(target_arch = "wasm32")]
+    wasm_bindgen_futures::spawn_local(finish);
+    Pending(slot)
+}
+
+/// The viewer window's attributes for this platform: in the browser, the page's canvas
+/// `#nlifs` (made and appended to the page's body if the page has none).
+pub fn window_attributes(attributes: winit::window::WindowAttributes) -> winit::window::WindowAttributes {
+    #[cfg(target_arch = "wasm32")]
+    return web::canvas_attributes(attributes);
+    #[cfg(not(target_arch = "wasm32"))]
+    attributes
+}
+
+/// Runs `app` on `event_loop`: until it exits on the desktop (the app is given back); in the
+/// browser the loop is handed to the page, this returns at once, and the app is not given back.
+pub fn run_app<A: winit::application::ApplicationHandler + 'static>(
+    event_loop: winit::event_loop::EventLoop<()>,
+    app: A,
+) -> Result<Option<A>, winit::error::EventLoopError> {
+    #[cfg(target_arch = "wasm32")]
+    {
+        use winit::platform::web::EventLoopExtWebSys;
+        event_loop.spawn_app(app);
+        Ok(None)
+    }
+    #[cfg(not(target_arch = "wasm32"))]
+    {
+        let mut app = app;
+        event_loop.run_app(&mut app)?;
+        Ok(Some(app))
+    }
+}

@@ -1,0 +1,268 @@
+//! The viewer in a real browser: compiled to wasm32 and run by `wasm-bindgen-test-runner` in
+//! headless Chromium (`web/test.sh`, which `.ci/run` calls; docs/testing.md). On the desktop
+//! this file is empty.
+//!
+//! - The page: the viewer starts in a canvas with `?scene=plant2`, draws the attractor (pixels
+//!   read back from the canvas differ from the background), a grid-point drag changes the
+//!   picture and Undo brings it back; a bad scene dropped on the page is shown located in the
+//!   banner's text while plant2 stays.
+//! - The address: unknown names and oversized or broken links are refused with the reason.
+//! - The GPU chaos game on the browser's WebGPU: its density agrees with the CPU chaos game's
+//!   within the 6σ bound of `tests/gpu_vs_cpu.rs` (`densities_match_cpu`).
+//!
+//! One page runs all tests and a page has one event loop, so the viewer's checks are one test.
+#![cfg(target_arch = "wasm32")]
+
+mod common;
+
+use wasm_bindgen::JsCast;
+use wasm_bindgen_test::{wasm_bindgen_test, wasm_bindgen_test_configure};
+
+use nlifs::chaos_game::{self, CompiledIfs, ORBITS_PER_CHUNK, run_chunk};
+use nlifs::gpu::GpuContext;
+use nlifs::live::{ChaosBackend, LiveSettings, LiveView};
+use nlifs::scene::Scene;
+use nlifs::scene::spec::SplatMode;
+use nlifs::splat::{Framebuffer, SplatView};
+use nlifs::viewer::Command;
+use nlifs::viewer::host::Host;
+use nlifs::web::{BUNDLED_SCENES, scene_from_query};
+
+use common::{Density, assert_densities_agree, coarse_density};
+
+wasm_bindgen_test_configure!(run_in_browser);
+
+/// The canvas the viewer draws into, in CSS pixels.
+const CANVAS_PX: (u32, u32) = (800, 500);
+
+/// Waits `ms` milliseconds on the page's event loop (the viewer draws meanwhile).
+async fn sleep_ms(ms: i32) {
+    let promise = js_sys::Promise::new(&mut |resolve, _| {
+        web_sys::window().unwrap().set_timeout_with_callback_and_timeout_and_arguments_0(&resolve, ms).unwrap();
+    });
+    wasm_bindgen_futures::JsFuture::from(promise).await.unwrap();
+}
+
+/// Waits until `done` holds of the host's state (checked every 100 ms), at most `secs`;
+/// whether it came.
+async fn wait_for(host: &Host, secs: f64, done: impl Fn(&nlifs::viewer::host::HostState) -> bool) -> bool {
+    for _ in 0..(secs * 10.0) as u32 {
+        if host.with(|h| done(h)) {
+            return true;
+        }
+        sleep_ms(100).await;
+    }
+    host.with(|h| done(h))
+}
+
+/// Waits for `n` more frames than now.
+async fn frames(host: &Host, n: u64) {
+    let target = host.with(|h| h.frames) + n;
+    assert!(
+        wait_for(host, 120.0, |h| h.frames >= target).await,
+        "the viewer stopped drawing: {:?}",
+        host.with(|h| h.frames)
+    );
+}
+
+/// The test page's canvas `#nlifs` at [`CANVAS_PX`].
+fn make_canvas() -> web_sys::HtmlCanvasElement {
+    let document = web_sys::window().unwrap().document().unwrap();
+    let canvas: web_sys::HtmlCanvasElement = document.create_element("canvas").unwrap().unchecked_into();
+    canvas.set_id(nlifs::platform::web::CANVAS_ID);
+    let style = canvas.style();
+    style.set_property("width", &format!("{}px", CANVAS_PX.0)).unwrap();
+    style.set_property("height", &format!("{}px", CANVAS_PX.1)).unwrap();
+    document.body().unwrap().append_child(&canvas).unwrap();
+    canvas
+}
+
+/// The canvas's pixels as RGBA bytes with its size, copied through a 2D canvas.
+fn canvas_pixels(canvas: &web_sys::HtmlCanvasElement) -> (u32, u32, Vec<u8>) {
+    let (w, h) = (canvas.width(), canvas.height());
+    let document = web_sys::window().unwrap().document().unwrap();
+    let copy: web_sys::HtmlCanvasElement = document.create_element("canvas").unwrap().unchecked_into();
+    copy.set_width(w);
+    copy.set_height(h);
+    let ctx: web_sys::CanvasRenderingContext2d = copy.get_context("2d").unwrap().unwrap().unchecked_into();
+    ctx.draw_image_with_html_canvas_element(canvas, 0.0, 0.0).unwrap();
+    let data = ctx.get_image_data(0.0, 0.0, w as f64, h as f64).unwrap().data().0;
+    (w, h, data)
+}
+
+/// Which pixels of the right half of the picture (the side panel covers the left) hold the
+/// attractor: those farther than 24 levels in some channel from the half's most common colour,
+/// the background.
+fn attractor_mask((w, h, rgba): &(u32, u32, Vec<u8>)) -> Vec<bool> {
+    let pixel = |x: u32, y: u32| {
+        let i = 4 * (y * w + x) as usize;
+        [rgba[i], rgba[i + 1], rgba[i + 2]]
+    };
+    let mut counts = std::collections::BTreeMap::new();
+    for y in 0..*h {
+        for x in w / 2..*w {
+            *counts.entry(pixel(x, y)).or_insert(0u32) += 1;
+        }
+    }
+    let background = counts.into_iter().max_by_key(|&(_, n)| n).map(|(c, _)| c).unwrap();
+    let mut mask = Vec::new();
+    for y in 0..*h {
+        for x in w / 2..*w {
+            let p = pixel(x, y);
+            mask.push((0..3).any(|c| p[c].abs_diff(background[c]) > 24));
+        }
+    }
+    mask
+}
+
+/// The fraction of pixels where two masks differ.
+fn mask_difference(a: &[bool], b: &[bool]) -> f64 {
+    assert_eq!(a.len(), b.len(), "pictures of different sizes");
+    a.iter().zip(b).filter(|(x, y)| x != y).count() as f64 / a.len() as f64
+}
+
+#[wasm_bindgen_test]
+async fn the_viewer_draws_plant2_edits_it_and_undoes() {
+    let canvas = make_canvas();
+    let host = nlifs::web::start_with_query("?scene=plant2");
+    let started = wait_for(&host, 120.0, |h| h.started || h.fatal.is_some()).await;
+    assert!(started, "the viewer did not start within 120 s");
+    assert_eq!(host.with(|h| h.fatal.clone()), None, "the viewer could not start");
+    let plant2 = Scene::parse(BUNDLED_SCENES.iter().find(|(n, _)| *n == "plant2").unwrap().1, "plant2").unwrap();
+    // The grid overlay on from the start: the picture before the edit has its lines too.
+    host.send(Command::SetGridOverlay(true));
+    frames(&host, 10).await;
+    // The frame rate while plant2 accumulates (reported, not asserted: it is the machine's).
+    let (frames_0, t0_ms) = (host.with(|h| h.frames), js_sys::Date::now());
+    frames(&host, 10).await;
+    let fps = (host.with(|h| h.frames) - frames_0) as f64 / ((js_sys::Date::now() - t0_ms) / 1000.0);
+    assert_eq!(host.with(|h| (h.scene_name.clone(), h.error.clone())), (plant2.name.clone(), None));
+    let (adapter, route) = host.with(|h| (h.adapter.clone(), h.route.clone()));
+    web_sys::console::log_1(&format!("adapter {adapter}, chaos game on the {route}, {fps:.1} frames/s").into());
+
+    let before = attractor_mask(&canvas_pixels(&canvas));
+    let lit = before.iter().filter(|&&b| b).count() as f64 / before.len() as f64;
+    // plant2 framed in the view covers a good part of it; an empty or blank-white view does not.
+    assert!((0.02..0.9).contains(&lit), "attractor pixels: {:.2} % of the view", 100.0 * lit);
+
+    // A grid point of the first function dragged 60 pixels to the right, as the mouse does.
+    host.send(Command::BeginPointDrag { function: 0, point: 0 });
+    host.send(Command::DragPoint { delta_px: [60.0, 0.0] });
+    host.send(Command::EndGesture);
+    // As many frames as the picture before had accumulated.
+    frames(&host, 20).await;
+    assert!(host.with(|h| h.can_undo), "the drag made no undoable edit: {:?}", host.with(|h| h.error.clone()));
+    let edited = attractor_mask(&canvas_pixels(&canvas));
+    let changed = mask_difference(&before, &edited);
+
+    host.send(Command::Undo);
+    frames(&host, 20).await;
+    assert!(!host.with(|h| h.can_undo));
+    let undone = attractor_mask(&canvas_pixels(&canvas));
+    let left = mask_difference(&before, &undone);
+    web_sys::console::log_1(
+        &format!(
+            "lit {lit:.4}, changed by the edit {changed:.4}, left after undo {left:.4}, undo against the edit {:.4}",
+            mask_difference(&edited, &undone)
+        )
+        .into(),
+    );
+    // The edit moves a whole part of the attractor; after Undo only the stochastic edge of
+    // the point cloud differs (a few per cent of the lit pixels at most).
+    assert!(changed > 0.2 * lit, "the edit changed {:.2} % of the view", 100.0 * changed);
+    assert!(
+        left < 0.25 * changed,
+        "after undo {:.2} % of the view still differs (the edit: {:.2} %)",
+        100.0 * left,
+        100.0 * changed
+    );
+
+    // A bad scene dropped on the page: its error located in the banner, plant2 stays.
+    let bad = "name = \"bad\"\n[grid]\nnx = \"three\"\n";
+    host.send(Command::OpenBytes { name: "bad.toml".into(), bytes: bad.as_bytes().to_vec() });
+    frames(&host, 5).await;
+    sleep_ms(600).await;
+    let error = host.with(|h| h.error.clone()).expect("the bad scene's error");
+    assert!(error.contains("bad.toml:"), "{error}");
+    assert_eq!(host.with(|h| h.scene_name.clone()), plant2.name);
+    let banner = web_sys::window().unwrap().document().unwrap().get_element_by_id(nlifs::web::BANNER_ID).unwrap();
+    assert_eq!(banner.text_content().as_deref(), Some(error.as_str()));
+}
+
+#[wasm_bindgen_test]
+fn the_address_names_a_bundled_scene_or_carries_one() {
+    let (name, bytes) = scene_from_query("?scene=plant2").unwrap().unwrap();
+    assert_eq!((name.as_str(), bytes.as_slice()), ("plant2.toml", include_bytes!("../scenes/plant2.toml").as_slice()));
+    let unknown = scene_from_query("?scene=plant9").unwrap().unwrap_err();
+    assert!(unknown.contains("plant9") && unknown.contains("plant2"), "{unknown}");
+    let text = include_str!("../scenes/twisting.toml");
+    let query = format!("?toml={}", nlifs::scene::url::encode(text));
+    assert_eq!(scene_from_query(&query).unwrap().unwrap().1, text.as_bytes());
+    let long = format!("?toml={}", "A".repeat(nlifs::scene::url::MAX_PARAM_CHARS + 5));
+    let refused = scene_from_query(&long).unwrap().unwrap_err();
+    assert!(refused.contains(&format!("{} characters", nlifs::scene::url::MAX_PARAM_CHARS + 5)), "{refused}");
+    assert!(scene_from_query("").is_none());
+}
+
+#[wasm_bindgen_test]
+async fn webgpu_chaos_game_densities_match_cpu() {
+    let instance =
+        wgpu::util::new_instance_with_webgpu_detection(wgpu::InstanceDescriptor::new_without_display_handle_from_env())
+            .await;
+    let ctx = GpuContext::request(instance, None).await.expect("a WebGPU adapter (Chromium's SwiftShader)");
+    let info = ctx.adapter.get_info();
+    assert_eq!(info.backend, wgpu::Backend::BrowserWebGpu, "{}", ctx.describe());
+    // As `densities_match_cpu` in tests/gpu_vs_cpu.rs, for plant2.
+    let (width, height) = (160u32, 120u32);
+    let cells = (16usize, 12usize);
+    let k = 4u32;
+    let scene = Scene::parse(include_str!("../scenes/plant2.toml"), "plant2").unwrap();
+    let compiled = CompiledIfs::new(&scene.at(0.0)).unwrap();
+    let bounds = chaos_game::attractor_bounds(&compiled, 1);
+    let camera = scene.camera_for(bounds);
+    let bg = [0.0; 3];
+    let gpu_orbits = 1u32 << 18;
+    let settings = LiveSettings {
+        point_count: gpu_orbits,
+        steps_per_frame: k,
+        seed: 3,
+        mode: SplatMode::Density,
+        depth_cue: 0.0,
+        background: bg,
+        shading: 0.0,
+        occlusion: 0.0,
+        point_radius_px: 0,
+        max_splats: u64::MAX,
+        settle_steps: 0,
+        chaos_backend: ChaosBackend::Gpu,
+        ..LiveSettings::default()
+    };
+    let mut live = LiveView::new(&ctx, settings, width, height).unwrap();
+    live.set_ifs(&ctx, &compiled, bounds, true);
+    live.set_camera(&camera);
+    let mut encoder = ctx.device.create_command_encoder(&Default::default());
+    live.advance(&ctx, &mut encoder);
+    ctx.queue.submit([encoder.finish()]);
+    let accum = live.read_accum_async(&ctx).await.unwrap();
+    let gpu_counts: Vec<u32> = accum.chunks(4).map(|a| a[3]).collect();
+
+    let view = SplatView::new(&camera, width, height, bounds, SplatMode::Density, 0.0, bg);
+    let mut fb = Framebuffer::new(view, compiled.colors.clone());
+    for c in 0..gpu_orbits / ORBITS_PER_CHUNK as u32 {
+        run_chunk(&compiled, 77, 0, c, k as usize, &mut fb);
+    }
+    let cpu_counts: Vec<u32> = fb.accum.iter().map(|a| a[3]).collect();
+    let n_gpu: f64 = gpu_counts.iter().map(|&c| c as f64).sum();
+    let n_cpu: f64 = cpu_counts.iter().map(|&c| c as f64).sum();
+    let pg = coarse_density(&gpu_counts, width as usize, height as usize, cells);
+    let pc = coarse_density(&cpu_counts, width as usize, height as usize, cells);
+    let worst = assert_densities_agree(
+        "plant2 on WebGPU",
+        &Density { label: "WebGPU", density: &pg, samples: n_gpu, steps_per_orbit: k as f64 },
+        &Density { label: "CPU", density: &pc, samples: n_cpu, steps_per_orbit: k as f64 },
+        cells,
+    );
+    web_sys::console::log_1(
+        &format!("plant2: {n_gpu} WebGPU / {n_cpu} CPU samples, worst |Δ|/tolerance {worst:.3}").into(),
+    );
+}
