@@ -221,6 +221,12 @@ pub(crate) trait Pixels {
     fn own_keys(&mut self) -> Option<&mut [u32]> {
         None
     }
+    /// Accumulating modes: the sums themselves, one [r, g, b, count] per pixel, where this
+    /// target holds them (the vector splat then adds to them directly, their lines prefetched a
+    /// few vectors ahead); None: updates go through [`Self::add`] only.
+    fn own_sums(&mut self) -> Option<&mut [[u32; 4]]> {
+        None
+    }
 }
 
 /// A framebuffer's own pixels as a [`Pixels`] target.
@@ -252,6 +258,10 @@ impl Pixels for OwnPixels<'_> {
 
     fn own_keys(&mut self) -> Option<&mut [u32]> {
         Some(self.closest)
+    }
+
+    fn own_sums(&mut self) -> Option<&mut [[u32; 4]]> {
+        Some(self.accum)
     }
 }
 
