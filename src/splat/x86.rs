@@ -1,6 +1,6 @@
 //! The splat with AVX2 (detected at run time): eight points projected per vector (sixteen with
-//! AVX-512F in closest mode), every operation that of [`SplatView::project`] and the portable
-//! splat in its order. Then the pixels:
+//! AVX-512F), every operation that of [`SplatView::project`] and the portable splat in its
+//! order. Then the pixels:
 //! - closest mode, into keys the target holds ([`Pixels::own_keys`], a framebuffer's own): the
 //!   vector's present keys are gathered and compared with its new ones, and only lanes whose key
 //!   falls are written (a `min`, lane after lane, so two lanes on one pixel keep the smaller).
@@ -8,11 +8,13 @@
 //!   1920×1080: 0.85 % of the points), so the splat mostly reads, the branch is rarely taken, and
 //!   no cache line is dirtied for nothing; `min` is order-independent, so the keys are those of a
 //!   `min` per point, byte for byte (`nlifs bench cpu`: map + closest 105 → 261 M points/s);
+//! - the accumulating modes with AVX-512F and AVX-512CD, into sums the target holds
+//!   ([`Pixels::own_sums`]): a vector whose lanes fall on distinct pixels gathers their sums,
+//!   adds and scatters them back ([`splat_accumulate_avx512`]);
 //! - otherwise each lane's pixel is updated by scalar code: closest keys through
 //!   [`Pixels::min_key`], in the accumulating modes the portable splat's own colour arithmetic
 //!   and a saturating add. Making a block of 256 updates first, their lines prefetched, and
-//!   applying them after was tried and measured no faster (the attractor's pixels, 3 % of the
-//!   image for tapering, mostly stay in the caches).
+//!   applying them after was tried and measured no faster.
 //!
 //! Everything here requires AVX2: [`splat`] checks the CPU before entering. Hence the
 //! module-wide `unsafe_code` allowance: the intrinsics are `unsafe` to call outside a
@@ -44,7 +46,7 @@ pub(super) fn splat(view: &SplatView, colors: &[[f32; 3]], batch: PointBatch<'_>
     splat_with(view, colors, batch, out, SimdLevel::detect().avx512());
 }
 
-/// [`splat`], with the closest mode's 16-wide AVX-512F projection if `wide` (for tests).
+/// [`splat`], with the 16-wide AVX-512 splats if `wide` (for tests).
 pub(super) fn splat_with(
     view: &SplatView,
     colors: &[[f32; 3]],
@@ -60,6 +62,9 @@ pub(super) fn splat_with(
         match view.mode {
             SplatMode::Closest if wide => splat_closest_avx512(view, out, batch),
             SplatMode::Closest => splat_closest_avx2(view, out, batch),
+            SplatMode::Average | SplatMode::Density if wide && is_x86_feature_detected!("avx512cd") => {
+                splat_accumulate_avx512(view, colors, out, batch)
+            }
             SplatMode::Average | SplatMode::Density => splat_accumulate_avx2(view, colors, out, batch),
         }
     }
@@ -148,20 +153,15 @@ unsafe fn closest_keys8(view: &SplatView, batch: &PointBatch<'_>, o: usize) -> (
     }
 }
 
-/// The closest-mode keys of 16 points from offset `o` of `batch` (o + 16 ≤ its length): as
-/// [`closest_keys8`] with AVX-512F, [`project8`]'s operations in the same order.
+/// The projection of 16 points with AVX-512F, [`project8`]'s operations in its order: a mask of
+/// the lanes that land in the image, their pixel indices (0 elsewhere) and their depth
+/// fractions t (clamped as `f32::clamp` does: a NaN stays NaN).
 #[inline(always)]
-unsafe fn closest_keys16(view: &SplatView, batch: &PointBatch<'_>, o: usize) -> (__mmask16, __m512i, __m512i) {
-    let scale = ((1u32 << DEPTH_BITS) - 1) as f32;
+unsafe fn project16(view: &SplatView, x: __m512, y: __m512, z: __m512) -> (__mmask16, __m512i, __m512) {
     let m = view.pixel_from_world;
     let (c0, c1, c2, c3) = (m.x_axis, m.y_axis, m.z_axis, m.w_axis);
-    // SAFETY: the caller checked the CPU features (module doc) and that o + 16 ≤ the length of
-    // each of the batch's slices.
+    // SAFETY: the caller checked the CPU features (module doc); no memory is accessed.
     unsafe {
-        let x = _mm512_loadu_ps(batch.x.as_ptr().add(o));
-        let y = _mm512_loadu_ps(batch.y.as_ptr().add(o));
-        let z = _mm512_loadu_ps(batch.z.as_ptr().add(o));
-        let fi = _mm512_cvtepu8_epi32(_mm_loadu_si128(batch.functions.as_ptr().add(o).cast()));
         macro_rules! row {
             ($c:ident) => {
                 _mm512_add_ps(
@@ -190,10 +190,27 @@ unsafe fn closest_keys16(view: &SplatView, batch: &PointBatch<'_>, o: usize) -> 
             _mm512_mul_ps(_mm512_sub_ps(qz, _mm512_set1_ps(view.near)), _mm512_set1_ps(1.0 / (view.far - view.near)));
         let t = _mm512_mask_blend_ps(_mm512_cmp_ps_mask::<_CMP_LT_OQ>(t, zero), t, zero);
         let t = _mm512_mask_blend_ps(_mm512_cmp_ps_mask::<_CMP_GT_OQ>(t, _mm512_set1_ps(1.0)), t, _mm512_set1_ps(1.0));
-        let d = _mm512_max_ps(_mm512_mul_ps(t, _mm512_set1_ps(scale)), zero);
+        (inside, _mm512_maskz_mov_epi32(inside, pixel), t)
+    }
+}
+
+/// The closest-mode keys of 16 points from offset `o` of `batch` (o + 16 ≤ its length): as
+/// [`closest_keys8`] with AVX-512F, [`project16`] then the key.
+#[inline(always)]
+unsafe fn closest_keys16(view: &SplatView, batch: &PointBatch<'_>, o: usize) -> (__mmask16, __m512i, __m512i) {
+    let scale = ((1u32 << DEPTH_BITS) - 1) as f32;
+    // SAFETY: the caller checked the CPU features (module doc) and that o + 16 ≤ the length of
+    // each of the batch's slices.
+    unsafe {
+        let x = _mm512_loadu_ps(batch.x.as_ptr().add(o));
+        let y = _mm512_loadu_ps(batch.y.as_ptr().add(o));
+        let z = _mm512_loadu_ps(batch.z.as_ptr().add(o));
+        let fi = _mm512_cvtepu8_epi32(_mm_loadu_si128(batch.functions.as_ptr().add(o).cast()));
+        let (inside, pixel, t) = project16(view, x, y, z);
+        let d = _mm512_max_ps(_mm512_mul_ps(t, _mm512_set1_ps(scale)), _mm512_setzero_ps());
         let key = _mm512_or_si512(_mm512_slli_epi32::<8>(_mm512_cvttps_epi32(d)), fi);
         let key = _mm512_mask_blend_epi32(inside, _mm512_set1_epi32(EMPTY as i32), key);
-        (inside, _mm512_maskz_mov_epi32(inside, pixel), key)
+        (inside, pixel, key)
     }
 }
 
@@ -428,6 +445,163 @@ unsafe fn splat_accumulate_avx2(
         y: &batch.y[vectors * LANES..],
         z: &batch.z[vectors * LANES..],
         functions: &batch.functions[vectors * LANES..],
+    };
+    splat_portable(&view, function_colors, tail, out);
+}
+
+/// The accumulating modes' splat with 16 points per vector (AVX-512F and AVX-512CD) for up to
+/// 16 function colours (more, a palette: [`splat_accumulate_avx2`]): [`project16`], each lane's
+/// colour from a 16-entry table by function (`vpermps`), the colour arithmetic of
+/// [`splat_accumulate_avx2`] in its order, so the same updates. Into sums the target holds
+/// ([`Pixels::own_sums`]), a vector whose lanes all fall on distinct pixels (`vpconflictd`)
+/// gathers its pixels' sums as two 64-bit words each, (r, g) and (b, count), adds with
+/// saturation and scatters them back: sixteen read-modify-writes in flight at once, where the
+/// lane-by-lane updates waited on each other's cache misses (`nlifs bench cpu`, tapering: map +
+/// average 152–157 → 199–210 M points per CPU second; 16-wide with lane-by-lane updates
+/// 177–188; prefetching the lines a few vectors ahead of lane-by-lane updates gained nothing).
+/// A vector with two lanes on one pixel, and every vector into a target without its own sums,
+/// is applied lane by lane through [`Pixels::add`]. (Scattering such a vector's distinct lanes
+/// and then applying the others one by one measured 7–14 % slower, probably as a lane's load
+/// after the scatter to its pixel waits for the scatter's stores.) The sums are saturating sums
+/// of non-negative terms, which no order changes.
+#[target_feature(enable = "avx2,avx512f,avx512cd")]
+unsafe fn splat_accumulate_avx512(
+    view: &SplatView,
+    function_colors: &[[f32; 3]],
+    out: &mut impl Pixels,
+    batch: PointBatch<'_>,
+) {
+    const WIDE: usize = 16;
+    if function_colors.is_empty() || function_colors.len() > WIDE {
+        // SAFETY: AVX2 is enabled here too.
+        return unsafe { splat_accumulate_avx2(view, function_colors, out, batch) };
+    }
+    let view = *view;
+    let n = batch.len();
+    let last = function_colors.len() - 1;
+    // Entries past the last colour repeat it, as the AVX2 table does.
+    let table: [[f32; WIDE]; 3] =
+        std::array::from_fn(|ch| std::array::from_fn(|f| function_colors[f.min(last)][ch] * COLOR_SCALE));
+    let bg = view.background.map(|x| x * COLOR_SCALE);
+    let pixel_count = view.width as usize * view.height as usize;
+    // The gather's qword index 2 · pixel must fit in an i32.
+    let sums: Option<*mut [u32; 4]> =
+        out.own_sums().filter(|s| s.len() == pixel_count && pixel_count <= 1 << 30).map(|s| s.as_mut_ptr());
+    let vectors = n / WIDE;
+    for g in 0..vectors {
+        let o = g * WIDE;
+        let (mut pixels, mut ts, mut adds) = ([0u32; WIDE], [0f32; WIDE], [[0u32; 4]; WIDE]);
+        // SAFETY: o + 16 ≤ n, the length of each of the batch's slices; stores into local arrays.
+        // The gathers and scatters touch only inside lanes (the masks), whose pixels are
+        // iy · width + ix with 0 ≤ ix < width and 0 ≤ iy < height, below width · height, the
+        // length of the sums behind `sums` (checked above): words 2 · pixel and 2 · pixel + 1 of
+        // them as u64s, which the [u32; 4] of that pixel holds (alignment 8 is not required by
+        // the gather or scatter).
+        let (lanes, vector) = unsafe {
+            let fi = _mm512_cvtepu8_epi32(_mm_loadu_si128(batch.functions.as_ptr().add(o).cast()));
+            let (inside, pixel, t) = project16(
+                &view,
+                _mm512_loadu_ps(batch.x.as_ptr().add(o)),
+                _mm512_loadu_ps(batch.y.as_ptr().add(o)),
+                _mm512_loadu_ps(batch.z.as_ptr().add(o)),
+            );
+            // k = depth_cue · t; per channel (c + (bg − c) · k + 0.5) as u32 as in the AVX2 splat.
+            let k = _mm512_mul_ps(_mm512_set1_ps(view.depth_cue), t);
+            let mut big: __mmask16 = 0;
+            let mut channel = [_mm512_setzero_si512(); 3];
+            for ch in 0..3 {
+                let c = _mm512_permutexvar_ps(fi, _mm512_loadu_ps(table[ch].as_ptr()));
+                let v = _mm512_add_ps(
+                    _mm512_add_ps(c, _mm512_mul_ps(_mm512_sub_ps(_mm512_set1_ps(bg[ch]), c), k)),
+                    _mm512_set1_ps(0.5),
+                );
+                big |= _mm512_cmp_ps_mask::<_CMP_GE_OQ>(v, _mm512_set1_ps(2_147_483_648.0));
+                let nonneg = _mm512_cmp_ps_mask::<_CMP_GE_OQ>(v, _mm512_setzero_ps());
+                channel[ch] = _mm512_maskz_mov_epi32(nonneg, _mm512_cvttps_epi32(v));
+            }
+            let distinct = {
+                let conflicts = _mm512_maskz_conflict_epi32(inside, pixel);
+                _mm512_mask_test_epi32_mask(inside, conflicts, conflicts) == 0
+            };
+            match sums {
+                Some(base) if big == 0 && distinct => {
+                    let all = _mm512_set1_epi32(-1);
+                    let lo: *mut i64 = base.cast();
+                    let hi = lo.wrapping_add(1);
+                    for half in 0..2 {
+                        let pick = |v: __m512i| {
+                            if half == 0 { _mm512_castsi512_si256(v) } else { _mm512_extracti64x4_epi64::<1>(v) }
+                        };
+                        let lanes = (inside >> (8 * half)) as __mmask8;
+                        let index = _mm256_slli_epi32::<1>(pick(pixel));
+                        let rg_add = _mm512_or_si512(
+                            _mm512_cvtepu32_epi64(pick(channel[0])),
+                            _mm512_slli_epi64::<32>(_mm512_cvtepu32_epi64(pick(channel[1]))),
+                        );
+                        let b1_add = _mm512_or_si512(
+                            _mm512_cvtepu32_epi64(pick(channel[2])),
+                            _mm512_slli_epi64::<32>(_mm512_set1_epi64(1)),
+                        );
+                        let zero = _mm512_setzero_si512();
+                        let rg = _mm512_mask_i32gather_epi64::<8>(zero, lanes, index, lo.cast_const().cast());
+                        let b1 = _mm512_mask_i32gather_epi64::<8>(zero, lanes, index, hi.cast_const().cast());
+                        // a + min(add, !a) per u32: the saturating add of `OwnPixels::add`.
+                        let rg = _mm512_add_epi32(rg, _mm512_min_epu32(rg_add, _mm512_xor_si512(rg, all)));
+                        let b1 = _mm512_add_epi32(b1, _mm512_min_epu32(b1_add, _mm512_xor_si512(b1, all)));
+                        _mm512_mask_i32scatter_epi64::<8>(lo.cast(), lanes, index, rg);
+                        _mm512_mask_i32scatter_epi64::<8>(hi.cast(), lanes, index, b1);
+                    }
+                    (0, true)
+                }
+                _ => {
+                    _mm512_storeu_si512(pixels.as_mut_ptr().cast(), pixel);
+                    _mm512_storeu_ps(ts.as_mut_ptr(), t);
+                    // Transpose to r, g, b, 1 per lane, a 256-bit half at a time as the AVX2
+                    // splat does: lane l of a half in its half l / 4 of row l % 4.
+                    let one = _mm256_set1_epi32(1);
+                    for half in 0..2 {
+                        let pick = |v: __m512i| {
+                            if half == 0 { _mm512_castsi512_si256(v) } else { _mm512_extracti64x4_epi64::<1>(v) }
+                        };
+                        let (r, gr, b) = (pick(channel[0]), pick(channel[1]), pick(channel[2]));
+                        let (rg_lo, rg_hi) = (_mm256_unpacklo_epi32(r, gr), _mm256_unpackhi_epi32(r, gr));
+                        let (b1_lo, b1_hi) = (_mm256_unpacklo_epi32(b, one), _mm256_unpackhi_epi32(b, one));
+                        let rows = [
+                            _mm256_unpacklo_epi64(rg_lo, b1_lo),
+                            _mm256_unpackhi_epi64(rg_lo, b1_lo),
+                            _mm256_unpacklo_epi64(rg_hi, b1_hi),
+                            _mm256_unpackhi_epi64(rg_hi, b1_hi),
+                        ];
+                        let adds = &mut adds[half * 8..half * 8 + 8];
+                        for (j, row) in rows.into_iter().enumerate() {
+                            _mm_storeu_si128(adds[j].as_mut_ptr().cast(), _mm256_castsi256_si128(row));
+                            _mm_storeu_si128(adds[j + 4].as_mut_ptr().cast(), _mm256_extracti128_si256::<1>(row));
+                        }
+                    }
+                    (inside as u32, big == 0)
+                }
+            }
+        };
+        let mut lanes = lanes;
+        while lanes != 0 {
+            let l = lanes.trailing_zeros() as usize;
+            lanes &= lanes - 1;
+            if vector {
+                out.add(pixels[l] as usize, adds[l]);
+            } else {
+                // The portable splat's arithmetic for one point.
+                let c = function_colors[batch.functions[o + l] as usize].map(|x| x * COLOR_SCALE);
+                let k = view.depth_cue * ts[l];
+                let add = [0, 1, 2].map(|ch| (c[ch] + (bg[ch] - c[ch]) * k + 0.5) as u32);
+                out.add(pixels[l] as usize, [add[0], add[1], add[2], 1]);
+            }
+        }
+    }
+    let tail = PointBatch {
+        x: &batch.x[vectors * WIDE..],
+        y: &batch.y[vectors * WIDE..],
+        z: &batch.z[vectors * WIDE..],
+        functions: &batch.functions[vectors * WIDE..],
     };
     splat_portable(&view, function_colors, tail, out);
 }
