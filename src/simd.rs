@@ -14,7 +14,8 @@ pub enum SimdLevel {
     Scalar,
     /// x86-64 with AVX2.
     Avx2,
-    /// x86-64 with AVX2 and AVX-512F.
+    /// x86-64 with AVX2, AVX-512F and AVX-512CD (every AVX-512 CPU has both; the splat's
+    /// accumulating modes find a vector's repeated pixels with CD's conflict detection).
     Avx512,
 }
 
@@ -30,7 +31,7 @@ impl SimdLevel {
         self >= Self::Avx2
     }
 
-    /// Whether AVX-512F (and AVX2) code may run at this level.
+    /// Whether AVX-512F and AVX-512CD (and AVX2) code may run at this level.
     pub fn avx512(self) -> bool {
         self >= Self::Avx512
     }
@@ -39,7 +40,9 @@ impl SimdLevel {
         #[cfg(target_arch = "x86_64")]
         {
             if std::arch::is_x86_feature_detected!("avx2") {
-                return if std::arch::is_x86_feature_detected!("avx512f") { Self::Avx512 } else { Self::Avx2 };
+                let avx512 =
+                    std::arch::is_x86_feature_detected!("avx512f") && std::arch::is_x86_feature_detected!("avx512cd");
+                return if avx512 { Self::Avx512 } else { Self::Avx2 };
             }
         }
         Self::Scalar

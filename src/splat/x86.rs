@@ -56,15 +56,13 @@ pub(super) fn splat_with(
 ) {
     assert!(supported(view) && (!wide || SimdLevel::detect().avx512()));
     assert!(batch.x.len() == batch.len() && batch.y.len() == batch.len() && batch.z.len() == batch.len());
-    // SAFETY: the CPU has AVX2 (and AVX-512F if wide), and the view has width · height > 0
+    // SAFETY: the CPU has AVX2 (and AVX-512F and CD if wide: `SimdLevel::Avx512`), and the view has width · height > 0
     // pixels (asserted); the batch's slices have equal lengths (asserted).
     unsafe {
         match view.mode {
             SplatMode::Closest if wide => splat_closest_avx512(view, out, batch),
             SplatMode::Closest => splat_closest_avx2(view, out, batch),
-            SplatMode::Average | SplatMode::Density if wide && is_x86_feature_detected!("avx512cd") => {
-                splat_accumulate_avx512(view, colors, out, batch)
-            }
+            SplatMode::Average | SplatMode::Density if wide => splat_accumulate_avx512(view, colors, out, batch),
             SplatMode::Average | SplatMode::Density => splat_accumulate_avx2(view, colors, out, batch),
         }
     }
