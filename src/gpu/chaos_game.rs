@@ -5,11 +5,13 @@
 //!
 //! The tables are bound as uniform buffers when they fit their fixed capacities (program
 //! `chaos_game`, `shaders/ifs_tables_uniform.wgsl`), else as storage buffers (program
-//! `chaos_game_storage`); the buffers are the same bytes either way.
+//! `chaos_game_storage`); the buffers are the same bytes either way. The flame functions' table
+//! ([`CompiledIfs::flame_ops`], `shaders/variations.wgsl`) is a storage buffer in both.
 
 use wgpu::util::DeviceExt;
 
 use crate::chaos_game::{Cell, CompiledIfs, KIND_MULTILINEAR, KernelFunction};
+use crate::flame::variations::FlameOp;
 use crate::scene::spec::SplatMode;
 use crate::splat::SplatView;
 
@@ -84,6 +86,11 @@ pub struct IfsShape {
     // Palette colour (`src/chaos_game/color_coord.rs`):
     /// The points carry a colour coordinate (the shader's `PALETTE`).
     pub palette: bool,
+    // Flame functions (`src/chaos_game/flame.rs`):
+    /// Some function is a flame (the shader's `HAS_FLAMES`).
+    pub flames: bool,
+    /// The colour coordinate steps with per-function colour speeds (`COLOR_SPEEDS`).
+    pub color_speeds: bool,
 }
 
 impl IfsShape {
@@ -93,11 +100,13 @@ impl IfsShape {
             function_count: ifs.selection.function_count,
             single_selection_cell: ifs.selection.cells == [1, 1, 1],
             palette: ifs.color_coords.is_some(),
+            flames: ifs.has_flames(),
+            color_speeds: ifs.color_speeds.is_some(),
         }
     }
 
     /// The shader's pipeline constants for this shape.
-    fn constants(&self) -> [(&'static str, f64); 6] {
+    fn constants(&self) -> [(&'static str, f64); 8] {
         let [x, y, z] = self.shared_cells.unwrap_or([0; 3]);
         [
             ("SHARED_CELLS_X", x as f64),
@@ -106,6 +115,8 @@ impl IfsShape {
             ("FUNCTION_COUNT", self.function_count as f64),
             ("SINGLE_SELECTION_CELL", self.single_selection_cell as u32 as f64),
             ("PALETTE", self.palette as u32 as f64),
+            ("HAS_FLAMES", self.flames as u32 as f64),
+            ("COLOR_SPEEDS", self.color_speeds as u32 as f64),
         ]
     }
 }
@@ -242,6 +253,7 @@ impl Program {
                 entry(6, write),
                 entry(7, write),
                 entry(8, write),
+                entry(9, wgpu::BufferBindingType::Storage { read_only: true }),
             ],
         });
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
@@ -313,6 +325,8 @@ pub struct GpuChaosGame {
     cells: wgpu::Buffer,
     thresholds: wgpu::Buffer,
     pub colors: wgpu::Buffer,
+    /// The flame table (`CompiledIfs::flame_ops`; a storage buffer in both programs).
+    flame_ops: wgpu::Buffer,
     pub points: wgpu::Buffer,
     pub accum: wgpu::Buffer,
     bind_group: Option<wgpu::BindGroup>,
@@ -355,6 +369,7 @@ impl GpuChaosGame {
             cells: table(device, "cells", cells),
             thresholds: table(device, "thresholds", thresholds),
             colors: table(device, "colors", colors),
+            flame_ops: storage(device, "flame_ops", size_of::<FlameOp>() as u64, wgpu::BufferUsages::empty()),
             points: storage(device, "points", point_count as u64 * 16, wgpu::BufferUsages::COPY_SRC),
             accum: storage(device, "accum", width as u64 * height as u64 * 16, wgpu::BufferUsages::COPY_SRC),
             bind_group: None,
@@ -384,7 +399,8 @@ impl GpuChaosGame {
             && tables.iter().zip(UNIFORM_CAPACITY).all(|(t, capacity)| t.len() as u64 <= capacity);
         self.has_julia = ifs.functions.iter().any(|f| f.coord_offset[3] == crate::chaos_game::KIND_JULIA);
         self.shape = if self.force_generic {
-            IfsShape { palette: ifs.color_coords.is_some(), ..IfsShape::default() }
+            let IfsShape { palette, flames, color_speeds, .. } = IfsShape::of(ifs);
+            IfsShape { palette, flames, color_speeds, ..IfsShape::default() }
         } else {
             IfsShape::of(ifs)
         };
@@ -394,6 +410,7 @@ impl GpuChaosGame {
         replaced |= upload(device, queue, &mut self.coords, "coords", tables[1]);
         replaced |= upload(device, queue, &mut self.cells, "cells", tables[2]);
         replaced |= upload(device, queue, &mut self.thresholds, "thresholds", tables[3]);
+        replaced |= upload(device, queue, &mut self.flame_ops, "flame_ops", bytemuck::cast_slice(&ifs.flame_ops()));
         let colors_replaced = upload(device, queue, &mut self.colors, "colors", tables[4]);
         if replaced || colors_replaced {
             self.bind_group = None;
@@ -493,6 +510,7 @@ impl GpuChaosGame {
                 &self.points,
                 &self.accum,
                 &self.shadow,
+                &self.flame_ops,
             ];
             let entries: Vec<wgpu::BindGroupEntry> = buffers
                 .iter()
@@ -574,7 +592,14 @@ mod tests {
         // plant2: 2×4×2 grid points, 1×3×1 cells, five functions on the scene's grid.
         assert_eq!(
             shape("plant2.toml"),
-            IfsShape { shared_cells: Some([1, 3, 1]), function_count: 5, single_selection_cell: true, palette: false }
+            IfsShape {
+                shared_cells: Some([1, 3, 1]),
+                function_count: 5,
+                single_selection_cell: true,
+                palette: false,
+                flames: false,
+                color_speeds: false
+            }
         );
         // Julia maps have no grid.
         assert_eq!(shape("julia.toml").shared_cells, None);
