@@ -41,6 +41,29 @@ const FRAC_PI_4: f32 = 0.785398163397448309616;
 
 @group(0) @binding(9) var<storage, read> flame_ops: array<FlameOp>;
 
+// Pipeline constants: the variations the IFS's flame functions use, bit v % 32 of word v / 32
+// (`IfsShape::flame_variations` in src/gpu/chaos_game.rs). Every arm of the variation switches
+// opens with `flame_uses`, so the compiler drops the arms of the variations not used: a SIMD
+// software rasterizer (lavapipe) would otherwise run every arm, transcendental functions and
+// all, for every term of every point (it runs both sides of a branch whose lanes differ).
+override FLAME_VARIATIONS_0: u32 = 0xffffffffu;
+override FLAME_VARIATIONS_1: u32 = 0xffffffffu;
+override FLAME_VARIATIONS_2: u32 = 0xffffffffu;
+override FLAME_VARIATIONS_3: u32 = 0xffffffffu;
+
+// Whether variation `v` is used (a constant wherever `v` is one).
+fn flame_uses(v: u32) -> bool {
+    var word = FLAME_VARIATIONS_3;
+    if v < 32u {
+        word = FLAME_VARIATIONS_0;
+    } else if v < 64u {
+        word = FLAME_VARIATIONS_1;
+    } else if v < 96u {
+        word = FLAME_VARIATIONS_2;
+    }
+    return ((word >> (v & 31u)) & 1u) != 0u;
+}
+
 fn flame_op_at(i: u32) -> FlameOp {
     return flame_ops[i];
 }
@@ -104,6 +127,21 @@ fn pre_blur_offset(w: f32, rng: ptr<function, u32>) -> vec2<f32> {
     return vec2<f32>(g * cos(a), g * sin(a));
 }
 
+// Whether a variation used reads atan2(tx, ty) (`NEEDS_ATAN_XY` in `basic::needs` and
+// `plugins::needs`).
+fn flame_needs_atan_xy() -> bool {
+    return flame_uses(5u) || flame_uses(6u) || flame_uses(7u) || flame_uses(8u) || flame_uses(12u)
+        || flame_uses(13u) || flame_uses(22u) || flame_uses(23u) || flame_uses(25u) || flame_uses(49u)
+        || flame_uses(70u);
+}
+
+// Whether a variation used reads atan2(ty, tx) (`NEEDS_ATAN_YX`).
+fn flame_needs_atan_yx() -> bool {
+    return flame_uses(32u) || flame_uses(33u) || flame_uses(36u) || flame_uses(38u) || flame_uses(50u)
+        || flame_uses(51u) || flame_uses(59u) || flame_uses(63u) || flame_uses(77u) || flame_uses(78u)
+        || flame_uses(79u) || flame_uses(80u) || flame_uses(83u);
+}
+
 // The image of `p` under compiled function `fi`'s xform (its header at `fi`); may be NaN or
 // huge: the chaos game re-seeds such points, as flam3 does.
 fn apply_xform(fi: u32, p: vec2<f32>, rng: ptr<function, u32>) -> vec2<f32> {
@@ -113,12 +151,18 @@ fn apply_xform(fi: u32, p: vec2<f32>, rng: ptr<function, u32>) -> vec2<f32> {
         t += pre_blur_offset(x.weight, rng);
     }
     // The shared quantities (`Point`): t (tx, ty, tx² + ty², |t|) and the angles (atan2(tx, ty),
-    // flam3's "sin" tx / |t| and "cos" ty / |t|, atan2(ty, tx)). All of them, always: cheaper
-    // here than a branch per quantity.
+    // flam3's "sin" tx / |t| and "cos" ty / |t|, atan2(ty, tx)); the arctangents only where a
+    // variation used reads them (`needs` in the Rust files; a constant condition).
     let sumsq = t.x * t.x + t.y * t.y;
     let r = sqrt(sumsq);
     let pt = vec4<f32>(t, sumsq, r);
-    let angles = vec4<f32>(atan2_c(t.x, t.y), t.x / r, t.y / r, atan2_c(t.y, t.x));
+    var angles = vec4<f32>(0.0, t.x / r, t.y / r, 0.0);
+    if flame_needs_atan_xy() {
+        angles.x = atan2_c(t.x, t.y);
+    }
+    if flame_needs_atan_yx() {
+        angles.w = atan2_c(t.y, t.x);
+    }
     var out = vec2<f32>(0.0);
     for (var i = x.first; i < x.first + x.count; i += 1u) {
         let op = flame_op_at(i);

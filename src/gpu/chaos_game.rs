@@ -91,6 +91,10 @@ pub struct IfsShape {
     pub flames: bool,
     /// The colour coordinate steps with per-function colour speeds (`COLOR_SPEEDS`).
     pub color_speeds: bool,
+    /// The variations the flame functions use: bit v % 32 of word v / 32 (the shader's
+    /// `FLAME_VARIATIONS_*`; the others are compiled out). Adding a variation to a flame in
+    /// the viewer makes a new pipeline.
+    pub flame_variations: [u32; 4],
 }
 
 impl IfsShape {
@@ -102,11 +106,12 @@ impl IfsShape {
             palette: ifs.color_coords.is_some(),
             flames: ifs.has_flames(),
             color_speeds: ifs.color_speeds.is_some(),
+            flame_variations: flame_variations(ifs),
         }
     }
 
     /// The shader's pipeline constants for this shape.
-    fn constants(&self) -> [(&'static str, f64); 8] {
+    fn constants(&self) -> [(&'static str, f64); 12] {
         let [x, y, z] = self.shared_cells.unwrap_or([0; 3]);
         [
             ("SHARED_CELLS_X", x as f64),
@@ -117,8 +122,25 @@ impl IfsShape {
             ("PALETTE", self.palette as u32 as f64),
             ("HAS_FLAMES", self.flames as u32 as f64),
             ("COLOR_SPEEDS", self.color_speeds as u32 as f64),
+            ("FLAME_VARIATIONS_0", self.flame_variations[0] as f64),
+            ("FLAME_VARIATIONS_1", self.flame_variations[1] as f64),
+            ("FLAME_VARIATIONS_2", self.flame_variations[2] as f64),
+            ("FLAME_VARIATIONS_3", self.flame_variations[3] as f64),
         ]
     }
+}
+
+/// See [`IfsShape::flame_variations`]: the variation numbers of the flame table's terms.
+fn flame_variations(ifs: &CompiledIfs) -> [u32; 4] {
+    let mut words = [0u32; 4];
+    if ifs.has_flames() {
+        for op in ifs.flame_ops() {
+            if op.kind < 128 {
+                words[op.kind as usize / 32] |= 1 << (op.kind % 32);
+            }
+        }
+    }
+    words
 }
 
 /// See [`IfsShape::shared_cells`]: the shared shader path reads function 0's record and axes
@@ -399,8 +421,8 @@ impl GpuChaosGame {
             && tables.iter().zip(UNIFORM_CAPACITY).all(|(t, capacity)| t.len() as u64 <= capacity);
         self.has_julia = ifs.functions.iter().any(|f| f.coord_offset[3] == crate::chaos_game::KIND_JULIA);
         self.shape = if self.force_generic {
-            let IfsShape { palette, flames, color_speeds, .. } = IfsShape::of(ifs);
-            IfsShape { palette, flames, color_speeds, ..IfsShape::default() }
+            let IfsShape { palette, flames, color_speeds, flame_variations, .. } = IfsShape::of(ifs);
+            IfsShape { palette, flames, color_speeds, flame_variations, ..IfsShape::default() }
         } else {
             IfsShape::of(ifs)
         };
@@ -598,7 +620,8 @@ mod tests {
                 single_selection_cell: true,
                 palette: false,
                 flames: false,
-                color_speeds: false
+                color_speeds: false,
+                flame_variations: [0; 4]
             }
         );
         // Julia maps have no grid.
