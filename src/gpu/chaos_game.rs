@@ -329,7 +329,10 @@ impl Program {
 
 pub struct GpuChaosGame {
     uniform_program: Program,
-    storage_program: Program,
+    /// Made on first use: most IFS fit the uniform program, and this one binds nine storage
+    /// buffers (the tables, points, accumulation, shadow map and flame table), one more than
+    /// WebGPU's default limit; a device at that limit still runs every IFS that fits.
+    storage_program: Option<Program>,
     /// The tables fit the uniform program's capacities (set by `set_ifs`).
     uniform_tables: bool,
     /// Some compiled function is a Julia map (set by `set_ifs`).
@@ -368,8 +371,6 @@ pub struct GpuChaosGame {
 impl GpuChaosGame {
     pub fn new(device: &wgpu::Device, point_count: u32, width: u32, height: u32) -> Self {
         let uniform_program = Program::new(device, "chaos_game", wgpu::BufferBindingType::Uniform);
-        let storage_program =
-            Program::new(device, "chaos_game_storage", wgpu::BufferBindingType::Storage { read_only: true });
         let params = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("chaos_params"),
             size: std::mem::size_of::<ChaosParams>() as u64,
@@ -379,7 +380,7 @@ impl GpuChaosGame {
         let [functions, coords, cells, thresholds, colors] = UNIFORM_CAPACITY;
         Self {
             uniform_program,
-            storage_program,
+            storage_program: None,
             uniform_tables: true,
             force_storage_tables: false,
             shape: IfsShape::default(),
@@ -516,7 +517,13 @@ impl GpuChaosGame {
             lens: v.lens.uniform(),
         };
         queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
-        let program = if self.uniform_tables { &mut self.uniform_program } else { &mut self.storage_program };
+        let program = if self.uniform_tables {
+            &mut self.uniform_program
+        } else {
+            self.storage_program.get_or_insert_with(|| {
+                Program::new(device, "chaos_game_storage", wgpu::BufferBindingType::Storage { read_only: true })
+            })
+        };
         let shadowed = v.shadow.is_some();
         let key = (mode_index(v.mode), self.has_julia, self.shape, shadowed, v.lens.is_on());
         let chaos_index = program.chaos_pipeline(device, key);
