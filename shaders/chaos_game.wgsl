@@ -1,7 +1,8 @@
 // The chaos game on the GPU, twin of `src/chaos_game.rs` (the map, the function selection and
 // the start point) fused with the splat, twin of `src/splat.rs` (`Framebuffer::consume`).
-// Prepended with `rng.wgsl` and one of `ifs_tables_uniform.wgsl` / `ifs_tables_storage.wgsl`
-// (the compiled IFS tables and their accessors) by `src/gpu/shaders.rs`.
+// Prepended with `rng.wgsl`, one of `ifs_tables_uniform.wgsl` / `ifs_tables_storage.wgsl` (the
+// compiled IFS tables and their accessors) and the flame functions' xforms (`variations.wgsl`,
+// `variations_basic.wgsl`, `variations_plugins.wgsl`) by `src/gpu/shaders.rs`.
 //
 // Every invocation owns one persistent point (xyz, w: the function that mapped it last, or with
 // `PALETTE` its colour coordinate). Per
@@ -90,6 +91,14 @@ override LENS: bool = false;
 override PALETTE: bool = false;
 // The colour coordinate at a (re)start, `C_START` in src/chaos_game/color_coord.rs.
 const C_START: f32 = 0.5;
+// Some function is a flame (`kind = "flame"`, src/chaos_game/flame.rs): the functions whose
+// flame-table header is an xform map by `apply_xform`; false compiles the flames out.
+override HAS_FLAMES: bool = false;
+// Palette colour with flame colour speeds (`CompiledIfs::color_speeds`): c ← s·c_i + (1 − s)·c
+// with each function's speed s from its flame-table header, as the CPU's `step_color_speed`.
+override COLOR_SPEEDS: bool = false;
+// flam3's limit of a coordinate in the plane (`BAD_VALUE` in src/chaos_game/flame.rs).
+const FLAME_BAD_VALUE: f32 = 1e10;
 
 const KIND_JULIA: u32 = 1u;
 const SELECT_BITS: u32 = 24u;
@@ -344,11 +353,31 @@ fn chaos_game(@builtin(global_invocation_id) id: vec3<u32>) {
     }
     for (var s = 0u; s < params.steps; s += 1u) {
         fi = select_function(selection_cell(p), pcg_next_u32(&rng));
-        p = map_point(fi, p);
-        if PALETTE {
-            c = (c + color_coord_at(fi)) * 0.5;
+        // False where a flame function's image left the plane: flam3 re-seeds the orbit at a
+        // random point of [−1, 1]² and does not draw that step (`CompiledIfs::map_with_rng`).
+        var shown = true;
+        if HAS_FLAMES && flame_op_at(fi).kind == FLAME_OP_XFORM {
+            let q = apply_xform(fi, p.xy, &rng);
+            if abs(q.x) <= FLAME_BAD_VALUE && abs(q.y) <= FLAME_BAD_VALUE {
+                p = vec3<f32>(q, p.z);
+            } else {
+                let x = flame_random(&rng) * 2.0 - 1.0;
+                let y = flame_random(&rng) * 2.0 - 1.0;
+                p = vec3<f32>(x, y, p.z);
+                shown = false;
+            }
+        } else {
+            p = map_point(fi, p);
         }
-        if s >= params.skip_steps {
+        if PALETTE {
+            if COLOR_SPEEDS {
+                let speed = flame_op_at(fi).k1.z;
+                c = speed * color_coord_at(fi) + (1.0 - speed) * c;
+            } else {
+                c = (c + color_coord_at(fi)) * 0.5;
+            }
+        }
+        if s >= params.skip_steps && shown {
             splat(p, select(fi, u32(c * COLOR_SCALE + 0.5), PALETTE));
             if SHADOWED {
                 splat_shadow(p);

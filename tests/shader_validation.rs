@@ -3,19 +3,22 @@
 //! mirror in Rust.
 
 use nlifs::chaos_game::{Cell, KernelFunction};
+use nlifs::flame::variations::FlameOp;
 use nlifs::gpu::chaos_game::ChaosParams;
 use nlifs::gpu::shaders::{PROGRAMS, program};
 use nlifs::resolve::ResolveParams;
 
 /// (program, WGSL struct, size of its Rust mirror). Shader-interface structs (vertex outputs)
 /// have no memory layout and no mirror.
-const MIRRORS: [(&str, &str, usize); 9] = [
+const MIRRORS: [(&str, &str, usize); 11] = [
     ("chaos_game", "KernelFunction", size_of::<KernelFunction>()),
     ("chaos_game", "Cell", size_of::<Cell>()),
     ("chaos_game", "ChaosParams", size_of::<ChaosParams>()),
     ("chaos_game_storage", "KernelFunction", size_of::<KernelFunction>()),
     ("chaos_game_storage", "Cell", size_of::<Cell>()),
     ("chaos_game_storage", "ChaosParams", size_of::<ChaosParams>()),
+    ("chaos_game", "FlameOp", size_of::<FlameOp>()),
+    ("chaos_game_storage", "FlameOp", size_of::<FlameOp>()),
     ("resolve", "ResolveParams", size_of::<ResolveParams>()),
     ("density_estimation", "ResolveParams", size_of::<ResolveParams>()),
     (

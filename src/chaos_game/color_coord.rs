@@ -14,10 +14,10 @@
 //! weighs less than 2^-24.
 //!
 //! A flame function (`chaos_game/flame.rs`) has its own colour speed s and the step is flam3's
-//! c' = s·c_i + (1 − s)·c ([`step_color_speed`]); it has no GPU twin (flames run on the CPU).
+//! c' = s·c_i + (1 − s)·c ([`step_color_speed`]).
 //!
 //! The GPU twin is the palette branch of `shaders/chaos_game.wgsl` (the same update in f32,
-//! the same quantization).
+//! the same quantization; the colour speeds from the flame table's headers).
 
 use super::sink::{PointBatch, PointSink};
 use super::{ORBITS_PER_CHUNK, STEPS_PER_BATCH};

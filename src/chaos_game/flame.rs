@@ -8,16 +8,21 @@
 //! point is NaN, which the splat skips), as flam3 retries such a step without plotting it.
 //!
 //! An IFS with a flame function runs on the general path (the lane and vector kernels take only
-//! multilinear and affine maps); its other functions are mapped there as always. There is no
-//! GPU twin of the variations: the live view and the GPU renders take the CPU route for such a
-//! scene ([`CompiledIfs::has_flames`]). The kernel table holds, for a flame function, its
-//! pre-affine as one affine cell, so that the tables stay well formed for every consumer.
+//! multilinear and affine maps); its other functions are mapped there as always. The kernel
+//! table holds, for a flame function, its pre-affine as one affine cell, so that the tables stay
+//! well formed for every consumer.
+//!
+//! The GPU twin is the flame branch of `shaders/chaos_game.wgsl` with the xforms of
+//! `shaders/variations.wgsl`: the same selection, the xform in f32 from the table
+//! [`CompiledIfs::flame_ops`] (the constants prepared here in f64), the same re-seed and colour
+//! speeds, and the same random draws in the same order (`flame_random` truncates each f64 draw
+//! to 24 bits). `tests/gpu_flames.rs` checks the two step by step and as densities.
 
 use glam::Vec3;
 
 use super::CompiledIfs;
 use crate::flame::Xform;
-use crate::flame::variations::CompiledXform;
+use crate::flame::variations::{CompiledXform, FLAME_OP_NONE, FlameOp};
 use crate::rng::Pcg32;
 
 /// flam3's limit of a coordinate in the plane (`badvalue`).
@@ -59,7 +64,7 @@ fn is_bad(v: [f64; 2]) -> bool {
 }
 
 impl CompiledIfs {
-    /// Whether a function of this IFS is a flame (no GPU twin: the CPU route runs it).
+    /// Whether a function of this IFS is a flame.
     pub fn has_flames(&self) -> bool {
         self.flames.is_some()
     }
@@ -83,6 +88,28 @@ impl CompiledIfs {
         }
         let q = self.map_fast(fi, p);
         (q, q)
+    }
+
+    /// The GPU's flame table (`shaders/variations.wgsl`): one header per compiled function
+    /// (its xform's for a flame function, else [`FLAME_OP_NONE`] with colour speed ½), then the
+    /// flame functions' terms and post-affines ([`CompiledXform::gpu_ops`]).
+    pub fn flame_ops(&self) -> Vec<FlameOp> {
+        let n = self.functions.len();
+        let none =
+            FlameOp { kind: FLAME_OP_NONE, weight: 0.0, first: 0, count: 0, k: [[0.0; 4], [0.0, 0.0, 0.5, 0.0]] };
+        let mut headers = vec![none; n];
+        let mut records = Vec::new();
+        if let Some(table) = &self.flames {
+            for (header, x) in headers.iter_mut().zip(&table.compiled) {
+                if let Some(x) = x {
+                    let (h, ops) = x.gpu_ops((n + records.len()) as u32);
+                    *header = h;
+                    records.extend(ops);
+                }
+            }
+        }
+        headers.extend(records);
+        headers
     }
 
     /// One step of an orbit's colour coordinate after compiled function `fi`:

@@ -152,9 +152,6 @@ pub fn run(command: BenchCommand) -> anyhow::Result<()> {
         }
         BenchCommand::Gpu { scene, points, steps, frames } => {
             let scene = load(&scene)?;
-            if scene.has_flames() {
-                return Err(BadInput(format!("bench gpu: {}", nlifs::live::FLAMES_ON_CPU)).into());
-            }
             let report = nlifs::gpu::bench::run(&scene, points, steps, frames)?;
             println!("{report}");
             Ok(())

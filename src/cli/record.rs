@@ -274,7 +274,7 @@ pub fn record(args: RecordArgs) -> anyhow::Result<()> {
         );
     }
     if rec.settings().renderer == Renderer::Chaos {
-        rec = choose_backend(rec, args.backend, scene.has_flames())?;
+        rec = choose_backend(rec, args.backend)?;
     } else {
         eprintln!("record: ray-traced on the CPU");
     }
@@ -332,13 +332,9 @@ pub fn record(args: RecordArgs) -> anyhow::Result<()> {
 /// `rec` with its chaos game where `backend` says, and a line saying where that is: `auto`
 /// takes the GPU only where the adapter is a hardware one (a software rasterizer is slower
 /// than the CPU chaos game).
-fn choose_backend(rec: Recorder<'_>, backend: RecordBackend, flames: bool) -> anyhow::Result<Recorder<'_>> {
+fn choose_backend(rec: Recorder<'_>, backend: RecordBackend) -> anyhow::Result<Recorder<'_>> {
     let ctx = match backend {
         RecordBackend::Cpu => None,
-        _ if flames => {
-            eprintln!("record: chaos game on the CPU ({})", nlifs::live::FLAMES_ON_CPU);
-            return Ok(rec);
-        }
         RecordBackend::Gpu => Some(nlifs::gpu::GpuContext::headless().map_err(gpu_error)?),
         RecordBackend::Auto => match nlifs::gpu::GpuContext::headless() {
             Ok(ctx) if nlifs::gpu::batch::is_software(&ctx) => {

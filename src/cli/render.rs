@@ -222,13 +222,6 @@ pub fn render(args: RenderArgs) -> anyhow::Result<()> {
     // only (the CPU outruns a software rasterizer), as `record --backend auto` does.
     let gpu = match args.backend {
         RenderBackend::Cpu => None,
-        // Flame functions have no GPU twin (`chaos_game/flame.rs`): the CPU runs them.
-        _ if shot.compiled.has_flames() => {
-            if args.backend == RenderBackend::Gpu {
-                eprintln!("note: {}", nlifs::live::FLAMES_ON_CPU);
-            }
-            None
-        }
         RenderBackend::Gpu => Some(nlifs::gpu::GpuContext::headless().map_err(gpu_error)?),
         RenderBackend::Auto => {
             nlifs::gpu::GpuContext::headless().ok().filter(|ctx| !nlifs::gpu::batch::is_software(ctx))

@@ -76,10 +76,7 @@ pub fn view(args: ViewArgs) -> anyhow::Result<()> {
             args.scene = Some(toml);
         } else {
             // A flame file opens as its imported scene; its warnings are printed here, once.
-            let scene = super::load(path)?;
-            if scene.has_flames() && args.chaos_backend == Some(ChaosBackendArg::Gpu) {
-                eprintln!("note: {}", nlifs::live::FLAMES_ON_CPU);
-            }
+            super::load(path)?;
         }
     }
     if let Some(path) = &args.screenshot {

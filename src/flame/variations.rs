@@ -401,4 +401,67 @@ impl CompiledXform {
     pub fn apply_color(&self, c: f64) -> f64 {
         self.color_speed * self.color + (1.0 - self.color_speed) * c
     }
+
+    /// This xform as records of the GPU's flame table (`shaders/variations.wgsl`): its header
+    /// (pre-affine, `pre_blur` weight, colour speed; its `count` records start at `first`) and
+    /// those records: the terms in flam3's order with the constants [`Self::new`] prepared,
+    /// then the post-affine when there is one. The f64 constants are rounded to f32 here.
+    pub fn gpu_ops(&self, first: u32) -> (FlameOp, Vec<FlameOp>) {
+        let f = |v: &[f64]| -> [f32; 4] { std::array::from_fn(|i| v.get(i).map_or(0.0, |&x| x as f32)) };
+        let mut records: Vec<FlameOp> = self
+            .terms
+            .iter()
+            .map(|t| FlameOp {
+                kind: t.variation as u32,
+                weight: t.weight as f32,
+                first: 0,
+                count: 0,
+                k: [f(&t.k[..4]), f(&t.k[4..])],
+            })
+            .collect();
+        if let Some(post) = &self.post {
+            records.push(FlameOp {
+                kind: FLAME_OP_POST,
+                weight: 0.0,
+                first: 0,
+                count: 0,
+                k: [f(&post[..4]), f(&post[4..])],
+            });
+        }
+        let c = &self.coefs;
+        let header = FlameOp {
+            kind: FLAME_OP_XFORM,
+            weight: self.pre_blur as f32,
+            first,
+            count: records.len() as u32,
+            k: [f(&c[..4]), f(&[c[4], c[5], self.color_speed])],
+        };
+        (header, records)
+    }
 }
+
+/// One record of the GPU's flame table (`shaders/variations.wgsl`, read by the chaos game).
+/// Mirrors `struct FlameOp` there: keep the two in sync. Record i < the number of compiled
+/// functions is function i's header ([`FLAME_OP_XFORM`] for a flame function, else
+/// [`FLAME_OP_NONE`]); a header's `count` records from `first` on are its xform's terms (`kind`
+/// = the variation's number, `k` its constants) and its post-affine ([`FLAME_OP_POST`]).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct FlameOp {
+    pub kind: u32,
+    /// A term's weight; a header's `pre_blur` weight.
+    pub weight: f32,
+    pub first: u32,
+    pub count: u32,
+    /// A term's constants; an affine map's coefs a, b, c, d | e, f; a header's colour speed in
+    /// `k[1][2]`.
+    pub k: [[f32; 4]; 2],
+}
+const _: () = assert!(std::mem::size_of::<FlameOp>() == 48);
+
+/// The header of a flame function's xform.
+pub const FLAME_OP_XFORM: u32 = 1000;
+/// The header of a function that is not a flame (colour speed ½ in `k[1][2]`).
+pub const FLAME_OP_NONE: u32 = 1001;
+/// An xform's post-affine.
+pub const FLAME_OP_POST: u32 = 1002;

@@ -5,11 +5,13 @@
 //!
 //! The tables are bound as uniform buffers when they fit their fixed capacities (program
 //! `chaos_game`, `shaders/ifs_tables_uniform.wgsl`), else as storage buffers (program
-//! `chaos_game_storage`); the buffers are the same bytes either way.
+//! `chaos_game_storage`); the buffers are the same bytes either way. The flame functions' table
+//! ([`CompiledIfs::flame_ops`], `shaders/variations.wgsl`) is a storage buffer in both.
 
 use wgpu::util::DeviceExt;
 
 use crate::chaos_game::{Cell, CompiledIfs, KIND_MULTILINEAR, KernelFunction};
+use crate::flame::variations::FlameOp;
 use crate::scene::spec::SplatMode;
 use crate::splat::SplatView;
 
@@ -84,6 +86,15 @@ pub struct IfsShape {
     // Palette colour (`src/chaos_game/color_coord.rs`):
     /// The points carry a colour coordinate (the shader's `PALETTE`).
     pub palette: bool,
+    // Flame functions (`src/chaos_game/flame.rs`):
+    /// Some function is a flame (the shader's `HAS_FLAMES`).
+    pub flames: bool,
+    /// The colour coordinate steps with per-function colour speeds (`COLOR_SPEEDS`).
+    pub color_speeds: bool,
+    /// The variations the flame functions use: bit v % 32 of word v / 32 (the shader's
+    /// `FLAME_VARIATIONS_*`; the others are compiled out). Adding a variation to a flame in
+    /// the viewer makes a new pipeline.
+    pub flame_variations: [u32; 4],
 }
 
 impl IfsShape {
@@ -93,11 +104,14 @@ impl IfsShape {
             function_count: ifs.selection.function_count,
             single_selection_cell: ifs.selection.cells == [1, 1, 1],
             palette: ifs.color_coords.is_some(),
+            flames: ifs.has_flames(),
+            color_speeds: ifs.color_speeds.is_some(),
+            flame_variations: flame_variations(ifs),
         }
     }
 
     /// The shader's pipeline constants for this shape.
-    fn constants(&self) -> [(&'static str, f64); 6] {
+    fn constants(&self) -> [(&'static str, f64); 12] {
         let [x, y, z] = self.shared_cells.unwrap_or([0; 3]);
         [
             ("SHARED_CELLS_X", x as f64),
@@ -106,8 +120,27 @@ impl IfsShape {
             ("FUNCTION_COUNT", self.function_count as f64),
             ("SINGLE_SELECTION_CELL", self.single_selection_cell as u32 as f64),
             ("PALETTE", self.palette as u32 as f64),
+            ("HAS_FLAMES", self.flames as u32 as f64),
+            ("COLOR_SPEEDS", self.color_speeds as u32 as f64),
+            ("FLAME_VARIATIONS_0", self.flame_variations[0] as f64),
+            ("FLAME_VARIATIONS_1", self.flame_variations[1] as f64),
+            ("FLAME_VARIATIONS_2", self.flame_variations[2] as f64),
+            ("FLAME_VARIATIONS_3", self.flame_variations[3] as f64),
         ]
     }
+}
+
+/// See [`IfsShape::flame_variations`]: the variation numbers of the flame table's terms.
+fn flame_variations(ifs: &CompiledIfs) -> [u32; 4] {
+    let mut words = [0u32; 4];
+    if ifs.has_flames() {
+        for op in ifs.flame_ops() {
+            if op.kind < 128 {
+                words[op.kind as usize / 32] |= 1 << (op.kind % 32);
+            }
+        }
+    }
+    words
 }
 
 /// See [`IfsShape::shared_cells`]: the shared shader path reads function 0's record and axes
@@ -242,6 +275,7 @@ impl Program {
                 entry(6, write),
                 entry(7, write),
                 entry(8, write),
+                entry(9, wgpu::BufferBindingType::Storage { read_only: true }),
             ],
         });
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
@@ -295,7 +329,10 @@ impl Program {
 
 pub struct GpuChaosGame {
     uniform_program: Program,
-    storage_program: Program,
+    /// Made on first use: most IFS fit the uniform program, and this one binds nine storage
+    /// buffers (the tables, points, accumulation, shadow map and flame table), one more than
+    /// WebGPU's default limit; a device at that limit still runs every IFS that fits.
+    storage_program: Option<Program>,
     /// The tables fit the uniform program's capacities (set by `set_ifs`).
     uniform_tables: bool,
     /// Some compiled function is a Julia map (set by `set_ifs`).
@@ -313,6 +350,8 @@ pub struct GpuChaosGame {
     cells: wgpu::Buffer,
     thresholds: wgpu::Buffer,
     pub colors: wgpu::Buffer,
+    /// The flame table (`CompiledIfs::flame_ops`; a storage buffer in both programs).
+    flame_ops: wgpu::Buffer,
     pub points: wgpu::Buffer,
     pub accum: wgpu::Buffer,
     bind_group: Option<wgpu::BindGroup>,
@@ -332,8 +371,6 @@ pub struct GpuChaosGame {
 impl GpuChaosGame {
     pub fn new(device: &wgpu::Device, point_count: u32, width: u32, height: u32) -> Self {
         let uniform_program = Program::new(device, "chaos_game", wgpu::BufferBindingType::Uniform);
-        let storage_program =
-            Program::new(device, "chaos_game_storage", wgpu::BufferBindingType::Storage { read_only: true });
         let params = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("chaos_params"),
             size: std::mem::size_of::<ChaosParams>() as u64,
@@ -343,7 +380,7 @@ impl GpuChaosGame {
         let [functions, coords, cells, thresholds, colors] = UNIFORM_CAPACITY;
         Self {
             uniform_program,
-            storage_program,
+            storage_program: None,
             uniform_tables: true,
             force_storage_tables: false,
             shape: IfsShape::default(),
@@ -355,6 +392,7 @@ impl GpuChaosGame {
             cells: table(device, "cells", cells),
             thresholds: table(device, "thresholds", thresholds),
             colors: table(device, "colors", colors),
+            flame_ops: storage(device, "flame_ops", size_of::<FlameOp>() as u64, wgpu::BufferUsages::empty()),
             points: storage(device, "points", point_count as u64 * 16, wgpu::BufferUsages::COPY_SRC),
             accum: storage(device, "accum", width as u64 * height as u64 * 16, wgpu::BufferUsages::COPY_SRC),
             bind_group: None,
@@ -384,7 +422,8 @@ impl GpuChaosGame {
             && tables.iter().zip(UNIFORM_CAPACITY).all(|(t, capacity)| t.len() as u64 <= capacity);
         self.has_julia = ifs.functions.iter().any(|f| f.coord_offset[3] == crate::chaos_game::KIND_JULIA);
         self.shape = if self.force_generic {
-            IfsShape { palette: ifs.color_coords.is_some(), ..IfsShape::default() }
+            let IfsShape { palette, flames, color_speeds, flame_variations, .. } = IfsShape::of(ifs);
+            IfsShape { palette, flames, color_speeds, flame_variations, ..IfsShape::default() }
         } else {
             IfsShape::of(ifs)
         };
@@ -394,6 +433,7 @@ impl GpuChaosGame {
         replaced |= upload(device, queue, &mut self.coords, "coords", tables[1]);
         replaced |= upload(device, queue, &mut self.cells, "cells", tables[2]);
         replaced |= upload(device, queue, &mut self.thresholds, "thresholds", tables[3]);
+        replaced |= upload(device, queue, &mut self.flame_ops, "flame_ops", bytemuck::cast_slice(&ifs.flame_ops()));
         let colors_replaced = upload(device, queue, &mut self.colors, "colors", tables[4]);
         if replaced || colors_replaced {
             self.bind_group = None;
@@ -477,7 +517,13 @@ impl GpuChaosGame {
             lens: v.lens.uniform(),
         };
         queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
-        let program = if self.uniform_tables { &mut self.uniform_program } else { &mut self.storage_program };
+        let program = if self.uniform_tables {
+            &mut self.uniform_program
+        } else {
+            self.storage_program.get_or_insert_with(|| {
+                Program::new(device, "chaos_game_storage", wgpu::BufferBindingType::Storage { read_only: true })
+            })
+        };
         let shadowed = v.shadow.is_some();
         let key = (mode_index(v.mode), self.has_julia, self.shape, shadowed, v.lens.is_on());
         let chaos_index = program.chaos_pipeline(device, key);
@@ -493,6 +539,7 @@ impl GpuChaosGame {
                 &self.points,
                 &self.accum,
                 &self.shadow,
+                &self.flame_ops,
             ];
             let entries: Vec<wgpu::BindGroupEntry> = buffers
                 .iter()
@@ -574,7 +621,15 @@ mod tests {
         // plant2: 2×4×2 grid points, 1×3×1 cells, five functions on the scene's grid.
         assert_eq!(
             shape("plant2.toml"),
-            IfsShape { shared_cells: Some([1, 3, 1]), function_count: 5, single_selection_cell: true, palette: false }
+            IfsShape {
+                shared_cells: Some([1, 3, 1]),
+                function_count: 5,
+                single_selection_cell: true,
+                palette: false,
+                flames: false,
+                color_speeds: false,
+                flame_variations: [0; 4]
+            }
         );
         // Julia maps have no grid.
         assert_eq!(shape("julia.toml").shared_cells, None);

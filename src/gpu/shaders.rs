@@ -1,13 +1,16 @@
 //! The one place WGSL enters the program. Every file under `shaders/` is included here, and a
 //! program is the concatenation of its files in order (`rng.wgsl` holds functions only, shared
 //! by the programs that draw random numbers; `fullscreen.wgsl` the vertex stage of the
-//! full-screen passes). `tests/shader_validation.rs` validates every
+//! full-screen passes; the three `variations*.wgsl` the flame functions of the chaos game). `tests/shader_validation.rs` validates every
 //! program with naga and checks that every file under `shaders/` belongs to one.
 
 pub const RNG: &str = include_str!("../../shaders/rng.wgsl");
 pub const IFS_TABLES_UNIFORM: &str = include_str!("../../shaders/ifs_tables_uniform.wgsl");
 pub const IFS_TABLES_STORAGE: &str = include_str!("../../shaders/ifs_tables_storage.wgsl");
 pub const CHAOS_GAME: &str = include_str!("../../shaders/chaos_game.wgsl");
+pub const VARIATIONS: &str = include_str!("../../shaders/variations.wgsl");
+pub const VARIATIONS_BASIC: &str = include_str!("../../shaders/variations_basic.wgsl");
+pub const VARIATIONS_PLUGINS: &str = include_str!("../../shaders/variations_plugins.wgsl");
 pub const FULLSCREEN: &str = include_str!("../../shaders/fullscreen.wgsl");
 pub const RESOLVE: &str = include_str!("../../shaders/resolve.wgsl");
 pub const COMPOSITE: &str = include_str!("../../shaders/composite.wgsl");
@@ -20,11 +23,25 @@ pub const PROGRAMS: [(&str, &[(&str, &str)]); 6] = [
     ("rng", &[("rng.wgsl", RNG)]),
     (
         "chaos_game",
-        &[("rng.wgsl", RNG), ("ifs_tables_uniform.wgsl", IFS_TABLES_UNIFORM), ("chaos_game.wgsl", CHAOS_GAME)],
+        &[
+            ("rng.wgsl", RNG),
+            ("ifs_tables_uniform.wgsl", IFS_TABLES_UNIFORM),
+            ("variations.wgsl", VARIATIONS),
+            ("variations_basic.wgsl", VARIATIONS_BASIC),
+            ("variations_plugins.wgsl", VARIATIONS_PLUGINS),
+            ("chaos_game.wgsl", CHAOS_GAME),
+        ],
     ),
     (
         "chaos_game_storage",
-        &[("rng.wgsl", RNG), ("ifs_tables_storage.wgsl", IFS_TABLES_STORAGE), ("chaos_game.wgsl", CHAOS_GAME)],
+        &[
+            ("rng.wgsl", RNG),
+            ("ifs_tables_storage.wgsl", IFS_TABLES_STORAGE),
+            ("variations.wgsl", VARIATIONS),
+            ("variations_basic.wgsl", VARIATIONS_BASIC),
+            ("variations_plugins.wgsl", VARIATIONS_PLUGINS),
+            ("chaos_game.wgsl", CHAOS_GAME),
+        ],
     ),
     ("resolve", &[("fullscreen.wgsl", FULLSCREEN), ("resolve.wgsl", RESOLVE)]),
     ("composite", &[("fullscreen.wgsl", FULLSCREEN), ("composite.wgsl", COMPOSITE)]),

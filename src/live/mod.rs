@@ -29,7 +29,7 @@ use crate::gpu::{GpuContext, GpuError};
 use crate::resolve::density_estimation;
 
 use self::cpu_source::CpuChaosGame;
-pub use self::settings::{ChaosBackend, ChaosRoute, FLAMES_ON_CPU, Imaging, LiveSettings};
+pub use self::settings::{ChaosBackend, ChaosRoute, Imaging, LiveSettings};
 
 impl From<&LiveSettings> for ProgressiveSettings {
     fn from(s: &LiveSettings) -> Self {
@@ -71,8 +71,6 @@ pub struct LiveView {
     route: ChaosRoute,
     /// The adapter rasterizes on the CPU (lavapipe, llvmpipe): `auto` takes the CPU route.
     software_adapter: bool,
-    /// The IFS has flame functions: the CPU route, whatever the backend (`ChaosBackend::route_for`).
-    flames: bool,
     cpu: CpuChaosGame,
     /// The camera is being dragged: the view draws without the key light's shadows
     /// ([`Self::set_navigating`]).
@@ -89,7 +87,6 @@ impl LiveView {
             route: settings.chaos_backend.route(software_adapter),
             settings,
             software_adapter,
-            flames: false,
             cpu: CpuChaosGame::default(),
             navigating: false,
         })
@@ -152,13 +149,6 @@ impl LiveView {
     pub fn set_ifs(&mut self, ctx: &GpuContext, ifs: &CompiledIfs, bounds: (DVec3, DVec3), restart: bool) {
         self.gpu.set_ifs(ctx, ifs, bounds, restart);
         self.cpu.set_ifs(ifs, restart, self.settle_steps());
-        self.flames = ifs.has_flames();
-        let route = self.settings.chaos_backend.route_for(self.software_adapter, self.flames);
-        if route.cpu != self.route.cpu {
-            self.gpu.restart_points();
-            self.cpu.restart();
-        }
-        self.route = route;
     }
 
     pub fn set_camera(&mut self, camera: &OrbitCamera) {
@@ -167,7 +157,7 @@ impl LiveView {
 
     pub fn set_settings(&mut self, ctx: &GpuContext, settings: LiveSettings) -> Result<(), GpuError> {
         self.gpu.set_settings(ctx, self.progressive_settings(&settings))?;
-        let route = settings.chaos_backend.route_for(self.software_adapter, self.flames);
+        let route = settings.chaos_backend.route(self.software_adapter);
         if route.cpu != self.route.cpu {
             // The points of the route that did not run did not follow the edits: restart them.
             self.gpu.restart_points();

@@ -141,19 +141,7 @@ impl ChaosBackend {
             Self::Auto => ChaosRoute { cpu: false, reason: "auto: hardware adapter" },
         }
     }
-
-    /// [`Self::route`] for an IFS that may have flame functions (`flames`), which have no GPU
-    /// twin: such an IFS takes the CPU route whatever the setting, and the reason says why.
-    pub fn route_for(self, software_adapter: bool, flames: bool) -> ChaosRoute {
-        if flames {
-            return ChaosRoute { cpu: true, reason: FLAMES_ON_CPU };
-        }
-        self.route(software_adapter)
-    }
 }
-
-/// Why an IFS with flame functions takes the CPU route (the viewer's statistics show it).
-pub const FLAMES_ON_CPU: &str = "flame functions run on the CPU only (their variations have no GPU twin)";
 
 /// Where the chaos game runs, and why (the viewer's statistics show both).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -178,8 +166,6 @@ mod tests {
         assert!(!ChaosBackend::Auto.route(false).cpu);
         assert!(!ChaosBackend::Gpu.route(true).cpu);
         assert!(ChaosBackend::Cpu.route(false).cpu);
-        assert!(ChaosBackend::Gpu.route_for(false, true).cpu);
-        assert_eq!(ChaosBackend::Gpu.route_for(false, false), ChaosBackend::Gpu.route(false));
         for b in ChaosBackend::ALL {
             assert_eq!(ChaosBackend::parse(b.name()), Some(b));
         }
