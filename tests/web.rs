@@ -180,6 +180,13 @@ async fn the_viewer_draws_plant2_edits_it_and_undoes() {
         100.0 * changed
     );
 
+    // F12's screenshot: read back when its copy maps, encoded with the scene inside, and
+    // offered as a download.
+    host.send(Command::ScreenshotNextToScene);
+    frames(&host, 3).await;
+    let message = host.with(|h| h.message.clone()).unwrap_or_default();
+    assert!(message.starts_with("saved the screenshot ") && message.ends_with(".png"), "{message}");
+
     // A bad scene dropped on the page: its error located in the banner, plant2 stays.
     let bad = "name = \"bad\"\n[grid]\nnx = \"three\"\n";
     host.send(Command::OpenBytes { name: "bad.toml".into(), bytes: bad.as_bytes().to_vec() });
