@@ -129,8 +129,6 @@ async fn the_viewer_draws_plant2_edits_it_and_undoes() {
     assert!(started, "the viewer did not start within 120 s");
     assert_eq!(host.with(|h| h.fatal.clone()), None, "the viewer could not start");
     let plant2 = Scene::parse(BUNDLED_SCENES.iter().find(|(n, _)| *n == "plant2").unwrap().1, "plant2").unwrap();
-    // The grid overlay on from the start: the picture before the edit has its lines too.
-    host.send(Command::SetGridOverlay(true));
     frames(&host, 10).await;
     // The frame rate while plant2 accumulates (reported, not asserted: it is the machine's).
     let (frames_0, t0_ms) = (host.with(|h| h.frames), js_sys::Date::now());
@@ -145,16 +143,21 @@ async fn the_viewer_draws_plant2_edits_it_and_undoes() {
     // plant2 framed in the view covers a good part of it; an empty or blank-white view does not.
     assert!((0.02..0.9).contains(&lit), "attractor pixels: {:.2} % of the view", 100.0 * lit);
 
-    // A grid point of the first function dragged 60 pixels to the right, as the mouse does.
-    host.send(Command::BeginPointDrag { function: 0, point: 0 });
-    host.send(Command::DragPoint { delta_px: [60.0, 0.0] });
-    host.send(Command::EndGesture);
+    // The two middle-left grid points of f2 (the crown, a quarter of the points; index
+    // (x·4 + y)·2 + z) dragged 150 pixels to the right, each its own gesture as with the mouse
+    // (without the grid overlay, whose lines would be in the picture).
+    for point in [2, 3] {
+        host.send(Command::BeginPointDrag { function: 1, point });
+        host.send(Command::DragPoint { delta_px: [150.0, 0.0] });
+        host.send(Command::EndGesture);
+    }
     // As many frames as the picture before had accumulated.
     frames(&host, 20).await;
     assert!(host.with(|h| h.can_undo), "the drag made no undoable edit: {:?}", host.with(|h| h.error.clone()));
     let edited = attractor_mask(&canvas_pixels(&canvas));
     let changed = mask_difference(&before, &edited);
 
+    host.send(Command::Undo);
     host.send(Command::Undo);
     frames(&host, 20).await;
     assert!(!host.with(|h| h.can_undo));
@@ -176,6 +179,13 @@ async fn the_viewer_draws_plant2_edits_it_and_undoes() {
         100.0 * left,
         100.0 * changed
     );
+
+    // F12's screenshot: read back when its copy maps, encoded with the scene inside, and
+    // offered as a download.
+    host.send(Command::ScreenshotNextToScene);
+    frames(&host, 3).await;
+    let message = host.with(|h| h.message.clone()).unwrap_or_default();
+    assert!(message.starts_with("saved the screenshot ") && message.ends_with(".png"), "{message}");
 
     // A bad scene dropped on the page: its error located in the banner, plant2 stays.
     let bad = "name = \"bad\"\n[grid]\nnx = \"three\"\n";

@@ -23,6 +23,8 @@ pub struct HostState {
     pub fatal: Option<String>,
     /// The error shown in the view (a scene that did not open, with its location), if any.
     pub error: Option<String>,
+    /// The last message of the panel ("saved …", "opened …").
+    pub message: Option<String>,
     /// The name of the scene on screen.
     pub scene_name: String,
     /// Frames drawn so far.

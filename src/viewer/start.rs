@@ -83,6 +83,7 @@ impl App {
         let (state, gfx) = (&self.state, &self.gfx);
         self.options.host.with(|h| {
             h.error = state.files.view_error.clone().or_else(|| state.error.clone());
+            h.message.clone_from(&state.message);
             h.scene_name.clone_from(&state.scene.name);
             h.frames = self.frames;
             h.can_undo = state.history.can_undo();

@@ -52,11 +52,7 @@ pub fn scene_from_query(query: &str) -> Option<Result<(String, Vec<u8>), String>
         });
     }
     let param = params.get("toml")?;
-    Some(
-        url::decode(&param)
-            .map(|text| ("scene from the link.toml".to_string(), text.into_bytes()))
-            .map_err(|e| e.to_string()),
-    )
+    Some(url::decode(&param).map(|text| ("link.toml".to_string(), text.into_bytes())).map_err(|e| e.to_string()))
 }
 
 /// Starts the viewer in the page (called by `index.html`), with the scene its address names.
