@@ -176,7 +176,8 @@ fn probe_inner(path: &Path, created: &mut Vec<PathBuf>) -> std::io::Result<()> {
     created.extend(missing.into_iter().rev());
     let tmp = temp_path(path);
     // This process writes nothing yet, so a file of this name is a dead one's, as good to replace.
-    drop(std::fs::File::create(&tmp)?);
+    // The file closes at the end of the statement.
+    std::fs::File::create(&tmp)?;
     std::fs::remove_file(&tmp)
 }
 
