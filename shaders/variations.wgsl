@@ -104,8 +104,11 @@ fn pow_c(x: f32, y: f32) -> f32 {
         if y == 0.0 {
             return 1.0;
         }
-        // +∞ for a negative exponent.
-        return select(0.0, bitcast<f32>(0x7f800000u), y < 0.0);
+        // +∞ for a negative exponent. Its bits are made from the runtime `y` (an `& 0u` that
+        // changes nothing): a constant expression may not be infinite in WGSL, and browsers'
+        // compilers (Chromium's Tint) refuse the module where naga accepts it.
+        let inf = bitcast<f32>(0x7f800000u | (bitcast<u32>(y) & 0u));
+        return select(0.0, inf, y < 0.0);
     }
     return pow(x, y);
 }

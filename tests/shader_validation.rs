@@ -124,3 +124,34 @@ fn uniform_table_sizes_match_host_capacities() {
         .expect("resolve: colors");
     assert_eq!(layouter[colors.ty].size as u64, UNIFORM_CAPACITY[4], "resolve: colors");
 }
+
+/// WGSL forbids a constant expression whose value is infinite or NaN, and browsers' compilers
+/// (Chromium's Tint) refuse such a module where naga accepts it: the whole chaos game then draws
+/// nothing in the page. The one way this code writes such a value by hand, a bitcast of literal
+/// bits with the f32 exponent all ones, is looked for in every shader file.
+#[test]
+fn no_constant_infinity_or_nan() {
+    for (_, parts) in PROGRAMS {
+        for (file, text) in parts.iter() {
+            for (i, line) in text.lines().enumerate() {
+                let code = line.split("//").next().unwrap_or("");
+                let mut rest = code;
+                while let Some(at) = rest.find("bitcast<f32>(") {
+                    let arg = &rest[at + "bitcast<f32>(".len()..];
+                    let literal: String = arg.chars().take_while(|c| c.is_ascii_alphanumeric()).collect();
+                    let closes = arg[literal.len()..].starts_with(')');
+                    let bits = literal.strip_prefix("0x").map(|h| u32::from_str_radix(h.trim_end_matches('u'), 16));
+                    if let (true, Some(Ok(bits))) = (closes, bits) {
+                        assert!(
+                            f32::from_bits(bits).is_finite(),
+                            "shaders/{file}:{}: `bitcast<f32>({literal})` is a constant infinity or NaN, which \
+                             browsers refuse; make it from a runtime value",
+                            i + 1
+                        );
+                    }
+                    rest = &arg[literal.len()..];
+                }
+            }
+        }
+    }
+}
