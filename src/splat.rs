@@ -223,8 +223,9 @@ pub(crate) trait Pixels {
         None
     }
     /// Accumulating modes: the sums themselves, one [r, g, b, count] per pixel, where this
-    /// target holds them (the vector splat then adds to them directly, their lines prefetched a
-    /// few vectors ahead); None: updates go through [`Self::add`] only.
+    /// target holds them (the vector splat then gathers, adds and scatters back the sums of a
+    /// vector whose pixels are distinct); None: updates go through [`Self::add`] only.
+    #[cfg_attr(not(target_arch = "x86_64"), allow(dead_code, reason = "used by the x86-64 vector splat only"))]
     fn own_sums(&mut self) -> Option<&mut [[u32; 4]]> {
         None
     }
