@@ -20,6 +20,7 @@ use wasm_bindgen_test::{wasm_bindgen_test, wasm_bindgen_test_configure};
 
 use nlifs::chaos_game::{self, CompiledIfs, ORBITS_PER_CHUNK, run_chunk};
 use nlifs::gpu::GpuContext;
+use nlifs::gpu::progressive::ProgressiveSettings;
 use nlifs::live::{ChaosBackend, LiveSettings, LiveView};
 use nlifs::scene::Scene;
 use nlifs::scene::spec::SplatMode;
@@ -184,6 +185,9 @@ async fn the_viewer_draws_plant2_edits_it_and_undoes() {
     // offered as a download.
     host.send(Command::ScreenshotNextToScene);
     frames(&host, 3).await;
+    // The copy maps when the browser's GPU process gets to it: seconds on a busy SwiftShader.
+    let saved = |h: &nlifs::viewer::host::HostState| h.message.as_deref().is_some_and(|m| m.starts_with("saved"));
+    wait_for(&host, 60.0, saved).await;
     let message = host.with(|h| h.message.clone()).unwrap_or_default();
     assert!(message.starts_with("saved the screenshot ") && message.ends_with(".png"), "{message}");
 
@@ -233,19 +237,21 @@ async fn webgpu_chaos_game_densities_match_cpu() {
     let bg = [0.0; 3];
     let gpu_orbits = 1u32 << 18;
     let settings = LiveSettings {
-        point_count: gpu_orbits,
-        steps_per_frame: k,
-        seed: 3,
-        mode: SplatMode::Density,
-        depth_cue: 0.0,
-        background: bg,
-        shading: 0.0,
-        occlusion: 0.0,
-        point_radius_px: 0,
-        max_splats: u64::MAX,
-        settle_steps: 0,
+        draw: ProgressiveSettings {
+            point_count: gpu_orbits,
+            steps_per_frame: k,
+            seed: 3,
+            mode: SplatMode::Density,
+            depth_cue: 0.0,
+            background: bg,
+            shading: 0.0,
+            occlusion: 0.0,
+            point_radius_px: 0,
+            max_splats: u64::MAX,
+            settle_steps: 0,
+            ..ProgressiveSettings::default()
+        },
         chaos_backend: ChaosBackend::Gpu,
-        ..LiveSettings::default()
     };
     let mut live = LiveView::new(&ctx, settings, width, height).unwrap();
     live.set_ifs(&ctx, &compiled, bounds, true);
