@@ -119,6 +119,7 @@ fn gpu_density_estimation_matches_cpu() {
 #[test]
 fn live_cpu_route_estimate_matches_the_gpu_estimate() {
     use nlifs::chaos_game::{self, CompiledIfs};
+    use nlifs::gpu::progressive::ProgressiveSettings;
     use nlifs::live::{ChaosBackend, LiveSettings, LiveView};
     use nlifs::resolve::Tone;
     use nlifs::scene::Scene;
@@ -130,13 +131,15 @@ fn live_cpu_route_estimate_matches_the_gpu_estimate() {
     let compiled = CompiledIfs::new(&scene.at(0.0)).unwrap();
     let bounds = chaos_game::attractor_bounds(&compiled, 1);
     let settings = LiveSettings {
-        point_count: 1 << 16,
-        mode: SplatMode::Density,
-        max_splats: u64::MAX,
+        draw: ProgressiveSettings {
+            point_count: 1 << 16,
+            mode: SplatMode::Density,
+            max_splats: u64::MAX,
+            tone: Tone { exposure: 0.5, gamma: 2.2, ..Tone::NEUTRAL },
+            density_estimation: Some(DensityEstimation { max_radius_px: 5.0, min_radius_px: 0.0, curve: 0.4 }),
+            ..ProgressiveSettings::default()
+        },
         chaos_backend: ChaosBackend::Cpu,
-        tone: Tone { exposure: 0.5, gamma: 2.2, ..Tone::NEUTRAL },
-        density_estimation: Some(DensityEstimation { max_radius_px: 5.0, min_radius_px: 0.0, curve: 0.4 }),
-        ..LiveSettings::default()
     };
     let mut live = LiveView::new(&ctx, settings, width, height).unwrap();
     live.set_ifs(&ctx, &compiled, bounds, true);

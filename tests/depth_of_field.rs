@@ -298,22 +298,25 @@ fn viewer_lens_edits_are_undoable_scene_edits() {
     use nlifs::viewer::command::Command;
     use nlifs::viewer::state::ViewerState;
     let mut state = ViewerState::new(common::load_scene("plant2"), None, LiveSettings::default());
-    assert_eq!((state.live.aperture, state.live.focus_distance), (0.0, None));
+    assert_eq!((state.live.draw.aperture, state.live.draw.focus_distance), (0.0, None));
     let changes = state.apply([Command::SetLens { aperture: 1.5, focus_distance: Some(70.0) }]);
     assert!(changes.live_settings && changes.scene_edited);
     assert_eq!((state.scene.render.aperture, state.scene.render.focus_distance), (1.5, Some(70.0)));
-    assert_eq!((state.live.aperture, state.live.focus_distance), (1.5, Some(70.0)));
+    assert_eq!((state.live.draw.aperture, state.live.draw.focus_distance), (1.5, Some(70.0)));
     assert!(state.modified());
     let changes = state.apply([Command::Undo]);
     assert!(changes.live_settings);
-    assert_eq!((state.scene.render.aperture, state.live.aperture, state.live.focus_distance), (0.0, 0.0, None));
+    assert_eq!(
+        (state.scene.render.aperture, state.live.draw.aperture, state.live.draw.focus_distance),
+        (0.0, 0.0, None)
+    );
     state.apply([Command::Redo]);
-    assert_eq!(state.live.aperture, 1.5);
+    assert_eq!(state.live.draw.aperture, 1.5);
     // A preview (a slider being dragged) moves the live view only; its release makes the edit.
     let mut live = state.live;
-    live.aperture = 3.0;
+    live.draw.aperture = 3.0;
     state.apply([Command::SetLiveSettings(live)]);
-    assert_eq!((state.scene.render.aperture, state.live.aperture), (1.5, 3.0));
+    assert_eq!((state.scene.render.aperture, state.live.draw.aperture), (1.5, 3.0));
     state.apply([Command::SetLens { aperture: 3.0, focus_distance: Some(70.0) }]);
     assert_eq!(state.scene.render.aperture, 3.0);
     // Refused: the scene and the live view keep their lens, the error says why.

@@ -14,6 +14,7 @@ use common::{Density, assert_densities_agree, coarse_density, gpu};
 use glam::Vec3;
 use nlifs::chaos_game::{self, ChunkChains, CompiledIfs, ORBITS_PER_CHUNK, continue_chunk, run_chunk};
 use nlifs::gpu::chaos_game::{FrameArgs, GpuChaosGame};
+use nlifs::gpu::progressive::ProgressiveSettings;
 use nlifs::gpu::readback::read_buffer;
 use nlifs::live::cpu_source::frame_layout;
 use nlifs::live::{ChaosBackend, LiveSettings, LiveView};
@@ -105,7 +106,7 @@ fn densities_match_cpu() {
 
         // GPU: 2^18 independent orbits of k steps after the transient.
         let gpu_orbits = 1u32 << 18;
-        let settings = LiveSettings {
+        let draw = ProgressiveSettings {
             point_count: gpu_orbits,
             steps_per_frame: k,
             seed: 3,
@@ -117,9 +118,9 @@ fn densities_match_cpu() {
             point_radius_px: 0,
             max_splats: u64::MAX,
             settle_steps: 0,
-            chaos_backend: ChaosBackend::Gpu,
-            ..LiveSettings::default()
+            ..ProgressiveSettings::default()
         };
+        let settings = LiveSettings { draw, chaos_backend: ChaosBackend::Gpu };
         let mut live = LiveView::new(&ctx, settings, width, height).unwrap();
         live.set_ifs(&ctx, &compiled, bounds, true);
         live.set_camera(&camera);
@@ -155,7 +156,7 @@ fn densities_match_cpu() {
 
 /// Settings of the CPU-route tests.
 fn route_settings(backend: ChaosBackend, mode: SplatMode, points: u32, steps: u32) -> LiveSettings {
-    LiveSettings {
+    let draw = ProgressiveSettings {
         point_count: points,
         steps_per_frame: steps,
         seed: 5,
@@ -163,9 +164,9 @@ fn route_settings(backend: ChaosBackend, mode: SplatMode, points: u32, steps: u3
         depth_cue: 0.5,
         background: [0.02, 0.03, 0.05],
         max_splats: u64::MAX,
-        chaos_backend: backend,
-        ..LiveSettings::default()
-    }
+        ..ProgressiveSettings::default()
+    };
+    LiveSettings { draw, chaos_backend: backend }
 }
 
 /// The CPU route (`chaos_backend = cpu`) uploads exactly the framebuffer that the CPU chaos
@@ -187,12 +188,13 @@ fn cpu_route_uploads_the_cpu_framebuffer() {
         assert!(live.route().cpu);
         live.set_ifs(&ctx, &compiled, bounds, true);
         live.set_camera(&camera);
-        let view = SplatView::new(&camera, width, height, bounds, mode, settings.depth_cue, settings.background);
+        let view =
+            SplatView::new(&camera, width, height, bounds, mode, settings.draw.depth_cue, settings.draw.background);
         let mut expected = Framebuffer::new(view, compiled.colors.clone());
-        let points = settings.point_count as u64 * settings.steps_per_frame as u64;
+        let points = settings.draw.point_count as u64 * settings.draw.steps_per_frame as u64;
         let (chunks, steps) = frame_layout(points, rayon::current_num_threads());
         let mut chains: Vec<ChunkChains> =
-            (0..chunks).map(|c| ChunkChains::start(&compiled, settings.seed, 0, c)).collect();
+            (0..chunks).map(|c| ChunkChains::start(&compiled, settings.draw.seed, 0, c)).collect();
         let mut previous_covered = 0;
         for frame in 0..3u32 {
             let mut encoder = ctx.device.create_command_encoder(&Default::default());
@@ -244,7 +246,8 @@ fn cpu_route_densities_match_gpu_route() {
     let bounds = chaos_game::attractor_bounds(&compiled, 1);
     let camera = scene.camera_for(bounds);
     let counts = |backend: ChaosBackend, frames: u32| -> (Vec<u32>, u64) {
-        let settings = LiveSettings { depth_cue: 0.0, ..route_settings(backend, SplatMode::Density, 1 << 18, 4) };
+        let mut settings = route_settings(backend, SplatMode::Density, 1 << 18, 4);
+        settings.draw.depth_cue = 0.0;
         let mut live = LiveView::new(&ctx, settings, width, height).unwrap();
         assert_eq!(live.route().cpu, backend == ChaosBackend::Cpu);
         live.set_ifs(&ctx, &compiled, bounds, true);

@@ -38,7 +38,7 @@ fn a_tone_drag_is_one_scene_edit_that_keeps_the_accumulation_and_saves() {
         let tone = Tone { exposure: 0.25 * k as f32, gamma: 2.2, highlight_power: 1.0, ..Tone::NEUTRAL };
         let c = s.apply([Command::SetImaging(Imaging { tone, density_estimation: Some(de) })]);
         assert!(c.live_settings && !c.scene_edited && !c.scene_replaced, "step {k}: {c:?}");
-        assert_eq!(s.live.tone.exposure, 0.25 * k as f32);
+        assert_eq!(s.live.draw.tone.exposure, 0.25 * k as f32);
     }
     s.apply([Command::EndGesture]);
     assert!(s.modified());
@@ -77,18 +77,18 @@ fn keyed_tone_follows_time_and_is_edited_in_the_key_at_the_playhead() {
         assert_eq!(s.imaging(), render_imaging(&s.scene, t_secs), "t = {t_secs}");
     }
     // On key 1 the keyed exposure goes into the key, the unkeyed gamma into [render].
-    let tone = Tone { exposure: 3.0, gamma: 1.8, ..s.live.tone };
+    let tone = Tone { exposure: 3.0, gamma: 1.8, ..s.live.draw.tone };
     s.apply([Command::SetImaging(Imaging { tone, density_estimation: None }), Command::EndGesture]);
     let tl = s.scene.timeline.as_ref().unwrap();
     assert_eq!(tl.keys[1].render.tone[0], Some(3.0));
     assert_eq!(tl.keys[0].render.tone[0], Some(-1.0));
     assert_eq!(s.scene.render.exposure, 0.0);
     assert_eq!(s.scene.render.gamma, 1.8);
-    assert_eq!(s.live.tone.exposure, 3.0);
+    assert_eq!(s.live.draw.tone.exposure, 3.0);
     // Between keys a keyed field is not edited (the panel disables it).
     s.apply([Command::SetTime(1.0)]);
     let before = s.scene.clone();
-    let tone = Tone { exposure: 5.0, ..s.live.tone };
+    let tone = Tone { exposure: 5.0, ..s.live.draw.tone };
     s.apply([Command::SetImaging(Imaging { tone, density_estimation: None }), Command::EndGesture]);
     assert_eq!(s.scene, before);
 }

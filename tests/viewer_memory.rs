@@ -11,6 +11,7 @@
 mod common;
 
 use nlifs::chaos_game::{self, CompiledIfs};
+use nlifs::gpu::progressive::ProgressiveSettings;
 use nlifs::live::{ChaosBackend, LiveSettings, LiveView};
 use nlifs::scene::spec::SplatMode;
 
@@ -76,17 +77,27 @@ fn growth_over_frames(ctx: &nlifs::gpu::GpuContext, scene: &str, settings: LiveS
 fn live_view_frames_keep_host_memory_flat() {
     let Some(ctx) = common::gpu() else { return };
     let base = LiveSettings {
-        point_count: 4096,
-        steps_per_frame: 1,
-        seed: 3,
-        max_splats: u64::MAX,
+        draw: ProgressiveSettings {
+            point_count: 4096,
+            steps_per_frame: 1,
+            seed: 3,
+            max_splats: u64::MAX,
+            ..ProgressiveSettings::default()
+        },
         chaos_backend: ChaosBackend::Cpu,
-        ..LiveSettings::default()
     };
     let cases = [
-        ("plant1", "solid look, CPU route", LiveSettings { shading: 1.0, occlusion: 0.6, ..base }),
+        (
+            "plant1",
+            "solid look, CPU route",
+            LiveSettings { draw: ProgressiveSettings { shading: 1.0, occlusion: 0.6, ..base.draw }, ..base },
+        ),
         ("julia", "paper look, GPU route", LiveSettings { chaos_backend: ChaosBackend::Gpu, ..base }),
-        ("plant2", "density mode", LiveSettings { mode: SplatMode::Density, ..base }),
+        (
+            "plant2",
+            "density mode",
+            LiveSettings { draw: ProgressiveSettings { mode: SplatMode::Density, ..base.draw }, ..base },
+        ),
     ];
     for (scene, what, settings) in cases {
         let growth = growth_over_frames(&ctx, scene, settings);

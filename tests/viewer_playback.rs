@@ -13,6 +13,7 @@ mod common;
 
 use nlifs::chaos_game::CompiledIfs;
 use nlifs::gpu::GpuContext;
+use nlifs::gpu::progressive::ProgressiveSettings;
 use nlifs::live::{ChaosBackend, LiveSettings, LiveView};
 use nlifs::scene::spec::SplatMode;
 
@@ -39,7 +40,10 @@ fn frame(ctx: &GpuContext, live: &mut LiveView) -> Vec<f64> {
 
 /// A converged image: 8 frames of 2^17 × 16 points on the CPU route from a fresh start.
 fn reference(ctx: &GpuContext, settings: LiveSettings, ifs: &CompiledIfs, view: &View) -> Vec<f64> {
-    let settings = LiveSettings { steps_per_frame: 16, seed: 99, chaos_backend: ChaosBackend::Cpu, ..settings };
+    let settings = LiveSettings {
+        draw: ProgressiveSettings { steps_per_frame: 16, seed: 99, ..settings.draw },
+        chaos_backend: ChaosBackend::Cpu,
+    };
     let mut r = LiveView::new(ctx, settings, W, H).unwrap();
     r.set_ifs(ctx, ifs, view.bounds, true);
     r.set_camera(&view.camera);
@@ -52,7 +56,9 @@ fn reference(ctx: &GpuContext, settings: LiveSettings, ifs: &CompiledIfs, view: 
 
 /// `frames` frames of a fresh, fully settled run with `settings` (another seed).
 fn fresh(ctx: &GpuContext, settings: LiveSettings, ifs: &CompiledIfs, view: &View, frames: usize) -> Vec<Vec<f64>> {
-    let mut f = LiveView::new(ctx, LiveSettings { seed: 7, ..settings }, W, H).unwrap();
+    let mut f =
+        LiveView::new(ctx, LiveSettings { draw: ProgressiveSettings { seed: 7, ..settings.draw }, ..settings }, W, H)
+            .unwrap();
     f.set_ifs(ctx, ifs, view.bounds, true);
     f.set_camera(&view.camera);
     (0..frames).map(|_| frame(ctx, &mut f)).collect()
@@ -97,9 +103,12 @@ fn playback_through_a_key_reconverges() {
         let t0 = 2.0 - 6.0 * dt;
         let times: Vec<f64> = (1..=12).map(|k| t0 + k as f64 * dt).collect();
         let base = LiveSettings {
-            point_count: 1 << 17,
-            mode: SplatMode::Density,
-            max_splats: u64::MAX,
+            draw: ProgressiveSettings {
+                point_count: 1 << 17,
+                mode: SplatMode::Density,
+                max_splats: u64::MAX,
+                ..ProgressiveSettings::default()
+            },
             ..LiveSettings::default()
         };
         let references: Vec<Vec<f64>> = times.iter().map(|&t| reference(&ctx, base, &compiled(t), &view)).collect();
@@ -157,11 +166,13 @@ fn an_edit_reconverges() {
         let edited = CompiledIfs::new(&parse(&text.replacen("[0.9, -13.33, -0.1]", moved, 1)).at(0.0)).unwrap();
         for backend in [ChaosBackend::Gpu, ChaosBackend::Cpu] {
             let settings = LiveSettings {
-                point_count: 1 << 17,
-                mode: SplatMode::Density,
-                max_splats: u64::MAX,
+                draw: ProgressiveSettings {
+                    point_count: 1 << 17,
+                    mode: SplatMode::Density,
+                    max_splats: u64::MAX,
+                    ..ProgressiveSettings::default()
+                },
                 chaos_backend: backend,
-                ..LiveSettings::default()
             };
             let mut live = LiveView::new(&ctx, settings, W, H).unwrap();
             live.set_ifs(&ctx, &ifs, bounds, true);

@@ -39,7 +39,7 @@ const MAX_IDLE_CPU_PERCENT: f64 = 3.0;
 const IDLE_MEASURE_SECS: u64 = 10;
 /// One drag on the view.
 const ORBIT_SECS: u64 = 6;
-/// Shortest idle stretch: the view converges after 2^30 splats (`LiveSettings::max_splats`),
+/// Shortest idle stretch: the view converges after 2^30 splats (`ProgressiveSettings::max_splats`),
 /// about 20–35 s at the settings below on a 2-core machine on lavapipe (35–60 M points/s on
 /// the CPU route), then [`IDLE_MEASURE_SECS`] are measured.
 const MIN_IDLE_SECS: u64 = 60;

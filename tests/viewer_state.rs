@@ -57,7 +57,7 @@ fn the_first_view_rect_frames_the_attractor_in_it_and_later_ones_keep_the_camera
     assert!(changes.camera);
     assert_eq!((s.width_px, s.height_px, s.view_origin_px), (w, h, [371.0, 0.0]));
     let view = s.splat_view();
-    let sample = attractor_sample(s.compiled.as_ref().unwrap(), s.live.seed);
+    let sample = attractor_sample(s.compiled.as_ref().unwrap(), s.live.draw.seed);
     let (mut lo, mut hi) = (glam::Vec2::splat(f32::MAX), glam::Vec2::splat(f32::MIN));
     for p in &sample {
         let q = project(&view, p.as_dvec3()).unwrap();

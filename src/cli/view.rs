@@ -84,13 +84,13 @@ pub fn view(args: ViewArgs) -> anyhow::Result<()> {
     }
     let mut live = nlifs::live::LiveSettings::default();
     if let Some(n) = args.points {
-        live.point_count = n;
+        live.draw.point_count = n;
     }
     if let Some(k) = args.steps {
-        live.steps_per_frame = k;
+        live.draw.steps_per_frame = k;
     }
     if let Some(s) = args.shading {
-        live.shading = s.clamp(0.0, 1.0);
+        live.draw.shading = s.clamp(0.0, 1.0);
     }
     live.chaos_backend = args.chaos_backend.map_or(ChaosBackend::Auto, ChaosBackend::from);
     let options = nlifs::viewer::ViewerOptions {

@@ -31,33 +31,6 @@ use crate::resolve::density_estimation;
 use self::cpu_source::CpuChaosGame;
 pub use self::settings::{ChaosBackend, ChaosRoute, Imaging, LiveSettings};
 
-impl From<&LiveSettings> for ProgressiveSettings {
-    fn from(s: &LiveSettings) -> Self {
-        Self {
-            point_count: s.point_count,
-            steps_per_frame: s.steps_per_frame,
-            seed: s.seed,
-            mode: s.mode,
-            depth_cue: s.depth_cue,
-            background: s.background,
-            shading: s.shading,
-            occlusion: s.occlusion,
-            point_radius_px: s.point_radius_px,
-            // The full fit; `LiveView::progressive_settings` narrows it while navigating.
-            normal_radius_px: crate::resolve::NORMAL_RADIUS_PX,
-            max_splats: s.max_splats,
-            settle_steps: s.settle_steps,
-            shadows: s.shadows,
-            light_yaw_deg: s.light_yaw_deg,
-            light_pitch_deg: s.light_pitch_deg,
-            aperture: s.aperture,
-            focus_distance: s.focus_distance,
-            tone: s.tone,
-            density_estimation: s.density_estimation,
-        }
-    }
-}
-
 /// The live view refreshes the solid look's light a quarter of the rows per frame while the
 /// view rests ([`Progressive::light_bands`]): the look's cost a frame drops about fourfold.
 pub const LIGHT_BANDS: u32 = 4;
@@ -80,7 +53,7 @@ pub struct LiveView {
 impl LiveView {
     pub fn new(ctx: &GpuContext, settings: LiveSettings, width: u32, height: u32) -> Result<Self, GpuError> {
         let software_adapter = ctx.adapter.get_info().device_type == wgpu::DeviceType::Cpu;
-        let mut gpu = Progressive::new(ctx, (&settings).into(), width, height)?;
+        let mut gpu = Progressive::new(ctx, settings.draw, width, height)?;
         gpu.light_bands = LIGHT_BANDS;
         Ok(Self {
             gpu,
@@ -95,7 +68,7 @@ impl LiveView {
     /// What the GPU side runs for `settings`: the same, without shadows and occlusion and with
     /// the normals fitted in a smaller window while navigating.
     fn progressive_settings(&self, settings: &LiveSettings) -> ProgressiveSettings {
-        let mut p = ProgressiveSettings::from(settings);
+        let mut p = settings.draw;
         if self.navigating {
             p.shadows = 0.0;
             p.occlusion = 0.0;
@@ -111,8 +84,8 @@ impl LiveView {
     /// shows; the settle steps were most of a playing frame's chaos game.
     fn settle_steps(&self) -> u32 {
         match self.navigating {
-            true => self.settings.settle_steps.min(NAVIGATING_SETTLE_STEPS),
-            false => self.settings.settle_steps,
+            true => self.settings.draw.settle_steps.min(NAVIGATING_SETTLE_STEPS),
+            false => self.settings.draw.settle_steps,
         }
     }
 
@@ -225,8 +198,8 @@ impl LiveView {
         if frame.clear {
             self.cpu.clear(&frame.view);
         }
-        let points = self.settings.point_count as u64 * self.settings.steps_per_frame as u64;
-        let splats = self.cpu.advance(self.settings.seed, frame.frame, points);
+        let points = self.settings.draw.point_count as u64 * self.settings.draw.steps_per_frame as u64;
+        let splats = self.cpu.advance(self.settings.draw.seed, frame.frame, points);
         if frame.view.shadow.is_some() {
             self.gpu.upload_shadow(ctx, self.cpu.merged_shadow());
         }
@@ -276,17 +249,5 @@ impl LiveView {
     /// [`Self::read_accum`] that also works in the browser (awaits the map). Tests.
     pub async fn read_accum_async(&self, ctx: &GpuContext) -> Result<Vec<u32>, GpuError> {
         self.gpu.read_accum_async(ctx).await
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn default_settings_agree_with_the_gpu_defaults() {
-        let live = LiveSettings::default();
-        assert_eq!(ProgressiveSettings::from(&live), ProgressiveSettings::default());
-        assert_eq!(live.chaos_backend, ChaosBackend::Gpu);
     }
 }

@@ -1,80 +1,24 @@
 //! The live view's settings as plain data: what the viewer's render panel edits and its state
-//! holds, free of GPU types ([`crate::live::LiveView`] converts them for the GPU at the
-//! boundary), with the choice of where the chaos game runs ([`ChaosBackend`]) and the route it
-//! took on the adapter at hand ([`ChaosRoute`]).
+//! holds, namely the GPU side's settings (plain data too, no GPU handles) and the choice of where
+//! the chaos game runs ([`ChaosBackend`]), with the route it took on the adapter at hand
+//! ([`ChaosRoute`]).
 
+use crate::gpu::progressive::ProgressiveSettings;
 use crate::resolve::Tone;
-use crate::scene::spec::{DensityEstimation, SplatMode};
+use crate::scene::spec::DensityEstimation;
 
-/// Settings of the live view (the viewer's render panel edits them).
-#[derive(Clone, Copy, Debug, PartialEq)]
+/// Settings of the live view (the viewer's render panel edits them): what the GPU side draws and
+/// where the chaos game runs. The default draws as `gpu::progressive::ProgressiveSettings`'s
+/// default does, with the GPU chaos game.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct LiveSettings {
-    /// Persistent points on the GPU.
-    pub point_count: u32,
-    /// Steps every point advances (and splats) per frame.
-    pub steps_per_frame: u32,
-    pub seed: u32,
-    pub mode: SplatMode,
-    pub depth_cue: f32,
-    /// Linear RGB.
-    pub background: [f32; 3],
-    /// Screen-space shading strength in [0, 1] (closest mode).
-    pub shading: f32,
-    /// Screen-space ambient occlusion strength in [0, 1] (closest mode).
-    pub occlusion: f32,
-    /// Drawn point radius in pixels (closest mode: the nearest key within the radius).
-    pub point_radius_px: u32,
-    /// Splats after which accumulation stops (keeps the u32 sums far from overflow).
-    pub max_splats: u64,
-    /// Steps not splatted after a scene edit while the kept points settle on the new attractor.
-    pub settle_steps: u32,
+    /// Points, steps, the look, the light, the lens and the tone: what the GPU resolves (the CPU
+    /// route's chaos game reads its point count, steps and seed). The live view draws with the
+    /// full normal fit and narrows it while navigating ([`crate::live::LiveView::set_navigating`]).
+    pub draw: ProgressiveSettings,
     /// Where the chaos game runs (the GPU only resolves on the CPU route). The default, `gpu`,
     /// is what `render --backend gpu` and the benchmarks run; the viewer starts on `auto`.
     pub chaos_backend: ChaosBackend,
-    // Shadows (`crate::resolve::shadow`).
-    /// Cast shadow strength in [0, 1] (closest mode, with shading on).
-    pub shadows: f32,
-    /// The key light's direction relative to the camera.
-    pub light_yaw_deg: f32,
-    pub light_pitch_deg: f32,
-    // Depth of field (`crate::splat::lens`).
-    /// Thin-lens radius in scene units; 0: none.
-    pub aperture: f32,
-    /// View distance in focus; None: the camera's distance to its target.
-    pub focus_distance: Option<f32>,
-    /// flam3's tone map (average and density modes): the scene's `[render]` tone at the
-    /// playhead, as `render` resolves it.
-    pub tone: Tone,
-    /// flam3's density estimation (density mode): the scene's, None off.
-    pub density_estimation: Option<DensityEstimation>,
-}
-
-impl Default for LiveSettings {
-    /// The same values as `gpu::progressive::ProgressiveSettings::default` (a test in
-    /// `crate::live` keeps them equal), with the GPU chaos game.
-    fn default() -> Self {
-        Self {
-            point_count: 1 << 20,
-            steps_per_frame: 1,
-            seed: 1,
-            mode: SplatMode::Closest,
-            depth_cue: 0.75,
-            background: crate::scene::spec::RenderSettings::default().background,
-            shading: 0.0,
-            occlusion: 0.0,
-            point_radius_px: 0,
-            max_splats: 1 << 30,
-            settle_steps: 8,
-            chaos_backend: ChaosBackend::Gpu,
-            shadows: 0.0,
-            light_yaw_deg: crate::resolve::KEY_LIGHT_YAW_DEG,
-            light_pitch_deg: crate::resolve::KEY_LIGHT_PITCH_DEG,
-            aperture: 0.0,
-            focus_distance: None,
-            tone: Tone::NEUTRAL,
-            density_estimation: None,
-        }
-    }
 }
 
 /// The live view's imaging: its tone map and density estimation (the viewer's render panel

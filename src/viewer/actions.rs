@@ -285,9 +285,9 @@ impl ViewerState {
                     fov_y_deg: Some(c.fov_y_deg as f64),
                     projection: Some(c.projection),
                 };
-                scene.render.mode = self.live.mode;
-                scene.render.depth_cue = self.live.depth_cue;
-                scene.render.background = self.live.background;
+                scene.render.mode = self.live.draw.mode;
+                scene.render.depth_cue = self.live.draw.depth_cue;
+                scene.render.background = self.live.draw.background;
                 // The plan as the form showed it (`start_job` refused a bad one), with its
                 // numbered folder taken now.
                 JobRequest::Record { scene: Box::new(scene), plan: Box::new(self.record_plan()?) }

@@ -437,10 +437,10 @@ impl ViewerState {
     /// Takes the live settings and the camera of the scene just loaded.
     pub(super) fn show_opened(&mut self, changes: &mut Changes) {
         let s = &self.scene.render;
-        self.live.seed = s.seed;
-        self.live.mode = s.mode;
-        self.live.depth_cue = s.depth_cue;
-        self.live.background = s.background;
+        self.live.draw.seed = s.seed;
+        self.live.draw.mode = s.mode;
+        self.live.draw.depth_cue = s.depth_cue;
+        self.live.draw.background = s.background;
         self.take_scene_look();
         self.camera = self.framed_camera();
         self.camera_moved = false;

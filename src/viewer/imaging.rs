@@ -20,7 +20,7 @@ pub const DEFAULT_DENSITY_ESTIMATION: DensityEstimation =
 impl ViewerState {
     /// The imaging the live view shows.
     pub fn imaging(&self) -> Imaging {
-        Imaging { tone: self.live.tone, density_estimation: self.live.density_estimation }
+        Imaging { tone: self.live.draw.tone, density_estimation: self.live.draw.density_estimation }
     }
 
     /// Which tone fields (in the order of `TONE_FIELDS`) some key of the timeline sets: those
@@ -35,8 +35,8 @@ impl ViewerState {
     pub fn take_scene_imaging(&mut self) -> bool {
         let render = self.scene.render_at(self.t_secs);
         let before = self.imaging();
-        self.live.tone = Tone::of(&render);
-        self.live.density_estimation = render.density_estimation;
+        self.live.draw.tone = Tone::of(&render);
+        self.live.draw.density_estimation = render.density_estimation;
         self.imaging() != before
     }
 

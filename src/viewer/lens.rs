@@ -36,9 +36,9 @@ impl ViewerState {
     /// or a move in time). True when the live settings changed.
     pub fn take_scene_lens(&mut self) -> bool {
         let r = self.scene.render_at(self.t_secs);
-        let before = (self.live.aperture, self.live.focus_distance);
-        (self.live.aperture, self.live.focus_distance) = (r.aperture, r.focus_distance);
-        before != (self.live.aperture, self.live.focus_distance)
+        let before = (self.live.draw.aperture, self.live.draw.focus_distance);
+        (self.live.draw.aperture, self.live.draw.focus_distance) = (r.aperture, r.focus_distance);
+        before != (self.live.draw.aperture, self.live.draw.focus_distance)
     }
 }
 

@@ -181,8 +181,8 @@ pub fn run(options: ViewerOptions) -> Result<(), ViewerError> {
             secs,
             app.frames as f64 / secs,
             app.splats as f64 / secs / 1e6,
-            app.state.live.point_count,
-            app.state.live.steps_per_frame,
+            app.state.live.draw.point_count,
+            app.state.live.draw.steps_per_frame,
             app.smoothed.chaos_route.name()
         );
     }

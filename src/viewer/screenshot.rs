@@ -46,12 +46,12 @@ pub(super) fn save_screenshot(
     let settings = serde_json::json!({
         "width": image.width(),
         "height": image.height(),
-        "points_per_frame": live.point_count,
-        "steps_per_frame": live.steps_per_frame,
-        "seed": live.seed,
-        "shading": live.shading,
-        "occlusion": live.occlusion,
-        "shadows": live.shadows,
+        "points_per_frame": live.draw.point_count,
+        "steps_per_frame": live.draw.steps_per_frame,
+        "seed": live.draw.seed,
+        "shading": live.draw.shading,
+        "occlusion": live.draw.occlusion,
+        "shadows": live.draw.shadows,
     });
     let provenance = crate::output::Provenance::for_command(&state.scene, state.t_secs, "view", settings);
     crate::output::png::save_rgb8(path, image, Some(&provenance))

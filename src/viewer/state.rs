@@ -250,10 +250,10 @@ impl ViewerState {
         // point there (`Scene::to_toml_over` checks what it writes).
         state.files.scene_text = state.scene_path.as_deref().and_then(|p| std::fs::read_to_string(p).ok());
         state.edit.save_text = state.default_save_text();
-        state.live.seed = state.scene.render.seed;
-        state.live.mode = state.scene.render.mode;
-        state.live.depth_cue = state.scene.render.depth_cue;
-        state.live.background = state.scene.render.background;
+        state.live.draw.seed = state.scene.render.seed;
+        state.live.draw.mode = state.scene.render.mode;
+        state.live.draw.depth_cue = state.scene.render.depth_cue;
+        state.live.draw.background = state.scene.render.background;
         state.take_scene_look();
         state.take_scene_lens();
         state.take_scene_imaging();
@@ -266,12 +266,12 @@ impl ViewerState {
     /// `occlusion`), as `render` and `record` resolve it.
     pub fn take_scene_look(&mut self) {
         let style = crate::resolve::ResolveStyle::of(&self.scene.render, self.scene.domain.dimension());
-        self.live.shading = style.shading;
-        self.live.occlusion = style.occlusion;
+        self.live.draw.shading = style.shading;
+        self.live.draw.occlusion = style.occlusion;
         // Shadows (`crate::resolve::shadow`).
-        self.live.shadows = style.shadows;
-        self.live.light_yaw_deg = style.light_yaw_deg;
-        self.live.light_pitch_deg = style.light_pitch_deg;
+        self.live.draw.shadows = style.shadows;
+        self.live.draw.light_yaw_deg = style.light_yaw_deg;
+        self.live.draw.light_pitch_deg = style.light_pitch_deg;
     }
 
     /// The scene's camera at the current time, fitted to a sample of the attractor where the
@@ -381,7 +381,7 @@ impl ViewerState {
     /// The tables and bounds come from the one shot setup that `render` and `record` use
     /// ([`Shot::prepare`]), with the live view's seed; the camera stays the viewer's.
     pub(super) fn recompile(&mut self) {
-        let settings = RenderSettings { seed: self.live.seed, ..self.scene.render_at(self.t_secs) };
+        let settings = RenderSettings { seed: self.live.draw.seed, ..self.scene.render_at(self.t_secs) };
         match Shot::prepare(&self.scene, self.t_secs, &settings, Framing::Given(self.camera), None) {
             Ok(shot) => {
                 self.report = Some(shot.ifs.report());
@@ -440,7 +440,15 @@ impl ViewerState {
     /// grid overlay project with).
     pub fn splat_view(&self) -> SplatView {
         let (w, h) = (self.width_px.max(1.0) as u32, self.height_px.max(1.0) as u32);
-        SplatView::new(&self.camera, w, h, self.bounds, self.live.mode, self.live.depth_cue, self.live.background)
+        SplatView::new(
+            &self.camera,
+            w,
+            h,
+            self.bounds,
+            self.live.draw.mode,
+            self.live.draw.depth_cue,
+            self.live.draw.background,
+        )
     }
 
     /// The editable grid point nearest to `cursor_px` (window pixels) within

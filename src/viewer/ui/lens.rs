@@ -19,7 +19,7 @@ use super::widgets::slider;
 /// The render panel's depth-of-field controls.
 pub fn lens_ui(ui: &mut egui::Ui, state: &ViewerState, commands: &mut Vec<Command>) {
     let live = state.live;
-    let (mut aperture, focus) = (live.aperture, live.focus_distance);
+    let (mut aperture, focus) = (live.draw.aperture, live.draw.focus_distance);
     // Apertures up to a fifth of the camera's distance (a strong blur); typed values may go past.
     let max_aperture = (0.2 * state.camera.distance).max(1e-6);
     let r = ui.add(slider(&mut aperture, 0.0..=max_aperture).logarithmic(true).text("aperture (depth of field)"));
@@ -28,12 +28,12 @@ pub fn lens_ui(ui: &mut egui::Ui, state: &ViewerState, commands: &mut Vec<Comman
         let mut at_target = focus.is_none();
         if ui.checkbox(&mut at_target, "focus at target").changed() {
             let focus = if at_target { None } else { Some(state.camera.distance) };
-            commands.push(Command::SetLens { aperture: live.aperture, focus_distance: focus });
+            commands.push(Command::SetLens { aperture: live.draw.aperture, focus_distance: focus });
         }
         if let Some(mut f) = focus {
             let speed = 0.005 * state.camera.distance as f64;
             let r = ui.add(egui::DragValue::new(&mut f).speed(speed).range(1e-6..=f32::MAX).prefix("focus "));
-            lens_edit(r, state, live.aperture, Some(f), commands);
+            lens_edit(r, state, live.draw.aperture, Some(f), commands);
         }
     });
     ui.small("Ctrl+click the picture: focus on the point there (closest mode).");
@@ -44,7 +44,7 @@ pub fn lens_ui(ui: &mut egui::Ui, state: &ViewerState, commands: &mut Vec<Comman
 fn lens_edit(r: egui::Response, state: &ViewerState, aperture: f32, focus: Option<f32>, commands: &mut Vec<Command>) {
     if r.changed() && r.dragged() {
         let mut live = state.live;
-        (live.aperture, live.focus_distance) = (aperture, focus);
+        (live.draw.aperture, live.draw.focus_distance) = (aperture, focus);
         commands.push(Command::SetLiveSettings(live));
     } else if r.changed() || r.drag_stopped() {
         commands.push(Command::SetLens { aperture, focus_distance: focus });
@@ -65,7 +65,7 @@ pub fn focus_click(
 ) -> Option<Command> {
     let (x, y) = cursor.filter(|_| ctrl && button == MouseButton::Left)?;
     let notice = |m: &str| Some(Command::SetToast(Some(m.into())));
-    if state.live.mode != SplatMode::Closest {
+    if state.live.draw.mode != SplatMode::Closest {
         return notice("focus by click needs the closest splat mode (its keys hold the depth)");
     }
     let (w, h) = live.size();

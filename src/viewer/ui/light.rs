@@ -13,16 +13,17 @@ use super::widgets::slider;
 pub fn light_ui(ui: &mut egui::Ui, live: &mut LiveSettings) -> bool {
     let [(_, shadows_lo, shadows_hi), (_, yaw_lo, yaw_hi), (_, pitch_lo, pitch_hi)] = LIGHT_FIELDS;
     let mut changed = false;
-    changed |=
-        ui.add(slider(&mut live.shadows, shadows_lo as f32..=shadows_hi as f32).text("shadows (closest)")).changed();
+    changed |= ui
+        .add(slider(&mut live.draw.shadows, shadows_lo as f32..=shadows_hi as f32).text("shadows (closest)"))
+        .changed();
     // The direction only matters where something is lit.
-    ui.add_enabled_ui(live.shading > 0.0, |ui| {
+    ui.add_enabled_ui(live.draw.shading > 0.0, |ui| {
         changed |= ui
-            .add(slider(&mut live.light_yaw_deg, yaw_lo as f32..=yaw_hi as f32).text("light yaw (°)"))
+            .add(slider(&mut live.draw.light_yaw_deg, yaw_lo as f32..=yaw_hi as f32).text("light yaw (°)"))
             .on_hover_text("the key light's direction from the view direction towards the right")
             .changed();
         changed |= ui
-            .add(slider(&mut live.light_pitch_deg, pitch_lo as f32..=pitch_hi as f32).text("light pitch (°)"))
+            .add(slider(&mut live.draw.light_pitch_deg, pitch_lo as f32..=pitch_hi as f32).text("light pitch (°)"))
             .on_hover_text("the key light's height above the view's horizontal plane")
             .changed();
     });

@@ -222,15 +222,15 @@ fn render_ui(ui: &mut egui::Ui, state: &ViewerState, commands: &mut Vec<Command>
         // button's 8-bit round trip), and that cleared the accumulation every frame.
         let mut live = state.live;
         let mut changed = false;
-        let mut log2_points = (live.point_count as f32).log2().round() as u32;
+        let mut log2_points = (live.draw.point_count as f32).log2().round() as u32;
         if ui.add(slider(&mut log2_points, 12..=24).text("points (log2)")).changed() {
-            live.point_count = 1 << log2_points;
+            live.draw.point_count = 1 << log2_points;
             changed = true;
         }
-        changed |= ui.add(slider(&mut live.steps_per_frame, 1..=64).text("steps / frame")).changed();
-        egui::ComboBox::from_label("splat").selected_text(live.mode.name()).show_ui(ui, |ui| {
+        changed |= ui.add(slider(&mut live.draw.steps_per_frame, 1..=64).text("steps / frame")).changed();
+        egui::ComboBox::from_label("splat").selected_text(live.draw.mode.name()).show_ui(ui, |ui| {
             for mode in SplatMode::ALL {
-                changed |= ui.selectable_value(&mut live.mode, mode, mode.name()).changed();
+                changed |= ui.selectable_value(&mut live.draw.mode, mode, mode.name()).changed();
             }
         });
         egui::ComboBox::from_label("chaos game backend").selected_text(live.chaos_backend.name()).show_ui(ui, |ui| {
@@ -238,14 +238,14 @@ fn render_ui(ui: &mut egui::Ui, state: &ViewerState, commands: &mut Vec<Command>
                 changed |= ui.selectable_value(&mut live.chaos_backend, backend, backend.name()).changed();
             }
         });
-        changed |= ui.add(slider(&mut live.depth_cue, 0.0..=1.0).text("depth cue")).changed();
-        changed |= ui.add(slider(&mut live.point_radius_px, 0..=3).text("point size (radius px)")).changed();
-        changed |= ui.add(slider(&mut live.shading, 0.0..=1.0).text("shading (closest)")).changed();
-        changed |= ui.add(slider(&mut live.occlusion, 0.0..=1.0).text("occlusion (closest)")).changed();
+        changed |= ui.add(slider(&mut live.draw.depth_cue, 0.0..=1.0).text("depth cue")).changed();
+        changed |= ui.add(slider(&mut live.draw.point_radius_px, 0..=3).text("point size (radius px)")).changed();
+        changed |= ui.add(slider(&mut live.draw.shading, 0.0..=1.0).text("shading (closest)")).changed();
+        changed |= ui.add(slider(&mut live.draw.occlusion, 0.0..=1.0).text("occlusion (closest)")).changed();
         lens::lens_ui(ui, state, commands);
         changed |= light::light_ui(ui, &mut live);
         ui.horizontal(|ui| {
-            changed |= ui.color_edit_button_rgb(&mut live.background).changed();
+            changed |= ui.color_edit_button_rgb(&mut live.draw.background).changed();
             ui.label("background");
         });
         if changed && live != state.live {

@@ -13,7 +13,7 @@ use super::widgets::slider;
 const TONE_LABELS: [&str; 5] = ["exposure (stops)", "gamma", "gamma threshold", "vibrancy", "highlight power (−1 off)"];
 
 pub fn imaging_ui(ui: &mut egui::Ui, state: &ViewerState, commands: &mut Vec<Command>) {
-    let mode = state.live.mode;
+    let mode = state.live.draw.mode;
     if mode == SplatMode::Closest {
         return;
     }
