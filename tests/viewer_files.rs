@@ -14,7 +14,7 @@ use nlifs::live::LiveSettings;
 use nlifs::scene::Scene;
 use nlifs::viewer::command::{CloseChoice, Command, FileDialogKind, FileDialogRequest};
 use nlifs::viewer::recent::{MAX_RECENT, RECENT_FILE, RecentFiles};
-use nlifs::viewer::state::ViewerState;
+use nlifs::viewer::state::{PendingOpen, ViewerState};
 
 /// A fresh folder with copies of paper scenes and a config folder of its own.
 struct Scratch {
@@ -208,7 +208,7 @@ fn a_drop_over_unsaved_edits_asks_first() {
     let changes = s.apply([Command::OpenFile(plant2.clone())]);
     assert!(!changes.scene_replaced);
     assert!(s.ui.close_dialog);
-    assert_eq!(s.ui.pending_open.as_deref(), Some(plant2.as_path()));
+    assert_eq!(s.ui.pending_open, Some(PendingOpen::File(plant2.clone())));
     // Cancel: the edits stay.
     s.apply([Command::CloseDialog(CloseChoice::Cancel)]);
     assert_eq!(s.scene, edited);
@@ -218,6 +218,47 @@ fn a_drop_over_unsaved_edits_asks_first() {
     let changes = s.apply([Command::CloseDialog(CloseChoice::Discard)]);
     assert!(changes.scene_replaced);
     assert_eq!(s.scene_path.as_deref(), Some(plant2.as_path()));
+}
+
+/// The browser's way in (its file chooser and drops send the file's bytes): the same question
+/// over unsaved edits, and a file that does not read is an error without one.
+#[test]
+fn bytes_opened_over_unsaved_edits_ask_first_and_bad_bytes_are_an_error_at_once() {
+    let scratch = Scratch::new("bytes-modified");
+    let plant1 = scratch.scene("plant1");
+    let mut s = scratch.open(&plant1);
+    let plant2_text = std::fs::read_to_string(common::scene_path("plant2")).unwrap();
+    let open_plant2 = || Command::OpenBytes { name: "plant2.toml".into(), bytes: plant2_text.as_bytes().to_vec() };
+    s.apply([Command::SetFunctionEnabled { function: 0, enabled: false }]);
+    let edited = s.scene.clone();
+
+    let changes = s.apply([open_plant2()]);
+    assert!(!changes.scene_replaced);
+    assert!(s.ui.close_dialog);
+    assert!(matches!(&s.ui.pending_open, Some(open @ PendingOpen::Read { .. }) if open.name() == "plant2.toml"));
+    // Cancel: the edits stay.
+    s.apply([Command::CloseDialog(CloseChoice::Cancel)]);
+    assert_eq!(s.scene, edited);
+    assert!(s.ui.pending_open.is_none() && !s.ui.close_dialog);
+
+    // A file that does not read: its error, no question, the edits stay.
+    let bad = "name = \"bad\"\n[grid]\nnx = \"three\"\n";
+    s.apply([Command::OpenBytes { name: "bad.toml".into(), bytes: bad.as_bytes().to_vec() }]);
+    assert!(!s.ui.close_dialog && s.ui.pending_open.is_none());
+    assert_eq!(s.scene, edited);
+    let error = s.files.view_error.clone().expect("the bad file's error over the view");
+    assert!(error.contains("bad.toml:"), "{error}");
+
+    // Discard: the file opens, the edits are gone.
+    s.apply([open_plant2()]);
+    let changes = s.apply([Command::CloseDialog(CloseChoice::Discard)]);
+    assert!(changes.scene_replaced);
+    assert_eq!(s.scene, Scene::parse(&plant2_text, "plant2.toml").unwrap());
+    assert!(!s.modified());
+    assert_eq!(s.message.as_deref(), Some("opened plant2.toml"));
+    // Unedited, bytes open at once.
+    let changes = s.apply([Command::OpenBytes { name: "plant1.toml".into(), bytes: std::fs::read(&plant1).unwrap() }]);
+    assert!(changes.scene_replaced && !s.ui.close_dialog);
 }
 
 #[test]

@@ -21,7 +21,7 @@ use crate::scene::timeline::{Key, LoopMode};
 use super::command::{CloseChoice, Command, FileDialogRequest, JobKind, JobRequest};
 use super::picking;
 use super::recovery;
-use super::state::{CameraFit, Gesture, PointDrag, ViewerState, mtime};
+use super::state::{CameraFit, Gesture, PendingOpen, PointDrag, ViewerState, mtime};
 
 /// What the renderer must refresh after a batch of commands.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -47,16 +47,8 @@ impl ViewerState {
         let mut time_moved = false;
         for command in commands {
             match command {
-                Command::OpenScene(path) => {
-                    // Opening over unsaved edits asks first, as closing does.
-                    if self.modified() {
-                        self.end_gesture();
-                        self.ui.close_dialog = true;
-                        self.ui.pending_open = Some(path);
-                    } else {
-                        self.open_scene(&path, &mut changes);
-                    }
-                }
+                // Opening over unsaved edits asks first, as closing does.
+                Command::OpenScene(path) => self.request_open(PendingOpen::File(path), &mut changes),
                 Command::ReloadScene => {
                     if let Some(path) = self.scene_path.clone()
                         && self.load(&path)
@@ -331,7 +323,7 @@ impl ViewerState {
                     if proceed {
                         // Then what the dialog interrupted: opening another scene, or quitting.
                         match self.ui.pending_open.take() {
-                            Some(path) => self.open_scene(&path, &mut changes),
+                            Some(open) => self.open_pending(open, &mut changes),
                             None => self.ui.quit = true,
                         }
                     }

@@ -13,7 +13,7 @@ use std::path::{Path, PathBuf};
 use super::apply::Changes;
 use super::command::{Command, FileDialogKind, FileDialogRequest};
 use super::recent::{self, RecentFiles};
-use super::state::ViewerState;
+use super::state::{PendingOpen, ViewerState};
 
 /// Says what to do where no native dialog can be shown.
 pub fn no_dialog_notice(kind: FileDialogKind) -> String {
@@ -121,7 +121,7 @@ impl ViewerState {
             // so that a save never writes over the image.
             match crate::output::png::extract_scene(path, &std::env::temp_dir()) {
                 Ok((toml, _t_secs)) => {
-                    self.request_open(&toml, changes);
+                    self.request_open(PendingOpen::File(toml.clone()), changes);
                     if self.scene_path.as_deref() == Some(toml.as_path()) {
                         self.remember_recent(path);
                         self.message = Some(format!("opened the scene inside {}", path.display()));
@@ -130,7 +130,7 @@ impl ViewerState {
                 Err(e) => self.set_view_error(e.to_string()),
             }
         } else if path.extension().is_some_and(|e| e.eq_ignore_ascii_case("toml")) {
-            self.request_open(path, changes);
+            self.request_open(PendingOpen::File(path.to_path_buf()), changes);
         } else {
             self.set_view_error(format!(
                 "cannot open {}: not a scene file (.toml) or a PNG that nlifs wrote",
@@ -160,23 +160,33 @@ impl ViewerState {
         };
         match opened {
             Ok((scene, text)) => {
-                self.install_scene(scene, text, None);
-                self.show_opened(changes);
-                self.message = Some(format!("opened {name}"));
+                self.request_open(PendingOpen::Read { name: name.to_string(), scene: Box::new(scene), text }, changes)
             }
             Err(e) => self.set_view_error(e),
         }
     }
 
-    /// Opens `path` now, or, over unsaved edits, once the Save / Discard / Cancel dialog is
-    /// answered.
-    fn request_open(&mut self, path: &Path, changes: &mut Changes) {
+    /// Opens a scene now, or, over unsaved edits, once the Save / Discard / Cancel dialog is
+    /// answered ([`Self::open_pending`]).
+    pub(super) fn request_open(&mut self, open: PendingOpen, changes: &mut Changes) {
         if self.modified() {
             self.end_gesture();
             self.ui.close_dialog = true;
-            self.ui.pending_open = Some(path.to_path_buf());
+            self.ui.pending_open = Some(open);
         } else {
-            self.open_scene(path, changes);
+            self.open_pending(open, changes);
+        }
+    }
+
+    /// Opens what [`Self::request_open`] was asked for, edits or not.
+    pub(super) fn open_pending(&mut self, open: PendingOpen, changes: &mut Changes) {
+        match open {
+            PendingOpen::File(path) => self.open_scene(&path, changes),
+            PendingOpen::Read { name, scene, text } => {
+                self.install_scene(*scene, text, None);
+                self.show_opened(changes);
+                self.message = Some(format!("opened {name}"));
+            }
         }
     }
 

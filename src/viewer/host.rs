@@ -34,6 +34,8 @@ pub struct HostState {
     pub route: String,
     /// An edit can be undone (for the tests).
     pub can_undo: bool,
+    /// The scene has edits not yet saved: leaving the page asks first.
+    pub modified: bool,
 }
 
 impl Host {

@@ -87,6 +87,7 @@ impl App {
             h.scene_name.clone_from(&state.scene.name);
             h.frames = self.frames;
             h.can_undo = state.history.can_undo();
+            h.modified = state.modified();
             if let Some(gfx) = gfx {
                 h.route = gfx.live.route().name().to_string();
             }

@@ -83,7 +83,7 @@ pub struct UiState {
     /// Asking Save / Discard / Cancel before closing with unsaved edits.
     pub close_dialog: bool,
     /// The scene to open once the dialog is answered (None: the dialog is about closing).
-    pub pending_open: Option<PathBuf>,
+    pub pending_open: Option<PendingOpen>,
     /// The window should close now (set once the user has decided).
     pub quit: bool,
     /// Full screen (`F11`).
@@ -94,6 +94,26 @@ pub struct UiState {
     pub file_changed_on_disk: bool,
     /// A job waiting for Continue / Cancel: a function may not be contractive.
     pub job_confirm: Option<JobConfirm>,
+}
+
+/// A scene waiting for the Save / Discard / Cancel dialog: opening it would drop unsaved edits.
+#[derive(Clone, Debug, PartialEq)]
+pub enum PendingOpen {
+    /// A scene file (or the scene copied out of a PNG), read when the dialog is answered.
+    File(PathBuf),
+    /// A scene that came as bytes (the page's file chooser or a drop on the page), already read:
+    /// one that does not read is an error at once, with no question asked.
+    Read { name: String, scene: Box<Scene>, text: String },
+}
+
+impl PendingOpen {
+    /// The file's name as the dialog says it: "Save them before opening …?".
+    pub fn name(&self) -> String {
+        match self {
+            Self::File(path) => path.display().to_string(),
+            Self::Read { name, .. } => name.clone(),
+        }
+    }
 }
 
 /// How the camera was last framed, which decides how a resize of the view (a panel shown or

@@ -6,7 +6,8 @@
 //! `?toml=…` a whole scene carried in the link (`scene::url`: zlib in URL-safe base64, with its
 //! size bounded). A bad scene in the address or in a dropped file is shown in the banner with
 //! its location (file:line:column), and the scene on screen stays. Where the browser has no
-//! WebGPU (WebGL2 only, or neither) the banner says so instead of the viewer.
+//! WebGPU (WebGL2 only, or neither) the banner says so instead of the viewer. Leaving the page
+//! with unsaved edits asks first.
 //!
 //! The page and the viewer share a [`Host`]: the page sends opened files as commands, and reads
 //! the viewer's error and state for the banner, four times a second.
@@ -81,6 +82,7 @@ pub fn start_with_query(query: &str) -> Host {
     let early_error = host.with(|h| h.error.clone());
     watch_files(&host);
     watch_banner(&host, early_error);
+    watch_leaving(&host);
     let options = ViewerOptions { host: host.clone(), ..ViewerOptions::default() };
     if let Err(e) = crate::viewer::run(options) {
         host.with(|h| h.fatal = Some(e.to_string()));
@@ -158,6 +160,22 @@ fn watch_files(host: &Host) {
     });
     let _ = document.add_event_listener_with_callback("drop", on_drop.as_ref().unchecked_ref());
     on_drop.forget();
+}
+
+/// Leaving or reloading the page with unsaved edits asks first (the browser's own question:
+/// a page cannot word it, and the browser asks only after the user has used the page).
+fn watch_leaving(host: &Host) {
+    let Some(window) = web_sys::window() else { return };
+    let host = host.clone();
+    let on_leave = Closure::<dyn FnMut(web_sys::BeforeUnloadEvent)>::new(move |e: web_sys::BeforeUnloadEvent| {
+        if host.with(|h| h.modified) {
+            e.prevent_default();
+            // Older browsers ask only when the event carries a text.
+            e.set_return_value("the scene has unsaved edits");
+        }
+    });
+    let _ = window.add_event_listener_with_callback("beforeunload", on_leave.as_ref().unchecked_ref());
+    on_leave.forget();
 }
 
 /// What the banner says: why the viewer cannot run, else the error on screen, else nothing.

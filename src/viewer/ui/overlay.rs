@@ -209,7 +209,7 @@ fn close_dialog_ui(ctx: &egui::Context, state: &ViewerState, commands: &mut Vec<
     egui::Modal::new(egui::Id::unique("nlifs_close_dialog")).show(ctx, |ui| {
         ui.heading("Unsaved changes");
         let before = match &state.ui.pending_open {
-            Some(path) => format!("opening {}", path.display()),
+            Some(open) => format!("opening {}", open.name()),
             None => "closing".into(),
         };
         ui.label(format!("{} has unsaved edits. Save them before {before}?", state.scene.name));
