@@ -342,6 +342,14 @@ fn the_dialogs_ask_the_event_loop_and_their_answers_open_and_save() {
     assert!(changes.scene_replaced);
     assert_eq!(s.scene_path.as_deref(), Some(plant2.as_path()));
 
+    // The Open button with no path typed shows the dialog, edits or not (no question about
+    // opening nothing).
+    s.apply([Command::SetFunctionEnabled { function: 0, enabled: false }]);
+    let changes = s.apply([Command::OpenScene("".into())]);
+    assert_eq!(changes.file_dialog.map(|r| r.kind), Some(FileDialogKind::Open));
+    assert!(!s.ui.close_dialog && s.ui.pending_open.is_none());
+    s.apply([Command::FileDialogDone { kind: FileDialogKind::Open, path: None }]);
+
     // Ctrl+S on a scene without a file asks where.
     let mut built_in = ViewerState::new(ViewerState::default_scene(), None, LiveSettings::default());
     built_in.apply([Command::SetToolSupport { native_dialogs: true, ffmpeg: false }]);

@@ -18,7 +18,7 @@ use crate::scene::Scene;
 use crate::scene::spec::FunctionDef;
 use crate::scene::timeline::{Key, LoopMode};
 
-use super::command::{CloseChoice, Command, FileDialogRequest, JobKind, JobRequest};
+use super::command::{CloseChoice, Command, FileDialogKind, FileDialogRequest, JobKind, JobRequest};
 use super::picking;
 use super::recovery;
 use super::state::{CameraFit, Gesture, PendingOpen, PointDrag, ViewerState, mtime};
@@ -47,6 +47,11 @@ impl ViewerState {
         let mut time_moved = false;
         for command in commands {
             match command {
+                // The Open button with no path typed: the file dialog (the browser's file
+                // chooser) instead of a question about opening nothing.
+                Command::OpenScene(path) if path.as_os_str().is_empty() => {
+                    self.show_file_dialog(FileDialogKind::Open, &mut changes)
+                }
                 // Opening over unsaved edits asks first, as closing does.
                 Command::OpenScene(path) => self.request_open(PendingOpen::File(path), &mut changes),
                 Command::ReloadScene => {

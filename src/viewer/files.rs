@@ -74,7 +74,7 @@ impl ViewerState {
     }
 
     /// Asks the event loop for a native dialog, or says how to do without one.
-    fn show_file_dialog(&mut self, kind: FileDialogKind, changes: &mut Changes) {
+    pub(super) fn show_file_dialog(&mut self, kind: FileDialogKind, changes: &mut Changes) {
         if self.files.dialog_open {
             self.message = Some("a file dialog is already open".into());
             return;

@@ -180,17 +180,24 @@ fn scene_ui(ui: &mut egui::Ui, state: &ViewerState, commands: &mut Vec<Command>)
             state.scene.name,
             state.scene_path.as_ref().map_or("built in".into(), |p| p.display().to_string())
         ));
-        let mut text = state.path_text.clone();
-        ui.horizontal(|ui| {
-            let edit = ui.text_edit_singleline(&mut text);
-            if edit.changed() {
-                commands.push(Command::SetPathText(text.clone()));
-            }
-            let enter = edit.lost_focus() && ui.input(|i| i.key_pressed(egui::Key::Enter));
-            if ui.button("Open").clicked() || enter {
-                commands.push(Command::OpenScene(text.trim().into()));
-            }
-        });
+        if crate::platform::DESKTOP {
+            let mut text = state.path_text.clone();
+            ui.horizontal(|ui| {
+                let edit = ui.text_edit_singleline(&mut text);
+                if edit.changed() {
+                    commands.push(Command::SetPathText(text.clone()));
+                }
+                let enter = edit.lost_focus() && ui.input(|i| i.key_pressed(egui::Key::Enter));
+                if ui.button("Open").on_hover_text("opens the path typed here (none: the file dialog)").clicked()
+                    || enter
+                {
+                    commands.push(Command::OpenScene(text.trim().into()));
+                }
+            });
+        } else if ui.button("Open…").on_hover_text("a scene (.toml) or a PNG that nlifs wrote").clicked() {
+            // The browser opens files from its file chooser, never by path.
+            commands.push(Command::ShowFileDialog(FileDialogKind::Open));
+        }
         let mut save_text = state.edit.save_text.clone();
         ui.horizontal(|ui| {
             if ui.text_edit_singleline(&mut save_text).changed() {
@@ -201,10 +208,13 @@ fn scene_ui(ui: &mut egui::Ui, state: &ViewerState, commands: &mut Vec<Command>)
                 commands.push(Command::SaveScene(save_text.trim().into()));
             }
         });
-        ui.small(
+        ui.small(if crate::platform::DESKTOP {
             "…or drop a .toml file, or a PNG that nlifs wrote, onto the window. The file is reloaded when it \
-             changes.",
-        );
+             changes."
+        } else {
+            "…or drop a .toml file, or a PNG that nlifs wrote, onto the page. Save as downloads the scene under \
+             this name."
+        });
         if let Some(e) = &state.error {
             ui.colored_label(Color32::from_rgb(255, 110, 90), format!("error: {e}"));
         }
