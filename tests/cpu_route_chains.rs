@@ -229,3 +229,38 @@ fn converged_density_matches_the_fresh_orbit_route() {
     eprintln!("unedited vs edited: worst |Δ|/tolerance {separation:.3}");
     assert!(separation > 1.0, "the edit does not move the density beyond the bound: the test cannot fail");
 }
+
+/// The viewer cuts a costly frame to a time (`LiveView::bound_frame_time`): the same chains
+/// advance fewer steps, so frames cut in four splat exactly what the whole frame splats, and no
+/// chain restarts.
+#[test]
+fn a_frame_cut_short_advances_the_same_chains_fewer_steps() {
+    let scene = scene_with("plant2", None);
+    let ifs = CompiledIfs::new(&scene.at(0.0)).unwrap();
+    let (seed, points) = (9u32, 1u64 << 16);
+    let (chunks, steps) = frame_layout(points, rayon::current_num_threads());
+    let per_step = chunks as u64 * ORBITS_PER_CHUNK as u64;
+    assert_eq!(steps % 4, 0, "the test cuts a frame of {steps} steps in four");
+    for mode in [SplatMode::Closest, SplatMode::Density] {
+        let view = view_of(&scene, &ifs, mode, 96, 64);
+        let mut whole = CpuChaosGame::default();
+        whole.set_ifs(&ifs, true, 8);
+        whole.clear(&view);
+        assert_eq!(whole.advance(seed, 0, points), per_step * steps as u64);
+
+        let mut cut = CpuChaosGame::default();
+        cut.set_ifs(&ifs, true, 8);
+        cut.clear(&view);
+        let quarter = per_step * steps as u64 / 4;
+        for frame in 0..4 {
+            // A bound between whole steps rounds down to them.
+            assert_eq!(cut.advance_within(seed, frame, points, quarter + per_step / 2), quarter, "{mode:?}");
+            assert_eq!(cut.chains().len(), chunks as usize);
+        }
+        assert_eq!(cut.restarted_chains(), 0);
+        assert_eq!(cut.chains(), whole.chains(), "{mode:?}: the chains end where the whole frame's end");
+        assert!(cut.merged() == whole.merged(), "{mode:?}: the cut frames splat what the whole frame splats");
+        // At least one step of every chain, however small the bound.
+        assert_eq!(cut.advance_within(seed, 4, points, 1), per_step);
+    }
+}

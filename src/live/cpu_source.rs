@@ -145,12 +145,20 @@ impl CpuChaosGame {
     /// number of points splatted. `frame` names the random streams of chains started or
     /// restarted in this frame. Call [`Self::clear`] first, and again whenever the view changes.
     pub fn advance(&mut self, seed: u32, frame: u32, points: u64) -> u64 {
+        self.advance_within(seed, frame, points, u64::MAX)
+    }
+
+    /// [`Self::advance`] with the frame cut to about `at_most` points (whole steps of every
+    /// chain, at least one): the chains are laid out for `points` as always, so a smaller frame
+    /// advances the same chains fewer steps and never restarts them.
+    pub fn advance_within(&mut self, seed: u32, frame: u32, points: u64, at_most: u64) -> u64 {
         let Some(ifs) = self.ifs.clone() else { return 0 };
         if self.workers.is_empty() {
             return 0;
         }
         let workers = self.workers.len();
         let (chunks, steps) = frame_layout(points, workers);
+        let steps = steps.min((at_most / (chunks as u64 * ORBITS_PER_CHUNK as u64)).max(1) as usize);
         if self.chains.len() != chunks as usize || self.chains_seed != seed {
             self.chains = (0..chunks).map(|c| ChunkChains::start(&ifs, seed, frame, c)).collect();
             self.chains_seed = seed;

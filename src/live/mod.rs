@@ -26,6 +26,7 @@ use crate::camera::OrbitCamera;
 use crate::chaos_game::CompiledIfs;
 use crate::gpu::progressive::{EstimateDue, Progressive, ProgressiveSettings};
 use crate::gpu::{GpuContext, GpuError};
+use crate::platform::Instant;
 use crate::resolve::density_estimation;
 
 use self::cpu_source::CpuChaosGame;
@@ -38,6 +39,16 @@ pub const LIGHT_BANDS: u32 = 4;
 /// Settle steps after an edit while navigating ([`LiveView::set_navigating`]).
 pub const NAVIGATING_SETTLE_STEPS: u32 = 2;
 
+/// The CPU route's chaos game a frame, at most, where the viewer bounds it
+/// ([`LiveView::bound_frame_time`]): while navigating or playing, so that a costly scene (a
+/// flame's variations, builders) still moves at about 20 frames a second with the resolve and
+/// the present; every frame starts afresh there and shows only its own points.
+pub const NAVIGATING_CPU_FRAME_SECS: f64 = 0.020;
+/// The same at rest, while the picture accumulates: long enough that the fixed costs of a frame
+/// (merge, upload, resolve, present) stay a small part of it, short enough that the view answers
+/// a click within about a tenth of a second.
+pub const RESTING_CPU_FRAME_SECS: f64 = 0.100;
+
 pub struct LiveView {
     gpu: Progressive,
     settings: LiveSettings,
@@ -48,6 +59,13 @@ pub struct LiveView {
     /// The camera is being dragged: the view draws without the key light's shadows
     /// ([`Self::set_navigating`]).
     navigating: bool,
+    /// The CPU route's frames are cut to the time of [`NAVIGATING_CPU_FRAME_SECS`] and
+    /// [`RESTING_CPU_FRAME_SECS`] ([`Self::bound_frame_time`]); otherwise every frame runs the
+    /// settings' points, as the tests and benchmarks want.
+    bounded_frame_time: bool,
+    /// Points a second the CPU route's frames have splatted lately (whole frames, fixed costs
+    /// included), from which the next bounded frame is sized.
+    cpu_points_per_sec: Option<f64>,
 }
 
 impl LiveView {
@@ -62,7 +80,31 @@ impl LiveView {
             software_adapter,
             cpu: CpuChaosGame::default(),
             navigating: false,
+            bounded_frame_time: false,
+            cpu_points_per_sec: None,
         })
+    }
+
+    /// Bounds the time of the CPU route's frames (the viewer does; see
+    /// [`NAVIGATING_CPU_FRAME_SECS`]). A frame then splats what the last frames' rate fits in
+    /// the bound, at most the settings' points, at least one step of every chain.
+    pub fn bound_frame_time(&mut self, bounded: bool) {
+        self.bounded_frame_time = bounded;
+    }
+
+    /// The CPU route's points for the next frame: the settings' points, or fewer to keep within
+    /// the frame time's bound.
+    fn cpu_frame_points(&self) -> (u64, u64) {
+        let points = self.settings.draw.point_count as u64 * self.settings.draw.steps_per_frame as u64;
+        let bound_secs = match self.navigating {
+            true => NAVIGATING_CPU_FRAME_SECS,
+            false => RESTING_CPU_FRAME_SECS,
+        };
+        let at_most = match (self.bounded_frame_time, self.cpu_points_per_sec) {
+            (true, Some(rate)) => (rate * bound_secs) as u64,
+            _ => u64::MAX,
+        };
+        (points, at_most)
     }
 
     /// What the GPU side runs for `settings`: the same, without shadows and occlusion and with
@@ -198,8 +240,16 @@ impl LiveView {
         if frame.clear {
             self.cpu.clear(&frame.view);
         }
-        let points = self.settings.draw.point_count as u64 * self.settings.draw.steps_per_frame as u64;
-        let splats = self.cpu.advance(self.settings.draw.seed, frame.frame, points);
+        let (points, at_most) = self.cpu_frame_points();
+        let started = Instant::now();
+        let splats = self.cpu.advance_within(self.settings.draw.seed, frame.frame, points, at_most);
+        let secs = started.elapsed().as_secs_f64();
+        if splats > 0 && secs > 0.0 {
+            // Half the last frame, half the frames before: one slow frame (the machine busy
+            // elsewhere) does not halve the next.
+            let rate = splats as f64 / secs;
+            self.cpu_points_per_sec = Some(self.cpu_points_per_sec.map_or(rate, |r| 0.5 * (r + rate)));
+        }
         if frame.view.shadow.is_some() {
             self.gpu.upload_shadow(ctx, self.cpu.merged_shadow());
         }

@@ -268,6 +268,8 @@ impl Gfx {
         }
         surface.configure(&ctx.device, &config);
         let mut live = LiveView::new(&ctx, state.live, width, height)?;
+        // A costly scene on the CPU route still moves: its frames are cut to a time.
+        live.bound_frame_time(true);
         if let Some(c) = &state.compiled {
             live.set_ifs(&ctx, c, state.bounds, true);
         }
