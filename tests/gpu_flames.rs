@@ -11,9 +11,9 @@
 
 mod common;
 
-use common::{Density, assert_densities_agree, coarse_density, gpu};
+use common::{assert_gpu_density_matches_cpu, gpu};
 use glam::Vec3;
-use nlifs::chaos_game::{self, CompiledIfs, ORBITS_PER_CHUNK, run_chunk};
+use nlifs::chaos_game::{self, CompiledIfs};
 use nlifs::flame::variations::VARIATIONS;
 use nlifs::gpu::GpuContext;
 use nlifs::gpu::chaos_game::{FrameArgs, GpuChaosGame};
@@ -21,7 +21,7 @@ use nlifs::gpu::readback::read_buffer;
 use nlifs::rng::Pcg32;
 use nlifs::scene::Scene;
 use nlifs::scene::spec::SplatMode;
-use nlifs::splat::{Framebuffer, SplatView};
+use nlifs::splat::SplatView;
 
 /// Variations per test flame (one flame function each).
 const GROUP: usize = 3;
@@ -201,27 +201,23 @@ fn densities_match_the_cpu_for_every_variation() {
         let accum: Vec<u32> = bytemuck::pod_collect_to_vec(&read_buffer(&ctx, &game.accum).unwrap());
         let gpu_counts: Vec<u32> = accum.chunks(4).map(|a| a[3]).take((width * height) as usize).collect();
 
-        // CPU: as many orbits of k steps after the same transient, another seed.
-        let mut fb = Framebuffer::new(view, compiled.colors.clone());
-        for c in 0..orbits / ORBITS_PER_CHUNK as u32 {
-            run_chunk(&compiled, 77, 0, c, k as usize, &mut fb);
-        }
-        let cpu_counts: Vec<u32> = fb.accum.iter().map(|a| a[3]).collect();
-
-        let n_gpu: f64 = gpu_counts.iter().map(|&c| c as f64).sum();
-        let n_cpu: f64 = cpu_counts.iter().map(|&c| c as f64).sum();
-        let pg = coarse_density(&gpu_counts, width as usize, height as usize, cells);
-        let pc = coarse_density(&cpu_counts, width as usize, height as usize, cells);
-        // Within 6 standard deviations of the difference of two frequencies with variance
-        // ≤ k p (1 − p) / N each (`assert_densities_agree`).
-        let worst = assert_densities_agree(
+        // CPU: as many orbits of k steps after the same transient, another seed; within 6
+        // standard deviations of the difference of two frequencies with variance ≤ k p (1 − p) / N
+        // each.
+        let found = assert_gpu_density_matches_cpu(
             &format!("flames {name}"),
-            &Density { label: "GPU", density: &pg, samples: n_gpu, steps_per_orbit: k as f64 },
-            &Density { label: "CPU", density: &pc, samples: n_cpu, steps_per_orbit: k as f64 },
+            "GPU",
+            &gpu_counts,
+            &compiled,
+            view,
+            (orbits, k),
             cells,
         );
-        eprintln!("{name}: {n_gpu} GPU / {n_cpu} CPU samples, worst |Δ|/tolerance {worst:.3}");
-        worst_overall = worst_overall.max(worst);
+        eprintln!(
+            "{name}: {} GPU / {} CPU samples, worst |Δ|/tolerance {:.3}",
+            found.gpu_samples, found.cpu_samples, found.worst
+        );
+        worst_overall = worst_overall.max(found.worst);
     }
     eprintln!("worst |Δ|/tolerance over every group: {worst_overall:.3}");
 }

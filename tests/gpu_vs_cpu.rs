@@ -10,7 +10,7 @@
 
 mod common;
 
-use common::{Density, assert_densities_agree, coarse_density, gpu};
+use common::{Density, assert_densities_agree, assert_gpu_density_matches_cpu, coarse_density, gpu};
 use glam::Vec3;
 use nlifs::chaos_game::{self, ChunkChains, CompiledIfs, ORBITS_PER_CHUNK, continue_chunk, run_chunk};
 use nlifs::gpu::chaos_game::{FrameArgs, GpuChaosGame};
@@ -130,27 +130,15 @@ fn densities_match_cpu() {
         let accum = live.read_accum(&ctx).unwrap();
         let gpu_counts: Vec<u32> = accum.chunks(4).map(|a| a[3]).collect();
 
-        // CPU: the same number of orbits of k steps, in chunks of ORBITS_PER_CHUNK.
+        // CPU: the same number of orbits of k steps, in chunks of ORBITS_PER_CHUNK; within 6
+        // standard deviations of the difference of two frequencies with variance ≤ k p (1 − p) / N
+        // each.
         let view = SplatView::new(&camera, width, height, bounds, SplatMode::Density, 0.0, bg);
-        let mut fb = Framebuffer::new(view, compiled.colors.clone());
-        for c in 0..gpu_orbits / ORBITS_PER_CHUNK as u32 {
-            run_chunk(&compiled, 77, 0, c, k as usize, &mut fb);
-        }
-        let cpu_counts: Vec<u32> = fb.accum.iter().map(|a| a[3]).collect();
-
-        let n_gpu: f64 = gpu_counts.iter().map(|&c| c as f64).sum();
-        let n_cpu: f64 = cpu_counts.iter().map(|&c| c as f64).sum();
-        let pg = coarse_density(&gpu_counts, width as usize, height as usize, cells);
-        let pc = coarse_density(&cpu_counts, width as usize, height as usize, cells);
-        // Within 6 standard deviations of the difference of two frequencies with variance
-        // ≤ k p (1 − p) / N each.
-        let worst = assert_densities_agree(
-            name,
-            &Density { label: "GPU", density: &pg, samples: n_gpu, steps_per_orbit: k as f64 },
-            &Density { label: "CPU", density: &pc, samples: n_cpu, steps_per_orbit: k as f64 },
-            cells,
+        let found = assert_gpu_density_matches_cpu(name, "GPU", &gpu_counts, &compiled, view, (gpu_orbits, k), cells);
+        eprintln!(
+            "{name}: {} GPU / {} CPU samples, worst |Δ|/tolerance {:.3}",
+            found.gpu_samples, found.cpu_samples, found.worst
         );
-        eprintln!("{name}: {n_gpu} GPU / {n_cpu} CPU samples, worst |Δ|/tolerance {worst:.3}");
     }
 }
 

@@ -29,7 +29,7 @@ use nlifs::viewer::Command;
 use nlifs::viewer::host::Host;
 use nlifs::web::{BUNDLED_SCENES, scene_from_query};
 
-use common::{Density, assert_densities_agree, coarse_density};
+use common::assert_gpu_density_matches_cpu;
 
 wasm_bindgen_test_configure!(run_in_browser);
 
@@ -263,22 +263,20 @@ async fn webgpu_chaos_game_densities_match_cpu() {
     let gpu_counts: Vec<u32> = accum.chunks(4).map(|a| a[3]).collect();
 
     let view = SplatView::new(&camera, width, height, bounds, SplatMode::Density, 0.0, bg);
-    let mut fb = Framebuffer::new(view, compiled.colors.clone());
-    for c in 0..gpu_orbits / ORBITS_PER_CHUNK as u32 {
-        run_chunk(&compiled, 77, 0, c, k as usize, &mut fb);
-    }
-    let cpu_counts: Vec<u32> = fb.accum.iter().map(|a| a[3]).collect();
-    let n_gpu: f64 = gpu_counts.iter().map(|&c| c as f64).sum();
-    let n_cpu: f64 = cpu_counts.iter().map(|&c| c as f64).sum();
-    let pg = coarse_density(&gpu_counts, width as usize, height as usize, cells);
-    let pc = coarse_density(&cpu_counts, width as usize, height as usize, cells);
-    let worst = assert_densities_agree(
+    let found = assert_gpu_density_matches_cpu(
         "plant2 on WebGPU",
-        &Density { label: "WebGPU", density: &pg, samples: n_gpu, steps_per_orbit: k as f64 },
-        &Density { label: "CPU", density: &pc, samples: n_cpu, steps_per_orbit: k as f64 },
+        "WebGPU",
+        &gpu_counts,
+        &compiled,
+        view,
+        (gpu_orbits, k),
         cells,
     );
     web_sys::console::log_1(
-        &format!("plant2: {n_gpu} WebGPU / {n_cpu} CPU samples, worst |Δ|/tolerance {worst:.3}").into(),
+        &format!(
+            "plant2: {} WebGPU / {} CPU samples, worst |Δ|/tolerance {:.3}",
+            found.gpu_samples, found.cpu_samples, found.worst
+        )
+        .into(),
     );
 }

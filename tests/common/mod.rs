@@ -13,8 +13,10 @@ pub mod window;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
+use nlifs::chaos_game::{CompiledIfs, ORBITS_PER_CHUNK, run_chunk};
 use nlifs::gpu::GpuContext;
 use nlifs::scene::Scene;
+use nlifs::splat::{Framebuffer, SplatView};
 
 /// A path relative to the repository root.
 pub fn repo_path(relative: &str) -> PathBuf {
@@ -95,6 +97,48 @@ pub fn coarse_density(counts: &[u32], width: usize, height: usize, cells: (usize
     let total: f64 = out.iter().sum();
     assert!(total > 0.0, "no samples on the {width}×{height} image");
     out.iter().map(|c| c / total).collect()
+}
+
+/// A GPU chaos game's hit counts against the CPU's: `orbits` orbits of `k` steps (seed 77,
+/// frame 0, in chunks of [`ORBITS_PER_CHUNK`] after the transient) splatted into `view`, both
+/// reduced to `cells` and compared within 6σ ([`assert_densities_agree`]). `gpu_counts`: the
+/// GPU's hits per pixel of `view`. Returns the samples on each side and the worst
+/// |Δ| / tolerance.
+#[track_caller]
+pub fn assert_gpu_density_matches_cpu(
+    what: &str,
+    gpu_label: &str,
+    gpu_counts: &[u32],
+    compiled: &CompiledIfs,
+    view: SplatView,
+    (orbits, k): (u32, u32),
+    cells: (usize, usize),
+) -> DensityAgreement {
+    let mut fb = Framebuffer::new(view, compiled.colors.clone());
+    for c in 0..orbits / ORBITS_PER_CHUNK as u32 {
+        run_chunk(compiled, 77, 0, c, k as usize, &mut fb);
+    }
+    let cpu_counts: Vec<u32> = fb.accum.iter().map(|a| a[3]).collect();
+    let gpu_samples: f64 = gpu_counts.iter().map(|&c| c as f64).sum();
+    let cpu_samples: f64 = cpu_counts.iter().map(|&c| c as f64).sum();
+    let (width, height) = (view.width as usize, view.height as usize);
+    let pg = coarse_density(gpu_counts, width, height, cells);
+    let pc = coarse_density(&cpu_counts, width, height, cells);
+    let worst = assert_densities_agree(
+        what,
+        &Density { label: gpu_label, density: &pg, samples: gpu_samples, steps_per_orbit: k as f64 },
+        &Density { label: "CPU", density: &pc, samples: cpu_samples, steps_per_orbit: k as f64 },
+        cells,
+    );
+    DensityAgreement { gpu_samples, cpu_samples, worst }
+}
+
+/// What [`assert_gpu_density_matches_cpu`] found.
+pub struct DensityAgreement {
+    pub gpu_samples: f64,
+    pub cpu_samples: f64,
+    /// The worst cell's |Δ| / tolerance (at most 1).
+    pub worst: f64,
 }
 
 /// One side of a density comparison: a coarse density, how many samples made it, and the
