@@ -185,6 +185,13 @@ fn a_dropped_png_that_nlifs_wrote_opens_its_scene_and_another_png_is_an_error() 
     // the recent files remember.
     assert_ne!(s.scene_path.as_deref(), Some(png.as_path()));
     assert_eq!(s.files.recent.paths[0], canonical(&png));
+    // The same image as bytes (the browser's way): its scene opens, to be saved as TOML.
+    let changes =
+        s.apply([Command::OpenBytes { name: "sierpinski-shot.png".into(), bytes: std::fs::read(&png).unwrap() }]);
+    assert!(changes.scene_replaced, "{:?}", s.files.view_error);
+    assert_eq!(s.scene.functions, scene.functions);
+    assert_eq!(s.edit.save_text, "sierpinski-shot.toml");
+    assert_eq!(s.files.opened_name.as_deref(), Some("sierpinski-shot.png"));
 
     // A PNG without a scene: an error over the view, the scene stays.
     let plain = scratch.dir.join("plain.png");
@@ -256,6 +263,9 @@ fn bytes_opened_over_unsaved_edits_ask_first_and_bad_bytes_are_an_error_at_once(
     assert_eq!(s.scene, Scene::parse(&plant2_text, "plant2.toml").unwrap());
     assert!(!s.modified());
     assert_eq!(s.message.as_deref(), Some("opened plant2.toml"));
+    // Its name stays: in the Scene section and as Save's file (a download in the browser).
+    assert_eq!(s.files.opened_name.as_deref(), Some("plant2.toml"));
+    assert_eq!(s.edit.save_text, "plant2.toml");
     // Unedited, bytes open at once.
     let changes = s.apply([Command::OpenBytes { name: "plant1.toml".into(), bytes: std::fs::read(&plant1).unwrap() }]);
     assert!(changes.scene_replaced && !s.ui.close_dialog);

@@ -479,6 +479,7 @@ impl ViewerState {
         self.edit.selected_function = self.edit.selected_function.filter(|&f| f < self.scene.functions.len());
         self.edit.selected_point = None;
         self.edit.save_text = self.default_save_text();
+        self.files.opened_name = None;
         self.playback.playing &= self.scene.timeline.is_some();
         self.files.view_error = None;
         self.recompile();

@@ -185,7 +185,13 @@ impl ViewerState {
             PendingOpen::Read { name, scene, text } => {
                 self.install_scene(*scene, text, None);
                 self.show_opened(changes);
+                // Save (a download in the browser) keeps the file's name; a PNG's scene is
+                // saved as TOML.
+                if let Some(file_name) = Path::new(&name).with_extension("toml").file_name() {
+                    self.edit.save_text = file_name.to_string_lossy().into_owned();
+                }
                 self.message = Some(format!("opened {name}"));
+                self.files.opened_name = Some(name);
             }
         }
     }

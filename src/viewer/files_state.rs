@@ -24,4 +24,7 @@ pub struct FilesState {
     /// The text of the scene's file as read or last written (None: the built-in scene): a save
     /// edits it, so that the file keeps its comments and spellings (`Scene::save_over`).
     pub scene_text: Option<String>,
+    /// The name of the file the scene came from where it has no path (the browser's file
+    /// chooser, a drop on the page, the page's address): said in the Scene section.
+    pub opened_name: Option<String>,
 }

@@ -178,7 +178,11 @@ fn scene_ui(ui: &mut egui::Ui, state: &ViewerState, commands: &mut Vec<Command>)
         ui.label(format!(
             "{} — {}",
             state.scene.name,
-            state.scene_path.as_ref().map_or("built in".into(), |p| p.display().to_string())
+            match (&state.scene_path, &state.files.opened_name) {
+                (Some(path), _) => path.display().to_string(),
+                (None, Some(name)) => name.clone(),
+                (None, None) => "built in".into(),
+            }
         ));
         if crate::platform::DESKTOP {
             let mut text = state.path_text.clone();
