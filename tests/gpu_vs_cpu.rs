@@ -10,7 +10,9 @@
 
 mod common;
 
-use common::{Density, assert_densities_agree, assert_gpu_density_matches_cpu, coarse_density, gpu};
+use common::{
+    Density, assert_densities_agree, assert_gpu_density_matches_cpu, coarse_density, gpu, raw_density_settings,
+};
 use glam::Vec3;
 use nlifs::chaos_game::{self, ChunkChains, CompiledIfs, ORBITS_PER_CHUNK, continue_chunk, run_chunk};
 use nlifs::gpu::chaos_game::{FrameArgs, GpuChaosGame};
@@ -106,21 +108,7 @@ fn densities_match_cpu() {
 
         // GPU: 2^18 independent orbits of k steps after the transient.
         let gpu_orbits = 1u32 << 18;
-        let draw = ProgressiveSettings {
-            point_count: gpu_orbits,
-            steps_per_frame: k,
-            seed: 3,
-            mode: SplatMode::Density,
-            depth_cue: 0.0,
-            background: bg,
-            shading: 0.0,
-            occlusion: 0.0,
-            point_radius_px: 0,
-            max_splats: u64::MAX,
-            settle_steps: 0,
-            ..ProgressiveSettings::default()
-        };
-        let settings = LiveSettings { draw, chaos_backend: ChaosBackend::Gpu };
+        let settings = raw_density_settings(gpu_orbits, k);
         let mut live = LiveView::new(&ctx, settings, width, height).unwrap();
         live.set_ifs(&ctx, &compiled, bounds, true);
         live.set_camera(&camera);

@@ -18,18 +18,17 @@ mod common;
 use wasm_bindgen::JsCast;
 use wasm_bindgen_test::{wasm_bindgen_test, wasm_bindgen_test_configure};
 
-use nlifs::chaos_game::{self, CompiledIfs, ORBITS_PER_CHUNK, run_chunk};
+use nlifs::chaos_game::{self, CompiledIfs};
 use nlifs::gpu::GpuContext;
-use nlifs::gpu::progressive::ProgressiveSettings;
-use nlifs::live::{ChaosBackend, LiveSettings, LiveView};
+use nlifs::live::LiveView;
 use nlifs::scene::Scene;
 use nlifs::scene::spec::SplatMode;
-use nlifs::splat::{Framebuffer, SplatView};
+use nlifs::splat::SplatView;
 use nlifs::viewer::Command;
 use nlifs::viewer::host::Host;
 use nlifs::web::{BUNDLED_SCENES, scene_from_query};
 
-use common::assert_gpu_density_matches_cpu;
+use common::{assert_gpu_density_matches_cpu, raw_density_settings};
 
 wasm_bindgen_test_configure!(run_in_browser);
 
@@ -236,23 +235,7 @@ async fn webgpu_chaos_game_densities_match_cpu() {
     let camera = scene.camera_for(bounds);
     let bg = [0.0; 3];
     let gpu_orbits = 1u32 << 18;
-    let settings = LiveSettings {
-        draw: ProgressiveSettings {
-            point_count: gpu_orbits,
-            steps_per_frame: k,
-            seed: 3,
-            mode: SplatMode::Density,
-            depth_cue: 0.0,
-            background: bg,
-            shading: 0.0,
-            occlusion: 0.0,
-            point_radius_px: 0,
-            max_splats: u64::MAX,
-            settle_steps: 0,
-            ..ProgressiveSettings::default()
-        },
-        chaos_backend: ChaosBackend::Gpu,
-    };
+    let settings = raw_density_settings(gpu_orbits, k);
     let mut live = LiveView::new(&ctx, settings, width, height).unwrap();
     live.set_ifs(&ctx, &compiled, bounds, true);
     live.set_camera(&camera);

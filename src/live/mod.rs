@@ -42,7 +42,7 @@ pub const NAVIGATING_SETTLE_STEPS: u32 = 2;
 /// The CPU route's chaos game a frame, at most, where the viewer bounds it
 /// ([`LiveView::bound_frame_time`]): with the resolve and the present, a costly scene (a flame's
 /// variations, builders) still draws about 20 frames a second on lavapipe while it accumulates
-/// and while navigating, for about 0.7 times the points a second of unbounded frames (their
+/// and while navigating, for 0.4–0.8 times the points a second of unbounded frames (their
 /// fixed costs, merge, upload, resolve and present, come more often).
 pub const CPU_FRAME_SECS: f64 = 0.020;
 
@@ -82,8 +82,9 @@ impl LiveView {
         })
     }
 
-    /// Bounds the time of the CPU route's frames to [`CPU_FRAME_SECS`] (the viewer does). A frame then splats what the last frames' rate fits in
-    /// the bound, at most the settings' points, at least one step of every chain.
+    /// Bounds the time of the CPU route's frames to [`CPU_FRAME_SECS`] (the viewer does). A
+    /// frame then splats what the last frames' rate fits in the bound, at most the settings'
+    /// points, at least one step of every chain.
     pub fn bound_frame_time(&mut self, bounded: bool) {
         self.bounded_frame_time = bounded;
     }

@@ -15,7 +15,10 @@ use std::process::{Command, Output};
 
 use nlifs::chaos_game::{CompiledIfs, ORBITS_PER_CHUNK, run_chunk};
 use nlifs::gpu::GpuContext;
+use nlifs::gpu::progressive::ProgressiveSettings;
+use nlifs::live::{ChaosBackend, LiveSettings};
 use nlifs::scene::Scene;
+use nlifs::scene::spec::SplatMode;
 use nlifs::splat::{Framebuffer, SplatView};
 
 /// A path relative to the repository root.
@@ -97,6 +100,27 @@ pub fn coarse_density(counts: &[u32], width: usize, height: usize, cells: (usize
     let total: f64 = out.iter().sum();
     assert!(total > 0.0, "no samples on the {width}×{height} image");
     out.iter().map(|c| c / total).collect()
+}
+
+/// The live view's settings for [`assert_gpu_density_matches_cpu`]: the GPU chaos game's
+/// `orbits` orbits of `k` steps in one frame (seed 3), splatted as raw counts (density mode on
+/// black, no depth cue, shading, occlusion or point radius, no settling, never stopped).
+pub fn raw_density_settings(orbits: u32, k: u32) -> LiveSettings {
+    let draw = ProgressiveSettings {
+        point_count: orbits,
+        steps_per_frame: k,
+        seed: 3,
+        mode: SplatMode::Density,
+        depth_cue: 0.0,
+        background: [0.0; 3],
+        shading: 0.0,
+        occlusion: 0.0,
+        point_radius_px: 0,
+        max_splats: u64::MAX,
+        settle_steps: 0,
+        ..ProgressiveSettings::default()
+    };
+    LiveSettings { draw, chaos_backend: ChaosBackend::Gpu }
 }
 
 /// A GPU chaos game's hit counts against the CPU's: `orbits` orbits of `k` steps (seed 77,
