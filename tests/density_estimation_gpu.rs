@@ -166,3 +166,65 @@ fn live_cpu_route_estimate_matches_the_gpu_estimate() {
     assert!(lit > 1000, "only {lit} pixels differ from the background");
     assert!(differing * 100 < 3 * width * height, "{differing} channels differ by one level");
 }
+
+/// A converged view with density estimation comes to rest (the viewer then stops drawing): the
+/// estimate made after the last frame is what every later draw shows. Before, only the light
+/// cache's bands counted, which the estimated picture never draws, so a flame's view (density
+/// mode with an estimate) redrew at 60 frames a second forever. Both routes; a view without
+/// the estimate rests too.
+#[test]
+fn a_converged_view_with_density_estimation_comes_to_rest() {
+    use nlifs::chaos_game::{self, CompiledIfs};
+    use nlifs::gpu::progressive::ProgressiveSettings;
+    use nlifs::live::{ChaosBackend, LiveSettings, LiveView};
+    use nlifs::scene::Scene;
+    use nlifs::scene::spec::SplatMode;
+    let Some(ctx) = gpu() else { return };
+    let (width, height) = (96u32, 64u32);
+    let path = format!("{}/scenes/plant2.toml", env!("CARGO_MANIFEST_DIR"));
+    let scene = Scene::parse(&std::fs::read_to_string(&path).unwrap(), &path).unwrap();
+    let compiled = CompiledIfs::new(&scene.at(0.0)).unwrap();
+    let bounds = chaos_game::attractor_bounds(&compiled, 1);
+    let de = Some(DensityEstimation { max_radius_px: 5.0, min_radius_px: 0.0, curve: 0.4 });
+    for (backend, density_estimation) in
+        [(ChaosBackend::Cpu, de), (ChaosBackend::Gpu, de), (ChaosBackend::Cpu, None), (ChaosBackend::Gpu, None)]
+    {
+        let point_count = 1u32 << 14;
+        let settings = LiveSettings {
+            draw: ProgressiveSettings {
+                point_count,
+                mode: SplatMode::Density,
+                // Converged after 20 frames: past the frames before the first estimate.
+                max_splats: 20 * point_count as u64,
+                density_estimation,
+                ..ProgressiveSettings::default()
+            },
+            chaos_backend: backend,
+        };
+        let mut live = LiveView::new(&ctx, settings, width, height).unwrap();
+        live.set_ifs(&ctx, &compiled, bounds, true);
+        live.set_camera(&scene.camera_for(bounds));
+        let mut frames = 0;
+        while !live.at_rest() {
+            assert!(frames < 60, "{backend:?}, estimate {density_estimation:?}: not at rest after {frames} frames");
+            let mut encoder = ctx.device.create_command_encoder(&Default::default());
+            live.advance(&ctx, &mut encoder);
+            ctx.queue.submit([encoder.finish()]);
+            nlifs::gpu::readback::draw_offscreen(&ctx, width, height, |encoder, target, format| {
+                live.draw(&ctx, encoder, target, format, [0, 0])
+            })
+            .unwrap();
+            frames += 1;
+        }
+        assert!(live.converged(), "{backend:?}: at rest before converging");
+        // And it stays at rest: the draws that follow change nothing.
+        let mut encoder = ctx.device.create_command_encoder(&Default::default());
+        assert_eq!(live.advance(&ctx, &mut encoder), 0);
+        ctx.queue.submit([encoder.finish()]);
+        nlifs::gpu::readback::draw_offscreen(&ctx, width, height, |encoder, target, format| {
+            live.draw(&ctx, encoder, target, format, [0, 0])
+        })
+        .unwrap();
+        assert!(live.at_rest(), "{backend:?}, estimate {density_estimation:?}: a draw at rest woke it");
+    }
+}

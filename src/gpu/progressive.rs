@@ -289,10 +289,20 @@ impl Progressive {
         !self.clear && self.splats_since_clear >= self.settings.max_splats
     }
 
-    /// True when another draw would show what the last one showed: accumulation has stopped
-    /// and the light cache's bands were all refreshed since it last changed.
+    /// True when another draw would show what the last one showed: accumulation has stopped,
+    /// and the picture drawn caught up with it: the density estimate made since the last frame
+    /// (drawn as it is), else the light cache's bands all refreshed since it last changed.
     pub fn at_rest(&self) -> bool {
-        self.converged() && (self.light_bands <= 1 || self.bands_since_change >= self.light_bands)
+        if !self.converged() {
+            return false;
+        }
+        match self.estimate_due() {
+            EstimateDue::Keep => true,
+            EstimateDue::Make(_) => false,
+            EstimateDue::Off | EstimateDue::Young => {
+                self.light_bands <= 1 || self.bands_since_change >= self.light_bands
+            }
+        }
     }
 
     /// Records one chaos-game frame into `encoder` unless converged; returns the number of
