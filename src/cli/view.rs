@@ -103,6 +103,7 @@ pub fn view(args: ViewArgs) -> anyhow::Result<()> {
         play: args.play,
         log_fps: args.log_fps,
         host: Default::default(),
+        backends: None,
     };
     nlifs::viewer::run(options).context("viewer")?;
     Ok(())

@@ -11,6 +11,7 @@ pub mod batch;
 pub mod bench;
 pub mod chaos_game;
 pub mod density_estimation;
+pub mod picture;
 pub mod progressive;
 pub mod readback;
 pub mod render;

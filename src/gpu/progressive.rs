@@ -30,6 +30,7 @@ use crate::splat::{Lens, SplatView};
 
 use super::chaos_game::{FrameArgs, GpuChaosGame};
 use super::density_estimation::GpuDensityEstimation;
+use super::picture::CpuPicture;
 use super::resolve::{GpuResolve, LightRows};
 use super::{GpuContext, GpuError};
 use crate::resolve::density_estimation::{self, Estimated};
@@ -131,9 +132,21 @@ pub struct UploadedFrame {
     pub frame: u32,
 }
 
+/// Where the accumulation lives and what resolves it.
+enum Engine {
+    /// Compute shaders: the chaos game, its accumulation and the resolve on the GPU, and the
+    /// density estimation pass (made on first use).
+    Gpu { game: GpuChaosGame, resolve: GpuResolve, estimation: Option<GpuDensityEstimation> },
+    /// No compute shaders (a browser's WebGL2): the accumulation comes from the CPU
+    /// ([`Progressive::begin_uploaded_frame`]) and is resolved there, the picture drawn as a
+    /// texture (`gpu/picture.rs`).
+    Picture(Box<CpuPicture>),
+}
+
 pub struct Progressive {
-    game: GpuChaosGame,
-    resolve: GpuResolve,
+    engine: Engine,
+    width: u32,
+    height: u32,
     pub settings: ProgressiveSettings,
     bounds: (DVec3, DVec3),
     transient: u32,
@@ -160,9 +173,8 @@ pub struct Progressive {
     light_args: Option<ResolveArgs>,
     /// Clears of the accumulation so far (an estimate belongs to one accumulation).
     clears: u64,
-    /// The density estimation pass (made on first use), and what its last estimate was made of:
-    /// the clear count, the frames since that clear and the setting.
-    estimation: Option<GpuDensityEstimation>,
+    /// What the last density estimate was made of: the clear count, the frames since that
+    /// clear and the setting.
     estimated: Option<(u64, u32, DensityEstimation)>,
 }
 
@@ -184,14 +196,40 @@ fn same_view(a: &SplatView, b: &SplatView) -> bool {
 }
 
 impl Progressive {
+    /// A progressive render on the GPU where the adapter has compute shaders; otherwise one
+    /// whose frames come from the CPU and are resolved there ([`Self::computes`] tells which).
     pub fn new(ctx: &GpuContext, settings: ProgressiveSettings, width: u32, height: u32) -> Result<Self, GpuError> {
+        let compute = ctx.adapter.get_downlevel_capabilities().flags.contains(wgpu::DownlevelFlags::COMPUTE_SHADERS);
+        Self::with_compute(ctx, settings, width, height, compute)
+    }
+
+    /// [`Self::new`] on the GPU (`compute`, which the adapter must have) or with the picture
+    /// resolved on the CPU (any adapter; tests draw both on one).
+    pub fn with_compute(
+        ctx: &GpuContext,
+        settings: ProgressiveSettings,
+        width: u32,
+        height: u32,
+        compute: bool,
+    ) -> Result<Self, GpuError> {
         crate::splat::lens::check(settings.aperture, settings.focus_distance)?;
-        if settings.point_count as u64 > ctx.max_points() {
-            return Err(GpuError::TooManyPoints(settings.point_count as u64));
-        }
+        let (width, height) = (width.max(1), height.max(1));
+        let engine = if compute {
+            if settings.point_count as u64 > ctx.max_points() {
+                return Err(GpuError::TooManyPoints(settings.point_count as u64));
+            }
+            Engine::Gpu {
+                game: GpuChaosGame::new(&ctx.device, settings.point_count, width, height),
+                resolve: GpuResolve::new(&ctx.device),
+                estimation: None,
+            }
+        } else {
+            Engine::Picture(Box::new(CpuPicture::new(&ctx.device)))
+        };
         Ok(Self {
-            game: GpuChaosGame::new(&ctx.device, settings.point_count, width.max(1), height.max(1)),
-            resolve: GpuResolve::new(&ctx.device),
+            engine,
+            width,
+            height,
             settings,
             bounds: (DVec3::ZERO, DVec3::ONE),
             transient: 0,
@@ -209,20 +247,28 @@ impl Progressive {
             bands_since_change: 0,
             light_args: None,
             clears: 0,
-            estimation: None,
             estimated: None,
         })
     }
 
+    /// The chaos game and the resolve run on the GPU; false: frames come from the CPU
+    /// ([`Self::begin_uploaded_frame`]) and are resolved there.
+    pub fn computes(&self) -> bool {
+        matches!(self.engine, Engine::Gpu { .. })
+    }
+
     pub fn size(&self) -> (u32, u32) {
-        (self.game.width, self.game.height)
+        (self.width, self.height)
     }
 
     /// Uploads a new IFS with its attractor `bounds`. `restart`: a different scene (the points
     /// restart in the domain and skip the full transient); otherwise an edit (the points are
     /// kept and skip `settle_steps`).
     pub fn set_ifs(&mut self, ctx: &GpuContext, ifs: &CompiledIfs, bounds: (DVec3, DVec3), restart: bool) {
-        self.game.set_ifs(&ctx.device, &ctx.queue, ifs);
+        match &mut self.engine {
+            Engine::Gpu { game, .. } => game.set_ifs(&ctx.device, &ctx.queue, ifs),
+            Engine::Picture(picture) => picture.set_colors(&ifs.colors),
+        }
         self.bounds = bounds;
         self.transient = ifs.transient;
         self.has_ifs = true;
@@ -243,13 +289,12 @@ impl Progressive {
     fn update_view(&mut self) {
         let Some(camera) = &self.camera else { return };
         let s = &self.settings;
-        let view =
-            SplatView::new(camera, self.game.width, self.game.height, self.bounds, s.mode, s.depth_cue, s.background);
+        let view = SplatView::new(camera, self.width, self.height, self.bounds, s.mode, s.depth_cue, s.background);
         let casts = s.mode == SplatMode::Closest && s.shadows > 0.0 && s.shading > 0.0;
         let to_light = crate::resolve::shadow::key_light(s.light_yaw_deg, s.light_pitch_deg);
         let view = super::shadow::live_shadow(view, casts, glam::Vec3::from_array(to_light), camera, self.bounds);
         // The settings' lens was checked when they were set.
-        let lens = Lens::new(camera, self.game.height, s.aperture, s.focus_distance, s.seed).unwrap_or(Lens::NONE);
+        let lens = Lens::new(camera, self.height, s.aperture, s.focus_distance, s.seed).unwrap_or(Lens::NONE);
         let view = view.with_lens(lens);
         if self.view.as_ref().is_none_or(|v| !same_view(v, &view)) {
             self.view = Some(view);
@@ -260,10 +305,12 @@ impl Progressive {
     pub fn set_settings(&mut self, ctx: &GpuContext, settings: ProgressiveSettings) -> Result<(), GpuError> {
         crate::splat::lens::check(settings.aperture, settings.focus_distance)?;
         if settings.point_count != self.settings.point_count {
-            if settings.point_count as u64 > ctx.max_points() {
-                return Err(GpuError::TooManyPoints(settings.point_count as u64));
+            if let Engine::Gpu { game, .. } = &mut self.engine {
+                if settings.point_count as u64 > ctx.max_points() {
+                    return Err(GpuError::TooManyPoints(settings.point_count as u64));
+                }
+                game.set_point_count(&ctx.device, settings.point_count);
             }
-            self.game.set_point_count(&ctx.device, settings.point_count);
             self.restart_points();
         }
         self.settings = settings;
@@ -280,7 +327,10 @@ impl Progressive {
     }
 
     pub fn resize(&mut self, ctx: &GpuContext, width: u32, height: u32) {
-        self.game.resize(&ctx.device, width.max(1), height.max(1));
+        (self.width, self.height) = (width.max(1), height.max(1));
+        if let Engine::Gpu { game, .. } = &mut self.engine {
+            game.resize(&ctx.device, self.width, self.height);
+        }
         self.update_view();
     }
 
@@ -306,12 +356,14 @@ impl Progressive {
     }
 
     /// Records one chaos-game frame into `encoder` unless converged; returns the number of
-    /// point steps splatted. Submit `encoder` before the next call.
+    /// point steps splatted (none without compute shaders: the frames come from the CPU).
+    /// Submit `encoder` before the next call.
     pub fn advance(&mut self, ctx: &GpuContext, encoder: &mut wgpu::CommandEncoder) -> u64 {
         let Some(view) = self.view else { return 0 };
         if !self.has_ifs || self.converged() {
             return 0;
         }
+        let Engine::Gpu { game, .. } = &mut self.engine else { return 0 };
         let steps = self.skip_steps + self.settings.steps_per_frame;
         let args = FrameArgs {
             view: &view,
@@ -322,13 +374,13 @@ impl Progressive {
             restart: self.restart,
             clear: self.clear,
         };
-        self.game.encode(&ctx.device, &ctx.queue, encoder, &args);
+        game.encode(&ctx.device, &ctx.queue, encoder, &args);
+        let splats = game.point_count as u64 * self.settings.steps_per_frame as u64;
         if self.clear {
             self.frames_since_clear = 0;
             self.splats_since_clear = 0;
             self.clears += 1;
         }
-        let splats = self.game.point_count as u64 * self.settings.steps_per_frame as u64;
         self.bands_since_change = 0;
         self.frames_since_clear += 1;
         self.splats_since_clear += splats;
@@ -362,15 +414,24 @@ impl Progressive {
     /// Uploads the shadow map of a frame from elsewhere (before [`Self::finish_uploaded_frame`]).
     pub fn upload_shadow(&mut self, ctx: &GpuContext, shadow: &[u32]) {
         let Some(view) = self.view else { return };
-        self.game.fit_shadow(&ctx.device, view.shadow.as_ref());
-        if view.shadow.is_some_and(|s| s.texels() == shadow.len()) {
-            ctx.queue.write_buffer(&self.game.shadow, 0, bytemuck::cast_slice(shadow));
+        match &mut self.engine {
+            Engine::Gpu { game, .. } => {
+                game.fit_shadow(&ctx.device, view.shadow.as_ref());
+                if view.shadow.is_some_and(|s| s.texels() == shadow.len()) {
+                    ctx.queue.write_buffer(&game.shadow, 0, bytemuck::cast_slice(shadow));
+                }
+            }
+            Engine::Picture(picture) => picture.set_shadow(shadow),
         }
     }
 
     pub fn finish_uploaded_frame(&mut self, ctx: &GpuContext, accum: &[u32], splats: u64) {
-        if !accum.is_empty() {
-            ctx.queue.write_buffer(&self.game.accum, 0, bytemuck::cast_slice(accum));
+        match &mut self.engine {
+            Engine::Gpu { game, .. } if !accum.is_empty() => {
+                ctx.queue.write_buffer(&game.accum, 0, bytemuck::cast_slice(accum))
+            }
+            Engine::Gpu { .. } => {}
+            Engine::Picture(picture) => picture.set_accum(accum),
         }
         self.bands_since_change = 0;
         self.frames_since_clear += 1;
@@ -382,6 +443,17 @@ impl Progressive {
     /// Records only an emptying of the accumulation buffer (benchmarks time it alone).
     pub fn encode_clear(&mut self, ctx: &GpuContext, encoder: &mut wgpu::CommandEncoder) {
         let Some(view) = self.view else { return };
+        let game = match &mut self.engine {
+            Engine::Gpu { game, .. } => game,
+            Engine::Picture(picture) => {
+                picture.clear();
+                self.clear = false;
+                self.frames_since_clear = 0;
+                self.splats_since_clear = 0;
+                self.clears += 1;
+                return;
+            }
+        };
         let args = FrameArgs {
             view: &view,
             seed: self.settings.seed,
@@ -391,7 +463,7 @@ impl Progressive {
             restart: false,
             clear: true,
         };
-        self.game.encode(&ctx.device, &ctx.queue, encoder, &args);
+        game.encode(&ctx.device, &ctx.queue, encoder, &args);
         self.clear = false;
         self.frames_since_clear = 0;
         self.splats_since_clear = 0;
@@ -413,9 +485,9 @@ impl Progressive {
         let (near, far) = self.view.map_or((0.0, 1.0), |v| (v.near, v.far));
         let (pixel_size, perspective) = match &self.camera {
             Some(c) if c.projection == Projection::Perspective => {
-                (2.0 * (0.5 * c.fov_y_deg.to_radians()).tan() / self.game.height as f32, true)
+                (2.0 * (0.5 * c.fov_y_deg.to_radians()).tan() / self.height as f32, true)
             }
-            Some(c) => (2.0 * c.half_height_at_target() / self.game.height as f32, false),
+            Some(c) => (2.0 * c.half_height_at_target() / self.height as f32, false),
             None => (1.0, false),
         };
         let args = ResolveArgs {
@@ -437,18 +509,37 @@ impl Progressive {
             normal_radius_px: s.normal_radius_px,
         };
         let due = self.estimate_due();
-        if matches!(due, EstimateDue::Keep | EstimateDue::Make(_)) {
-            let (width, height) = self.size();
-            let estimation = self.estimation.get_or_insert_with(|| GpuDensityEstimation::new(&ctx.device));
-            if let EstimateDue::Make(de) = due {
-                estimation.encode(ctx, encoder, &self.game.accum, width, height, &de);
-                self.estimated = Some((self.clears, self.frames_since_clear, de));
+        let estimated = matches!(due, EstimateDue::Keep | EstimateDue::Make(_));
+        // Light rows only where the estimate is not drawn (their bands count towards the rest).
+        let light = if estimated { LightRows::Inline } else { self.light_rows(&args) };
+        let size = self.size();
+        match &mut self.engine {
+            Engine::Gpu { game, estimation, .. } if estimated => {
+                let estimation = estimation.get_or_insert_with(|| GpuDensityEstimation::new(&ctx.device));
+                if let EstimateDue::Make(de) = due {
+                    estimation.encode(ctx, encoder, &game.accum, size.0, size.1, &de);
+                    self.estimated = Some((self.clears, self.frames_since_clear, de));
+                }
+                estimation.draw(ctx, encoder, &args, target, format);
             }
-            estimation.draw(ctx, encoder, &args, target, format);
-            return;
+            Engine::Gpu { game, resolve, .. } => resolve.draw(ctx, encoder, game, &args, target, format, light),
+            Engine::Picture(picture) => {
+                if let EstimateDue::Make(de) = due {
+                    // The CPU twin, from the accumulation as handed over.
+                    let accum = picture.accum();
+                    if accum.len() == 4 * size.0 as usize * size.1 as usize {
+                        picture.set_estimate(density_estimation::estimate(
+                            bytemuck::cast_slice(accum),
+                            size.0,
+                            size.1,
+                            &de,
+                        ));
+                    }
+                    self.estimated = Some((self.clears, self.frames_since_clear, de));
+                }
+                picture.draw(ctx, encoder, &args, size, estimated, target, format);
+            }
         }
-        let light = self.light_rows(&args);
-        self.resolve.draw(ctx, encoder, &self.game, &args, target, format, light);
     }
 
     /// What the next draw does about density estimation (see the module's notes; `light_bands`
@@ -476,8 +567,13 @@ impl Progressive {
 
     /// Takes `e`, made with `de` on the CPU from the accumulation as it is now (the live view's
     /// CPU route), as the estimate the next draws show.
-    pub fn upload_estimate(&mut self, ctx: &GpuContext, e: &Estimated, de: &DensityEstimation) {
-        self.estimation.get_or_insert_with(|| GpuDensityEstimation::new(&ctx.device)).upload(ctx, e);
+    pub fn upload_estimate(&mut self, ctx: &GpuContext, e: Estimated, de: &DensityEstimation) {
+        match &mut self.engine {
+            Engine::Gpu { estimation, .. } => {
+                estimation.get_or_insert_with(|| GpuDensityEstimation::new(&ctx.device)).upload(ctx, &e)
+            }
+            Engine::Picture(picture) => picture.set_estimate(e),
+        }
         self.estimated = Some((self.clears, self.frames_since_clear, *de));
     }
 
@@ -486,7 +582,7 @@ impl Progressive {
         if self.light_bands <= 1 {
             return LightRows::Inline;
         }
-        let height = self.game.height;
+        let height = self.height;
         if self.frames_since_clear <= LIGHT_FULL_FRAMES {
             // Lit in the draw itself: the same pixels as a whole refresh in one pass instead of
             // two (a playing timeline or a dragged camera clears every frame and never reads
@@ -533,13 +629,21 @@ impl Progressive {
     /// Reads the accumulation buffer back (four u32 per pixel, as `Framebuffer` after a
     /// fashion: closest keys in slot 0, or r, g, b sums and the count). Tests and benchmarks.
     pub fn read_accum(&self, ctx: &GpuContext) -> Result<Vec<u32>, GpuError> {
-        let bytes = super::readback::read_buffer(ctx, &self.game.accum)?;
-        Ok(bytemuck::pod_collect_to_vec(&bytes))
+        match &self.engine {
+            Engine::Gpu { game, .. } => {
+                Ok(bytemuck::pod_collect_to_vec(&super::readback::read_buffer(ctx, &game.accum)?))
+            }
+            Engine::Picture(picture) => Ok(picture.accum().to_vec()),
+        }
     }
 
     /// [`Self::read_accum`] that also works in the browser (awaits the map).
     pub async fn read_accum_async(&self, ctx: &GpuContext) -> Result<Vec<u32>, GpuError> {
-        let bytes = super::readback::read_buffer_async(ctx, &self.game.accum).await?;
-        Ok(bytemuck::pod_collect_to_vec(&bytes))
+        match &self.engine {
+            Engine::Gpu { game, .. } => {
+                Ok(bytemuck::pod_collect_to_vec(&super::readback::read_buffer_async(ctx, &game.accum).await?))
+            }
+            Engine::Picture(picture) => Ok(picture.accum().to_vec()),
+        }
     }
 }

@@ -14,12 +14,13 @@ pub const VARIATIONS_PLUGINS: &str = include_str!("../../shaders/variations_plug
 pub const FULLSCREEN: &str = include_str!("../../shaders/fullscreen.wgsl");
 pub const RESOLVE: &str = include_str!("../../shaders/resolve.wgsl");
 pub const COMPOSITE: &str = include_str!("../../shaders/composite.wgsl");
+pub const PICTURE: &str = include_str!("../../shaders/picture.wgsl");
 pub const DENSITY_ESTIMATION: &str = include_str!("../../shaders/density_estimation.wgsl");
 
 /// The programs: a name and the files it is made of, in order.
 /// The chaos game comes in two programs that differ only in where the compiled IFS tables
 /// live: uniform buffers (fast on lavapipe, fixed capacities) or storage buffers (any size).
-pub const PROGRAMS: [(&str, &[(&str, &str)]); 6] = [
+pub const PROGRAMS: [(&str, &[(&str, &str)]); 7] = [
     ("rng", &[("rng.wgsl", RNG)]),
     (
         "chaos_game",
@@ -45,6 +46,7 @@ pub const PROGRAMS: [(&str, &[(&str, &str)]); 6] = [
     ),
     ("resolve", &[("fullscreen.wgsl", FULLSCREEN), ("resolve.wgsl", RESOLVE)]),
     ("composite", &[("fullscreen.wgsl", FULLSCREEN), ("composite.wgsl", COMPOSITE)]),
+    ("picture", &[("fullscreen.wgsl", FULLSCREEN), ("picture.wgsl", PICTURE)]),
     // Density estimation reads the accumulation and draws with the resolve's tone map.
     (
         "density_estimation",

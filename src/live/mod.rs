@@ -9,6 +9,9 @@
 //! - here, [`LiveView`], which converts the settings at the GPU boundary and runs each frame on
 //!   the route the backend takes on the adapter at hand.
 //!
+//! On an adapter without compute shaders (a browser's WebGL2) the CPU route is the only one, and
+//! the accumulation is resolved on the CPU too and drawn as a texture (`gpu/picture.rs`).
+//!
 //! With [`LiveSettings::chaos_backend`] taking the CPU route (`cpu`, or `auto` on a software
 //! adapter) the chaos game runs on the CPU: persistent chains advanced every frame into CPU
 //! framebuffers, uploaded into the same accumulation buffer and resolved by the same pass;
@@ -67,19 +70,33 @@ pub struct LiveView {
 
 impl LiveView {
     pub fn new(ctx: &GpuContext, settings: LiveSettings, width: u32, height: u32) -> Result<Self, GpuError> {
+        Ok(Self::with_gpu(ctx, settings, Progressive::new(ctx, settings.draw, width, height)?))
+    }
+
+    /// [`Self::new`] drawing on the CPU (its route and resolve) whether the adapter has compute
+    /// shaders or not, as it does where it has none (a browser's WebGL2). Tests.
+    pub fn without_compute(
+        ctx: &GpuContext,
+        settings: LiveSettings,
+        width: u32,
+        height: u32,
+    ) -> Result<Self, GpuError> {
+        Ok(Self::with_gpu(ctx, settings, Progressive::with_compute(ctx, settings.draw, width, height, false)?))
+    }
+
+    fn with_gpu(ctx: &GpuContext, settings: LiveSettings, mut gpu: Progressive) -> Self {
         let software_adapter = ctx.adapter.get_info().device_type == wgpu::DeviceType::Cpu;
-        let mut gpu = Progressive::new(ctx, settings.draw, width, height)?;
         gpu.light_bands = LIGHT_BANDS;
-        Ok(Self {
+        Self {
+            route: settings.chaos_backend.route(software_adapter, gpu.computes()),
             gpu,
-            route: settings.chaos_backend.route(software_adapter),
             settings,
             software_adapter,
             cpu: CpuChaosGame::default(),
             navigating: false,
             bounded_frame_time: false,
             cpu_points_per_sec: None,
-        })
+        }
     }
 
     /// Bounds the time of the CPU route's frames to [`CPU_FRAME_SECS`] (the viewer does). A
@@ -165,7 +182,7 @@ impl LiveView {
 
     pub fn set_settings(&mut self, ctx: &GpuContext, settings: LiveSettings) -> Result<(), GpuError> {
         self.gpu.set_settings(ctx, self.progressive_settings(&settings))?;
-        let route = settings.chaos_backend.route(self.software_adapter);
+        let route = settings.chaos_backend.route(self.software_adapter, self.gpu.computes());
         if route.cpu != self.route.cpu {
             // The points of the route that did not run did not follow the edits: restart them.
             self.gpu.restart_points();
@@ -268,7 +285,7 @@ impl LiveView {
             let merged = self.cpu.merged();
             if merged.len() == 4 * width as usize * height as usize {
                 let e = density_estimation::estimate(bytemuck::cast_slice(merged), width, height, &de);
-                self.gpu.upload_estimate(ctx, &e, &de);
+                self.gpu.upload_estimate(ctx, e, &de);
             }
         }
         self.gpu.draw(ctx, encoder, target, format, origin_px);

@@ -76,9 +76,11 @@ impl ChaosBackend {
     }
 
     /// The route this setting takes on a software adapter (`software_adapter`: it rasterizes
-    /// on the CPU, as lavapipe does) or a hardware one, and why.
-    pub fn route(self, software_adapter: bool) -> ChaosRoute {
+    /// on the CPU, as lavapipe does) or a hardware one, with compute shaders (`compute`) or
+    /// without (a browser's WebGL2: the CPU's whatever the setting), and why.
+    pub fn route(self, software_adapter: bool, compute: bool) -> ChaosRoute {
         match self {
+            _ if !compute => ChaosRoute { cpu: true, reason: "no compute shaders (WebGL2)" },
             Self::Gpu => ChaosRoute { cpu: false, reason: "chosen: gpu" },
             Self::Cpu => ChaosRoute { cpu: true, reason: "chosen: cpu" },
             Self::Auto if software_adapter => ChaosRoute { cpu: true, reason: "auto: software adapter" },
@@ -106,12 +108,13 @@ mod tests {
 
     #[test]
     fn auto_takes_the_cpu_on_software_adapters_only() {
-        assert!(ChaosBackend::Auto.route(true).cpu);
-        assert!(!ChaosBackend::Auto.route(false).cpu);
-        assert!(!ChaosBackend::Gpu.route(true).cpu);
-        assert!(ChaosBackend::Cpu.route(false).cpu);
+        assert!(ChaosBackend::Auto.route(true, true).cpu);
+        assert!(!ChaosBackend::Auto.route(false, true).cpu);
+        assert!(!ChaosBackend::Gpu.route(true, true).cpu);
+        assert!(ChaosBackend::Cpu.route(false, true).cpu);
         for b in ChaosBackend::ALL {
             assert_eq!(ChaosBackend::parse(b.name()), Some(b));
+            assert!(b.route(false, false).cpu, "without compute shaders only the CPU route runs");
         }
     }
 }

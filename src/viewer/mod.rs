@@ -86,8 +86,6 @@ pub enum ViewerError {
     Window(String),
     #[error(transparent)]
     Gpu(#[from] GpuError),
-    #[error("the adapter {0} has no compute shaders (a browser's WebGL2): the viewer needs WebGPU there")]
-    NoCompute(String),
 }
 
 /// How the viewer starts.
@@ -112,6 +110,9 @@ pub struct ViewerOptions {
     /// Shared with the page that embeds the viewer (the browser build): its commands are
     /// applied before the first frame and then once per frame.
     pub host: host::Host,
+    /// The graphics APIs to try (None: all, or the environment's `WGPU_BACKEND`); the page's
+    /// `?backend=webgl2` asks for WebGL2 alone.
+    pub backends: Option<wgpu::Backends>,
 }
 
 /// Opens the viewer and runs until the window closes.
@@ -300,7 +301,7 @@ impl ApplicationHandler for App {
         if self.gfx.is_some() || self.starting.is_some() {
             return;
         }
-        match Gfx::start(event_loop, &self.state) {
+        match Gfx::start(event_loop, &self.state, self.options.backends) {
             Ok(starting) => self.starting = Some(starting),
             Err(e) => self.fail(event_loop, e),
         }

@@ -23,16 +23,24 @@ pub(super) struct Starting {
 
 impl Gfx {
     /// Opens the window and asks for a GPU context that can draw into it: an instance with the
-    /// browser's WebGPU where it has an adapter (WebGL2 otherwise), its surface, adapter and device.
-    pub(super) fn start(event_loop: &ActiveEventLoop, state: &ViewerState) -> Result<Starting, ViewerError> {
+    /// browser's WebGPU where it has an adapter (WebGL2 otherwise), its surface, adapter and
+    /// device; `backends`, when given, are the only APIs tried.
+    pub(super) fn start(
+        event_loop: &ActiveEventLoop,
+        state: &ViewerState,
+        backends: Option<wgpu::Backends>,
+    ) -> Result<Starting, ViewerError> {
         let attributes = crate::platform::window_attributes(
             Window::default_attributes()
                 .with_title(state.window_title())
                 .with_inner_size(winit::dpi::PhysicalSize::new(1280u32, 720u32)),
         );
         let window = Arc::new(event_loop.create_window(attributes).map_err(|e| ViewerError::Window(e.to_string()))?);
-        let descriptor =
+        let mut descriptor =
             wgpu::InstanceDescriptor::new_with_display_handle_from_env(Box::new(event_loop.owned_display_handle()));
+        if let Some(backends) = backends {
+            descriptor.backends = backends;
+        }
         let target = window.clone();
         let request = async move {
             let instance = wgpu::util::new_instance_with_webgpu_detection(descriptor).await;
@@ -51,13 +59,9 @@ impl App {
     pub(super) fn finish_start(&mut self, event_loop: &ActiveEventLoop) {
         let Some(result) = self.starting.as_ref().and_then(|s| s.pending.take()) else { return };
         let Some(Starting { window, .. }) = self.starting.take() else { return };
-        let drawing = result.and_then(|(ctx, surface)| {
-            // The live view's chaos game and resolve are compute and storage-buffer passes.
-            if !ctx.adapter.get_downlevel_capabilities().flags.contains(wgpu::DownlevelFlags::COMPUTE_SHADERS) {
-                return Err(ViewerError::NoCompute(ctx.describe()));
-            }
-            Gfx::new(window, ctx, surface, &self.state)
-        });
+        // Without compute shaders (a browser's WebGL2) the live view runs the chaos game and
+        // the resolve on the CPU (`live::LiveView`).
+        let drawing = result.and_then(|(ctx, surface)| Gfx::new(window, ctx, surface, &self.state));
         match drawing {
             Ok(gfx) => {
                 gfx.window.request_redraw();

@@ -6,8 +6,9 @@
 //! `?toml=…` a whole scene carried in the link (`scene::url`: zlib in URL-safe base64, with its
 //! size bounded). A bad scene in the address or in a dropped file is shown in the banner with
 //! its location (file:line:column), and the scene on screen stays. Where the browser has no
-//! WebGPU (WebGL2 only, or neither) the banner says so instead of the viewer. Leaving the page
-//! with unsaved edits asks first.
+//! WebGPU the viewer draws with WebGL2, its chaos game and resolve on the CPU (`?backend=webgl2`
+//! asks for that where WebGPU exists); where it has neither the banner says so. Leaving the
+//! page with unsaved edits asks first.
 //!
 //! The page and the viewer share a [`Host`]: the page sends opened files as commands, and reads
 //! the viewer's error and state for the banner, four times a second.
@@ -56,6 +57,19 @@ pub fn scene_from_query(query: &str) -> Option<Result<(String, Vec<u8>), String>
     Some(url::decode(&param).map(|text| ("link.toml".to_string(), text.into_bytes())).map_err(|e| e.to_string()))
 }
 
+/// The graphics API the page's address asks for (`?backend=webgpu` or `webgl2`); None: WebGPU
+/// where the browser has an adapter, WebGL2 otherwise.
+pub fn backends_from_query(query: &str) -> Result<Option<wgpu::Backends>, String> {
+    let Some(name) = web_sys::UrlSearchParams::new_with_str(query).ok().and_then(|p| p.get("backend")) else {
+        return Ok(None);
+    };
+    match name.as_str() {
+        "webgpu" => Ok(Some(wgpu::Backends::BROWSER_WEBGPU)),
+        "webgl2" => Ok(Some(wgpu::Backends::GL)),
+        _ => Err(format!("no backend `{}`; the backends are webgpu and webgl2", crate::io::printable(&name, false))),
+    }
+}
+
 /// Starts the viewer in the page (called by `index.html`), with the scene its address names.
 #[wasm_bindgen]
 pub fn start() {
@@ -79,11 +93,15 @@ pub fn start_with_query(query: &str) -> Host {
         Some(Err(e)) => host.with(|h| h.error = Some(e)),
         None => {}
     }
+    let backends = backends_from_query(query).unwrap_or_else(|e| {
+        host.with(|h| h.error = Some(e));
+        None
+    });
     let early_error = host.with(|h| h.error.clone());
     watch_files(&host);
     watch_banner(&host, early_error);
     watch_leaving(&host);
-    let options = ViewerOptions { host: host.clone(), ..ViewerOptions::default() };
+    let options = ViewerOptions { host: host.clone(), backends, ..ViewerOptions::default() };
     if let Err(e) = crate::viewer::run(options) {
         host.with(|h| h.fatal = Some(e.to_string()));
     }

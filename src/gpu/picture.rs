@@ -1,0 +1,303 @@
+//! The live view's drawing on an adapter without compute shaders (a browser's WebGL2, where
+//! wgpu has neither compute passes nor storage buffers): the accumulation stays on the CPU (the
+//! live view's CPU route fills it), the resolve's CPU twin (`crate::resolve`, the density
+//! estimate's where one applies) resolves it into an 8-bit picture, and `shaders/picture.wgsl`
+//! draws that as a texture into the accumulation's rectangle of the target.
+//! [`super::progressive::Progressive`] keeps its bookkeeping (clears, convergence, estimates,
+//! rest) the same over both drawings; this one resolves again only when its inputs or the
+//! resolve's arguments changed.
+
+use rayon::prelude::*;
+
+use crate::resolve::density_estimation::Estimated;
+use crate::resolve::{ResolveArgs, ResolveInputs, ResolveParams, max_count, resolve_row};
+use crate::scene::spec::SplatMode;
+
+use super::GpuContext;
+
+/// Mirrors `struct Placement` in `shaders/picture.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct Placement {
+    origin: [u32; 2],
+    pad: [u32; 2],
+}
+
+/// The picture's texture, of the accumulation's size.
+struct Texture {
+    texture: wgpu::Texture,
+    size_px: [u32; 2],
+    /// An sRGB view (the target is sRGB) or a plain one.
+    srgb: bool,
+    bind_group: wgpu::BindGroup,
+}
+
+pub struct CpuPicture {
+    /// The accumulation as last handed over ([`Self::set_accum`]), in the GPU's layout.
+    accum: Vec<u32>,
+    /// The shadow map's keys as last handed over (empty without one).
+    shadow: Vec<u32>,
+    /// The function colours (linear RGB), from the IFS.
+    colors: Vec<[f32; 3]>,
+    /// The density estimate the draws show while [`Self::draw`] is told to.
+    estimate: Option<Estimated>,
+    /// The inputs changed since the picture was last resolved.
+    stale: bool,
+    /// What the picture was last resolved with (the parameters, and whether from the estimate).
+    shown: Option<(ResolveParams, bool)>,
+    /// The picture, RGBA8 rows of the accumulation's width.
+    rgba: Vec<u8>,
+    module: wgpu::ShaderModule,
+    layout: wgpu::BindGroupLayout,
+    pipelines: Vec<(wgpu::TextureFormat, wgpu::RenderPipeline)>,
+    placement: wgpu::Buffer,
+    texture: Option<Texture>,
+}
+
+impl CpuPicture {
+    pub fn new(device: &wgpu::Device) -> Self {
+        Self {
+            accum: Vec::new(),
+            shadow: Vec::new(),
+            colors: Vec::new(),
+            estimate: None,
+            stale: true,
+            shown: None,
+            rgba: Vec::new(),
+            module: super::shaders::module(device, "picture"),
+            layout: bind_group_layout(device),
+            pipelines: Vec::new(),
+            placement: device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("picture_placement"),
+                size: std::mem::size_of::<Placement>() as u64,
+                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            }),
+            texture: None,
+        }
+    }
+
+    /// The function colours of a new IFS.
+    pub fn set_colors(&mut self, colors: &[[f32; 3]]) {
+        self.colors = colors.to_vec();
+        self.stale = true;
+    }
+
+    /// The whole accumulation since the last clear (as the GPU's accumulation buffer holds it).
+    pub fn set_accum(&mut self, accum: &[u32]) {
+        self.accum.clear();
+        self.accum.extend_from_slice(accum);
+        self.stale = true;
+    }
+
+    /// The shadow map's keys of the frame handed over next.
+    pub fn set_shadow(&mut self, shadow: &[u32]) {
+        self.shadow.clear();
+        self.shadow.extend_from_slice(shadow);
+        self.stale = true;
+    }
+
+    /// Empties the accumulation (nothing splatted yet: the background).
+    pub fn clear(&mut self) {
+        self.accum.clear();
+        self.stale = true;
+    }
+
+    /// The accumulation as last handed over.
+    pub fn accum(&self) -> &[u32] {
+        &self.accum
+    }
+
+    /// Takes `e` as the estimate the draws show when told to.
+    pub fn set_estimate(&mut self, e: Estimated) {
+        self.estimate = Some(e);
+        self.stale = true;
+    }
+
+    /// Resolves the accumulation (or the estimate, with `estimated`) with `args` for a
+    /// `width`×`height` accumulation, unless the picture already shows it, and records its draw
+    /// onto `target` at `args.origin_px`.
+    #[expect(clippy::too_many_arguments, reason = "the draw's inputs, each a different kind")]
+    pub fn draw(
+        &mut self,
+        ctx: &GpuContext,
+        encoder: &mut wgpu::CommandEncoder,
+        args: &ResolveArgs,
+        (width, height): (u32, u32),
+        estimated: bool,
+        target: &wgpu::TextureView,
+        format: wgpu::TextureFormat,
+    ) {
+        // The picture holds sRGB-encoded bytes whatever the target: an sRGB target reads them
+        // through an sRGB view and encodes them again.
+        let params = ResolveArgs { origin_px: [0, 0], ..*args }.params(width, height, true);
+        if self.stale || self.shown != Some((params, estimated)) {
+            self.resolve(&params, args.mode, estimated);
+            self.stale = false;
+            self.shown = Some((params, estimated));
+            self.upload(ctx, [width, height], format.is_srgb());
+        }
+        let placement = Placement { origin: args.origin_px, pad: [0; 2] };
+        ctx.queue.write_buffer(&self.placement, 0, bytemuck::bytes_of(&placement));
+        self.pipeline(&ctx.device, format);
+        let (Some(texture), Some((_, pipeline))) = (&self.texture, self.pipelines.iter().find(|(f, _)| *f == format))
+        else {
+            return;
+        };
+        let mut pass = super::resolve::resolve_pass(encoder, "picture", target, args.origin_px, texture.size_px);
+        pass.set_pipeline(pipeline);
+        pass.set_bind_group(0, &texture.bind_group, &[]);
+        pass.draw(0..3, 0..1);
+    }
+
+    /// Resolves into `self.rgba` with `p` (of the accumulation's size) on the CPU: the
+    /// background where nothing is splatted yet.
+    fn resolve(&mut self, p: &ResolveParams, mode: SplatMode, estimated: bool) {
+        let (w, h) = (p.width as usize, p.height as usize);
+        self.rgba.resize(4 * w * h, 255);
+        let rows = self.rgba.par_chunks_mut((4 * w).max(1)).enumerate();
+        let rgba = |c: [f32; 3]| {
+            let [r, g, b] = c.map(|v| (v * 255.0 + 0.5) as u8);
+            [r, g, b, 255]
+        };
+        if let Some(e) = self.estimate.as_ref().filter(|e| estimated && (e.width, e.height) == (p.width, p.height)) {
+            rows.for_each(|(y, row)| {
+                for (x, px) in row.chunks_exact_mut(4).enumerate() {
+                    px.copy_from_slice(&rgba(e.fragment(p, x as u32, y as u32)));
+                }
+            });
+            return;
+        }
+        let words = if mode == SplatMode::Closest { w * h } else { 4 * w * h };
+        if self.accum.len() != words {
+            let background = rgba([0, 1, 2].map(|c| crate::color::linear_to_srgb(p.background[c])));
+            rows.for_each(|(_, row)| row.chunks_exact_mut(4).for_each(|px| px.copy_from_slice(&background)));
+            return;
+        }
+        let mut p = *p;
+        // The shadow map must be the view's (as on the GPU, where the chaos game sizes it).
+        let texels = p.shadow_side_px as usize * p.shadow_side_px as usize;
+        if self.shadow.len() != texels || texels == 0 {
+            p.shadows = 0.0;
+        }
+        let inputs = ResolveInputs {
+            accum: &self.accum,
+            colors: &self.colors,
+            max_count: if mode == SplatMode::Density { max_count(&self.accum, w * h) } else { 0 },
+            shadow: &self.shadow,
+        };
+        if inputs.colors.is_empty() {
+            return;
+        }
+        rows.for_each(|(y, row)| {
+            resolve_row(&p, &inputs, y as u32, |x, c| row[4 * x..4 * x + 4].copy_from_slice(&rgba(c)))
+        });
+    }
+
+    /// Writes the picture into the texture, made anew when the size or the target's kind changed.
+    fn upload(&mut self, ctx: &GpuContext, size_px: [u32; 2], srgb: bool) {
+        let device = &ctx.device;
+        if self.texture.as_ref().is_none_or(|t| t.size_px != size_px || t.srgb != srgb) {
+            // WebGL2 has no views of another format: the texture itself is sRGB or plain.
+            let format = if srgb { wgpu::TextureFormat::Rgba8UnormSrgb } else { wgpu::TextureFormat::Rgba8Unorm };
+            let texture = device.create_texture(&wgpu::TextureDescriptor {
+                label: Some("picture"),
+                size: wgpu::Extent3d { width: size_px[0], height: size_px[1], depth_or_array_layers: 1 },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format,
+                usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+                view_formats: &[],
+            });
+            let view = texture.create_view(&Default::default());
+            let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("picture"),
+                layout: &self.layout,
+                entries: &[
+                    wgpu::BindGroupEntry { binding: 0, resource: wgpu::BindingResource::TextureView(&view) },
+                    wgpu::BindGroupEntry { binding: 1, resource: self.placement.as_entire_binding() },
+                ],
+            });
+            self.texture = Some(Texture { texture, size_px, srgb, bind_group });
+        }
+        let Some(t) = &self.texture else { return };
+        ctx.queue.write_texture(
+            t.texture.as_image_copy(),
+            &self.rgba,
+            wgpu::TexelCopyBufferLayout { offset: 0, bytes_per_row: Some(4 * size_px[0]), rows_per_image: None },
+            wgpu::Extent3d { width: size_px[0], height: size_px[1], depth_or_array_layers: 1 },
+        );
+    }
+
+    /// The pipeline drawing onto `format` targets.
+    fn pipeline(&mut self, device: &wgpu::Device, format: wgpu::TextureFormat) -> &wgpu::RenderPipeline {
+        let index = match self.pipelines.iter().position(|(f, _)| *f == format) {
+            Some(i) => i,
+            None => {
+                let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                    label: Some("picture"),
+                    bind_group_layouts: &[Some(&self.layout)],
+                    immediate_size: 0,
+                });
+                let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                    label: Some("picture"),
+                    layout: Some(&layout),
+                    vertex: wgpu::VertexState {
+                        module: &self.module,
+                        entry_point: Some("fullscreen"),
+                        compilation_options: Default::default(),
+                        buffers: &[],
+                    },
+                    primitive: wgpu::PrimitiveState::default(),
+                    depth_stencil: None,
+                    multisample: wgpu::MultisampleState::default(),
+                    fragment: Some(wgpu::FragmentState {
+                        module: &self.module,
+                        entry_point: Some("picture_fragment"),
+                        compilation_options: Default::default(),
+                        targets: &[Some(wgpu::ColorTargetState {
+                            format,
+                            blend: None,
+                            write_mask: wgpu::ColorWrites::ALL,
+                        })],
+                    }),
+                    multiview_mask: None,
+                    cache: None,
+                });
+                self.pipelines.push((format, pipeline));
+                self.pipelines.len() - 1
+            }
+        };
+        &self.pipelines[index].1
+    }
+}
+
+/// The bind group layout of `shaders/picture.wgsl`: the picture and its placement.
+fn bind_group_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
+    device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some("picture"),
+        entries: &[
+            wgpu::BindGroupLayoutEntry {
+                binding: 0,
+                visibility: wgpu::ShaderStages::FRAGMENT,
+                ty: wgpu::BindingType::Texture {
+                    sample_type: wgpu::TextureSampleType::Float { filterable: false },
+                    view_dimension: wgpu::TextureViewDimension::D2,
+                    multisampled: false,
+                },
+                count: None,
+            },
+            wgpu::BindGroupLayoutEntry {
+                binding: 1,
+                visibility: wgpu::ShaderStages::FRAGMENT,
+                ty: wgpu::BindingType::Buffer {
+                    ty: wgpu::BufferBindingType::Uniform,
+                    has_dynamic_offset: false,
+                    min_binding_size: None,
+                },
+                count: None,
+            },
+        ],
+    })
+}
