@@ -459,6 +459,21 @@ pub fn resolve_row(p: &ResolveParams, inputs: &ResolveInputs<'_>, y: u32, mut pi
     }
 }
 
+/// [`resolve_row`] with the solid look's light read from `light` (a cache of every row, some
+/// of them refreshed for this draw: [`LightRows::whole`], [`LightRows::refresh`]), as the GPU's
+/// draw reads its light cache: the same colours where the cache is current.
+pub fn resolve_row_cached(
+    p: &ResolveParams,
+    inputs: &ResolveInputs<'_>,
+    y: u32,
+    light: &LightRows,
+    mut pixel: impl FnMut(usize, [f32; 3]),
+) {
+    for x in 0..p.width {
+        pixel(x as usize, fragment(p, inputs, x, y, Light::Rows(light)));
+    }
+}
+
 fn fragment(p: &ResolveParams, inputs: &ResolveInputs<'_>, x: u32, y: u32, light: Light<'_>) -> [f32; 3] {
     let accum = inputs.accum;
     let mut c = [p.background[0], p.background[1], p.background[2]];

@@ -96,34 +96,91 @@ fn the_picture_resolved_on_the_cpu_matches_the_gpu_resolve() {
 fn the_picture_is_drawn_at_its_origin_and_comes_to_rest() {
     let Some(ctx) = gpu() else { return };
     let mut s = settings(SplatMode::Closest);
-    s.draw.max_splats = 4 * (1 << 14) * 3;
-    let mut live = live_view(&ctx, s, false, 1);
-    let picture = live.snapshot(&ctx).unwrap();
+    // Past the frames whose draws light every pixel (`LIGHT_FULL_FRAMES`): the light cache is
+    // refreshed a band of rows a draw, as the viewer's.
+    let frames = 14;
+    s.draw.max_splats = frames * (1 << 14) * 3;
+    let mut live = live_view(&ctx, s, false, 0);
     let origin = [7u32, 5u32];
-    let (w, h) = (SIZE.0 + 20, SIZE.1 + 9);
-    let placed =
-        draw_offscreen(&ctx, w, h, |encoder, target, format| live.draw(&ctx, encoder, target, format, origin)).unwrap();
-    for (x, y, p) in placed.enumerate_pixels() {
-        let inside = (origin[0]..origin[0] + SIZE.0).contains(&x) && (origin[1]..origin[1] + SIZE.1).contains(&y);
-        let want = if inside { picture.get_pixel(x - origin[0], y - origin[1]).0 } else { [0, 0, 0] };
-        assert_eq!(p.0, want, "pixel ({x}, {y}) of a target with the picture at {origin:?}");
-    }
-    // Converges after a few frames; then a few draws (the light bands) bring it to rest.
-    let mut frames = 0;
+    let draw_at = |live: &mut LiveView, (w, h): (u32, u32), origin: [u32; 2]| {
+        draw_offscreen(&ctx, w, h, |encoder, target, format| live.draw(&ctx, encoder, target, format, origin)).unwrap()
+    };
+    let mut drawn = 0;
     while !live.converged() {
         let mut encoder = ctx.device.create_command_encoder(&Default::default());
         live.advance(&ctx, &mut encoder);
         ctx.queue.submit([encoder.finish()]);
-        frames += 1;
-        assert!(frames < 10, "not converged after {frames} frames");
+        draw_at(&mut live, SIZE, [0, 0]);
+        drawn += 1;
+        assert!(drawn <= frames, "not converged after {drawn} frames");
     }
+    // Converged: a few draws (the light's bands) bring it to rest, the light then current.
     let mut draws = 0;
     while !live.at_rest() {
-        draw_offscreen(&ctx, SIZE.0, SIZE.1, |encoder, target, format| {
-            live.draw(&ctx, encoder, target, format, [0, 0])
-        })
-        .unwrap();
+        draw_at(&mut live, SIZE, [0, 0]);
         draws += 1;
         assert!(draws <= 8, "not at rest after {draws} draws of a converged view");
+    }
+    let (w, h) = (SIZE.0 + 20, SIZE.1 + 9);
+    let placed = draw_at(&mut live, (w, h), origin);
+    let picture = live.snapshot(&ctx).unwrap();
+    assert!(picture.pixels().filter(|p| p.0 != picture.get_pixel(0, 0).0).count() > 500, "a blank picture");
+    for (x, y, p) in placed.enumerate_pixels() {
+        let inside = (origin[0]..origin[0] + SIZE.0).contains(&x) && (origin[1]..origin[1] + SIZE.1).contains(&y);
+        let want = if inside { picture.get_pixel(x - origin[0], y - origin[1]).0 } else { [0, 0, 0] };
+        assert_eq!(p.0, want, "pixel ({x}, {y}): the banded light at rest against the whole light, at {origin:?}");
+    }
+}
+
+/// Frames drawn as the viewer draws them, through an edit and its undo: the picture after the
+/// undo is the one before the edit, drawn as the GPU resolve draws it.
+#[test]
+fn an_edit_and_its_undo_redraw_the_picture() {
+    let Some(ctx) = gpu() else { return };
+    let scene = common::load_scene("plant2");
+    let compiled = CompiledIfs::new(&scene.at(0.0)).unwrap();
+    let mut edited_scene = scene.clone();
+    edited_scene.functions[1].enabled = false;
+    let edited = CompiledIfs::new(&edited_scene.at(0.0)).unwrap();
+    let bounds = chaos_game::attractor_bounds(&compiled, 1);
+    let s = settings(SplatMode::Closest);
+    let mut views: Vec<LiveView> = [true, false]
+        .into_iter()
+        .map(|compute| {
+            let mut live = match compute {
+                true => LiveView::new(&ctx, s, SIZE.0, SIZE.1).unwrap(),
+                false => LiveView::without_compute(&ctx, s, SIZE.0, SIZE.1).unwrap(),
+            };
+            live.set_ifs(&ctx, &compiled, bounds, true);
+            live.set_camera(&scene.camera_for(bounds));
+            live
+        })
+        .collect();
+    for ifs in [&compiled, &edited, &compiled] {
+        for live in &mut views {
+            live.set_ifs(&ctx, ifs, bounds, false);
+            for _ in 0..12 {
+                let mut encoder = ctx.device.create_command_encoder(&Default::default());
+                live.advance(&ctx, &mut encoder);
+                ctx.queue.submit([encoder.finish()]);
+                draw_offscreen(&ctx, SIZE.0, SIZE.1, |encoder, target, format| {
+                    live.draw(&ctx, encoder, target, format, [0, 0])
+                })
+                .unwrap();
+            }
+        }
+        let [a, b] = [0, 1].map(|i| {
+            let live = &mut views[i];
+            draw_offscreen(&ctx, SIZE.0, SIZE.1, |encoder, target, format| {
+                live.draw(&ctx, encoder, target, format, [0, 0])
+            })
+            .unwrap()
+        });
+        let background = b.get_pixel(0, 0).0;
+        // plant2 without its crown lights a few hundred pixels here.
+        assert!(b.pixels().filter(|p| p.0 != background).count() > 200, "a blank picture");
+        let worst =
+            a.pixels().zip(b.pixels()).map(|(p, q)| (0..3).map(|c| p.0[c].abs_diff(q.0[c])).max().unwrap()).max();
+        assert!(worst <= Some(1), "the pictures differ by {worst:?} levels");
     }
 }

@@ -10,7 +10,7 @@ use nlifs::resolve::ResolveParams;
 
 /// (program, WGSL struct, size of its Rust mirror). Shader-interface structs (vertex outputs)
 /// have no memory layout and no mirror.
-const MIRRORS: [(&str, &str, usize); 11] = [
+const MIRRORS: [(&str, &str, usize); 12] = [
     ("chaos_game", "KernelFunction", size_of::<KernelFunction>()),
     ("chaos_game", "Cell", size_of::<Cell>()),
     ("chaos_game", "ChaosParams", size_of::<ChaosParams>()),
@@ -21,6 +21,7 @@ const MIRRORS: [(&str, &str, usize); 11] = [
     ("chaos_game_storage", "FlameOp", size_of::<FlameOp>()),
     ("resolve", "ResolveParams", size_of::<ResolveParams>()),
     ("density_estimation", "ResolveParams", size_of::<ResolveParams>()),
+    ("picture", "Placement", size_of::<nlifs::gpu::picture::Placement>()),
     (
         "density_estimation",
         "DensityEstimationParams",

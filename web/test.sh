@@ -8,4 +8,4 @@ export CHROMEDRIVER="${CHROMEDRIVER:-/usr/bin/chromedriver}"
 # SwiftShader is slow: a test may take minutes.
 export WASM_BINDGEN_TEST_TIMEOUT="${WASM_BINDGEN_TEST_TIMEOUT:-600}"
 export CARGO_TARGET_WASM32_UNKNOWN_UNKNOWN_RUNNER="$PWD/web/test-runner.sh"
-cargo test --release --target wasm32-unknown-unknown --test web "$@"
+cargo test --release --target wasm32-unknown-unknown --test web --test web_webgl2 "$@"

@@ -10,17 +10,21 @@
 use rayon::prelude::*;
 
 use crate::resolve::density_estimation::Estimated;
-use crate::resolve::{ResolveArgs, ResolveInputs, ResolveParams, max_count, resolve_row};
+use crate::resolve::{
+    LightRows as LightCache, ResolveArgs, ResolveInputs, ResolveParams, max_count, resolve_row, resolve_row_cached,
+};
 use crate::scene::spec::SplatMode;
 
 use super::GpuContext;
+use super::resolve::LightRows;
 
-/// Mirrors `struct Placement` in `shaders/picture.wgsl`.
+/// Mirrors `struct Placement` in `shaders/picture.wgsl`: keep in sync.
 #[repr(C)]
-#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-struct Placement {
-    origin: [u32; 2],
-    pad: [u32; 2],
+#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct Placement {
+    /// The target pixel of the picture's pixel (0, 0).
+    pub origin: [u32; 2],
+    pub pad: [u32; 2],
 }
 
 /// The picture's texture, of the accumulation's size.
@@ -47,6 +51,9 @@ pub struct CpuPicture {
     shown: Option<(ResolveParams, bool)>,
     /// The picture, RGBA8 rows of the accumulation's width.
     rgba: Vec<u8>,
+    /// The solid look's light of every pixel, refreshed in bands as the GPU's light cache is
+    /// ([`LightRows::Refresh`]).
+    light: Option<LightCache>,
     module: wgpu::ShaderModule,
     layout: wgpu::BindGroupLayout,
     pipelines: Vec<(wgpu::TextureFormat, wgpu::RenderPipeline)>,
@@ -64,6 +71,7 @@ impl CpuPicture {
             stale: true,
             shown: None,
             rgba: Vec::new(),
+            light: None,
             module: super::shaders::module(device, "picture"),
             layout: bind_group_layout(device),
             pipelines: Vec::new(),
@@ -115,8 +123,9 @@ impl CpuPicture {
     }
 
     /// Resolves the accumulation (or the estimate, with `estimated`) with `args` for a
-    /// `width`×`height` accumulation, unless the picture already shows it, and records its draw
-    /// onto `target` at `args.origin_px`.
+    /// `width`×`height` accumulation, the solid look's light computed per pixel or read from
+    /// the light cache after refreshing its rows `light` (as the GPU's resolve does), unless the
+    /// picture already shows it; records its draw onto `target` at `args.origin_px`.
     #[expect(clippy::too_many_arguments, reason = "the draw's inputs, each a different kind")]
     pub fn draw(
         &mut self,
@@ -125,14 +134,17 @@ impl CpuPicture {
         args: &ResolveArgs,
         (width, height): (u32, u32),
         estimated: bool,
+        light: LightRows,
         target: &wgpu::TextureView,
         format: wgpu::TextureFormat,
     ) {
         // The picture holds sRGB-encoded bytes whatever the target: an sRGB target reads them
         // through an sRGB view and encodes them again.
         let params = ResolveArgs { origin_px: [0, 0], ..*args }.params(width, height, true);
-        if self.stale || self.shown != Some((params, estimated)) {
-            self.resolve(&params, args.mode, estimated);
+        // A refreshed band changes the picture even where the accumulation did not.
+        let refresh = matches!(light, LightRows::Refresh { start, end } if start < end);
+        if self.stale || refresh || self.shown != Some((params, estimated)) {
+            self.resolve(&params, args.mode, estimated, light);
             self.stale = false;
             self.shown = Some((params, estimated));
             self.upload(ctx, [width, height], format.is_srgb());
@@ -152,7 +164,7 @@ impl CpuPicture {
 
     /// Resolves into `self.rgba` with `p` (of the accumulation's size) on the CPU: the
     /// background where nothing is splatted yet.
-    fn resolve(&mut self, p: &ResolveParams, mode: SplatMode, estimated: bool) {
+    fn resolve(&mut self, p: &ResolveParams, mode: SplatMode, estimated: bool, light: LightRows) {
         let (w, h) = (p.width as usize, p.height as usize);
         self.rgba.resize(4 * w * h, 255);
         let rows = self.rgba.par_chunks_mut((4 * w).max(1)).enumerate();
@@ -189,9 +201,27 @@ impl CpuPicture {
         if inputs.colors.is_empty() {
             return;
         }
-        rows.for_each(|(y, row)| {
-            resolve_row(&p, &inputs, y as u32, |x, c| row[4 * x..4 * x + 4].copy_from_slice(&rgba(c)))
-        });
+        let lit = mode == SplatMode::Closest && (p.shading > 0.0 || p.occlusion > 0.0);
+        match light {
+            LightRows::Refresh { start, end } if lit => {
+                let cache = match self.light.take() {
+                    Some(cache) if cache.covers(p.width, p.height) => self.light.insert(cache),
+                    _ => self.light.insert(LightCache::whole(&p)),
+                };
+                if start < end {
+                    cache.refresh(&p, &inputs, start as i32..=end as i32 - 1);
+                }
+                let cache = &*cache;
+                rows.for_each(|(y, row)| {
+                    resolve_row_cached(&p, &inputs, y as u32, cache, |x, c| {
+                        row[4 * x..4 * x + 4].copy_from_slice(&rgba(c))
+                    })
+                });
+            }
+            _ => rows.for_each(|(y, row)| {
+                resolve_row(&p, &inputs, y as u32, |x, c| row[4 * x..4 * x + 4].copy_from_slice(&rgba(c)))
+            }),
+        }
     }
 
     /// Writes the picture into the texture, made anew when the size or the target's kind changed.

@@ -133,6 +133,10 @@ pub struct UploadedFrame {
 }
 
 /// Where the accumulation lives and what resolves it.
+#[allow(
+    clippy::large_enum_variant,
+    reason = "one per progressive render, never moved in a loop; wasm32's pointers make the GPU variant the larger"
+)]
 enum Engine {
     /// Compute shaders: the chaos game, its accumulation and the resolve on the GPU, and the
     /// density estimation pass (made on first use).
@@ -537,7 +541,7 @@ impl Progressive {
                     }
                     self.estimated = Some((self.clears, self.frames_since_clear, de));
                 }
-                picture.draw(ctx, encoder, &args, size, estimated, target, format);
+                picture.draw(ctx, encoder, &args, size, estimated, light, target, format);
             }
         }
     }

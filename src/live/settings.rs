@@ -80,7 +80,7 @@ impl ChaosBackend {
     /// without (a browser's WebGL2: the CPU's whatever the setting), and why.
     pub fn route(self, software_adapter: bool, compute: bool) -> ChaosRoute {
         match self {
-            _ if !compute => ChaosRoute { cpu: true, reason: "no compute shaders (WebGL2)" },
+            _ if !compute => ChaosRoute { cpu: true, reason: "WebGL2: no compute shaders" },
             Self::Gpu => ChaosRoute { cpu: false, reason: "chosen: gpu" },
             Self::Cpu => ChaosRoute { cpu: true, reason: "chosen: cpu" },
             Self::Auto if software_adapter => ChaosRoute { cpu: true, reason: "auto: software adapter" },

@@ -17,7 +17,9 @@
 //! - **Files**: in the browser `io::write_atomic`, through which every file is written, offers
 //!   the bytes as a download instead (`web.rs`); files are opened from their bytes (a file
 //!   input, a drop), never by path.
-//! - **The window**: in the browser the viewer draws into the page's canvas ([`window_attributes`]).
+//! - **The window**: in the browser the viewer draws into the page's canvas ([`window_attributes`]),
+//!   whose WebGL2 context, where WebGPU is missing, keeps its pixels between frames
+//!   ([`keep_webgl2_pixels`]).
 //! - **Waiting for the GPU**: adapter and device requests are futures; [`run_async`] blocks on
 //!   them on the desktop and hands them to the page's event loop in the browser, where blocking
 //!   would never let them finish.
@@ -69,6 +71,16 @@ pub fn window_attributes(attributes: winit::window::WindowAttributes) -> winit::
     return web::canvas_attributes(attributes);
     #[cfg(not(target_arch = "wasm32"))]
     attributes
+}
+
+/// Before a WebGL2 surface is made for `window`: in the browser, its canvas keeps the last
+/// frame's pixels for read-backs between frames (`web::keep_webgl2_pixels`); nothing on the
+/// desktop.
+pub fn keep_webgl2_pixels(window: &winit::window::Window) {
+    #[cfg(target_arch = "wasm32")]
+    web::keep_webgl2_pixels(window);
+    #[cfg(not(target_arch = "wasm32"))]
+    let _ = window;
 }
 
 /// Runs `app` on `event_loop`: until it exits on the desktop (the app is given back); in the

@@ -48,6 +48,20 @@ pub fn canvas_attributes(mut attributes: winit::window::WindowAttributes) -> win
     }
 }
 
+/// Makes the viewer's canvas's WebGL2 context with `preserveDrawingBuffer`, before wgpu asks
+/// for it (the browser then hands wgpu this context; wgpu asks only for no antialiasing, which
+/// is the default here too). Without it the browser clears the canvas after showing a frame,
+/// and the page's picture reads back blank (`drawImage`, "save image") between the viewer's
+/// frames, which come only when something changes.
+pub fn keep_webgl2_pixels(window: &winit::window::Window) {
+    use winit::platform::web::WindowExtWebSys;
+    let Some(canvas) = window.canvas() else { return };
+    let options = js_sys::Object::new();
+    let _ = js_sys::Reflect::set(&options, &"preserveDrawingBuffer".into(), &wasm_bindgen::JsValue::TRUE);
+    let _ = js_sys::Reflect::set(&options, &"antialias".into(), &wasm_bindgen::JsValue::FALSE);
+    let _ = canvas.get_context_with_context_options("webgl2", &options);
+}
+
 /// The id of the page's file input, which Open clicks.
 pub const FILE_INPUT_ID: &str = "nlifs-open";
 

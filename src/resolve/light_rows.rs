@@ -456,6 +456,31 @@ impl LightRows {
         Self { rows, width, factors }
     }
 
+    /// A cache of every row of `p`'s accumulation, each pixel unlit (factor 1, nothing added)
+    /// until [`Self::refresh`] computes its rows: the CPU twin of the GPU's light cache.
+    pub fn whole(p: &ResolveParams) -> Self {
+        let width = p.width as usize;
+        Self { rows: 0..=p.height as i32 - 1, width, factors: vec![[1.0, 0.0]; width * p.height as usize] }
+    }
+
+    /// Computes rows `rows` (clipped to these rows) afresh, as [`Self::new`] would; the
+    /// other rows keep their factors.
+    pub fn refresh(&mut self, p: &ResolveParams, inputs: &ResolveInputs<'_>, rows: RangeInclusive<i32>) {
+        debug_assert_eq!(self.width, p.width as usize);
+        let rows = (*rows.start()).max(*self.rows.start())..=(*rows.end()).min(*self.rows.end());
+        let first = (*rows.start() - *self.rows.start()).max(0) as usize;
+        let out = self.factors[first * self.width..].chunks_exact_mut(self.width.max(1));
+        for (y, out) in rows.zip(out) {
+            out.fill([1.0, 0.0]);
+            light_row(p, inputs, y, out);
+        }
+    }
+
+    /// True when the cache holds every row of a `width`×`height` accumulation.
+    pub fn covers(&self, width: u32, height: u32) -> bool {
+        self.width == width as usize && self.rows == (0..=height as i32 - 1)
+    }
+
     /// `albedo` lit at pixel (x, y) (a pixel of these rows).
     pub fn lit(&self, x: i32, y: i32, albedo: [f32; 3]) -> [f32; 3] {
         debug_assert!(self.rows.contains(&y));

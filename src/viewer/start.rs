@@ -43,7 +43,15 @@ impl Gfx {
         }
         let target = window.clone();
         let request = async move {
-            let instance = wgpu::util::new_instance_with_webgpu_detection(descriptor).await;
+            if descriptor.backends.contains(wgpu::Backends::BROWSER_WEBGPU)
+                && !wgpu::util::is_browser_webgpu_supported().await
+            {
+                descriptor.backends.remove(wgpu::Backends::BROWSER_WEBGPU);
+            }
+            if !descriptor.backends.contains(wgpu::Backends::BROWSER_WEBGPU) {
+                crate::platform::keep_webgl2_pixels(&target);
+            }
+            let instance = wgpu::Instance::new(descriptor);
             let surface = instance.create_surface(target).map_err(|e| ViewerError::Window(e.to_string()))?;
             let ctx = GpuContext::request(instance, Some(&surface)).await?;
             Ok((ctx, surface))

@@ -8,6 +8,8 @@
 //! lavapipe cannot pass by skipping.
 #![allow(dead_code, reason = "each suite compiles this file and uses a subset of it")]
 
+#[cfg(target_arch = "wasm32")]
+pub mod browser;
 pub mod window;
 
 use std::path::{Path, PathBuf};
