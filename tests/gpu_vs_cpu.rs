@@ -15,6 +15,7 @@ use common::{
 };
 use glam::Vec3;
 use nlifs::chaos_game::{self, ChunkChains, CompiledIfs, ORBITS_PER_CHUNK, continue_chunk, run_chunk};
+use nlifs::gpu::GpuContext;
 use nlifs::gpu::chaos_game::{FrameArgs, GpuChaosGame};
 use nlifs::gpu::progressive::ProgressiveSettings;
 use nlifs::gpu::readback::read_buffer;
@@ -519,4 +520,42 @@ fn gpu_render_past_the_device_limits_is_bad_input() {
     assert!(stderr.contains("16384×16384") && stderr.contains("--backend cpu"), "{stderr}");
     assert!(!out.exists());
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// An IFS whose tables pass the uniform program's capacities needs the storage program's nine
+/// storage buffers; on a device that binds eight (WebGPU's default limit) the live view takes
+/// the CPU route for it, whatever the backend setting, and says why; an IFS that fits keeps the
+/// GPU route there.
+#[test]
+fn tables_past_the_uniform_limits_take_the_cpu_route_on_eight_storage_buffers() {
+    let Some(ctx) = gpu() else { return };
+    let limits = wgpu::Limits { max_storage_buffers_per_shader_stage: 8, ..ctx.adapter.limits() };
+    let (device, queue) = pollster::block_on(
+        ctx.adapter.request_device(&wgpu::DeviceDescriptor { required_limits: limits, ..Default::default() }),
+    )
+    .unwrap();
+    let eight = GpuContext { instance: ctx.instance.clone(), adapter: ctx.adapter.clone(), device, queue };
+    // bent4 with its bent maps on 30×30 grids: 2 × 29² cells, past the 512 of the uniform table.
+    let text = std::fs::read_to_string(common::scene_path("bent4")).unwrap().replace("[9, 9]", "[30, 30]");
+    let bent = Scene::parse(&text, "bent4-30").unwrap();
+    let large = CompiledIfs::new(&bent.at(0.0)).unwrap();
+    assert!(!nlifs::gpu::chaos_game::tables_fit_uniforms(&large));
+    let small = CompiledIfs::new(&scene("plant2", false).at(0.0)).unwrap();
+    assert!(nlifs::gpu::chaos_game::tables_fit_uniforms(&small));
+    let settings = route_settings(ChaosBackend::Gpu, SplatMode::Closest, 1 << 12, 1);
+    for (context, limit) in [(&eight, 8), (&ctx, ctx.device.limits().max_storage_buffers_per_shader_stage)] {
+        let mut live = LiveView::new(context, settings, 64, 48).unwrap();
+        live.set_ifs(context, &small, chaos_game::attractor_bounds(&small, 1), true);
+        assert!(!live.route().cpu, "{limit} storage buffers: plant2 on the GPU");
+        let bounds = chaos_game::attractor_bounds(&large, 1);
+        live.set_ifs(context, &large, bounds, true);
+        live.set_camera(&bent.camera_for(bounds));
+        assert_eq!(live.route().cpu, limit < 9, "{limit} storage buffers: {:?}", live.route());
+        let mut encoder = context.device.create_command_encoder(&Default::default());
+        let splats = live.advance(context, &mut encoder);
+        context.queue.submit([encoder.finish()]);
+        assert!(splats > 0, "{limit} storage buffers: nothing splatted");
+        live.set_ifs(context, &small, chaos_game::attractor_bounds(&small, 1), false);
+        assert!(!live.route().cpu, "{limit} storage buffers: plant2 back on the GPU");
+    }
 }

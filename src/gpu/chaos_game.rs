@@ -327,11 +327,45 @@ impl Program {
     }
 }
 
+/// Storage buffers the storage-table program binds (the tables, points, accumulation, shadow
+/// map and flame table): one more than WebGPU's default limit of eight.
+pub const STORAGE_PROGRAM_BUFFERS: u32 = 9;
+
+/// The table bytes of `ifs` in the order of [`UNIFORM_CAPACITY`] (functions, coordinates, cells,
+/// thresholds, colours with their colour coordinates).
+fn table_bytes(ifs: &CompiledIfs) -> ([&[u8]; 4], Vec<[f32; 4]>) {
+    // w: function i's colour coordinate c_i in palette colour (`color_coord_at`), else 0.
+    let coord = |i: usize| ifs.color_coords.as_ref().and_then(|c| c.get(i).copied()).unwrap_or(0.0);
+    let colors = ifs.colors.iter().enumerate().map(|(i, c)| [c[0], c[1], c[2], coord(i)]).collect();
+    let tables: [&[u8]; 4] = [
+        bytemuck::cast_slice::<KernelFunction, u8>(&ifs.functions),
+        bytemuck::cast_slice(&ifs.coords),
+        bytemuck::cast_slice::<Cell, u8>(&ifs.cells),
+        bytemuck::cast_slice(&ifs.selection.thresholds),
+    ];
+    (tables, colors)
+}
+
+/// The tables of `ifs` fit the uniform program's capacities ([`UNIFORM_CAPACITY`]).
+pub fn tables_fit_uniforms(ifs: &CompiledIfs) -> bool {
+    let (tables, colors) = table_bytes(ifs);
+    let sizes = tables.map(|t| t.len() as u64);
+    sizes.iter().chain([&(colors.len() as u64 * 16)]).zip(UNIFORM_CAPACITY).all(|(&size, capacity)| size <= capacity)
+}
+
+/// Why a device with `limits` cannot run the chaos game of `ifs`, if it cannot: its tables
+/// need the storage program and the device binds fewer than [`STORAGE_PROGRAM_BUFFERS`]
+/// storage buffers.
+pub fn unable_to_run(limits: &wgpu::Limits, ifs: &CompiledIfs) -> Option<&'static str> {
+    let storage = limits.max_storage_buffers_per_shader_stage >= STORAGE_PROGRAM_BUFFERS;
+    (!storage && !tables_fit_uniforms(ifs)).then_some("tables past the uniform limits, too few storage buffers")
+}
+
 pub struct GpuChaosGame {
     uniform_program: Program,
-    /// Made on first use: most IFS fit the uniform program, and this one binds nine storage
-    /// buffers (the tables, points, accumulation, shadow map and flame table), one more than
-    /// WebGPU's default limit; a device at that limit still runs every IFS that fits.
+    /// Made on first use: most IFS fit the uniform program, and this one binds
+    /// [`STORAGE_PROGRAM_BUFFERS`] storage buffers; a device with fewer still runs every IFS
+    /// that fits ([`unable_to_run`]).
     storage_program: Option<Program>,
     /// The tables fit the uniform program's capacities (set by `set_ifs`).
     uniform_tables: bool,
@@ -408,18 +442,9 @@ impl GpuChaosGame {
 
     /// Uploads a compiled IFS (the points are kept).
     pub fn set_ifs(&mut self, device: &wgpu::Device, queue: &wgpu::Queue, ifs: &CompiledIfs) {
-        // w: function i's colour coordinate c_i in palette colour (`color_coord_at`), else 0.
-        let coord = |i: usize| ifs.color_coords.as_ref().and_then(|c| c.get(i).copied()).unwrap_or(0.0);
-        let colors: Vec<[f32; 4]> = ifs.colors.iter().enumerate().map(|(i, c)| [c[0], c[1], c[2], coord(i)]).collect();
-        let tables: [&[u8]; 5] = [
-            bytemuck::cast_slice::<KernelFunction, u8>(&ifs.functions),
-            bytemuck::cast_slice(&ifs.coords),
-            bytemuck::cast_slice::<Cell, u8>(&ifs.cells),
-            bytemuck::cast_slice(&ifs.selection.thresholds),
-            bytemuck::cast_slice(&colors),
-        ];
-        let uniform_tables = !self.force_storage_tables
-            && tables.iter().zip(UNIFORM_CAPACITY).all(|(t, capacity)| t.len() as u64 <= capacity);
+        let (four, colors) = table_bytes(ifs);
+        let tables: [&[u8]; 5] = [four[0], four[1], four[2], four[3], bytemuck::cast_slice(&colors)];
+        let uniform_tables = !self.force_storage_tables && tables_fit_uniforms(ifs);
         self.has_julia = ifs.functions.iter().any(|f| f.coord_offset[3] == crate::chaos_game::KIND_JULIA);
         self.shape = if self.force_generic {
             let IfsShape { palette, flames, color_speeds, flame_variations, .. } = IfsShape::of(ifs);

@@ -39,6 +39,9 @@ pub use self::settings::{ChaosBackend, ChaosRoute, Imaging, LiveSettings};
 /// view rests ([`Progressive::light_bands`]): the look's cost a frame drops about fourfold.
 pub const LIGHT_BANDS: u32 = 4;
 
+/// Why the CPU route runs on an adapter without compute shaders (a browser's WebGL2).
+pub const NO_COMPUTE: &str = "the adapter has no compute shaders";
+
 /// Settle steps after an edit while navigating ([`LiveView::set_navigating`]).
 pub const NAVIGATING_SETTLE_STEPS: u32 = 2;
 
@@ -55,6 +58,9 @@ pub struct LiveView {
     route: ChaosRoute,
     /// The adapter rasterizes on the CPU (lavapipe, llvmpipe): `auto` takes the CPU route.
     software_adapter: bool,
+    /// Why the GPU cannot run this IFS's chaos game, if it cannot (no compute shaders, or tables
+    /// that need more storage buffers than the device binds): the CPU route runs.
+    gpu_unable: Option<&'static str>,
     cpu: CpuChaosGame,
     /// The camera is being dragged: the view draws without the key light's shadows
     /// ([`Self::set_navigating`]).
@@ -87,11 +93,13 @@ impl LiveView {
     fn with_gpu(ctx: &GpuContext, settings: LiveSettings, mut gpu: Progressive) -> Self {
         let software_adapter = ctx.adapter.get_info().device_type == wgpu::DeviceType::Cpu;
         gpu.light_bands = LIGHT_BANDS;
+        let gpu_unable = (!gpu.computes()).then_some(NO_COMPUTE);
         Self {
-            route: settings.chaos_backend.route(software_adapter, gpu.computes()),
+            route: settings.chaos_backend.route(software_adapter, gpu_unable),
             gpu,
             settings,
             software_adapter,
+            gpu_unable,
             cpu: CpuChaosGame::default(),
             navigating: false,
             bounded_frame_time: false,
@@ -174,6 +182,22 @@ impl LiveView {
     pub fn set_ifs(&mut self, ctx: &GpuContext, ifs: &CompiledIfs, bounds: (DVec3, DVec3), restart: bool) {
         self.gpu.set_ifs(ctx, ifs, bounds, restart);
         self.cpu.set_ifs(ifs, restart, self.settle_steps());
+        self.gpu_unable = match self.gpu.computes() {
+            true => crate::gpu::chaos_game::unable_to_run(&ctx.device.limits(), ifs),
+            false => Some(NO_COMPUTE),
+        };
+        self.take_route(self.settings.chaos_backend);
+    }
+
+    /// Takes the route `backend` gives on this adapter for this IFS; the points of a route that
+    /// did not run did not follow the edits: they restart when the route changes.
+    fn take_route(&mut self, backend: ChaosBackend) {
+        let route = backend.route(self.software_adapter, self.gpu_unable);
+        if route.cpu != self.route.cpu {
+            self.gpu.restart_points();
+            self.cpu.restart();
+        }
+        self.route = route;
     }
 
     pub fn set_camera(&mut self, camera: &OrbitCamera) {
@@ -182,13 +206,7 @@ impl LiveView {
 
     pub fn set_settings(&mut self, ctx: &GpuContext, settings: LiveSettings) -> Result<(), GpuError> {
         self.gpu.set_settings(ctx, self.progressive_settings(&settings))?;
-        let route = settings.chaos_backend.route(self.software_adapter, self.gpu.computes());
-        if route.cpu != self.route.cpu {
-            // The points of the route that did not run did not follow the edits: restart them.
-            self.gpu.restart_points();
-            self.cpu.restart();
-        }
-        self.route = route;
+        self.take_route(settings.chaos_backend);
         self.settings = settings;
         Ok(())
     }

@@ -76,11 +76,12 @@ impl ChaosBackend {
     }
 
     /// The route this setting takes on a software adapter (`software_adapter`: it rasterizes
-    /// on the CPU, as lavapipe does) or a hardware one, with compute shaders (`compute`) or
-    /// without (a browser's WebGL2: the CPU's whatever the setting), and why.
-    pub fn route(self, software_adapter: bool, compute: bool) -> ChaosRoute {
+    /// on the CPU, as lavapipe does) or a hardware one, and why; where the GPU cannot run the
+    /// chaos game (`gpu_unable`: why not; a browser's WebGL2 has no compute shaders) the CPU's
+    /// whatever the setting.
+    pub fn route(self, software_adapter: bool, gpu_unable: Option<&'static str>) -> ChaosRoute {
         match self {
-            _ if !compute => ChaosRoute { cpu: true, reason: "WebGL2: no compute shaders" },
+            _ if gpu_unable.is_some() => ChaosRoute { cpu: true, reason: gpu_unable.unwrap_or_default() },
             Self::Gpu => ChaosRoute { cpu: false, reason: "chosen: gpu" },
             Self::Cpu => ChaosRoute { cpu: true, reason: "chosen: cpu" },
             Self::Auto if software_adapter => ChaosRoute { cpu: true, reason: "auto: software adapter" },
@@ -108,13 +109,14 @@ mod tests {
 
     #[test]
     fn auto_takes_the_cpu_on_software_adapters_only() {
-        assert!(ChaosBackend::Auto.route(true, true).cpu);
-        assert!(!ChaosBackend::Auto.route(false, true).cpu);
-        assert!(!ChaosBackend::Gpu.route(true, true).cpu);
-        assert!(ChaosBackend::Cpu.route(false, true).cpu);
+        assert!(ChaosBackend::Auto.route(true, None).cpu);
+        assert!(!ChaosBackend::Auto.route(false, None).cpu);
+        assert!(!ChaosBackend::Gpu.route(true, None).cpu);
+        assert!(ChaosBackend::Cpu.route(false, None).cpu);
         for b in ChaosBackend::ALL {
             assert_eq!(ChaosBackend::parse(b.name()), Some(b));
-            assert!(b.route(false, false).cpu, "without compute shaders only the CPU route runs");
+            let route = b.route(false, Some(crate::live::NO_COMPUTE));
+            assert_eq!(route, ChaosRoute { cpu: true, reason: crate::live::NO_COMPUTE }, "only the CPU route runs");
         }
     }
 }
