@@ -26,7 +26,7 @@
 //!   the image then depends on the batch sizes (it agrees with the CPU's in distribution, as
 //!   every GPU render does, not bit for bit).
 
-use std::time::Instant;
+use crate::platform::Instant;
 
 use crate::rng::pcg_hash;
 use crate::scene::spec::SplatMode;

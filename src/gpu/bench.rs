@@ -4,7 +4,7 @@
 //! noise of converged.
 
 use std::fmt;
-use std::time::Instant;
+use crate::platform::Instant;
 
 use glam::DVec3;
 

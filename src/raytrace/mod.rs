@@ -190,11 +190,11 @@ pub fn render(
     cancel: &AtomicBool,
 ) -> Result<Traced, RaytraceError> {
     let ifs = scene.at(t_secs);
-    let start = std::time::Instant::now();
+    let start = crate::platform::Instant::now();
     let (hierarchy, camera) = build(scene, &ifs, t_secs, camera, settings)?;
     let build_secs = start.elapsed().as_secs_f64();
     let shading = shading_for(scene, &ifs, &camera, settings);
-    let start = std::time::Instant::now();
+    let start = crate::platform::Instant::now();
     let (image, stats) = stream::trace(&hierarchy, &camera, &shading, progress, cancel)?;
     Ok(Traced {
         image,
