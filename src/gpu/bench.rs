@@ -3,8 +3,8 @@
 //! each splat mode, and how many frames after a scene edit the image is back within sampling
 //! noise of converged.
 
-use std::fmt;
 use crate::platform::Instant;
+use std::fmt;
 
 use glam::DVec3;
 

@@ -51,6 +51,8 @@ pub struct CpuPicture {
     shown: Option<(ResolveParams, bool)>,
     /// The picture, RGBA8 rows of the accumulation's width.
     rgba: Vec<u8>,
+    /// The 8-bit sRGB encode without a `powf` a channel (most pixels are background).
+    srgb8: crate::color::Srgb8Table,
     /// The solid look's light of every pixel, refreshed in bands as the GPU's light cache is
     /// ([`LightRows::Refresh`]).
     light: Option<LightCache>,
@@ -71,6 +73,7 @@ impl CpuPicture {
             stale: true,
             shown: None,
             rgba: Vec::new(),
+            srgb8: crate::color::Srgb8Table::new(),
             light: None,
             module: super::shaders::module(device, "picture"),
             layout: bind_group_layout(device),
@@ -138,9 +141,9 @@ impl CpuPicture {
         target: &wgpu::TextureView,
         format: wgpu::TextureFormat,
     ) {
-        // The picture holds sRGB-encoded bytes whatever the target: an sRGB target reads them
-        // through an sRGB view and encodes them again.
-        let params = ResolveArgs { origin_px: [0, 0], ..*args }.params(width, height, true);
+        // The picture holds sRGB-encoded bytes whatever the target (an sRGB target decodes and
+        // encodes them again): the resolve's linear colours, encoded here by a table.
+        let params = ResolveArgs { origin_px: [0, 0], ..*args }.params(width, height, false);
         // A refreshed band changes the picture even where the accumulation did not.
         let refresh = matches!(light, LightRows::Refresh { start, end } if start < end);
         if self.stale || refresh || self.shown != Some((params, estimated)) {
@@ -162,16 +165,22 @@ impl CpuPicture {
         pass.draw(0..3, 0..1);
     }
 
-    /// Resolves into `self.rgba` with `p` (of the accumulation's size) on the CPU: the
-    /// background where nothing is splatted yet.
+    /// Resolves into `self.rgba` with `p` (linear colours, of the accumulation's size) on the
+    /// CPU, 8-bit sRGB as the resolve writes into a unorm target: the background where nothing
+    /// is splatted yet.
     fn resolve(&mut self, p: &ResolveParams, mode: SplatMode, estimated: bool, light: LightRows) {
         let (w, h) = (p.width as usize, p.height as usize);
         self.rgba.resize(4 * w * h, 255);
         let rows = self.rgba.par_chunks_mut((4 * w).max(1)).enumerate();
-        let rgba = |c: [f32; 3]| {
-            let [r, g, b] = c.map(|v| (v * 255.0 + 0.5) as u8);
+        let srgb8 = &self.srgb8;
+        let encode = |c: [f32; 3]| {
+            let [r, g, b] = c.map(|v| srgb8.encode(v));
             [r, g, b, 255]
         };
+        // Most pixels show the background, encoded once.
+        let background = [p.background[0], p.background[1], p.background[2]];
+        let background_bytes = encode(background);
+        let rgba = |c: [f32; 3]| if c == background { background_bytes } else { encode(c) };
         if let Some(e) = self.estimate.as_ref().filter(|e| estimated && (e.width, e.height) == (p.width, p.height)) {
             rows.for_each(|(y, row)| {
                 for (x, px) in row.chunks_exact_mut(4).enumerate() {
@@ -182,8 +191,7 @@ impl CpuPicture {
         }
         let words = if mode == SplatMode::Closest { w * h } else { 4 * w * h };
         if self.accum.len() != words {
-            let background = rgba([0, 1, 2].map(|c| crate::color::linear_to_srgb(p.background[c])));
-            rows.for_each(|(_, row)| row.chunks_exact_mut(4).for_each(|px| px.copy_from_slice(&background)));
+            rows.for_each(|(_, row)| row.chunks_exact_mut(4).for_each(|px| px.copy_from_slice(&background_bytes)));
             return;
         }
         let mut p = *p;
