@@ -238,16 +238,8 @@ impl CpuPicture {
         if self.texture.as_ref().is_none_or(|t| t.size_px != size_px || t.srgb != srgb) {
             // WebGL2 has no views of another format: the texture itself is sRGB or plain.
             let format = if srgb { wgpu::TextureFormat::Rgba8UnormSrgb } else { wgpu::TextureFormat::Rgba8Unorm };
-            let texture = device.create_texture(&wgpu::TextureDescriptor {
-                label: Some("picture"),
-                size: wgpu::Extent3d { width: size_px[0], height: size_px[1], depth_or_array_layers: 1 },
-                mip_level_count: 1,
-                sample_count: 1,
-                dimension: wgpu::TextureDimension::D2,
-                format,
-                usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
-                view_formats: &[],
-            });
+            let usage = wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST;
+            let texture = super::readback::offscreen_texture(ctx, "picture", size_px[0], size_px[1], format, usage);
             let view = texture.create_view(&Default::default());
             let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some("picture"),
@@ -278,31 +270,14 @@ impl CpuPicture {
                     bind_group_layouts: &[Some(&self.layout)],
                     immediate_size: 0,
                 });
-                let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                    label: Some("picture"),
-                    layout: Some(&layout),
-                    vertex: wgpu::VertexState {
-                        module: &self.module,
-                        entry_point: Some("fullscreen"),
-                        compilation_options: Default::default(),
-                        buffers: &[],
-                    },
-                    primitive: wgpu::PrimitiveState::default(),
-                    depth_stencil: None,
-                    multisample: wgpu::MultisampleState::default(),
-                    fragment: Some(wgpu::FragmentState {
-                        module: &self.module,
-                        entry_point: Some("picture_fragment"),
-                        compilation_options: Default::default(),
-                        targets: &[Some(wgpu::ColorTargetState {
-                            format,
-                            blend: None,
-                            write_mask: wgpu::ColorWrites::ALL,
-                        })],
-                    }),
-                    multiview_mask: None,
-                    cache: None,
-                });
+                let pipeline = super::resolve::fullscreen_pipeline_in(
+                    device,
+                    Some(&layout),
+                    &self.module,
+                    "picture_fragment",
+                    &[],
+                    format,
+                );
                 self.pipelines.push((format, pipeline));
                 self.pipelines.len() - 1
             }

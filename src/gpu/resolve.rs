@@ -341,9 +341,22 @@ pub(super) fn fullscreen_pipeline(
     constants: &[(&str, f64)],
     format: wgpu::TextureFormat,
 ) -> wgpu::RenderPipeline {
+    fullscreen_pipeline_in(device, None, module, entry, constants, format)
+}
+
+/// [`fullscreen_pipeline`] with the pipeline layout `layout` (None: derived from the shader,
+/// whose bind groups then fit this pipeline alone).
+pub(super) fn fullscreen_pipeline_in(
+    device: &wgpu::Device,
+    layout: Option<&wgpu::PipelineLayout>,
+    module: &wgpu::ShaderModule,
+    entry: &str,
+    constants: &[(&str, f64)],
+    format: wgpu::TextureFormat,
+) -> wgpu::RenderPipeline {
     device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
         label: Some(entry),
-        layout: None,
+        layout,
         vertex: wgpu::VertexState {
             module,
             entry_point: Some("fullscreen"),
