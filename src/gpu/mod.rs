@@ -21,7 +21,7 @@ pub mod shadow;
 
 #[derive(Debug, thiserror::Error)]
 pub enum GpuError {
-    #[error("no GPU adapter available (set WGPU_BACKEND=vulkan for Mesa's lavapipe)")]
+    #[error("no GPU adapter available{}", crate::platform::NO_ADAPTER_HINT)]
     NoAdapter,
     #[error("cannot open the GPU device: {0}")]
     Device(String),

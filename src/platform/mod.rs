@@ -37,6 +37,10 @@ pub use web_time::Instant;
 /// child processes and native dialogs are available.
 pub const DESKTOP: bool = cfg!(not(target_arch = "wasm32"));
 
+/// What to try when no GPU adapter is found: Mesa's software Vulkan on the desktop; nothing to
+/// add in the browser, whose page says what it needs.
+pub const NO_ADAPTER_HINT: &str = if DESKTOP { " (set WGPU_BACKEND=vulkan for Mesa's lavapipe)" } else { "" };
+
 /// The result of [`run_async`], once its future has finished.
 pub struct Pending<T>(Rc<RefCell<Option<T>>>);
 

@@ -200,7 +200,8 @@ fn watch_leaving(host: &Host) {
 fn banner_text(fatal: Option<&str>, error: Option<&str>) -> Option<String> {
     match (fatal, error) {
         (Some(f), _) => Some(format!(
-            "nlifs cannot draw in this browser: {f}. It needs WebGPU (Chromium 113+, Firefox 141+, Safari 26)."
+            "nlifs cannot draw in this browser: {f}. It needs WebGPU or WebGL2, which every current browser has \
+             unless hardware acceleration is turned off."
         )),
         (None, Some(e)) => Some(e.to_string()),
         (None, None) => None,
