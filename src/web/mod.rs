@@ -101,7 +101,9 @@ pub fn start_with_query(query: &str) -> Host {
     watch_files(&host);
     watch_banner(&host, early_error);
     watch_leaving(&host);
-    let options = ViewerOptions { host: host.clone(), backends, ..ViewerOptions::default() };
+    // As on the desktop, the chaos game's route is chosen for the adapter (`auto`).
+    let live = crate::live::LiveSettings { chaos_backend: crate::live::ChaosBackend::Auto, ..Default::default() };
+    let options = ViewerOptions { host: host.clone(), backends, live, ..ViewerOptions::default() };
     if let Err(e) = crate::viewer::run(options) {
         host.with(|h| h.fatal = Some(e.to_string()));
     }
