@@ -2,7 +2,8 @@
 // compute shaders, a browser's WebGL2) into the accumulation's rectangle of the target: the
 // texture has that rectangle's size, and `origin` is where its pixel (0, 0) sits in the target
 // (the pass's viewport covers the rectangle). The texture holds sRGB-encoded bytes, as the
-// resolve's unorm targets do; an sRGB view of it decodes them where the target encodes again.
+// resolve's unorm targets do; for an sRGB target it is an sRGB texture, which decodes them
+// where the target encodes again.
 
 struct Placement {
     origin: vec2<u32>,

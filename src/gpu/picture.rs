@@ -31,7 +31,8 @@ pub struct Placement {
 struct Texture {
     texture: wgpu::Texture,
     size_px: [u32; 2],
-    /// An sRGB view (the target is sRGB) or a plain one.
+    /// The texture is sRGB (as the target is: it decodes what the target encodes again) or
+    /// plain (WebGL2 has no views of another format).
     srgb: bool,
     bind_group: wgpu::BindGroup,
 }
