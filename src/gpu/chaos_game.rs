@@ -331,26 +331,33 @@ impl Program {
 /// map and flame table): one more than WebGPU's default limit of eight.
 pub const STORAGE_PROGRAM_BUFFERS: u32 = 9;
 
-/// The table bytes of `ifs` in the order of [`UNIFORM_CAPACITY`] (functions, coordinates, cells,
-/// thresholds, colours with their colour coordinates).
-fn table_bytes(ifs: &CompiledIfs) -> ([&[u8]; 4], Vec<[f32; 4]>) {
-    // w: function i's colour coordinate c_i in palette colour (`color_coord_at`), else 0.
+/// The colour table of `ifs`: linear RGB and, in w, function i's colour coordinate c_i in
+/// palette colour (`color_coord_at`), else 0.
+fn color_table(ifs: &CompiledIfs) -> Vec<[f32; 4]> {
     let coord = |i: usize| ifs.color_coords.as_ref().and_then(|c| c.get(i).copied()).unwrap_or(0.0);
-    let colors = ifs.colors.iter().enumerate().map(|(i, c)| [c[0], c[1], c[2], coord(i)]).collect();
-    let tables: [&[u8]; 4] = [
+    ifs.colors.iter().enumerate().map(|(i, c)| [c[0], c[1], c[2], coord(i)]).collect()
+}
+
+/// The table bytes of `ifs` with its colour table `colors`, in the order of
+/// [`UNIFORM_CAPACITY`]: functions, coordinates, cells, thresholds, colours.
+fn table_bytes<'a>(ifs: &'a CompiledIfs, colors: &'a [[f32; 4]]) -> [&'a [u8]; 5] {
+    [
         bytemuck::cast_slice::<KernelFunction, u8>(&ifs.functions),
         bytemuck::cast_slice(&ifs.coords),
         bytemuck::cast_slice::<Cell, u8>(&ifs.cells),
         bytemuck::cast_slice(&ifs.selection.thresholds),
-    ];
-    (tables, colors)
+        bytemuck::cast_slice(colors),
+    ]
+}
+
+/// Tables that fit the uniform program's capacities ([`UNIFORM_CAPACITY`]).
+fn fit_uniforms(tables: &[&[u8]; 5]) -> bool {
+    tables.iter().zip(UNIFORM_CAPACITY).all(|(t, capacity)| t.len() as u64 <= capacity)
 }
 
 /// The tables of `ifs` fit the uniform program's capacities ([`UNIFORM_CAPACITY`]).
 pub fn tables_fit_uniforms(ifs: &CompiledIfs) -> bool {
-    let (tables, colors) = table_bytes(ifs);
-    let sizes = tables.map(|t| t.len() as u64);
-    sizes.iter().chain([&(colors.len() as u64 * 16)]).zip(UNIFORM_CAPACITY).all(|(&size, capacity)| size <= capacity)
+    fit_uniforms(&table_bytes(ifs, &color_table(ifs)))
 }
 
 /// Why a device with `limits` cannot run the chaos game of `ifs`, if it cannot: its tables
@@ -442,9 +449,9 @@ impl GpuChaosGame {
 
     /// Uploads a compiled IFS (the points are kept).
     pub fn set_ifs(&mut self, device: &wgpu::Device, queue: &wgpu::Queue, ifs: &CompiledIfs) {
-        let (four, colors) = table_bytes(ifs);
-        let tables: [&[u8]; 5] = [four[0], four[1], four[2], four[3], bytemuck::cast_slice(&colors)];
-        let uniform_tables = !self.force_storage_tables && tables_fit_uniforms(ifs);
+        let colors = color_table(ifs);
+        let tables = table_bytes(ifs, &colors);
+        let uniform_tables = !self.force_storage_tables && fit_uniforms(&tables);
         self.has_julia = ifs.functions.iter().any(|f| f.coord_offset[3] == crate::chaos_game::KIND_JULIA);
         self.shape = if self.force_generic {
             let IfsShape { palette, flames, color_speeds, flame_variations, .. } = IfsShape::of(ifs);
