@@ -124,6 +124,58 @@ fn sphere_hierarchy_matches_brute_force_on_paper_scenes() {
     }
 }
 
+/// Shadow rays of a parallel light (one direction, what the tracer's packets carry and what
+/// the beam cull serves): from the surfaces the camera rays hit, offset as the tracer does, and
+/// rays that graze leaf spheres within rounding of their silhouettes. Each packet answer must
+/// be brute force's.
+fn check_parallel_shadows(h: &Hierarchy, what: &str, seed: u32) -> (usize, usize) {
+    let (lo, hi) = h.bounds;
+    let eps = 1e-4 * 0.5 * (hi - lo).length();
+    let mut rng = Pcg32::for_stream(seed, 1, 0);
+    let light = unit_vector(&mut rng);
+    let mut rays = Vec::new();
+    for ray in seeded_rays(h, seed, 4000) {
+        if let Some(hit) = h.intersect(&ray, 0.0, f32::INFINITY) {
+            let (p, n) = h.surface(&ray, &hit);
+            rays.push(Ray { origin: p + eps * n, dir: light });
+        }
+    }
+    // Grazing: from a point on a leaf's silhouette circle (seen along the light), back along
+    // the light, so the ray touches that sphere within rounding.
+    let leaves: Vec<_> = h.leaf_spheres().copied().collect();
+    let (u, v) = light.any_orthonormal_pair();
+    for k in 0..2000 {
+        let leaf = leaves[(k * 7919) % leaves.len()];
+        let angle = std::f32::consts::TAU * rng.next_f32();
+        let rim = leaf.centre + leaf.radius * (angle.cos() * u + angle.sin() * v);
+        let back = (hi - lo).length() * (0.2 + rng.next_f32());
+        rays.push(Ray { origin: rim - back * light, dir: light });
+    }
+    let rays: Vec<Ray> = rays.into_iter().filter(|r| h.root_entry(r, 0.0, f32::INFINITY) != f32::INFINITY).collect();
+    let blocked = h.occluded_packets(&rays, 0.0, f32::INFINITY, u32::MAX, &mut Scratch::default());
+    let mut count = 0;
+    for (i, ray) in rays.iter().enumerate() {
+        let slow = h.intersect_brute_force(ray, 0.0, f32::INFINITY).is_some();
+        assert_eq!(blocked[i], slow, "{what}: parallel shadow ray {i} (seed {seed}) {ray:?}");
+        count += slow as usize;
+    }
+    (count, rays.len())
+}
+
+#[test]
+fn parallel_shadow_packets_match_brute_force() {
+    for (k, name) in SCENES.iter().enumerate() {
+        let ifs = scene(name).at(0.0);
+        let h = raytrace::build_fixed(&ifs, &Initial::Sphere, 4).unwrap();
+        for form in simd_forms(&h) {
+            let what = format!("{name} ({:?})", form.simd());
+            let (blocked, total) = check_parallel_shadows(&form, &what, 300 + k as u32);
+            // Both answers must occur often, or the comparison proves little.
+            assert!(blocked > total / 10 && blocked < total * 9 / 10, "{what}: {blocked} of {total} rays blocked");
+        }
+    }
+}
+
 /// The adaptive stop gives leaves at mixed depths; the traversal must still agree.
 #[test]
 fn adaptive_hierarchy_matches_brute_force() {

@@ -17,7 +17,7 @@ use super::search::{Scratch, TILE};
 use super::wide::Avx512;
 #[cfg(target_arch = "x86_64")]
 use super::wide::Simd;
-use super::wide::{LANES, Lanes, Portable};
+use super::wide::{Beam, LANES, Lanes, Portable, Projected};
 
 /// Most rays of a packet (a bit each in the stack entries' masks).
 pub const PACKET: usize = 16;
@@ -188,6 +188,18 @@ impl Hierarchy {
         }
         let origin: [[f32; 3]; PACKET] = std::array::from_fn(|i| rays.get(i).map_or([0.0; 3], |r| r.origin.to_array()));
         let dir: [[f32; 3]; PACKET] = std::array::from_fn(|i| rays.get(i).map_or([0.0; 3], |r| r.dir.to_array()));
+        // Rays of one direction over (0, ∞), as a parallel light's shadow rays: each node's
+        // lanes are culled for the packet without square roots, and only a ray that may meet
+        // one of its leaf spheres runs the exact pass there.
+        let parallel = t_min == 0.0 && t_max == f32::INFINITY && rays[..count].iter().all(|r| r.dir == rays[0].dir);
+        let beam = parallel.then(|| {
+            let reach =
+                rays[..count].iter().map(|r| r.origin.length()).fold(root.centre.length() + root.radius, f32::max);
+            Beam::new(dir[0], reach)
+        });
+        let at: [[f32; 3]; PACKET] =
+            std::array::from_fn(|i| beam.as_ref().map_or([0.0; 3], |b| b.coordinates(origin[i])));
+        let mut projected = Projected::EMPTY;
         let stack = &mut scratch.packet_any;
         stack.clear();
         stack.push((0, all & !blocked));
@@ -211,13 +223,27 @@ impl Hierarchy {
                 continue;
             }
             let w = &self.wide[id as usize];
+            if let Some(beam) = &beam {
+                // SAFETY: the caller guarantees L's instructions.
+                unsafe { L::project(w, beam, &mut projected) };
+            }
             let mut entered: [u32; LANES] = [0; LANES];
             let mut union = 0u64;
             while active != 0 {
                 let i = active.trailing_zeros() as usize;
                 active &= active - 1;
-                // SAFETY: the caller guarantees L's instructions.
-                let (hit, enter) = unsafe { L::any(w, origin[i], dir[i], t_min, t_max) };
+                // SAFETY (both): the caller guarantees L's instructions.
+                let (hit, enter) = match beam {
+                    Some(_) => {
+                        let kept = unsafe { L::cull(&projected, at[i]) };
+                        if kept & w.spheres != 0 {
+                            unsafe { L::any(w, origin[i], dir[i], t_min, t_max) }
+                        } else {
+                            (None, kept & w.bounds)
+                        }
+                    }
+                    None => unsafe { L::any(w, origin[i], dir[i], t_min, t_max) },
+                };
                 if let Some(lane) = hit {
                     blocked |= 1 << i;
                     *last = w.target[lane];

@@ -96,6 +96,59 @@ pub struct ClosestLanes {
     pub entry: [f32; LANES],
 }
 
+/// Rays that share one direction d (the shadow rays of a parallel light), seen along it: an
+/// orthonormal basis (u, v, d) in which a ray is a point (its origin's u and v) and a sphere a
+/// disc, so that a lane pass needs no square root and a node's half of it is done once per
+/// packet ([`Lanes::project`], [`Lanes::cull`]).
+///
+/// The pass it gives is a conservative cull, not the decision: the radii grow by `margin`
+/// (10^-5 of the largest coordinate's size, a hundred times the rounding of either form), so
+/// every lane that the exact pass ([`Lanes::any`]) finds hit or entered is kept, and a
+/// kept leaf lane is decided by the exact pass. The searches' answers are the exact pass's.
+#[derive(Clone, Copy, Debug)]
+pub struct Beam {
+    pub u: [f32; 3],
+    pub v: [f32; 3],
+    pub d: [f32; 3],
+    pub margin: f32,
+}
+
+impl Beam {
+    /// The basis of direction `d` (unit length) for coordinates of size up to `extent`.
+    pub fn new(d: [f32; 3], extent: f32) -> Self {
+        let dir = glam::Vec3::from_array(d);
+        // Duff et al.'s branch-free orthonormal basis.
+        let sign = 1.0f32.copysign(dir.z);
+        let a = -1.0 / (sign + dir.z);
+        let b = dir.x * dir.y * a;
+        let u = glam::Vec3::new(1.0 + sign * dir.x * dir.x * a, sign * b, -sign * dir.x);
+        let v = glam::Vec3::new(b, sign + dir.y * dir.y * a, -dir.y);
+        Self { u: u.to_array(), v: v.to_array(), d, margin: 1e-5 * extent }
+    }
+
+    /// A point's coordinates in the basis.
+    #[inline(always)]
+    pub fn coordinates(&self, p: [f32; 3]) -> [f32; 3] {
+        let dot = |a: [f32; 3]| a[0] * p[0] + a[1] * p[1] + a[2] * p[2];
+        [dot(self.u), dot(self.v), dot(self.d)]
+    }
+}
+
+/// A wide node's lanes in a [`Beam`]'s basis: the centres' u and v, their d plus the margin,
+/// and the grown radius squared.
+#[derive(Clone, Copy, Debug)]
+#[repr(C, align(64))]
+pub struct Projected {
+    pub u: [f32; LANES],
+    pub v: [f32; LANES],
+    pub d: [f32; LANES],
+    pub r2: [f32; LANES],
+}
+
+impl Projected {
+    pub const EMPTY: Projected = Projected { u: [0.0; LANES], v: [0.0; LANES], d: [0.0; LANES], r2: [0.0; LANES] };
+}
+
 /// A compiled form of the lane pass. The decisions are those of `sphere_surface` (leaf
 /// spheres) and of `Hierarchy::root_entry` (bounds: overlap with (t_min, t_max), entry clamped to t_min),
 /// on bit-identical roots.
@@ -113,6 +166,41 @@ pub trait Lanes {
     /// # Safety
     /// As for [`Lanes::closest`].
     unsafe fn any(w: &WideNode, origin: [f32; 3], dir: [f32; 3], t_min: f32, t_max: f32) -> (Option<usize>, Mask);
+
+    /// `w`'s lanes in `beam`'s basis, into `out`.
+    ///
+    /// # Safety
+    /// As for [`Lanes::closest`].
+    unsafe fn project(w: &WideNode, beam: &Beam, out: &mut Projected);
+
+    /// The lanes that a ray of the beam at `at` (its origin's [`Beam::coordinates`]) may meet
+    /// at t > 0: every lane whose exact any-hit pass over (0, ∞) is a surface hit or an
+    /// entered bound, and a few more within the margin.
+    ///
+    /// # Safety
+    /// As for [`Lanes::closest`].
+    unsafe fn cull(p: &Projected, at: [f32; 3]) -> Mask;
+}
+
+/// The cull's decision for one lane: the ray's line passes within the grown radius
+/// (q ≥ 0, q = r² − distance²) and the sphere's far side lies ahead of the origin
+/// (√q > b, b the centre's distance behind the origin less the margin).
+#[inline(always)]
+fn cull_lane(p: &Projected, i: usize, at: [f32; 3]) -> bool {
+    let (du, dv) = (at[0] - p.u[i], at[1] - p.v[i]);
+    let q = p.r2[i] - (du * du + dv * dv);
+    let b = at[2] - p.d[i];
+    (q >= 0.0) & ((b < 0.0) | (q > b * b))
+}
+
+#[inline(always)]
+fn project_lanes(w: &WideNode, beam: &Beam, out: &mut Projected) {
+    for i in 0..LANES {
+        let c = [w.centre_x[i], w.centre_y[i], w.centre_z[i]];
+        let [u, v, d] = beam.coordinates(c);
+        let r = w.radius[i] + beam.margin;
+        (out.u[i], out.v[i], out.d[i], out.r2[i]) = (u, v, d + beam.margin, r * r);
+    }
 }
 
 /// Plain loops over the lane arrays, which the compiler vectorises for the target it compiles
@@ -155,6 +243,20 @@ impl Lanes for Portable {
         let surface = surface & w.spheres;
         ((surface != 0).then(|| surface.trailing_zeros() as usize), enter & w.bounds)
     }
+
+    #[inline(always)]
+    unsafe fn project(w: &WideNode, beam: &Beam, out: &mut Projected) {
+        project_lanes(w, beam, out);
+    }
+
+    #[inline(always)]
+    unsafe fn cull(p: &Projected, at: [f32; 3]) -> Mask {
+        let mut kept: Mask = 0;
+        for i in 0..LANES {
+            kept |= (cull_lane(p, i, at) as Mask) << i;
+        }
+        kept
+    }
 }
 
 /// AVX-512F intrinsics: one 16-wide register per lane quantity, comparisons straight into
@@ -176,6 +278,18 @@ impl Lanes for Avx512 {
         // SAFETY: the caller guarantees AVX-512F.
         unsafe { avx512::any(w, origin, dir, t_min, t_max) }
     }
+
+    #[inline(always)]
+    unsafe fn project(w: &WideNode, beam: &Beam, out: &mut Projected) {
+        // Once per node and packet: the compiler's vector loop is enough.
+        project_lanes(w, beam, out);
+    }
+
+    #[inline(always)]
+    unsafe fn cull(p: &Projected, at: [f32; 3]) -> Mask {
+        // SAFETY: the caller guarantees AVX-512F.
+        unsafe { avx512::cull(p, at) }
+    }
 }
 
 #[cfg(target_arch = "x86_64")]
@@ -183,7 +297,7 @@ impl Lanes for Avx512 {
 mod avx512 {
     use std::arch::x86_64::*;
 
-    use super::{ClosestLanes, LANES, Mask, WideNode};
+    use super::{ClosestLanes, LANES, Mask, Projected, WideNode};
 
     const CHUNKS: usize = LANES / CHUNK;
     const _: () = assert!(LANES.is_multiple_of(CHUNK) && LANES <= 64, "whole __m512 chunks, masks fit in u64");
@@ -280,6 +394,35 @@ mod avx512 {
             enter |= (_mm512_mask_cmp_ps_mask::<_CMP_LT_OQ>(overlap, t0, hi) as Mask) << (c * CHUNK);
         }
         (None, enter)
+    }
+
+    /// [`super::cull_lane`] for every lane.
+    #[target_feature(enable = "avx512f")]
+    #[inline]
+    pub fn cull(p: &Projected, at: [f32; 3]) -> Mask {
+        let mut kept: Mask = 0;
+        let zero = _mm512_setzero_ps();
+        for c in 0..CHUNKS {
+            let i = c * CHUNK;
+            // SAFETY: lanes i..i + 16 are in bounds and 64-byte aligned (repr(C), align(64)).
+            let (u, v, d, r2) = unsafe {
+                (
+                    _mm512_load_ps(p.u.as_ptr().add(i)),
+                    _mm512_load_ps(p.v.as_ptr().add(i)),
+                    _mm512_load_ps(p.d.as_ptr().add(i)),
+                    _mm512_load_ps(p.r2.as_ptr().add(i)),
+                )
+            };
+            let du = _mm512_sub_ps(_mm512_set1_ps(at[0]), u);
+            let dv = _mm512_sub_ps(_mm512_set1_ps(at[1]), v);
+            let q = _mm512_sub_ps(r2, _mm512_add_ps(_mm512_mul_ps(du, du), _mm512_mul_ps(dv, dv)));
+            let b = _mm512_sub_ps(_mm512_set1_ps(at[2]), d);
+            let within = _mm512_cmp_ps_mask::<_CMP_GE_OQ>(q, zero);
+            let behind = _mm512_cmp_ps_mask::<_CMP_LT_OQ>(b, zero);
+            let reaches = _mm512_cmp_ps_mask::<_CMP_GT_OQ>(q, _mm512_mul_ps(b, b));
+            kept |= ((within & (behind | reaches)) as Mask) << i;
+        }
+        kept
     }
 }
 
