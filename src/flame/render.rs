@@ -14,10 +14,14 @@
 //! chains is exact and the picture is the same bytes for a seed whatever the thread count:
 //! run `k` draws from `Pcg32::for_stream(seed, 0, k)`, and threads take runs in any order.
 //!
-//! A worker interleaves eight runs (its lanes), one iteration of each in turn: one run's
-//! iterations depend on each other, the lanes' do not, so the core overlaps their arithmetic,
-//! and each sample's bucket is prefetched when it is computed and added a round later, when it
-//! is in cache. The sums, and so the picture, are the same as one run after another.
+//! A worker advances 64 runs together (its chains), one iteration of each per round: one run's
+//! iterations depend on each other, the chains' do not, so the core overlaps their work. In a
+//! round the chains are grouped by the xform they drew, and an xform whose variations are all
+//! arithmetic maps its group as one batch in vector registers (the vector path,
+//! `CompiledXform::apply_batch`); each sample's bucket is prefetched when it is computed and
+//! added 16 samples later, when it is in cache. Each chain draws its random numbers in flam3's
+//! order and goes through the same operations, so the sums, and the picture, are the same bits
+//! as one run after another.
 
 use std::sync::atomic::{AtomicU64, Ordering};
 
@@ -26,7 +30,7 @@ use rayon::prelude::*;
 pub use super::render_base::RenderError;
 use super::render_base::{Bucket, WHITE_LEVEL};
 use super::render_layout::Layout;
-use super::variations::CompiledXform;
+use super::variations::{BatchScratch, CompiledXform};
 use super::{Flame, PaletteMode, Xform};
 use crate::rng::Pcg32;
 
@@ -36,9 +40,14 @@ pub const RUN_SAMPLES: u64 = 10_000;
 pub const FUSE_ITERATIONS: i64 = 15;
 /// Entries of the xform choice table (flam3's `CHOOSE_XFORM_GRAIN`).
 const CHOICE_ENTRIES: usize = 16_384;
-/// Runs one worker interleaves: their iterations are independent, so the core overlaps them,
-/// and each sample's bucket is prefetched a round of lanes before its add.
-const LANES: usize = 8;
+/// Runs one worker advances together: their iterations are independent, so the core overlaps
+/// them and maps the chains that drew one xform as a batch in vector registers, and each
+/// sample's bucket is prefetched a round before its add.
+const CHAINS: usize = super::variations::BATCH;
+const _: () = assert!(CHAINS <= u8::MAX as usize, "chain numbers are bytes");
+/// Samples between a bucket's prefetch and its add: enough for the line to arrive, few enough
+/// that the prefetches do not queue up.
+const IN_FLIGHT: usize = 16;
 
 /// An 8-bit RGBA picture, rows top to bottom (flam3-render's PNG: alpha 255, the background
 /// composited).
@@ -224,12 +233,12 @@ impl ChaosGame {
         let runs = samples.div_ceil(RUN_SAMPLES);
         let next_run = AtomicU64::new(0);
         let cells = layout.hist_width * layout.hist_height;
-        let workers = rayon::current_num_threads().max(1).min(runs.div_ceil(LANES as u64).max(1) as usize);
+        let workers = rayon::current_num_threads().max(1).min(runs.max(1) as usize);
         let parts: Vec<(Vec<Bucket>, u64)> = (0..workers)
             .into_par_iter()
             .map(|_| {
                 let mut histogram = vec![[0u32; 5]; cells];
-                let bad = self.run_lanes_dispatch(seed, samples, &next_run, &mut histogram, progress);
+                let bad = self.run_chains_dispatch(seed, samples, &next_run, &mut histogram, progress);
                 (histogram, bad)
             })
             .collect();
@@ -246,8 +255,9 @@ impl ChaosGame {
         (total, bad)
     }
 
-    /// The lane that starts the next run not yet taken, if any.
-    fn start_lane(&self, seed: u32, samples: u64, next_run: &AtomicU64) -> Option<Lane> {
+    /// The next run not yet taken, if any: its generator, starting point and colour, and its
+    /// sample count.
+    fn start_run(&self, seed: u32, samples: u64, next_run: &AtomicU64) -> Option<(Pcg32, [f64; 2], f64, i64)> {
         let runs = samples.div_ceil(RUN_SAMPLES);
         let run = next_run.fetch_add(1, Ordering::Relaxed);
         if run >= runs {
@@ -257,20 +267,12 @@ impl ChaosGame {
         let p = [uniform11(&mut rng), uniform11(&mut rng)];
         let color = rng.next_f64();
         let n = RUN_SAMPLES.min(samples - run * RUN_SAMPLES);
-        Some(Lane {
-            rng,
-            p,
-            color,
-            last: 0,
-            consecutive_bad: 0,
-            i: -FUSE_ITERATIONS,
-            n: n as i64,
-            pending: NOTHING_PENDING,
-        })
+        Some((rng, p, color, n as i64))
     }
 
-    /// [`Self::run_lanes`] compiled for AVX2 when the CPU has it (no FMA: the same bits).
-    fn run_lanes_dispatch(
+    /// [`Self::run_chains`] compiled for AVX-512 or AVX2 when the CPU has it (no FMA: the same
+    /// bits).
+    fn run_chains_dispatch(
         &self,
         seed: u32,
         samples: u64,
@@ -279,17 +281,41 @@ impl ChaosGame {
         progress: &(dyn Fn(u64) + Sync),
     ) -> u64 {
         #[cfg(target_arch = "x86_64")]
-        if crate::simd::SimdLevel::detect().avx2() {
-            #[expect(unsafe_code, reason = "an AVX2 function, entered after the CPU check")]
-            // SAFETY: the CPU runs AVX2 (checked just above).
-            return unsafe { self.run_lanes_avx2(seed, samples, next_run, histogram, progress) };
+        {
+            use crate::simd::SimdLevel;
+            match SimdLevel::detect() {
+                #[expect(unsafe_code, reason = "an AVX-512 function, entered after the CPU check")]
+                // SAFETY: the CPU runs AVX-512F (detected).
+                SimdLevel::Avx512 => unsafe {
+                    return self.run_chains_avx512(seed, samples, next_run, histogram, progress);
+                },
+                #[expect(unsafe_code, reason = "an AVX2 function, entered after the CPU check")]
+                // SAFETY: the CPU runs AVX2 (detected).
+                SimdLevel::Avx2 => unsafe {
+                    return self.run_chains_avx2(seed, samples, next_run, histogram, progress);
+                },
+                SimdLevel::Scalar => {}
+            }
         }
-        self.run_lanes(seed, samples, next_run, histogram, progress)
+        self.run_chains(seed, samples, next_run, histogram, progress)
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,avx512f")]
+    fn run_chains_avx512(
+        &self,
+        seed: u32,
+        samples: u64,
+        next_run: &AtomicU64,
+        histogram: &mut [Bucket],
+        progress: &(dyn Fn(u64) + Sync),
+    ) -> u64 {
+        self.run_chains(seed, samples, next_run, histogram, progress)
     }
 
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
-    fn run_lanes_avx2(
+    fn run_chains_avx2(
         &self,
         seed: u32,
         samples: u64,
@@ -297,13 +323,20 @@ impl ChaosGame {
         histogram: &mut [Bucket],
         progress: &(dyn Fn(u64) + Sync),
     ) -> u64 {
-        self.run_lanes(seed, samples, next_run, histogram, progress)
+        self.run_chains(seed, samples, next_run, histogram, progress)
     }
 
-    /// One worker: [`LANES`] runs interleaved, each lane taking the next run when its own is
+    /// One worker: [`CHAINS`] runs advanced together, each taking the next run when its own is
     /// done, until no run is left. Returns the re-seeds.
+    ///
+    /// A round is one iteration of every chain, in phases: each chain draws its xform; the
+    /// chains are grouped by xform and each group mapped by [`CompiledXform::apply_batch`]
+    /// (the vector path); then chain by chain the re-seeds and the final xform's draw; the
+    /// final xform's points as one batch; and the plot, whose buckets are prefetched and
+    /// added at the next round. Each chain draws the same numbers in the same order as flam3's
+    /// loop does, so the sums are those of one run after another.
     #[inline(always)]
-    fn run_lanes(
+    fn run_chains(
         &self,
         seed: u32,
         samples: u64,
@@ -311,76 +344,160 @@ impl ChaosGame {
         histogram: &mut [Bucket],
         progress: &(dyn Fn(u64) + Sync),
     ) -> u64 {
-        let mut lanes: [Option<Lane>; LANES] = std::array::from_fn(|_| self.start_lane(seed, samples, next_run));
-        let mut active = lanes.iter().filter(|l| l.is_some()).count();
+        let mut c = Chains::new();
         let mut bad = 0;
-        while active > 0 {
-            for slot in lanes.iter_mut() {
-                let Some(lane) = slot else { continue };
-                let (b, inc) = std::mem::replace(&mut lane.pending, NOTHING_PENDING);
-                add(&mut histogram[b], &inc);
-                if lane.i >= lane.n {
-                    progress(lane.n as u64);
-                    *slot = self.start_lane(seed, samples, next_run);
-                    if slot.is_none() {
-                        active -= 1;
+        // Per xform: chains that drew it this round, and where its group starts in `order`.
+        let mut count = vec![0u8; self.xforms.len()];
+        let mut start = vec![0u8; self.xforms.len()];
+        let mut drawn: Vec<usize> = Vec::with_capacity(CHAINS);
+        let mut order = [0u8; CHAINS];
+        let mut chosen = [0usize; CHAINS];
+        let (mut gx, mut gy) = ([0.0f64; CHAINS], [0.0f64; CHAINS]);
+        let (mut qx, mut qy) = ([0.0f64; CHAINS], [0.0f64; CHAINS]);
+        let mut next_color = [0.0f64; CHAINS];
+        let mut plot = [false; CHAINS];
+        let (mut shown, mut shown_color) = ([[0.0f64; 2]; CHAINS], [0.0f64; CHAINS]);
+        let mut finals: Vec<u8> = Vec::with_capacity(CHAINS);
+        let mut scratch = BatchScratch::default();
+        // The last IN_FLIGHT samples' buckets (prefetched) and increments, not yet added.
+        let mut in_flight = [NOTHING_PENDING; IN_FLIGHT];
+        let mut next_in_flight = 0;
+        loop {
+            // The previous round's adds; finished runs hand their chain to the next run, or
+            // the last live chain moves into their place.
+            for k in (0..c.live).rev() {
+                if c.i[k] >= c.n[k] {
+                    if c.n[k] > 0 {
+                        progress(c.n[k] as u64);
                     }
-                    continue;
+                    match self.start_run(seed, samples, next_run) {
+                        Some(run) => c.start(k, run),
+                        None => {
+                            c.live -= 1;
+                            c.move_chain(c.live, k);
+                        }
+                    }
                 }
-                bad += self.step(lane, histogram);
             }
-        }
-        bad
-    }
-
-    /// One iteration of a lane's run (flam3's loop body): the next xform, its image (re-seeded
-    /// and retried when it leaves the plane), the final xform's plotted copy. The sample's
-    /// bucket is prefetched and its increments left in `lane.pending`, added at the lane's next
-    /// turn. Returns the re-seeds (0 or 1).
-    #[inline(always)]
-    fn step(&self, lane: &mut Lane, histogram: &[Bucket]) -> u64 {
-        let rng = &mut lane.rng;
-        let entry = rng.next_u32() as usize & (CHOICE_ENTRIES - 1);
-        let row = if self.xaos { lane.last } else { 0 };
-        let k = self.choice[row * CHOICE_ENTRIES + entry] as usize;
-        let x = &self.xforms[k];
-        let next_color = x.color_of(lane.color);
-        let mut q = x.map.apply(lane.p, rng);
-        let mut bad = 0;
-        if is_bad(q) {
-            q = [uniform11(rng), uniform11(rng)];
-            bad = 1;
-            lane.consecutive_bad += 1;
-            if lane.consecutive_bad < 5 {
-                lane.p = q;
-                lane.color = next_color;
+            let live = c.live;
+            if live == 0 {
+                for (b, inc) in &in_flight {
+                    add(&mut histogram[*b], inc);
+                }
                 return bad;
             }
-        }
-        lane.consecutive_bad = 0;
-        lane.last = k + 1;
-        lane.p = q;
-        lane.color = next_color;
-        let (mut shown, mut shown_color) = (q, next_color);
-        if let Some(f) = &self.final_xform
-            && (f.opacity == 1.0 || rng.next_f64() < f.opacity)
-        {
-            shown_color = f.color_of(next_color);
-            shown = f.map.apply(q, rng);
-            if is_bad(shown) {
-                shown = [uniform11(rng), uniform11(rng)];
+            // Each chain's xform, and the chains grouped by xform (a counting sort).
+            drawn.clear();
+            for (k, chosen) in chosen[..live].iter_mut().enumerate() {
+                let entry = c.rng[k].next_u32() as usize & (CHOICE_ENTRIES - 1);
+                let row = if self.xaos { c.last[k] } else { 0 };
+                let x = self.choice[row * CHOICE_ENTRIES + entry] as usize;
+                *chosen = x;
+                if count[x] == 0 {
+                    drawn.push(x);
+                }
+                count[x] += 1;
+            }
+            let mut at = 0u8;
+            for &x in &drawn {
+                start[x] = at;
+                at += count[x];
+            }
+            for (k, &x) in chosen[..live].iter().enumerate() {
+                order[start[x] as usize] = k as u8;
+                start[x] += 1;
+            }
+            // Each group mapped by its xform (start[x] is now the group's end).
+            for &x in &drawn {
+                let (end, m) = (start[x] as usize, count[x] as usize);
+                let members = &order[end - m..end];
+                let xf = &self.xforms[x];
+                for (j, &k) in members.iter().enumerate() {
+                    let k = k as usize;
+                    (gx[j], gy[j]) = (c.x[k], c.y[k]);
+                    next_color[k] = xf.color_of(c.color[k]);
+                }
+                if xf.map.batches() {
+                    xf.map.apply_batch(&mut gx[..m], &mut gy[..m], members, &mut c.rng, &mut scratch);
+                } else {
+                    for (j, &k) in members.iter().enumerate() {
+                        [gx[j], gy[j]] = xf.map.apply([gx[j], gy[j]], &mut c.rng[k as usize]);
+                    }
+                }
+                for (j, &k) in members.iter().enumerate() {
+                    (qx[k as usize], qy[k as usize]) = (gx[j], gy[j]);
+                }
+                count[x] = 0;
+            }
+            // Chain by chain: re-seeds (a retried step plots nothing) and the final xform's draw.
+            finals.clear();
+            for k in 0..live {
+                let mut q = [qx[k], qy[k]];
+                plot[k] = false;
+                if is_bad(q) {
+                    q = [uniform11(&mut c.rng[k]), uniform11(&mut c.rng[k])];
+                    bad += 1;
+                    c.consecutive_bad[k] += 1;
+                    if c.consecutive_bad[k] < 5 {
+                        [c.x[k], c.y[k]] = q;
+                        c.color[k] = next_color[k];
+                        continue;
+                    }
+                }
+                c.consecutive_bad[k] = 0;
+                c.last[k] = chosen[k] + 1;
+                [c.x[k], c.y[k]] = q;
+                c.color[k] = next_color[k];
+                plot[k] = true;
+                (shown[k], shown_color[k]) = (q, next_color[k]);
+                if let Some(f) = &self.final_xform
+                    && (f.opacity == 1.0 || c.rng[k].next_f64() < f.opacity)
+                {
+                    finals.push(k as u8);
+                }
+            }
+            if let Some(f) = &self.final_xform
+                && !finals.is_empty()
+            {
+                let m = finals.len();
+                for (j, &k) in finals.iter().enumerate() {
+                    [gx[j], gy[j]] = shown[k as usize];
+                }
+                if f.map.batches() {
+                    f.map.apply_batch(&mut gx[..m], &mut gy[..m], &finals, &mut c.rng, &mut scratch);
+                } else {
+                    for (j, &k) in finals.iter().enumerate() {
+                        [gx[j], gy[j]] = f.map.apply([gx[j], gy[j]], &mut c.rng[k as usize]);
+                    }
+                }
+                for (j, &k) in finals.iter().enumerate() {
+                    let k = k as usize;
+                    shown_color[k] = f.color_of(next_color[k]);
+                    shown[k] = [gx[j], gy[j]];
+                    if is_bad(shown[k]) {
+                        shown[k] = [uniform11(&mut c.rng[k]), uniform11(&mut c.rng[k])];
+                    }
+                }
+            }
+            // The plot: without branches (whether a sample is in view is as good as random),
+            // a sample that is not plotted adds 0 to bucket 0.
+            for k in 0..live {
+                if !plot[k] {
+                    continue;
+                }
+                let weight = self.xforms[chosen[k]].plotted_weight;
+                let (b, inside) = self.camera.bucket(shown[k]);
+                let plotted = inside & (c.i[k] >= 0) & (weight != 0.0);
+                let mask = 0u32.wrapping_sub(u32::from(plotted));
+                let b = b & (mask as usize);
+                prefetch(&histogram[b]);
+                let inc = self.increments_of(shown_color[k], weight).map(|v| v & mask);
+                let (earlier, earlier_inc) = std::mem::replace(&mut in_flight[next_in_flight], (b, inc));
+                add(&mut histogram[earlier], &earlier_inc);
+                next_in_flight = (next_in_flight + 1) % IN_FLIGHT;
+                c.i[k] += 1;
             }
         }
-        // Without branches (whether a sample is in view is as good as random): a sample that
-        // is not plotted adds 0 to bucket 0.
-        let (b, inside) = self.camera.bucket(shown);
-        let plotted = inside & (lane.i >= 0) & (x.plotted_weight != 0.0);
-        let mask = 0u32.wrapping_sub(u32::from(plotted));
-        let b = b & (mask as usize);
-        prefetch(&histogram[b]);
-        lane.pending = (b, self.increments_of(shown_color, x.plotted_weight).map(|v| v & mask));
-        lane.i += 1;
-        bad
     }
 
     /// The buckets' increments of a sample of palette coordinate `color` plotted with `weight`.
@@ -408,22 +525,53 @@ impl ChaosGame {
     }
 }
 
-/// A lane's `pending` when nothing is: 0 added to bucket 0.
+/// An empty slot of the samples in flight: 0 added to bucket 0.
 const NOTHING_PENDING: (usize, Bucket) = (0, [0; 5]);
 
-/// A run of the chaos game in progress, one of the [`LANES`] a worker interleaves.
-struct Lane {
-    rng: Pcg32,
-    p: [f64; 2],
-    color: f64,
+/// The runs one worker advances together, chain by chain in arrays; chains `0..live` are
+/// running.
+struct Chains {
+    live: usize,
+    rng: [Pcg32; CHAINS],
+    x: [f64; CHAINS],
+    y: [f64; CHAINS],
+    color: [f64; CHAINS],
     /// The previous xform + 1 (0 at the start): the xaos row.
-    last: usize,
-    consecutive_bad: u32,
+    last: [usize; CHAINS],
+    consecutive_bad: [u32; CHAINS],
     /// The iteration, from −[`FUSE_ITERATIONS`]; the run ends at `n`.
-    i: i64,
-    n: i64,
-    /// The previous sample's bucket (prefetched) and increments, not yet added.
-    pending: (usize, Bucket),
+    i: [i64; CHAINS],
+    n: [i64; CHAINS],
+}
+
+impl Chains {
+    /// Every chain live and finished, so that the first round starts a run on each.
+    fn new() -> Self {
+        Self {
+            live: CHAINS,
+            rng: [Pcg32::from_state(0); CHAINS],
+            x: [0.0; CHAINS],
+            y: [0.0; CHAINS],
+            color: [0.0; CHAINS],
+            last: [0; CHAINS],
+            consecutive_bad: [0; CHAINS],
+            i: [0; CHAINS],
+            n: [0; CHAINS],
+        }
+    }
+
+    fn start(&mut self, k: usize, (rng, p, color, n): (Pcg32, [f64; 2], f64, i64)) {
+        (self.rng[k], [self.x[k], self.y[k]], self.color[k]) = (rng, p, color);
+        (self.last[k], self.consecutive_bad[k], self.i[k], self.n[k]) = (0, 0, -FUSE_ITERATIONS, n);
+    }
+
+    /// Chain `from`'s state into chain `to`.
+    fn move_chain(&mut self, from: usize, to: usize) {
+        self.rng[to] = self.rng[from];
+        (self.x[to], self.y[to], self.color[to]) = (self.x[from], self.y[from], self.color[from]);
+        (self.last[to], self.consecutive_bad[to]) = (self.last[from], self.consecutive_bad[from]);
+        (self.i[to], self.n[to]) = (self.i[from], self.n[from]);
+    }
 }
 
 #[inline(always)]
@@ -532,6 +680,10 @@ mod tests {
             xform(0.3, 0.5, [0.4, 0.0, 0.0, 0.4, 0.0, 0.6], vec![0.5, 1.0, 1.0]),
         ];
         xforms[1].opacity = 0.6;
+        // The batch path's other branches: a variation drawing random numbers, one computed
+        // point by point, pre_blur, a post-affine.
+        xforms[2].variations.extend([term("julia", 0.3), term("sinusoidal", 0.2), term("pre_blur", 0.1)]);
+        xforms[1].post = Some([0.9, 0.1, -0.1, 0.9, 0.05, 0.0]);
         let mut final_xform = xform(0.0, 0.8, [0.9, 0.1, -0.1, 0.9, 0.0, 0.1], vec![]);
         final_xform.opacity = 0.5;
         Flame {
@@ -596,14 +748,15 @@ mod tests {
         (histogram, bad)
     }
 
-    /// The interleaved, prefetching workers sum exactly what one run after another does, on
-    /// one thread and on three, for a sample count that ends in a partial run.
+    /// The workers (chains mapped in batches by xform, buckets prefetched) sum exactly what
+    /// one run after another does, on one thread and on three, for a sample count that ends
+    /// in a partial run and is more runs than one worker's chains.
     #[test]
-    fn interleaved_lanes_sum_what_one_run_after_another_sums() {
+    fn batched_chains_sum_what_one_run_after_another_sums() {
         let flame = flame();
         let layout = Layout::new(&flame).expect("layout");
         let game = ChaosGame::new(&flame, &layout).expect("game");
-        let samples = 8 * RUN_SAMPLES + 1234;
+        let samples = (CHAINS as u64 + 9) * RUN_SAMPLES + 1234;
         let cells = layout.hist_width * layout.hist_height;
         let expected = one_run_after_another(&game, 5, samples, cells);
         assert!(expected.0.iter().any(|b| b[4] != 0), "nothing plotted");

@@ -232,16 +232,18 @@ impl Hierarchy {
             while active != 0 {
                 let i = active.trailing_zeros() as usize;
                 active &= active - 1;
-                // SAFETY (both): the caller guarantees L's instructions.
                 let (hit, enter) = match beam {
                     Some(_) => {
+                        // SAFETY: the caller guarantees L's instructions.
                         let kept = unsafe { L::cull(&projected, at[i]) };
                         if kept & w.spheres != 0 {
+                            // SAFETY: as above.
                             unsafe { L::any(w, origin[i], dir[i], t_min, t_max) }
                         } else {
                             (None, kept & w.bounds)
                         }
                     }
+                    // SAFETY: as above.
                     None => unsafe { L::any(w, origin[i], dir[i], t_min, t_max) },
                 };
                 if let Some(lane) = hit {
