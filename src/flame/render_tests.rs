@@ -1,0 +1,115 @@
+//! Tests of the flame chaos game: its workers (chains grouped by xform, batches, buckets in
+//! flight) against flam3's loop run one run after another.
+
+use super::*;
+use crate::flame::{Variation, VariationTerm};
+
+/// Three xforms with xaos, an opacity, a spherical term that sends points out of the plane
+/// now and then, a final xform plotted half the time, a rotated camera, a linear palette.
+fn flame() -> Flame {
+    let term = |name: &str, weight: f64| {
+        let variation = Variation::by_name(name).expect("variation");
+        VariationTerm { variation, weight, params: variation.default_params() }
+    };
+    let xform = |weight: f64, color: f64, coefs: [f64; 6], chaos: Vec<f64>| Xform {
+        weight,
+        color,
+        color_speed: 0.5,
+        opacity: 1.0,
+        coefs,
+        post: None,
+        variations: vec![term("linear", 0.6), term("spherical", 0.4)],
+        chaos,
+    };
+    let mut xforms = vec![
+        xform(0.5, 0.0, [0.5, 0.0, 0.0, 0.5, -0.5, -0.3], vec![1.0, 2.0, 0.0]),
+        xform(0.5, 1.0, [0.5, 0.2, -0.2, 0.5, 0.5, 0.3], vec![]),
+        xform(0.3, 0.5, [0.4, 0.0, 0.0, 0.4, 0.0, 0.6], vec![0.5, 1.0, 1.0]),
+    ];
+    xforms[1].opacity = 0.6;
+    // The batch path's other branches: a variation drawing random numbers, one computed
+    // point by point, pre_blur, a post-affine.
+    xforms[2].variations.extend([term("julia", 0.3), term("sinusoidal", 0.2), term("pre_blur", 0.1)]);
+    xforms[1].post = Some([0.9, 0.1, -0.1, 0.9, 0.05, 0.0]);
+    let mut final_xform = xform(0.0, 0.8, [0.9, 0.1, -0.1, 0.9, 0.0, 0.1], vec![]);
+    final_xform.opacity = 0.5;
+    Flame {
+        size: [40, 30],
+        scale: 12.0,
+        rotate: 20.0,
+        quality: 30.0,
+        palette_mode: PaletteMode::Linear,
+        palette: (0..256).map(|i| [i as f64 / 255.0, 1.0 - i as f64 / 255.0, 0.5, 1.0]).collect(),
+        xforms,
+        final_xform: Some(final_xform),
+        ..Flame::default()
+    }
+}
+
+/// The oracle: flam3's loop, one run after another, each sample added at once.
+fn one_run_after_another(game: &ChaosGame, seed: u32, samples: u64, cells: usize) -> (Vec<Bucket>, u64) {
+    let mut histogram = vec![[0u32; 5]; cells];
+    let mut bad = 0;
+    for run in 0..samples.div_ceil(RUN_SAMPLES) {
+        let n = RUN_SAMPLES.min(samples - run * RUN_SAMPLES) as i64;
+        let mut rng = Pcg32::for_stream(seed, 0, run as u32);
+        let mut p = [uniform11(&mut rng), uniform11(&mut rng)];
+        let mut color = rng.next_f64();
+        let (mut last, mut consecutive_bad, mut i) = (0, 0, -FUSE_ITERATIONS);
+        while i < n {
+            let entry = rng.next_u32() as usize & (CHOICE_ENTRIES - 1);
+            let row = if game.xaos { last } else { 0 };
+            let k = game.choice[row * CHOICE_ENTRIES + entry] as usize;
+            let x = &game.xforms[k];
+            color = x.color_of(color);
+            p = x.map.apply(p, &mut rng);
+            if is_bad(p) {
+                p = [uniform11(&mut rng), uniform11(&mut rng)];
+                bad += 1;
+                consecutive_bad += 1;
+                if consecutive_bad < 5 {
+                    continue;
+                }
+            }
+            consecutive_bad = 0;
+            last = k + 1;
+            let (mut shown, mut shown_color) = (p, color);
+            if let Some(f) = &game.final_xform
+                && (f.opacity == 1.0 || rng.next_f64() < f.opacity)
+            {
+                shown_color = f.color_of(color);
+                shown = f.map.apply(p, &mut rng);
+                if is_bad(shown) {
+                    shown = [uniform11(&mut rng), uniform11(&mut rng)];
+                }
+            }
+            if let (b, true) = game.camera.bucket(shown)
+                && i >= 0
+                && x.plotted_weight != 0.0
+            {
+                add(&mut histogram[b], &game.increments_of(shown_color, x.plotted_weight));
+            }
+            i += 1;
+        }
+    }
+    (histogram, bad)
+}
+
+/// The workers (chains mapped in batches by xform, buckets prefetched) sum exactly what
+/// one run after another does, on one thread and on three, for a sample count that ends
+/// in a partial run and is more runs than one worker's chains.
+#[test]
+fn batched_chains_sum_what_one_run_after_another_sums() {
+    let flame = flame();
+    let layout = Layout::new(&flame).expect("layout");
+    let game = ChaosGame::new(&flame, &layout).expect("game");
+    let samples = (CHAINS as u64 + 9) * RUN_SAMPLES + 1234;
+    let cells = layout.hist_width * layout.hist_height;
+    let expected = one_run_after_another(&game, 5, samples, cells);
+    assert!(expected.0.iter().any(|b| b[4] != 0), "nothing plotted");
+    for threads in [1, 3] {
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().expect("pool");
+        let got = pool.install(|| game.run(5, samples, &layout, &|_| {}));
+        assert!(got == expected, "{threads} thread(s): the histograms or re-seed counts differ");
+    }
+}
