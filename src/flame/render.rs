@@ -41,8 +41,7 @@ pub const FUSE_ITERATIONS: i64 = 15;
 /// Entries of the xform choice table (flam3's `CHOOSE_XFORM_GRAIN`).
 const CHOICE_ENTRIES: usize = 16_384;
 /// Runs one worker advances together: their iterations are independent, so the core overlaps
-/// them and maps the chains that drew one xform as a batch in vector registers, and each
-/// sample's bucket is prefetched a round before its add.
+/// them, and it maps the chains that drew one xform as a batch in vector registers.
 const CHAINS: usize = super::variations::BATCH;
 const _: () = assert!(CHAINS <= u8::MAX as usize, "chain numbers are bytes");
 /// Samples between a bucket's prefetch and its add: enough for the line to arrive, few enough
@@ -360,7 +359,7 @@ impl ChaosGame {
         let mut finals: Vec<u8> = Vec::with_capacity(CHAINS);
         let mut scratch = BatchScratch::default();
         // The last IN_FLIGHT samples' buckets (prefetched) and increments, not yet added.
-        let mut in_flight = [NOTHING_PENDING; IN_FLIGHT];
+        let mut in_flight = [EMPTY_SLOT; IN_FLIGHT];
         let mut next_in_flight = 0;
         loop {
             // The previous round's adds; finished runs hand their chain to the next run, or
@@ -526,7 +525,7 @@ impl ChaosGame {
 }
 
 /// An empty slot of the samples in flight: 0 added to bucket 0.
-const NOTHING_PENDING: (usize, Bucket) = (0, [0; 5]);
+const EMPTY_SLOT: (usize, Bucket) = (0, [0; 5]);
 
 /// The runs one worker advances together, chain by chain in arrays; chains `0..live` are
 /// running.
