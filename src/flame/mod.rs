@@ -19,6 +19,7 @@ mod render_density;
 pub mod render_filter;
 mod render_layout;
 pub mod render_tone;
+mod trig;
 pub mod variations;
 pub mod xml;
 mod xml_palette;

@@ -24,12 +24,20 @@ fn flame() -> Flame {
     let mut xforms = vec![
         xform(0.5, 0.0, [0.5, 0.0, 0.0, 0.5, -0.5, -0.3], vec![1.0, 2.0, 0.0]),
         xform(0.5, 1.0, [0.5, 0.2, -0.2, 0.5, 0.5, 0.3], vec![]),
-        xform(0.3, 0.5, [0.4, 0.0, 0.0, 0.4, 0.0, 0.6], vec![0.5, 1.0, 1.0]),
+        xform(0.3, 0.5, [0.4, 0.0, 0.1, 0.4, 0.0, 0.6], vec![0.5, 1.0, 1.0]),
     ];
     xforms[1].opacity = 0.6;
-    // The batch path's other branches: a variation drawing random numbers, one computed
-    // point by point, pre_blur, a post-affine.
-    xforms[2].variations.extend([term("julia", 0.3), term("sinusoidal", 0.2), term("pre_blur", 0.1)]);
+    // The batch path's other branches: a variation drawing a random bit (julia), sin's vector
+    // core (sinusoidal), waves with e = 0, whose sin(y / ε) is beyond the core's range so that
+    // the batches are redone with libm's sin, pre_blur, a post-affine; and an xform mapped point
+    // by point (exponential is not batched).
+    xforms[2].variations.extend([
+        term("julia", 0.3),
+        term("sinusoidal", 0.2),
+        term("waves", 0.1),
+        term("pre_blur", 0.1),
+    ]);
+    xforms[0].variations.push(term("exponential", 0.05));
     xforms[1].post = Some([0.9, 0.1, -0.1, 0.9, 0.05, 0.0]);
     let mut final_xform = xform(0.0, 0.8, [0.9, 0.1, -0.1, 0.9, 0.0, 0.1], vec![]);
     final_xform.opacity = 0.5;

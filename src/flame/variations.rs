@@ -36,7 +36,7 @@ mod plugins;
 #[path = "variations_tests.rs"]
 mod tests;
 
-use super::{Coefs, Xform, apply_coefs};
+use super::{Coefs, Xform, apply_coefs, trig};
 use crate::rng::Pcg32;
 
 /// A variation: its index in [`VARIATIONS`] (flam3's numbering for the first 99).
@@ -316,6 +316,10 @@ pub struct BatchScratch {
     atan_yx: [f64; BATCH],
     ox: [f64; BATCH],
     oy: [f64; BATCH],
+    /// One term's contribution, and julia's random bits.
+    dx: [f64; BATCH],
+    dy: [f64; BATCH],
+    flip: [bool; BATCH],
 }
 
 impl Default for BatchScratch {
@@ -332,6 +336,9 @@ impl Default for BatchScratch {
             atan_yx: zero,
             ox: zero,
             oy: zero,
+            dx: zero,
+            dy: zero,
+            flip: [false; BATCH],
         }
     }
 }
@@ -406,14 +413,14 @@ impl CompiledXform {
         let sqrt = sumsq.sqrt();
         let mut pt = Point { tx, ty, sumsq, sqrt, ..Point::default() };
         if self.needs & NEEDS_ATAN_XY != 0 {
-            pt.atan_xy = tx.atan2(ty);
+            pt.atan_xy = trig::atan2(tx, ty);
         }
         if self.needs & NEEDS_ANGLES != 0 {
             pt.sina = tx / sqrt;
             pt.cosa = ty / sqrt;
         }
         if self.needs & NEEDS_ATAN_YX != 0 {
-            pt.atan_yx = ty.atan2(tx);
+            pt.atan_yx = trig::atan2(ty, tx);
         }
         let mut out = [0.0, 0.0];
         for t in &self.terms {
@@ -445,7 +452,7 @@ impl CompiledXform {
     /// batch's bookkeeping measured slower than the point-by-point path.)
     #[inline]
     pub fn batches(&self) -> bool {
-        self.terms.iter().all(|t| matches!(t.variation, 0 | 2 | 4 | 5 | 10))
+        self.terms.iter().all(|t| matches!(t.variation, 0 | 2 | 4 | 5 | 10) || basic::smooth(t.variation))
     }
 
     #[inline(always)]
@@ -467,9 +474,20 @@ impl CompiledXform {
             s.sqrt[j] = s.sumsq[j].sqrt();
         }
         let needs = |flag: u8| self.needs & flag != 0;
+        // The angles by `trig`'s branch-free atan2 (a vector loop); where a lane's arguments
+        // are not finite, every lane again by `trig::atan2`, which gives the same bits for the
+        // others.
         if needs(NEEDS_ATAN_XY) {
+            let mut finite = true;
             for j in 0..m {
-                s.atan_xy[j] = s.tx[j].atan2(s.ty[j]);
+                let (a, ok) = trig::atan2_core(s.tx[j], s.ty[j]);
+                s.atan_xy[j] = a;
+                finite &= ok;
+            }
+            if !finite {
+                for j in 0..m {
+                    s.atan_xy[j] = trig::atan2(s.tx[j], s.ty[j]);
+                }
             }
         }
         if needs(NEEDS_ANGLES) {
@@ -479,8 +497,16 @@ impl CompiledXform {
             }
         }
         if needs(NEEDS_ATAN_YX) {
+            let mut finite = true;
             for j in 0..m {
-                s.atan_yx[j] = s.ty[j].atan2(s.tx[j]);
+                let (a, ok) = trig::atan2_core(s.ty[j], s.tx[j]);
+                s.atan_yx[j] = a;
+                finite &= ok;
+            }
+            if !finite {
+                for j in 0..m {
+                    s.atan_yx[j] = trig::atan2(s.ty[j], s.tx[j]);
+                }
             }
         }
         // The quantities `apply` leaves at 0 stay 0 here, whatever earlier calls left.
@@ -510,12 +536,63 @@ impl CompiledXform {
                     }
                 };
             }
+            // The smooth variations (`basic::eval_smooth`) likewise, their sin, cos and tan
+            // `trig`'s cores; where a lane's argument is beyond a core's range, every lane again
+            // with `trig`'s exact functions, which give the same bits for the others. julia's
+            // random bits are drawn first, one per point in order, as `apply` draws them.
+            macro_rules! smooth {
+                ($v:literal) => {{
+                    if $v == 13 {
+                        for j in 0..m {
+                            s.flip[j] = rngs[chain[j] as usize].next_u32() & 1 != 0;
+                        }
+                    }
+                    let mut in_range = true;
+                    for j in 0..m {
+                        let mut lane = basic::InRange { in_range: true };
+                        let d = basic::eval_smooth($v, w, &t.k, &point(s, j), s.flip[j], &mut lane).unwrap_or_default();
+                        s.dx[j] = d[0];
+                        s.dy[j] = d[1];
+                        in_range &= lane.in_range;
+                    }
+                    if !in_range {
+                        for j in 0..m {
+                            let d = basic::eval_smooth($v, w, &t.k, &point(s, j), s.flip[j], &mut basic::Exact)
+                                .unwrap_or_default();
+                            s.dx[j] = d[0];
+                            s.dy[j] = d[1];
+                        }
+                    }
+                    for j in 0..m {
+                        s.ox[j] += s.dx[j];
+                        s.oy[j] += s.dy[j];
+                    }
+                }};
+            }
             match t.variation {
                 0 => each!(0),
                 2 => each!(2),
                 4 => each!(4),
                 5 => each!(5),
                 10 => each!(10),
+                1 => smooth!(1),
+                3 => smooth!(3),
+                6 => smooth!(6),
+                7 => smooth!(7),
+                8 => smooth!(8),
+                9 => smooth!(9),
+                11 => smooth!(11),
+                12 => smooth!(12),
+                13 => smooth!(13),
+                14 => smooth!(14),
+                15 => smooth!(15),
+                16 => smooth!(16),
+                17 => smooth!(17),
+                27 => smooth!(27),
+                28 => smooth!(28),
+                29 => smooth!(29),
+                48 => smooth!(48),
+                49 => smooth!(49),
                 v => {
                     for j in 0..m {
                         let rng = &mut rngs[chain[j] as usize];

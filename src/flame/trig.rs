@@ -1,0 +1,244 @@
+//! sin, cos, tan and atan2 for the flame variations, in a form a vector loop can run.
+//!
+//! libm's functions are calls LLVM cannot vectorise, and on transcendental flames they were most
+//! of the chaos game's time (waves-popcorn: 52 % in `sin`, `tan`, `atan2`, `sincos`). Here each
+//! is a few multiplies and adds without branches: sin and cos reduce x by the nearest multiple
+//! q of π/2 (π/2 in three 31–32-bit parts and a rest, so q · part is exact for |q| < 2^20),
+//! then evaluate fdlibm's minimax polynomials on [−π/4, π/4] and pick and negate by q's two low
+//! bits; tan is their quotient; atan2 takes min / max of |y| and |x| in [0, 1], moves it to
+//! |u| ≤ 7/16 with atan(½) or π/4, evaluates fdlibm's polynomial and unfolds the octant. No
+//! fused multiply-add is used (Rust never contracts a · b + c), so a scalar call and a lane of an
+//! AVX-512 or AVX2 loop give the same bits, and the batched xforms (`variations.rs`) sum what
+//! point-by-point ones do. Accuracy: within 2 units in the last place of libm's results
+//! (`tests` below) — so pictures differ from libm-based ones by rounding only.
+//!
+//! The `*_core` functions cover the range where the reduction is exact (|x| ≤ 10^6 for sin, cos
+//! and tan; finite arguments for atan2) and say whether the argument was in it; outside, the
+//! plain functions fall back to libm, and a vector loop redoes such a lane with them.
+
+use std::f64::consts::FRAC_2_PI;
+
+/// |x| up to which sin, cos and tan reduce exactly (q = round(x · 2/π) < 2^20).
+const REDUCE_LIMIT: f64 = 1e6;
+/// 1.5 · 2^52: added and subtracted, rounds to the nearest integer (ties to even), and its
+/// sum's low mantissa bits are that integer modulo 2^51.
+const ROUND_MAGIC: f64 = 6_755_399_441_055_744.0;
+/// π/2 = P1 + P2 + P3 + P3_REST; P1, P2 and P3 have at most 32 significant bits.
+const PIO2_1: f64 = f64::from_bits(0x3FF9_21FB_5440_0000);
+const PIO2_2: f64 = f64::from_bits(0x3DD0_B461_1A60_0000);
+const PIO2_3: f64 = f64::from_bits(0x3BA3_198A_2E00_0000);
+const PIO2_3_REST: f64 = f64::from_bits(0x397B_839A_2520_49C1);
+
+/// sin(r) − r = r³ · S(r²) on [−π/4, π/4] (fdlibm's `__kernel_sin`).
+const S: [f64; 6] = [
+    -0.16666666666666632,
+    0.00833333333332249,
+    -0.0001984126982985795,
+    2.7557313707070068e-06,
+    -2.5050760253406863e-08,
+    1.58969099521155e-10,
+];
+/// cos(r) − 1 + r²/2 = r⁴ · C(r²) on [−π/4, π/4] (fdlibm's `__kernel_cos`).
+const C: [f64; 6] = [
+    0.0416666666666666,
+    -0.001388888888887411,
+    2.480158728947673e-05,
+    -2.7557314351390663e-07,
+    2.087572321298175e-09,
+    -1.1359647557788195e-11,
+];
+/// atan(u) − u = −u³ · T(u²) on |u| ≤ 7/16 (fdlibm's `atan`).
+const T: [f64; 11] = [
+    0.3333333333333293,
+    -0.19999999999876483,
+    0.14285714272503466,
+    -0.11111110405462356,
+    0.09090887133436507,
+    -0.0769187620504483,
+    0.06661073137387531,
+    -0.058335701337905735,
+    0.049768779946159324,
+    -0.036531572744216916,
+    0.016285820115365782,
+];
+/// atan(½) and π/4, each as a double and the rest.
+const ATAN_HALF: (f64, f64) = (0.463_647_609_000_806_1, 2.269_877_745_296_168_7e-17);
+const PI_4: (f64, f64) = (std::f64::consts::FRAC_PI_4, 3.061_616_997_868_383e-17);
+/// π/2 and π likewise.
+const PI_2: (f64, f64) = (std::f64::consts::FRAC_PI_2, 6.123_233_995_736_766e-17);
+const PI: (f64, f64) = (std::f64::consts::PI, 1.224_646_799_147_353_2e-16);
+
+/// (sin x, cos x, whether |x| ≤ 10^6); outside that range the two values are those of 0.
+#[inline(always)]
+pub fn sin_cos_core(x: f64) -> (f64, f64, bool) {
+    let ok = x.abs() <= REDUCE_LIMIT;
+    let x = if ok { x } else { 0.0 };
+    let shifted = x * FRAC_2_PI + ROUND_MAGIC;
+    let q = shifted - ROUND_MAGIC;
+    let quadrant = shifted.to_bits();
+    let r = (((x - q * PIO2_1) - q * PIO2_2) - q * PIO2_3) - q * PIO2_3_REST;
+    let z = r * r;
+    let sin_r = r + r * z * (S[0] + z * (S[1] + z * (S[2] + z * (S[3] + z * (S[4] + z * S[5])))));
+    let cos_r = (1.0 - 0.5 * z) + z * z * (C[0] + z * (C[1] + z * (C[2] + z * (C[3] + z * (C[4] + z * C[5])))));
+    let odd = quadrant & 1 != 0;
+    let (s, c) = if odd { (cos_r, sin_r) } else { (sin_r, cos_r) };
+    // sin is negated in quadrants 2 and 3, cos in 1 and 2.
+    let s = f64::from_bits(s.to_bits() ^ ((quadrant & 2) << 62));
+    // sin(±0) = ±0 (the polynomial's r + r·z·S(z) gives +0 for −0).
+    let s = if x == 0.0 { x } else { s };
+    let c = f64::from_bits(c.to_bits() ^ ((quadrant.wrapping_add(1) & 2) << 62));
+    (s, c, ok)
+}
+
+/// (tan x, whether |x| ≤ 10^6).
+#[inline(always)]
+pub fn tan_core(x: f64) -> (f64, bool) {
+    let (s, c, ok) = sin_cos_core(x);
+    (s / c, ok)
+}
+
+/// (atan2(y, x), whether both are finite); IEEE's signs for zeros (atan2(±0, −0) = ±π).
+#[inline(always)]
+pub fn atan2_core(y: f64, x: f64) -> (f64, bool) {
+    let (ax, ay) = (x.abs(), y.abs());
+    let ok = ax < f64::INFINITY && ay < f64::INFINITY;
+    let swapped = ay > ax;
+    let (small, large) = if swapped { (ax, ay) } else { (ay, ax) };
+    let t = if large > 0.0 { small / large } else { 0.0 };
+    // atan(t) for t in [0, 1]: t itself below 7/16, else atan(½) + atan((2t − 1)/(2 + t)) below
+    // 11/16, else π/4 + atan((t − 1)/(t + 1)); one division for all three.
+    let (num, den, base) = if t < 0.4375 {
+        (t, 1.0, (0.0, 0.0))
+    } else if t < 0.6875 {
+        (2.0 * t - 1.0, 2.0 + t, ATAN_HALF)
+    } else {
+        (t - 1.0, t + 1.0, PI_4)
+    };
+    let u = num / den;
+    let z = u * u;
+    let w = z * z;
+    let even = z * (T[0] + w * (T[2] + w * (T[4] + w * (T[6] + w * (T[8] + w * T[10])))));
+    let odd = w * (T[1] + w * (T[3] + w * (T[5] + w * (T[7] + w * T[9]))));
+    let a = base.0 - ((u * (even + odd) - base.1) - u);
+    let a = if swapped { (PI_2.0 - a) + PI_2.1 } else { a };
+    let a = if x.is_sign_negative() { (PI.0 - a) + PI.1 } else { a };
+    (a.copysign(y), ok)
+}
+
+/// sin x and cos x: [`sin_cos_core`], libm beyond its range.
+#[inline(always)]
+pub fn sin_cos(x: f64) -> (f64, f64) {
+    match sin_cos_core(x) {
+        (s, c, true) => (s, c),
+        _ => x.sin_cos(),
+    }
+}
+
+/// tan x: [`tan_core`], libm beyond its range.
+#[inline(always)]
+pub fn tan(x: f64) -> f64 {
+    match tan_core(x) {
+        (t, true) => t,
+        _ => x.tan(),
+    }
+}
+
+/// atan2(y, x): [`atan2_core`], libm for infinite or NaN arguments.
+#[inline(always)]
+pub fn atan2(y: f64, x: f64) -> f64 {
+    match atan2_core(y, x) {
+        (a, true) => a,
+        _ => y.atan2(x),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::rng::Pcg32;
+
+    /// Distance in units in the last place between two finite doubles of one sign (or zeros).
+    fn ulps(a: f64, b: f64) -> u64 {
+        if a == b {
+            return 0;
+        }
+        let key = |v: f64| {
+            let bits = v.to_bits() as i64;
+            if bits < 0 { i64::MIN - bits } else { bits }
+        };
+        key(a).abs_diff(key(b))
+    }
+
+    /// Error of `ours` against `libm` in ulps of the larger magnitude, or an absolute error of
+    /// 2^−60 where the result is near 0 (there sin's absolute error is the reduction's, a few
+    /// 10^−17 · |x|, which no method avoids without an exact π).
+    fn error_ok(ours: f64, libm: f64, ulp_bound: u64, abs_bound: f64) -> bool {
+        ulps(ours, libm) <= ulp_bound || (ours - libm).abs() <= abs_bound
+    }
+
+    #[test]
+    fn sin_cos_tan_are_within_two_ulps_of_libm() {
+        let mut rng = Pcg32::for_stream(7, 0, 1);
+        let ranges = [1.0, 10.0, 1e3, REDUCE_LIMIT];
+        for (i, &range) in ranges.iter().enumerate() {
+            // The reduction's error grows with |x| (q · the rest of π/2 rounded): bound it by
+            // |x| · 2^−100 on top of the result's own rounding.
+            let abs_bound = range * 2f64.powi(-100) + 2f64.powi(-60);
+            for k in 0..200_000 {
+                let x = (2.0 * rng.next_f64() - 1.0) * range;
+                let (s, c, ok) = sin_cos_core(x);
+                assert!(ok);
+                assert!(error_ok(s, x.sin(), 2, abs_bound), "range {i} case {k}: sin {x:e} = {s:e} vs {:e}", x.sin());
+                assert!(error_ok(c, x.cos(), 2, abs_bound), "range {i} case {k}: cos {x:e} = {c:e} vs {:e}", x.cos());
+                let (t, _) = tan_core(x);
+                // The quotient of two values within 2 ulps each.
+                assert!(
+                    ulps(t, x.tan()) <= 5 || (t - x.tan()).abs() <= abs_bound * (1.0 + x.tan().powi(2)),
+                    "range {i} case {k}: tan {x:e} = {t:e} vs {:e}",
+                    x.tan()
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn atan2_is_within_two_ulps_of_libm() {
+        let mut rng = Pcg32::for_stream(11, 0, 3);
+        for k in 0..400_000 {
+            // Magnitudes over many octaves, every sign, and the octant boundaries' neighbours.
+            let y = (2.0 * rng.next_f64() - 1.0) * 10f64.powi((rng.next_u32() % 13) as i32 - 6);
+            let x = match k % 4 {
+                0 => y * (0.4375 + (rng.next_f64() - 0.5) * 1e-9),
+                1 => -y * (0.6875 + (rng.next_f64() - 0.5) * 1e-9),
+                _ => (2.0 * rng.next_f64() - 1.0) * 10f64.powi((rng.next_u32() % 13) as i32 - 6),
+            };
+            let (a, ok) = atan2_core(y, x);
+            assert!(ok);
+            assert!(ulps(a, y.atan2(x)) <= 2, "case {k}: atan2({y:e}, {x:e}) = {a:e} vs {:e}", y.atan2(x));
+            let (a, _) = atan2_core(x, y);
+            assert!(ulps(a, x.atan2(y)) <= 2, "case {k}: atan2({x:e}, {y:e}) = {a:e} vs {:e}", x.atan2(y));
+        }
+    }
+
+    #[test]
+    fn special_arguments_follow_libm() {
+        for (y, x) in [(0.0, 0.0), (-0.0, 0.0), (0.0, -0.0), (-0.0, -0.0), (0.0, -1.0), (-0.0, -1.0), (1.0, 0.0)] {
+            assert_eq!(atan2(y, x).to_bits(), y.atan2(x).to_bits(), "atan2({y}, {x})");
+        }
+        for (y, x) in [(f64::NAN, 1.0), (1.0, f64::INFINITY), (f64::NEG_INFINITY, -2.0)] {
+            assert!(!atan2_core(y, x).1);
+            let (ours, libm) = (atan2(y, x), y.atan2(x));
+            assert!(ours.to_bits() == libm.to_bits() || ours.is_nan() && libm.is_nan());
+        }
+        for x in [f64::NAN, f64::INFINITY, 1e7, -3e15] {
+            assert!(!sin_cos_core(x).2);
+            let (ours, libm) = (sin_cos(x).0, x.sin());
+            assert!(ours.to_bits() == libm.to_bits() || ours.is_nan() && libm.is_nan());
+            let (ours, libm) = (tan(x), x.tan());
+            assert!(ours.to_bits() == libm.to_bits() || ours.is_nan() && libm.is_nan());
+        }
+        assert_eq!(sin_cos(0.0).0.to_bits(), 0f64.to_bits());
+        assert_eq!(sin_cos(-0.0).0.to_bits(), (-0f64).to_bits());
+        assert_eq!(sin_cos(0.0).1, 1.0);
+    }
+}
