@@ -419,9 +419,7 @@ impl ChaosGame {
                 if xf.map.batches() {
                     xf.map.apply_batch(&mut gx[..m], &mut gy[..m], members, &mut c.rng, &mut scratch);
                 } else {
-                    for (j, &k) in members.iter().enumerate() {
-                        [gx[j], gy[j]] = xf.map.apply([gx[j], gy[j]], &mut c.rng[k as usize]);
-                    }
+                    xf.map.apply_each(&mut gx[..m], &mut gy[..m], members, &mut c.rng);
                 }
                 for (j, &k) in members.iter().enumerate() {
                     (qx[k as usize], qy[k as usize]) = (gx[j], gy[j]);
@@ -465,9 +463,7 @@ impl ChaosGame {
                 if f.map.batches() {
                     f.map.apply_batch(&mut gx[..m], &mut gy[..m], &finals, &mut c.rng, &mut scratch);
                 } else {
-                    for (j, &k) in finals.iter().enumerate() {
-                        [gx[j], gy[j]] = f.map.apply([gx[j], gy[j]], &mut c.rng[k as usize]);
-                    }
+                    f.map.apply_each(&mut gx[..m], &mut gy[..m], &finals, &mut c.rng);
                 }
                 for (j, &k) in finals.iter().enumerate() {
                     let k = k as usize;

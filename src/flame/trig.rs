@@ -1,4 +1,5 @@
-//! sin, cos, tan and atan2 for the flame variations, in a form a vector loop can run.
+//! sin, cos, tan, atan2, exp, ln and pow for the flame variations, in a form a vector loop can
+//! run.
 //!
 //! libm's functions are calls LLVM cannot vectorise, and on transcendental flames they were most
 //! of the chaos game's time (waves-popcorn: 52 % in `sin`, `tan`, `atan2`, `sincos`). Here each
@@ -6,15 +7,20 @@
 //! q of π/2 (π/2 in three 31–32-bit parts and a rest, so q · part is exact for |q| < 2^20),
 //! then evaluate fdlibm's minimax polynomials on [−π/4, π/4] and pick and negate by q's two low
 //! bits; tan is their quotient; atan2 takes min / max of |y| and |x| in [0, 1], moves it to
-//! |u| ≤ 7/16 with atan(½) or π/4, evaluates fdlibm's polynomial and unfolds the octant. No
+//! |u| ≤ 7/16 with atan(½) or π/4, evaluates fdlibm's polynomial and unfolds the octant; exp
+//! splits x = n · ln 2 + r (|r| ≤ ln 2 / 2) and scales fdlibm's rational approximation of e^r by
+//! 2^n; ln splits x = 2^e · m (m in [√½, √2)) and sums fdlibm's series of ln m in
+//! s = (m − 1)/(m + 1); pow(x, y) is exp(y · ln x) for x > 0 (relative error up to about
+//! |y · ln x| units in the last place, invisible in a picture). No
 //! fused multiply-add is used (Rust never contracts a · b + c), so a scalar call and a lane of an
 //! AVX-512 or AVX2 loop give the same bits, and the batched xforms (`variations.rs`) sum what
 //! point-by-point ones do. Accuracy: within 2 units in the last place of libm's results
 //! (`tests` below) — so pictures differ from libm-based ones by rounding only.
 //!
 //! The `*_core` functions cover the range where the reduction is exact (|x| ≤ 10^6 for sin, cos
-//! and tan; finite arguments for atan2) and say whether the argument was in it; outside, the
-//! plain functions fall back to libm, and a vector loop redoes such a lane with them.
+//! and tan; finite arguments for atan2; |x| ≤ 708 for exp; positive normal x for ln and pow)
+//! and say whether the argument was in it; outside, the plain functions fall back to libm, and
+//! a vector loop redoes such a lane with them.
 
 use std::f64::consts::FRAC_2_PI;
 
@@ -67,6 +73,74 @@ const PI_4: (f64, f64) = (std::f64::consts::FRAC_PI_4, 3.061_616_997_868_383e-17
 /// π/2 and π likewise.
 const PI_2: (f64, f64) = (std::f64::consts::FRAC_PI_2, 6.123_233_995_736_766e-17);
 const PI: (f64, f64) = (std::f64::consts::PI, 1.224_646_799_147_353_2e-16);
+
+/// ln 2 = LN2_HI + LN2_LO, LN2_HI with 32 significant bits (n · LN2_HI is exact for |n| < 2^21).
+const LN2_HI: f64 = f64::from_bits(0x3FE6_2E42_FEE0_0000);
+const LN2_LO: f64 = f64::from_bits(0x3DEA_39EF_3579_3C76);
+/// |x| up to which exp's result is a normal double.
+const EXP_LIMIT: f64 = 708.0;
+/// r · (e^r + 1)/(e^r − 1) = 2 + r² · P(r²) on |r| ≤ ln 2 / 2 (fdlibm's `exp`).
+const P: [f64; 5] = [
+    0.16666666666666602,
+    -0.0027777777777015593,
+    6.613756321437934e-05,
+    -1.6533902205465252e-06,
+    4.1381367970572385e-08,
+];
+/// ln((1 + s)/(1 − s)) = 2s + s · L(s²) on |s| ≤ 0.1716 (fdlibm's `log`).
+const L: [f64; 7] = [
+    0.6666666666666735,
+    0.3999999999940942,
+    0.2857142874366239,
+    0.22222198432149784,
+    0.1818357216161805,
+    0.15313837699209373,
+    0.14798198605116586,
+];
+
+/// (e^x, whether |x| ≤ 708).
+#[inline(always)]
+pub fn exp_core(x: f64) -> (f64, bool) {
+    let ok = x.abs() <= EXP_LIMIT;
+    let x = if ok { x } else { 0.0 };
+    let shifted = x * std::f64::consts::LOG2_E + ROUND_MAGIC;
+    let n = shifted - ROUND_MAGIC;
+    let hi = x - n * LN2_HI;
+    let lo = n * LN2_LO;
+    let r = hi - lo;
+    let z = r * r;
+    let c = r - z * (P[0] + z * (P[1] + z * (P[2] + z * (P[3] + z * P[4]))));
+    let e_r = 1.0 - ((lo - (r * c) / (2.0 - c)) - hi);
+    // 2^n from its bits: n in [−1022, 1022] here.
+    let two_n = f64::from_bits(((shifted.to_bits() as i64).wrapping_add(1023) << 52) as u64);
+    (e_r * two_n, ok)
+}
+
+/// (ln x, whether x is positive, normal and finite).
+#[inline(always)]
+pub fn ln_core(x: f64) -> (f64, bool) {
+    let ok = (f64::MIN_POSITIVE..f64::INFINITY).contains(&x);
+    let x = if ok { x } else { 1.0 };
+    let bits = x.to_bits();
+    // x = 2^e · m with m in [1, 2), then moved to [√½, √2).
+    let m = f64::from_bits((bits & 0x000F_FFFF_FFFF_FFFF) | 0x3FF0_0000_0000_0000);
+    let e = ((bits >> 52) as i64 - 1023) as f64;
+    let high = m > std::f64::consts::SQRT_2;
+    let (m, e) = if high { (m * 0.5, e + 1.0) } else { (m, e) };
+    let f = m - 1.0;
+    let s = f / (2.0 + f);
+    let z = s * s;
+    let r = z * (L[0] + z * (L[1] + z * (L[2] + z * (L[3] + z * (L[4] + z * (L[5] + z * L[6]))))));
+    (e * LN2_HI + ((f - s * (f - r)) + e * LN2_LO), ok)
+}
+
+/// (x^y, whether x is positive, normal and finite and |y · ln x| ≤ 708).
+#[inline(always)]
+pub fn pow_core(x: f64, y: f64) -> (f64, bool) {
+    let (l, ok_ln) = ln_core(x);
+    let (p, ok_exp) = exp_core(y * l);
+    (p, ok_ln & ok_exp)
+}
 
 /// (sin x, cos x, whether |x| ≤ 10^6); outside that range the two values are those of 0.
 #[inline(always)]
@@ -152,6 +226,25 @@ pub fn atan2(y: f64, x: f64) -> f64 {
     }
 }
 
+/// e^x: [`exp_core`], libm beyond its range.
+#[inline(always)]
+pub fn exp(x: f64) -> f64 {
+    match exp_core(x) {
+        (e, true) => e,
+        _ => x.exp(),
+    }
+}
+
+/// x^y: [`pow_core`], libm beyond its range (x ≤ 0, subnormal or not finite; results beyond
+/// the normal doubles).
+#[inline(always)]
+pub fn pow(x: f64, y: f64) -> f64 {
+    match pow_core(x, y) {
+        (p, true) => p,
+        _ => x.powf(y),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -221,7 +314,40 @@ mod tests {
     }
 
     #[test]
+    fn exp_and_ln_are_within_two_ulps_of_libm_and_pow_close() {
+        let mut rng = Pcg32::for_stream(13, 0, 5);
+        for k in 0..400_000 {
+            let x = (2.0 * rng.next_f64() - 1.0) * [1e-3, 1.0, 30.0, EXP_LIMIT][k % 4];
+            let (e, ok) = exp_core(x);
+            assert!(ok);
+            assert!(ulps(e, x.exp()) <= 2, "case {k}: exp {x:e} = {e:e} vs {:e}", x.exp());
+            let v = rng.next_f64() * 10f64.powi((rng.next_u32() % 41) as i32 - 20);
+            let (l, ok) = ln_core(v);
+            assert!(ok && ulps(l, v.ln()) <= 2, "case {k}: ln {v:e} = {l:e} vs {:e}", v.ln());
+            // exp(y ln x): the rounding of y · ln x is scaled by |y ln x| in the result.
+            let y = (2.0 * rng.next_f64() - 1.0) * 4.0;
+            let (p, ok) = pow_core(v, y);
+            let bound = (y * v.ln()).abs().max(1.0) * 4.0 * f64::EPSILON;
+            assert!(ok && (p / v.powf(y) - 1.0).abs() <= bound, "case {k}: pow({v:e}, {y}) = {p:e} vs {:e}", v.powf(y));
+        }
+    }
+
+    #[test]
     fn special_arguments_follow_libm() {
+        for x in [0.0, -0.0, -1.0, 1e-310, f64::INFINITY, f64::NAN] {
+            assert!(!ln_core(x).1, "ln {x}");
+            for y in [2.0, -0.5, 0.0] {
+                let (ours, libm) = (pow(x, y), x.powf(y));
+                assert!(ours.to_bits() == libm.to_bits() || ours.is_nan() && libm.is_nan(), "pow({x}, {y})");
+            }
+        }
+        for x in [709.0, -746.0, f64::INFINITY, f64::NEG_INFINITY, f64::NAN] {
+            assert!(!exp_core(x).1);
+            let (ours, libm) = (exp(x), x.exp());
+            assert!(ours.to_bits() == libm.to_bits() || ours.is_nan() && libm.is_nan(), "exp {x}");
+        }
+        assert_eq!(exp(0.0), 1.0);
+        assert_eq!(pow(1.0, 3.7), 1.0);
         for (y, x) in [(0.0, 0.0), (-0.0, 0.0), (0.0, -0.0), (-0.0, -0.0), (0.0, -1.0), (-0.0, -1.0), (1.0, 0.0)] {
             assert_eq!(atan2(y, x).to_bits(), y.atan2(x).to_bits(), "atan2({y}, {x})");
         }

@@ -26,7 +26,12 @@
 //! half-integers), and mixtures of two to four variations with `pre_blur`. All outputs agree
 //! bit for bit, the random variations included, and where flam3 gives NaN or |v| > 1e10 so does
 //! this code. That needed C's conversion to `int` as x86-64 does it (`basic::c_int`): fan2 and
-//! rings2 with a parameter near 0, and cell of size 0, depend on it.
+//! rings2 with a parameter near 0, and cell of size 0, depend on it. (That was with libm's sin,
+//! cos, tan, atan2, exp and pow throughout. The precalc's angles and the smooth variations of
+//! `basic::eval_smooth` now take them from `flame::trig`, branch-free so that batches of
+//! points run in vector registers: their results differ from libm's in the last bits (within 2
+//! units for sin, cos, atan2, exp, ln, a few for tan, |y · ln x| for pow), which changes a
+//! picture only as another seed would; `tests/flame_fidelity.rs` measures the pictures.)
 
 #[path = "variations_basic.rs"]
 mod basic;
@@ -316,10 +321,10 @@ pub struct BatchScratch {
     atan_yx: [f64; BATCH],
     ox: [f64; BATCH],
     oy: [f64; BATCH],
-    /// One term's contribution, and julia's random bits.
+    /// One term's contribution, and its random draws (`basic::smooth_draw`).
     dx: [f64; BATCH],
     dy: [f64; BATCH],
-    flip: [bool; BATCH],
+    draw: [f64; BATCH],
 }
 
 impl Default for BatchScratch {
@@ -338,7 +343,7 @@ impl Default for BatchScratch {
             oy: zero,
             dx: zero,
             dy: zero,
-            flip: [false; BATCH],
+            draw: zero,
         }
     }
 }
@@ -440,21 +445,34 @@ impl CompiledXform {
         }
     }
 
-    /// [`Self::apply`] of up to [`BATCH`] points at once, in place: point j is
-    /// (`x[j]`, `y[j]`) and draws its random numbers from `rngs[chain[j]]`. Each quantity is
-    /// computed for all the points in a loop of its own, so the affine maps, the shared
-    /// quantities and the arithmetic variations (linear, spherical, horseshoe, polar,
-    /// hyperbolic) run in vector registers; the other variations run point by point. Every
-    /// point goes through the same operations in the same order as in `apply`, and draws the
-    /// same numbers in the same order from its generator, so the results are the same bits.
+    /// [`Self::apply`] of each point (`x[j]`, `y[j]`) in place, drawing from `rngs[chain[j]]`: the
+    /// point-by-point path of the chaos game's groups. Not inlined: inside the chaos game's
+    /// vector build, next to [`Self::apply_batch`]'s loops, the scalar code was compiled
+    /// worse (spiral-julian 2.0 → 2.6 s).
+    #[inline(never)]
+    pub fn apply_each(&self, x: &mut [f64], y: &mut [f64], chain: &[u8], rngs: &mut [Pcg32]) {
+        for ((x, y), &k) in x.iter_mut().zip(y.iter_mut()).zip(chain) {
+            [*x, *y] = self.apply([*x, *y], &mut rngs[k as usize]);
+        }
+    }
+
     /// Whether [`Self::apply_batch`] gains over [`Self::apply`] point by point: every term is
-    /// one of the arithmetic variations, computed in vector registers. (With the others the
-    /// batch's bookkeeping measured slower than the point-by-point path.)
+    /// one of the arithmetic variations or the smooth ones (`basic::eval_smooth`), computed in
+    /// vector registers. (With the others the batch's bookkeeping measured slower than the
+    /// point-by-point path.)
     #[inline]
     pub fn batches(&self) -> bool {
         self.terms.iter().all(|t| matches!(t.variation, 0 | 2 | 4 | 5 | 10) || basic::smooth(t.variation))
     }
 
+    /// [`Self::apply`] of up to [`BATCH`] points at once, in place: point j is
+    /// (`x[j]`, `y[j]`) and draws its random numbers from `rngs[chain[j]]`. Each quantity is
+    /// computed for all the points in a loop of its own, so the affine maps, the shared
+    /// quantities, the arithmetic variations (linear, spherical, horseshoe, polar, hyperbolic)
+    /// and the smooth ones (`basic::eval_smooth`, with `trig`'s functions) run in vector
+    /// registers; the other variations run point by point. Every point goes through the same
+    /// operations in the same order as in `apply`, and draws the same numbers in the same
+    /// order from its generator, so the results are the same bits.
     #[inline(always)]
     pub fn apply_batch(&self, x: &mut [f64], y: &mut [f64], chain: &[u8], rngs: &mut [Pcg32], s: &mut BatchScratch) {
         let m = x.len().min(y.len()).min(chain.len()).min(BATCH);
@@ -536,28 +554,29 @@ impl CompiledXform {
                     }
                 };
             }
-            // The smooth variations (`basic::eval_smooth`) likewise, their sin, cos and tan
-            // `trig`'s cores; where a lane's argument is beyond a core's range, every lane again
-            // with `trig`'s exact functions, which give the same bits for the others. julia's
-            // random bits are drawn first, one per point in order, as `apply` draws them.
+            // The smooth variations (`basic::eval_smooth`) likewise, their sin, cos, tan, exp
+            // and pow `trig`'s cores; where a lane's argument is beyond a core's range, every
+            // lane again with `trig`'s exact functions, which give the same bits for the others.
+            // julia's, julian's and juliascope's random numbers are drawn first, one per point,
+            // as `apply` draws them.
             macro_rules! smooth {
                 ($v:literal) => {{
-                    if $v == 13 {
+                    if matches!($v, 13 | 32 | 33) {
                         for j in 0..m {
-                            s.flip[j] = rngs[chain[j] as usize].next_u32() & 1 != 0;
+                            s.draw[j] = basic::smooth_draw($v, &mut rngs[chain[j] as usize]);
                         }
                     }
                     let mut in_range = true;
                     for j in 0..m {
                         let mut lane = basic::InRange { in_range: true };
-                        let d = basic::eval_smooth($v, w, &t.k, &point(s, j), s.flip[j], &mut lane).unwrap_or_default();
+                        let d = basic::eval_smooth($v, w, &t.k, &point(s, j), s.draw[j], &mut lane).unwrap_or_default();
                         s.dx[j] = d[0];
                         s.dy[j] = d[1];
                         in_range &= lane.in_range;
                     }
                     if !in_range {
                         for j in 0..m {
-                            let d = basic::eval_smooth($v, w, &t.k, &point(s, j), s.flip[j], &mut basic::Exact)
+                            let d = basic::eval_smooth($v, w, &t.k, &point(s, j), s.draw[j], &mut basic::Exact)
                                 .unwrap_or_default();
                             s.dx[j] = d[0];
                             s.dy[j] = d[1];
@@ -588,9 +607,21 @@ impl CompiledXform {
                 15 => smooth!(15),
                 16 => smooth!(16),
                 17 => smooth!(17),
+                18 => smooth!(18),
+                19 => smooth!(19),
+                20 => smooth!(20),
+                23 => smooth!(23),
+                24 => smooth!(24),
                 27 => smooth!(27),
                 28 => smooth!(28),
                 29 => smooth!(29),
+                30 => smooth!(30),
+                32 => smooth!(32),
+                33 => smooth!(33),
+                39 => smooth!(39),
+                40 => smooth!(40),
+                42 => smooth!(42),
+                46 => smooth!(46),
                 48 => smooth!(48),
                 49 => smooth!(49),
                 v => {

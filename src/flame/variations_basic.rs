@@ -151,11 +151,13 @@ pub(super) fn eval_arithmetic(v: u8, w: f64, pt: &Point) -> Option<[f64; 2]> {
     })
 }
 
-/// Where a variation's formula takes sin, cos and tan from ([`crate::flame::trig`]): [`Exact`]
-/// for a point on its own, [`InRange`] in a vector loop.
-pub(super) trait Trig {
+/// Where a variation's formula takes its elementary functions from ([`crate::flame::trig`]):
+/// [`Exact`] for a point on its own, [`InRange`] in a vector loop.
+pub(super) trait Elementary {
     fn sin_cos(&mut self, x: f64) -> (f64, f64);
     fn tan(&mut self, x: f64) -> f64;
+    fn exp(&mut self, x: f64) -> f64;
+    fn pow(&mut self, x: f64, y: f64) -> f64;
     #[inline(always)]
     fn sin(&mut self, x: f64) -> f64 {
         self.sin_cos(x).0
@@ -169,7 +171,7 @@ pub(super) trait Trig {
 /// [`trig`]'s functions, libm beyond their range.
 pub(super) struct Exact;
 
-impl Trig for Exact {
+impl Elementary for Exact {
     #[inline(always)]
     fn sin_cos(&mut self, x: f64) -> (f64, f64) {
         trig::sin_cos(x)
@@ -177,6 +179,14 @@ impl Trig for Exact {
     #[inline(always)]
     fn tan(&mut self, x: f64) -> f64 {
         trig::tan(x)
+    }
+    #[inline(always)]
+    fn exp(&mut self, x: f64) -> f64 {
+        trig::exp(x)
+    }
+    #[inline(always)]
+    fn pow(&mut self, x: f64, y: f64) -> f64 {
+        trig::pow(x, y)
     }
 }
 
@@ -186,7 +196,7 @@ pub(super) struct InRange {
     pub in_range: bool,
 }
 
-impl Trig for InRange {
+impl Elementary for InRange {
     #[inline(always)]
     fn sin_cos(&mut self, x: f64) -> (f64, f64) {
         let (s, c, ok) = trig::sin_cos_core(x);
@@ -199,17 +209,43 @@ impl Trig for InRange {
         self.in_range &= ok;
         t
     }
+    #[inline(always)]
+    fn exp(&mut self, x: f64) -> f64 {
+        let (e, ok) = trig::exp_core(x);
+        self.in_range &= ok;
+        e
+    }
+    #[inline(always)]
+    fn pow(&mut self, x: f64, y: f64) -> f64 {
+        let (p, ok) = trig::pow_core(x, y);
+        self.in_range &= ok;
+        p
+    }
 }
 
 /// Whether [`eval_smooth`] holds variation `v`'s formula.
 pub(super) fn smooth(v: u8) -> bool {
-    matches!(v, 1 | 3 | 6..=9 | 11..=17 | 27..=29 | 48 | 49)
+    matches!(v, 1 | 3 | 6..=9 | 11..=20 | 23 | 24 | 27..=30 | 32 | 33 | 39 | 40 | 42 | 46 | 48 | 49)
 }
 
-/// w · V(t) for the variations that draw no random number (julia draws one bit, passed in as
-/// `julia_flip`) and need only arithmetic, square roots and sin, cos, tan from `m`: sinusoidal,
-/// swirl, handkerchief, heart, disc, spiral, diamond, ex, julia, bent, waves, fisheye,
-/// popcorn, eyefish, bubble, cylinder, cross, disc2; `None` for the others. Inlined into a loop
+/// The random number [`eval_smooth`] takes for variation `v`, drawn from `rng` as flam3 draws
+/// it: julia's bit (0 or 1), julian's and juliascope's uniform number in [0, 1); 0 (nothing
+/// drawn) for the others.
+#[inline(always)]
+pub(super) fn smooth_draw(v: u8, rng: &mut Pcg32) -> f64 {
+    match v {
+        13 => (rng.next_u32() & 1) as f64,
+        32 | 33 => rng.next_f64(),
+        _ => 0.0,
+    }
+}
+
+/// w · V(t) for the variations that draw at most one random number (julia, julian and
+/// juliascope: `draw`, from [`smooth_draw`]) and need only arithmetic, square roots and sin,
+/// cos, tan, exp and pow from `m`: sinusoidal, swirl, handkerchief, heart, disc, spiral,
+/// diamond, ex, julia, bent, waves, fisheye, popcorn, exponential, power, cosine, blob, pdj,
+/// eyefish, bubble, cylinder, perspective, julian, juliascope, curl, rectangles, tangent,
+/// secant2, cross, disc2; `None` for the others. Inlined into a loop
 /// over points with a constant `v`, each is a vector loop (`CompiledXform::apply_batch`).
 #[inline(always)]
 pub(super) fn eval_smooth(
@@ -217,10 +253,10 @@ pub(super) fn eval_smooth(
     w: f64,
     k: &[f64; 8],
     pt: &Point,
-    julia_flip: bool,
-    m: &mut impl Trig,
+    draw: f64,
+    m: &mut impl Elementary,
 ) -> Option<[f64; 2]> {
-    let Point { tx: x, ty: y, sumsq: r2, sqrt: r, atan_xy: a, sina: sa, cosa: ca, .. } = *pt;
+    let Point { tx: x, ty: y, sumsq: r2, sqrt: r, atan_xy: a, sina: sa, cosa: ca, atan_yx: ayx } = *pt;
     Some(match v {
         // sinusoidal
         1 => [w * m.sin(x), w * m.sin(y)],
@@ -266,7 +302,7 @@ pub(super) fn eval_smooth(
         // julia: one of the two square roots, by a random bit.
         13 => {
             let mut aa = 0.5 * a;
-            if julia_flip {
+            if draw != 0.0 {
                 aa += PI;
             }
             let f = w * r.sqrt();
@@ -292,6 +328,24 @@ pub(super) fn eval_smooth(
             let dy = m.tan(3.0 * x);
             [w * (x + k[0] * m.sin(dx)), w * (y + k[1] * m.sin(dy))]
         }
+        // exponential
+        18 => {
+            let dx = w * m.exp(x - 1.0);
+            let (s, c) = m.sin_cos(PI * y);
+            [dx * c, dx * s]
+        }
+        // power
+        19 => {
+            let f = w * m.pow(r, sa);
+            [f * ca, f * sa]
+        }
+        // cosine: cosh y and sinh y from e^y.
+        20 => {
+            let (s, c) = m.sin_cos(x * PI);
+            let e = m.exp(y);
+            let (cosh, sinh) = (0.5 * (e + 1.0 / e), 0.5 * (e - 1.0 / e));
+            [w * (c * cosh), w * (-s * sinh)]
+        }
         // eyefish
         27 => {
             let f = (w * 2.0) / (r + 1.0);
@@ -304,6 +358,65 @@ pub(super) fn eval_smooth(
         }
         // cylinder
         29 => [w * m.sin(x), w * y],
+        // blob
+        23 => {
+            let f = r * (k[0] + k[1] * (0.5 + 0.5 * m.sin(k[2] * a)));
+            [w * sa * f, w * ca * f]
+        }
+        // pdj
+        24 => {
+            let nx1 = m.cos(k[1] * x);
+            let nx2 = m.sin(k[2] * x);
+            let ny1 = m.sin(k[0] * y);
+            let ny2 = m.cos(k[3] * y);
+            [w * (ny1 - nx1), w * (nx2 - ny2)]
+        }
+        // perspective
+        30 => {
+            let t = 1.0 / (k[0] - y * k[1]);
+            [w * k[0] * x * t, w * k[2] * y * t]
+        }
+        // curl
+        39 => {
+            let (c1, c2) = (k[0], k[1]);
+            let re = 1.0 + c1 * x + c2 * (x * x - y * y);
+            let im = c1 * y + 2.0 * c2 * x * y;
+            let f = w / (re * re + im * im);
+            [(x * re + y * im) * f, (y * re - x * im) * f]
+        }
+        // rectangles
+        40 => {
+            let (rx, ry) = (k[0], k[1]);
+            let nx = if rx == 0.0 { x } else { (2.0 * (x / rx).floor() + 1.0) * rx - x };
+            let ny = if ry == 0.0 { y } else { (2.0 * (y / ry).floor() + 1.0) * ry - y };
+            [w * nx, w * ny]
+        }
+        // tangent
+        42 => [w * m.sin(x) / m.cos(y), w * m.tan(y)],
+        // secant2
+        46 => {
+            let cr = m.cos(w * r);
+            let icr = 1.0 / cr;
+            [w * x, if cr < 0.0 { w * (icr + 1.0) } else { w * (icr - 1.0) }]
+        }
+        // julian: one of |power| branches of t^(dist/power), by a uniform draw.
+        32 => {
+            let branch = c_int(k[1] * draw) as f64;
+            let ang = (ayx + 2.0 * PI * branch) / k[0];
+            let f = w * m.pow(r2, k[2]);
+            let (s, c) = m.sin_cos(ang);
+            [f * c, f * s]
+        }
+        // juliascope: as julian, the odd branches mirrored.
+        33 => {
+            let branch = (k[1] * draw).trunc();
+            // flam3's branch % 2 == 0 for a whole number: half of it is whole.
+            let even = branch.is_finite() && (0.5 * branch).trunc() == 0.5 * branch;
+            let ang = if even { (2.0 * PI * branch + ayx) / k[0] } else { (2.0 * PI * branch - ayx) / k[0] };
+            let (s, c) = m.sin_cos(ang);
+            let f = w * m.pow(r2, k[2]);
+            [f * c, f * s]
+        }
         // cross
         48 => {
             let s = x * x - y * y;
@@ -330,27 +443,11 @@ pub(super) fn eval(v: u8, w: f64, k: &[f64; 8], pt: &Point, rng: &mut Pcg32) -> 
         return d;
     }
     if smooth(v) {
-        let julia_flip = v == 13 && rng.next_u32() & 1 != 0;
-        return eval_smooth(v, w, k, pt, julia_flip, &mut Exact).unwrap_or_default();
+        let draw = smooth_draw(v, rng);
+        return eval_smooth(v, w, k, pt, draw, &mut Exact).unwrap_or_default();
     }
     let Point { tx: x, ty: y, sumsq: r2, sqrt: r, atan_xy: a, sina: sa, cosa: ca, atan_yx: ayx } = *pt;
     match v {
-        // exponential
-        18 => {
-            let dx = w * (x - 1.0).exp();
-            let (s, c) = (PI * y).sin_cos();
-            [dx * c, dx * s]
-        }
-        // power
-        19 => {
-            let f = w * r.powf(sa);
-            [f * ca, f * sa]
-        }
-        // cosine
-        20 => {
-            let (s, c) = (x * PI).sin_cos();
-            [w * (c * y.cosh()), w * (-s * y.sinh())]
-        }
         // rings
         21 => {
             let dx = k[0];
@@ -365,19 +462,6 @@ pub(super) fn eval(v: u8, w: f64, k: &[f64; 8], pt: &Point, rng: &mut Pcg32) -> 
             let f = w * r;
             let (s, c) = aa.sin_cos();
             [f * c, f * s]
-        }
-        // blob
-        23 => {
-            let f = r * (k[0] + k[1] * (0.5 + 0.5 * (k[2] * a).sin()));
-            [w * sa * f, w * ca * f]
-        }
-        // pdj
-        24 => {
-            let nx1 = (k[1] * x).cos();
-            let nx2 = (k[2] * x).sin();
-            let ny1 = (k[0] * y).sin();
-            let ny2 = (k[3] * y).cos();
-            [w * (ny1 - nx1), w * (nx2 - ny2)]
         }
         // fan2
         25 => {
@@ -395,33 +479,11 @@ pub(super) fn eval(v: u8, w: f64, k: &[f64; 8], pt: &Point, rng: &mut Pcg32) -> 
             let f = r + (-2.0 * dx * c_int((r + dx) / (2.0 * dx)) as f64 + r * (1.0 - dx));
             [w * sa * f, w * ca * f]
         }
-        // perspective
-        30 => {
-            let t = 1.0 / (k[0] - y * k[1]);
-            [w * k[0] * x * t, w * k[2] * y * t]
-        }
         // noise
         31 => {
             let (s, c) = (rng.next_f64() * 2.0 * PI).sin_cos();
             let f = w * rng.next_f64();
             [x * f * c, y * f * s]
-        }
-        // julian: one of |power| branches of t^(dist/power).
-        32 => {
-            let branch = c_int(k[1] * rng.next_f64()) as f64;
-            let ang = (ayx + 2.0 * PI * branch) / k[0];
-            let f = w * r2.powf(k[2]);
-            let (s, c) = ang.sin_cos();
-            [f * c, f * s]
-        }
-        // juliascope: as julian, the odd branches mirrored.
-        33 => {
-            let branch = (k[1] * rng.next_f64()).trunc();
-            let ang =
-                if branch % 2.0 == 0.0 { (2.0 * PI * branch + ayx) / k[0] } else { (2.0 * PI * branch - ayx) / k[0] };
-            let (s, c) = ang.sin_cos();
-            let f = w * r2.powf(k[2]);
-            [f * c, f * s]
         }
         // blur
         34 => {
@@ -461,28 +523,11 @@ pub(super) fn eval(v: u8, w: f64, k: &[f64; 8], pt: &Point, rng: &mut Pcg32) -> 
             let amp = (k[3] * (1.0 / (phi.cos() + EPS) - 1.0) + k[2]) / (r_factor + EPS);
             [w * x * amp, w * y * amp]
         }
-        // curl
-        39 => {
-            let (c1, c2) = (k[0], k[1]);
-            let re = 1.0 + c1 * x + c2 * (x * x - y * y);
-            let im = c1 * y + 2.0 * c2 * x * y;
-            let f = w / (re * re + im * im);
-            [(x * re + y * im) * f, (y * re - x * im) * f]
-        }
-        // rectangles
-        40 => {
-            let (rx, ry) = (k[0], k[1]);
-            let nx = if rx == 0.0 { x } else { (2.0 * (x / rx).floor() + 1.0) * rx - x };
-            let ny = if ry == 0.0 { y } else { (2.0 * (y / ry).floor() + 1.0) * ry - y };
-            [w * nx, w * ny]
-        }
         // arch
         41 => {
             let (s, c) = (rng.next_f64() * w * PI).sin_cos();
             [w * s, w * (s * s) / c]
         }
-        // tangent
-        42 => [w * x.sin() / y.cos(), w * y.tan()],
         // square
         43 => [w * (rng.next_f64() - 0.5), w * (rng.next_f64() - 0.5)],
         // rays
@@ -496,12 +541,6 @@ pub(super) fn eval(v: u8, w: f64, k: &[f64; 8], pt: &Point, rng: &mut Pcg32) -> 
         45 => {
             let (s, c) = (rng.next_f64() * w * r).sin_cos();
             [w * x * (c + s), w * x * (c - s)]
-        }
-        // secant2
-        46 => {
-            let cr = (w * r).cos();
-            let icr = 1.0 / cr;
-            [w * x, if cr < 0.0 { w * (icr + 1.0) } else { w * (icr - 1.0) }]
         }
         // twintrian
         47 => {

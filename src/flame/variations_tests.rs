@@ -406,3 +406,55 @@ fn missing_parameters_take_defaults_and_unknown_variations_are_ignored() {
         (one("super_shape", 1.0, &[5.0, 4.0], [0.3, 0.4], 9), one("super_shape", 1.0, &[1.0, 4.0], [0.3, 0.4], 9));
     assert_eq!(a, b);
 }
+
+/// `apply_batch` gives `apply`'s bits for every variation it maps in vector loops, with
+/// `sample_params`, on points from 0 and tiny to 10^9 (where sin, cos and tan leave their
+/// cores' range and the batch is redone with libm) and each point's own generator.
+#[test]
+fn batches_give_the_bits_of_one_point_at_a_time() {
+    let mut batched = 0;
+    for i in 0..VARIATIONS.len() {
+        let v = Variation(i as u8);
+        let mut x = xform(&[("linear", 0.3, &[])], [0.9, 0.1, -0.2, 1.1, 0.3, 0.2], Some(IDENTITY));
+        x.variations.push(VariationTerm { variation: v, weight: 0.8, params: sample_params(v) });
+        let c = CompiledXform::new(&x);
+        if !c.batches() {
+            continue;
+        }
+        batched += 1;
+        let mut scratch = BatchScratch::default();
+        let mut source = Pcg32::for_stream(3, 0, i as u32);
+        for round in 0..8 {
+            let scale = [1e-12, 1.0, 1.0, 1.0, 40.0, 1e4, 1e7, 1e9][round];
+            let points: Vec<[f64; 2]> = (0..BATCH)
+                .map(|j| match j {
+                    0 => [0.0, 0.0],
+                    _ => [(2.0 * source.next_f64() - 1.0) * scale, (2.0 * source.next_f64() - 1.0) * scale],
+                })
+                .collect();
+            let chain: Vec<u8> = (0..BATCH as u8).rev().collect();
+            let mut rngs: Vec<Pcg32> = (0..BATCH as u32).map(|k| Pcg32::for_stream(9, round as u32, k)).collect();
+            let mut expected_rngs = rngs.clone();
+            let expected: Vec<[f64; 2]> =
+                points.iter().zip(&chain).map(|(&p, &k)| c.apply(p, &mut expected_rngs[k as usize])).collect();
+            let (mut xs, mut ys): (Vec<f64>, Vec<f64>) = points.iter().map(|p| (p[0], p[1])).unzip();
+            c.apply_batch(&mut xs, &mut ys, &chain, &mut rngs, &mut scratch);
+            for j in 0..BATCH {
+                let same = |a: f64, b: f64| a.to_bits() == b.to_bits() || a.is_nan() && b.is_nan();
+                assert!(
+                    same(xs[j], expected[j][0]) && same(ys[j], expected[j][1]),
+                    "{} round {round} point {j} {:?}: batch ({}, {}), alone {:?}",
+                    v.name(),
+                    points[j],
+                    xs[j],
+                    ys[j],
+                    expected[j]
+                );
+            }
+            for k in 0..BATCH {
+                assert_eq!(rngs[k].next_u32(), expected_rngs[k].next_u32(), "{}: generator {k}", v.name());
+            }
+        }
+    }
+    assert!(batched >= 30, "only {batched} variations batch");
+}
