@@ -245,6 +245,121 @@ pub fn pow(x: f64, y: f64) -> f64 {
     }
 }
 
+/// ln x: [`ln_core`], libm beyond its range.
+#[inline(always)]
+pub fn ln(x: f64) -> f64 {
+    match ln_core(x) {
+        (l, true) => l,
+        _ => x.ln(),
+    }
+}
+
+/// Where a variation's formula takes its elementary functions from: [`Exact`] for a point on
+/// its own, [`InRange`] in a vector loop.
+pub trait Elementary {
+    fn sin_cos(&mut self, x: f64) -> (f64, f64);
+    fn tan(&mut self, x: f64) -> f64;
+    fn exp(&mut self, x: f64) -> f64;
+    fn ln(&mut self, x: f64) -> f64;
+    fn pow(&mut self, x: f64, y: f64) -> f64;
+    fn atan2(&mut self, y: f64, x: f64) -> f64;
+    #[inline(always)]
+    fn sin(&mut self, x: f64) -> f64 {
+        self.sin_cos(x).0
+    }
+    #[inline(always)]
+    fn cos(&mut self, x: f64) -> f64 {
+        self.sin_cos(x).1
+    }
+    /// From e^x (near 0 its error is absolute, a few 10^−17).
+    #[inline(always)]
+    fn cosh(&mut self, x: f64) -> f64 {
+        let e = self.exp(x);
+        0.5 * (e + 1.0 / e)
+    }
+    /// From e^x (near 0 its error is absolute, a few 10^−17).
+    #[inline(always)]
+    fn sinh(&mut self, x: f64) -> f64 {
+        let e = self.exp(x);
+        0.5 * (e - 1.0 / e)
+    }
+}
+
+/// This file's functions, libm beyond their cores' ranges.
+pub struct Exact;
+
+impl Elementary for Exact {
+    #[inline(always)]
+    fn sin_cos(&mut self, x: f64) -> (f64, f64) {
+        sin_cos(x)
+    }
+    #[inline(always)]
+    fn tan(&mut self, x: f64) -> f64 {
+        tan(x)
+    }
+    #[inline(always)]
+    fn exp(&mut self, x: f64) -> f64 {
+        exp(x)
+    }
+    #[inline(always)]
+    fn ln(&mut self, x: f64) -> f64 {
+        ln(x)
+    }
+    #[inline(always)]
+    fn pow(&mut self, x: f64, y: f64) -> f64 {
+        pow(x, y)
+    }
+    #[inline(always)]
+    fn atan2(&mut self, y: f64, x: f64) -> f64 {
+        atan2(y, x)
+    }
+}
+
+/// This file's branch-free cores: the same bits as [`Exact`] while `in_range` stays true;
+/// where it turns false the caller redoes the point with [`Exact`].
+pub struct InRange {
+    pub in_range: bool,
+}
+
+impl Elementary for InRange {
+    #[inline(always)]
+    fn sin_cos(&mut self, x: f64) -> (f64, f64) {
+        let (s, c, ok) = sin_cos_core(x);
+        self.in_range &= ok;
+        (s, c)
+    }
+    #[inline(always)]
+    fn tan(&mut self, x: f64) -> f64 {
+        let (t, ok) = tan_core(x);
+        self.in_range &= ok;
+        t
+    }
+    #[inline(always)]
+    fn exp(&mut self, x: f64) -> f64 {
+        let (e, ok) = exp_core(x);
+        self.in_range &= ok;
+        e
+    }
+    #[inline(always)]
+    fn ln(&mut self, x: f64) -> f64 {
+        let (l, ok) = ln_core(x);
+        self.in_range &= ok;
+        l
+    }
+    #[inline(always)]
+    fn pow(&mut self, x: f64, y: f64) -> f64 {
+        let (p, ok) = pow_core(x, y);
+        self.in_range &= ok;
+        p
+    }
+    #[inline(always)]
+    fn atan2(&mut self, y: f64, x: f64) -> f64 {
+        let (a, ok) = atan2_core(y, x);
+        self.in_range &= ok;
+        a
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -353,6 +353,27 @@ pub(crate) const NEEDS_ATAN_XY: u8 = 1;
 pub(crate) const NEEDS_ANGLES: u8 = 2;
 pub(crate) const NEEDS_ATAN_YX: u8 = 4;
 
+/// Whether `basic::eval_smooth` or `plugins::eval_smooth` holds variation `v`'s formula.
+fn smooth(v: u8) -> bool {
+    if v < plugins::FIRST { basic::smooth(v) } else { plugins::smooth(v) }
+}
+
+/// The random number variation `v`'s smooth formula takes, drawn from `rng`.
+#[inline(always)]
+fn smooth_draw(v: u8, rng: &mut Pcg32) -> f64 {
+    if v < plugins::FIRST { basic::smooth_draw(v, rng) } else { plugins::smooth_draw(v, rng) }
+}
+
+/// Variation `v`'s smooth formula (`basic::eval_smooth`, `plugins::eval_smooth`).
+#[inline(always)]
+fn eval_smooth(v: u8, w: f64, k: &[f64; 8], pt: &Point, draw: f64, m: &mut impl trig::Elementary) -> Option<[f64; 2]> {
+    if v < plugins::FIRST {
+        basic::eval_smooth(v, w, k, pt, draw, m)
+    } else {
+        plugins::eval_smooth(v, w, k, pt, draw, m)
+    }
+}
+
 /// One weighted variation with its constants.
 #[derive(Clone, Copy, Debug)]
 struct Term {
@@ -462,7 +483,7 @@ impl CompiledXform {
     /// point-by-point path.)
     #[inline]
     pub fn batches(&self) -> bool {
-        self.terms.iter().all(|t| matches!(t.variation, 0 | 2 | 4 | 5 | 10) || basic::smooth(t.variation))
+        self.terms.iter().all(|t| matches!(t.variation, 0 | 2 | 4 | 5 | 10) || smooth(t.variation))
     }
 
     /// [`Self::apply`] of up to [`BATCH`] points at once, in place: point j is
@@ -561,23 +582,22 @@ impl CompiledXform {
             // as `apply` draws them.
             macro_rules! smooth {
                 ($v:literal) => {{
-                    if matches!($v, 13 | 32 | 33) {
-                        for j in 0..m {
-                            s.draw[j] = basic::smooth_draw($v, &mut rngs[chain[j] as usize]);
-                        }
+                    // (For a variation that draws nothing this is a fill with 0.)
+                    for j in 0..m {
+                        s.draw[j] = smooth_draw($v, &mut rngs[chain[j] as usize]);
                     }
                     let mut in_range = true;
                     for j in 0..m {
-                        let mut lane = basic::InRange { in_range: true };
-                        let d = basic::eval_smooth($v, w, &t.k, &point(s, j), s.draw[j], &mut lane).unwrap_or_default();
+                        let mut lane = trig::InRange { in_range: true };
+                        let d = eval_smooth($v, w, &t.k, &point(s, j), s.draw[j], &mut lane).unwrap_or_default();
                         s.dx[j] = d[0];
                         s.dy[j] = d[1];
                         in_range &= lane.in_range;
                     }
                     if !in_range {
                         for j in 0..m {
-                            let d = basic::eval_smooth($v, w, &t.k, &point(s, j), s.draw[j], &mut basic::Exact)
-                                .unwrap_or_default();
+                            let d =
+                                eval_smooth($v, w, &t.k, &point(s, j), s.draw[j], &mut trig::Exact).unwrap_or_default();
                             s.dx[j] = d[0];
                             s.dy[j] = d[1];
                         }
@@ -618,6 +638,44 @@ impl CompiledXform {
                 30 => smooth!(30),
                 32 => smooth!(32),
                 33 => smooth!(33),
+                51 => smooth!(51),
+                52 => smooth!(52),
+                54 => smooth!(54),
+                60 => smooth!(60),
+                63 => smooth!(63),
+                64 => smooth!(64),
+                66 => smooth!(66),
+                69 => smooth!(69),
+                70 => smooth!(70),
+                71 => smooth!(71),
+                72 => smooth!(72),
+                73 => smooth!(73),
+                74 => smooth!(74),
+                75 => smooth!(75),
+                76 => smooth!(76),
+                77 => smooth!(77),
+                78 => smooth!(78),
+                79 => smooth!(79),
+                80 => smooth!(80),
+                81 => smooth!(81),
+                82 => smooth!(82),
+                83 => smooth!(83),
+                84 => smooth!(84),
+                85 => smooth!(85),
+                86 => smooth!(86),
+                87 => smooth!(87),
+                88 => smooth!(88),
+                89 => smooth!(89),
+                90 => smooth!(90),
+                91 => smooth!(91),
+                92 => smooth!(92),
+                93 => smooth!(93),
+                94 => smooth!(94),
+                95 => smooth!(95),
+                96 => smooth!(96),
+                97 => smooth!(97),
+                98 => smooth!(98),
+                99 => smooth!(99),
                 39 => smooth!(39),
                 40 => smooth!(40),
                 42 => smooth!(42),

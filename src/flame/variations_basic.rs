@@ -9,7 +9,7 @@
 
 use super::{EPS, NEEDS_ANGLES, NEEDS_ATAN_XY, NEEDS_ATAN_YX, Point};
 use crate::flame::Coefs;
-use crate::flame::trig;
+use crate::flame::trig::{Elementary, Exact};
 use crate::rng::Pcg32;
 use std::f64::consts::{FRAC_1_PI, PI};
 
@@ -151,78 +151,6 @@ pub(super) fn eval_arithmetic(v: u8, w: f64, pt: &Point) -> Option<[f64; 2]> {
     })
 }
 
-/// Where a variation's formula takes its elementary functions from ([`crate::flame::trig`]):
-/// [`Exact`] for a point on its own, [`InRange`] in a vector loop.
-pub(super) trait Elementary {
-    fn sin_cos(&mut self, x: f64) -> (f64, f64);
-    fn tan(&mut self, x: f64) -> f64;
-    fn exp(&mut self, x: f64) -> f64;
-    fn pow(&mut self, x: f64, y: f64) -> f64;
-    #[inline(always)]
-    fn sin(&mut self, x: f64) -> f64 {
-        self.sin_cos(x).0
-    }
-    #[inline(always)]
-    fn cos(&mut self, x: f64) -> f64 {
-        self.sin_cos(x).1
-    }
-}
-
-/// [`trig`]'s functions, libm beyond their range.
-pub(super) struct Exact;
-
-impl Elementary for Exact {
-    #[inline(always)]
-    fn sin_cos(&mut self, x: f64) -> (f64, f64) {
-        trig::sin_cos(x)
-    }
-    #[inline(always)]
-    fn tan(&mut self, x: f64) -> f64 {
-        trig::tan(x)
-    }
-    #[inline(always)]
-    fn exp(&mut self, x: f64) -> f64 {
-        trig::exp(x)
-    }
-    #[inline(always)]
-    fn pow(&mut self, x: f64, y: f64) -> f64 {
-        trig::pow(x, y)
-    }
-}
-
-/// [`trig`]'s branch-free cores: the same bits as [`Exact`] while `in_range` stays true;
-/// where it turns false the caller redoes the point with [`Exact`].
-pub(super) struct InRange {
-    pub in_range: bool,
-}
-
-impl Elementary for InRange {
-    #[inline(always)]
-    fn sin_cos(&mut self, x: f64) -> (f64, f64) {
-        let (s, c, ok) = trig::sin_cos_core(x);
-        self.in_range &= ok;
-        (s, c)
-    }
-    #[inline(always)]
-    fn tan(&mut self, x: f64) -> f64 {
-        let (t, ok) = trig::tan_core(x);
-        self.in_range &= ok;
-        t
-    }
-    #[inline(always)]
-    fn exp(&mut self, x: f64) -> f64 {
-        let (e, ok) = trig::exp_core(x);
-        self.in_range &= ok;
-        e
-    }
-    #[inline(always)]
-    fn pow(&mut self, x: f64, y: f64) -> f64 {
-        let (p, ok) = trig::pow_core(x, y);
-        self.in_range &= ok;
-        p
-    }
-}
-
 /// Whether [`eval_smooth`] holds variation `v`'s formula.
 pub(super) fn smooth(v: u8) -> bool {
     matches!(v, 1 | 3 | 6..=9 | 11..=20 | 23 | 24 | 27..=30 | 32 | 33 | 39 | 40 | 42 | 46 | 48 | 49)
@@ -339,12 +267,10 @@ pub(super) fn eval_smooth(
             let f = w * m.pow(r, sa);
             [f * ca, f * sa]
         }
-        // cosine: cosh y and sinh y from e^y.
+        // cosine
         20 => {
             let (s, c) = m.sin_cos(x * PI);
-            let e = m.exp(y);
-            let (cosh, sinh) = (0.5 * (e + 1.0 / e), 0.5 * (e - 1.0 / e));
-            [w * (c * cosh), w * (-s * sinh)]
+            [w * (c * m.cosh(y)), w * (-s * m.sinh(y))]
         }
         // eyefish
         27 => {

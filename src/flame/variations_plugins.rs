@@ -10,6 +10,7 @@
 
 use super::basic::{c_int, pseudo_gaussian};
 use super::{EPS, NEEDS_ATAN_XY, NEEDS_ATAN_YX, Point};
+use crate::flame::trig::{Elementary, Exact};
 use crate::rng::Pcg32;
 use std::f64::consts::{FRAC_1_PI, FRAC_2_PI, FRAC_PI_2, FRAC_PI_4, PI};
 
@@ -74,13 +75,293 @@ fn wedge_index(count: f64, a: f64) -> f64 {
     ((count * a + PI) * FRAC_1_PI * 0.5).floor()
 }
 
+/// Whether [`eval_smooth`] holds variation `v`'s formula.
+pub(super) fn smooth(v: u8) -> bool {
+    matches!(v, 51 | 52 | 54 | 60 | 63 | 64 | 66 | 69..=99)
+}
+
+/// The random number [`eval_smooth`] takes for variation `v`, drawn from `rng` as flam3 draws
+/// it: flower's, conic's and wedge_julia's uniform number in [0, 1); 0 (nothing drawn) for the
+/// others.
+#[inline(always)]
+pub(super) fn smooth_draw(v: u8, rng: &mut Pcg32) -> f64 {
+    match v {
+        51 | 52 | 78 => rng.next_f64(),
+        _ => 0.0,
+    }
+}
+
+/// w · V(t) for the variations 50 and up that draw at most one random number (`draw`, from
+/// [`smooth_draw`]) and need only arithmetic, square roots, `floor` and `m`'s elementary
+/// functions (as `basic::eval_smooth`); `None` for the others. Inlined into a loop over points
+/// with a constant `v`, each is a vector loop (`CompiledXform::apply_batch`).
+#[inline(always)]
+pub(super) fn eval_smooth(
+    v: u8,
+    w: f64,
+    k: &[f64; 8],
+    pt: &Point,
+    draw: f64,
+    m: &mut impl Elementary,
+) -> Option<[f64; 2]> {
+    let Point { tx: x, ty: y, sumsq: r2, sqrt: r, atan_xy: a, atan_yx: ayx, .. } = *pt;
+    Some(match v {
+        // flower: petals, holes
+        51 => {
+            let f = w * (draw - k[1]) * m.cos(k[0] * ayx) / r;
+            [f * x, f * y]
+        }
+        // conic: eccentricity, holes
+        52 => {
+            let ct = x / r;
+            let f = w * (draw - k[1]) * k[0] / (1.0 + k[0] * ct) / r;
+            [f * x, f * y]
+        }
+        // bent2: x, y
+        54 => {
+            let nx = if x < 0.0 { x * k[0] } else { x };
+            let ny = if y < 0.0 { y * k[1] } else { y };
+            [w * nx, w * ny]
+        }
+        // curve: xamp, yamp, xlength², ylength²
+        60 => [w * (x + k[0] * m.exp(-y * y / k[2])), w * (y + k[1] * m.exp(-x * x / k[3]))],
+        // escher: vc, vd
+        63 => {
+            let lnr = 0.5 * m.ln(r2);
+            let mag = w * m.exp(k[0] * lnr - k[1] * ayx);
+            let (s, c) = m.sin_cos(k[0] * ayx + k[1] * lnr);
+            [mag * c, mag * s]
+        }
+        // foci
+        64 => {
+            let expx = m.exp(x) * 0.5;
+            let expnx = 0.25 / expx;
+            let (s, c) = m.sin_cos(y);
+            let t = w / (expx + expnx - c);
+            [t * (expx - expnx), t * s]
+        }
+        // loonie
+        66 => {
+            let w2 = w * w;
+            if r2 < w2 {
+                let f = w * (w2 / r2 - 1.0).sqrt();
+                [f * x, f * y]
+            } else {
+                [w * x, w * y]
+            }
+        }
+        // oscilloscope: separation, frequency, amplitude, damping
+        69 => {
+            let tpf = 2.0 * PI * k[1];
+            let t = if k[3] == 0.0 {
+                k[2] * m.cos(tpf * x) + k[0]
+            } else {
+                k[2] * m.exp(-x.abs() * k[3]) * m.cos(tpf * x) + k[0]
+            };
+            if y.abs() <= t { [w * x, -(w * y)] } else { [w * x, w * y] }
+        }
+        // polar2
+        70 => {
+            let p2v = w / PI;
+            [p2v * a, p2v / 2.0 * m.ln(r2)]
+        }
+        // popcorn2: x, y, c
+        71 => {
+            let (tx, ty) = (m.tan(y * k[2]), m.tan(x * k[2]));
+            [w * (x + k[0] * m.sin(tx)), w * (y + k[1] * m.sin(ty))]
+        }
+        // scry
+        72 => {
+            let f = 1.0 / (r * (r2 + 1.0 / (w + EPS)));
+            [x * f, y * f]
+        }
+        // separation: x, xinside, y, yinside
+        73 => {
+            let nx = if x > 0.0 {
+                w * ((x * x + k[0] * k[0]).sqrt() - x * k[1])
+            } else {
+                -(w * ((x * x + k[0] * k[0]).sqrt() + x * k[1]))
+            };
+            let ny = if y > 0.0 {
+                w * ((y * y + k[2] * k[2]).sqrt() - y * k[3])
+            } else {
+                -(w * ((y * y + k[2] * k[2]).sqrt() + y * k[3]))
+            };
+            [nx, ny]
+        }
+        // split: xsize, ysize
+        74 => {
+            let ny = if m.cos(x * k[0] * PI) >= 0.0 { w * y } else { -(w * y) };
+            let nx = if m.cos(y * k[1] * PI) >= 0.0 { w * x } else { -(w * x) };
+            [nx, ny]
+        }
+        // splits: x, y
+        75 => [
+            if x >= 0.0 { w * (x + k[0]) } else { w * (x - k[0]) },
+            if y >= 0.0 { w * (y + k[1]) } else { w * (y - k[1]) },
+        ],
+        // stripes: space, warp
+        76 => {
+            let rx = (x + 0.5).floor();
+            let ox = x - rx;
+            [w * (ox * (1.0 - k[0]) + rx), w * (y + ox * ox * k[1])]
+        }
+        // wedge: angle, hole, count, swirl, compensation
+        77 => {
+            let aa = ayx + k[3] * r;
+            let c = wedge_index(k[2], aa);
+            let aa = aa * k[4] + c * k[0];
+            let (s, co) = m.sin_cos(aa);
+            let f = w * (r + k[1]);
+            [f * co, f * s]
+        }
+        // wedge_julia: angle, count, power, cn, |power|, compensation
+        78 => {
+            let f = w * m.pow(r2, k[3]);
+            let branch = c_int(k[4] * draw) as f64;
+            let aa = (ayx + 2.0 * PI * branch) / k[2];
+            let c = wedge_index(k[1], aa);
+            let aa = aa * k[5] + c * k[0];
+            let (s, co) = m.sin_cos(aa);
+            [f * co, f * s]
+        }
+        // wedge_sph: angle, count, hole, swirl, compensation
+        79 => {
+            let rr = 1.0 / (r + EPS);
+            let aa = ayx + k[3] * rr;
+            let c = wedge_index(k[1], aa);
+            let aa = aa * k[4] + c * k[0];
+            let (s, co) = m.sin_cos(aa);
+            let f = w * (rr + k[2]);
+            [f * co, f * s]
+        }
+        // whorl: inside, outside
+        80 => {
+            let aa = if r < w { ayx + k[0] / (w - r) } else { ayx + k[1] / (w - r) };
+            let (s, c) = m.sin_cos(aa);
+            [w * r * c, w * r * s]
+        }
+        // waves2: scalex, scaley, freqx, freqy
+        81 => [w * (x + k[0] * m.sin(y * k[2])), w * (y + k[1] * m.sin(x * k[3]))],
+        // exp
+        82 => {
+            let e = m.exp(x);
+            let (s, c) = m.sin_cos(y);
+            [w * e * c, w * e * s]
+        }
+        // log
+        83 => [w * 0.5 * m.ln(r2), w * ayx],
+        // sin
+        84 => {
+            let (s, c) = m.sin_cos(x);
+            [w * s * m.cosh(y), w * c * m.sinh(y)]
+        }
+        // cos
+        85 => {
+            let (s, c) = m.sin_cos(x);
+            [w * c * m.cosh(y), -(w * s * m.sinh(y))]
+        }
+        // tan
+        86 => {
+            let (s, c) = m.sin_cos(2.0 * x);
+            let den = 1.0 / (c + m.cosh(2.0 * y));
+            [w * den * s, w * den * m.sinh(2.0 * y)]
+        }
+        // sec
+        87 => {
+            let (s, c) = m.sin_cos(x);
+            let den = 2.0 / (m.cos(2.0 * x) + m.cosh(2.0 * y));
+            [w * den * c * m.cosh(y), w * den * s * m.sinh(y)]
+        }
+        // csc
+        88 => {
+            let (s, c) = m.sin_cos(x);
+            let den = 2.0 / (m.cosh(2.0 * y) - m.cos(2.0 * x));
+            [w * den * s * m.cosh(y), -(w * den * c * m.sinh(y))]
+        }
+        // cot
+        89 => {
+            let (s, c) = m.sin_cos(2.0 * x);
+            let den = 1.0 / (m.cosh(2.0 * y) - c);
+            [w * den * s, -(w * den) * m.sinh(2.0 * y)]
+        }
+        // sinh
+        90 => {
+            let (s, c) = m.sin_cos(y);
+            [w * m.sinh(x) * c, w * m.cosh(x) * s]
+        }
+        // cosh
+        91 => {
+            let (s, c) = m.sin_cos(y);
+            [w * m.cosh(x) * c, w * m.sinh(x) * s]
+        }
+        // tanh
+        92 => {
+            let (s, c) = m.sin_cos(2.0 * y);
+            let den = 1.0 / (c + m.cosh(2.0 * x));
+            [w * den * m.sinh(2.0 * x), w * den * s]
+        }
+        // sech
+        93 => {
+            let (s, c) = m.sin_cos(y);
+            let den = 2.0 / (m.cos(2.0 * y) + m.cosh(2.0 * x));
+            [w * den * c * m.cosh(x), -(w * den * s * m.sinh(x))]
+        }
+        // csch
+        94 => {
+            let (s, c) = m.sin_cos(y);
+            let den = 2.0 / (m.cosh(2.0 * x) - m.cos(2.0 * y));
+            [w * den * m.sinh(x) * c, -(w * den * m.cosh(x) * s)]
+        }
+        // coth
+        95 => {
+            let (s, c) = m.sin_cos(2.0 * y);
+            let den = 1.0 / (m.cosh(2.0 * x) - c);
+            [w * den * m.sinh(2.0 * x), w * den * s]
+        }
+        // auger: freq, weight, sym, scale
+        96 => {
+            let s = m.sin(k[0] * x);
+            let t = m.sin(k[0] * y);
+            let dy = y + k[1] * (k[3] * s / 2.0 + y.abs() * s);
+            let dx = x + k[1] * (k[3] * t / 2.0 + x.abs() * t);
+            [w * (x + k[2] * (dx - x)), w * dy]
+        }
+        // flux: spread
+        97 => {
+            let xpw = x + w;
+            let xmw = x - w;
+            let avgr = w * (2.0 + k[0]) * ((y * y + xpw * xpw).sqrt() / (y * y + xmw * xmw).sqrt()).sqrt();
+            let avga = (m.atan2(y, xmw) - m.atan2(y, xpw)) * 0.5;
+            [avgr * m.cos(avga), avgr * m.sin(avga)]
+        }
+        // mobius: (a t + b) / (c t + d) in complex numbers
+        98 => {
+            let (re_a, im_a, re_b, im_b, re_c, im_c, re_d, im_d) = (k[0], k[1], k[2], k[3], k[4], k[5], k[6], k[7]);
+            let re_u = re_a * x - im_a * y + re_b;
+            let im_u = re_a * y + im_a * x + im_b;
+            let re_v = re_c * x - im_c * y + re_d;
+            let im_v = re_c * y + im_c * x + im_d;
+            let rad_v = w / (re_v * re_v + im_v * im_v);
+            [rad_v * (re_u * re_v + im_u * im_v), rad_v * (im_u * re_v - re_u * im_v)]
+        }
+        // linear3D
+        99 => [w * x, w * y],
+        _ => return None,
+    })
+}
+
 /// w · V(t) for variation `v` (50 and up) with constants `k`.
 // Not inlined into `CompiledXform::apply`: inlined, LLVM hoists the arms' transcendental
 // functions of the point out of the loop over the terms and computes them all for every point
 // (measured: 220 ns instead of 20 for one linear term).
 #[inline(never)]
 pub(super) fn eval(v: u8, w: f64, k: &[f64; 8], pt: &Point, rng: &mut Pcg32) -> [f64; 2] {
-    let Point { tx: x, ty: y, sumsq: r2, sqrt: r, atan_xy: a, atan_yx: ayx, .. } = *pt;
+    if smooth(v) {
+        let draw = smooth_draw(v, rng);
+        return eval_smooth(v, w, k, pt, draw, &mut Exact).unwrap_or_default();
+    }
+    let Point { tx: x, ty: y, sumsq: r2, sqrt: r, atan_yx: ayx, .. } = *pt;
     match v {
         // super_shape: rnd, m/4, −1/n1, n2, n3, holes
         50 => {
@@ -91,29 +372,12 @@ pub(super) fn eval(v: u8, w: f64, k: &[f64; 8], pt: &Point, rng: &mut Pcg32) -> 
             let f = w * ((rnd * rng.next_f64() + (1.0 - rnd) * r) - k[5]) * (t1 + t2).powf(k[2]) / r;
             [f * x, f * y]
         }
-        // flower: petals, holes
-        51 => {
-            let f = w * (rng.next_f64() - k[1]) * (k[0] * ayx).cos() / r;
-            [f * x, f * y]
-        }
-        // conic: eccentricity, holes
-        52 => {
-            let ct = x / r;
-            let f = w * (rng.next_f64() - k[1]) * k[0] / (1.0 + k[0] * ct) / r;
-            [f * x, f * y]
-        }
         // parabola: height, width
         53 => {
             let (s, c) = r.sin_cos();
             let nx = k[0] * w * s * s * rng.next_f64();
             let ny = k[1] * w * c * rng.next_f64();
             [nx, ny]
-        }
-        // bent2: x, y
-        54 => {
-            let nx = if x < 0.0 { x * k[0] } else { x };
-            let ny = if y < 0.0 { y * k[1] } else { y };
-            [w * nx, w * ny]
         }
         // bipolar: shift
         55 => {
@@ -176,8 +440,6 @@ pub(super) fn eval(v: u8, w: f64, k: &[f64; 8], pt: &Point, rng: &mut Pcg32) -> 
             let (s, c) = ang.sin_cos();
             [m * c, m * s]
         }
-        // curve: xamp, yamp, xlength², ylength²
-        60 => [w * (x + k[0] * (-y * y / k[2]).exp()), w * (y + k[1] * (-x * x / k[3]).exp())],
         // edisc
         61 => {
             let tmp = r2 + 1.0;
@@ -206,21 +468,6 @@ pub(super) fn eval(v: u8, w: f64, k: &[f64; 8], pt: &Point, rng: &mut Pcg32) -> 
             let l = (xmax + ssx).ln();
             [ww * aa.atan2(b), if y > 0.0 { ww * l } else { -(ww * l) }]
         }
-        // escher: vc, vd
-        63 => {
-            let lnr = 0.5 * r2.ln();
-            let m = w * (k[0] * lnr - k[1] * ayx).exp();
-            let (s, c) = (k[0] * ayx + k[1] * lnr).sin_cos();
-            [m * c, m * s]
-        }
-        // foci
-        64 => {
-            let expx = x.exp() * 0.5;
-            let expnx = 0.25 / expx;
-            let (s, c) = y.sin_cos();
-            let t = w / (expx + expnx - c);
-            [t * (expx - expnx), t * s]
-        }
         // lazysusan: spin, space, twist, x, y
         65 => {
             let (spin, space, twist, lx, ly) = (k[0], k[1], k[2], k[3], k[4]);
@@ -237,212 +484,8 @@ pub(super) fn eval(v: u8, w: f64, k: &[f64; 8], pt: &Point, rng: &mut Pcg32) -> 
                 [f * xx + lx, f * yy - ly]
             }
         }
-        // loonie
-        66 => {
-            let w2 = w * w;
-            if r2 < w2 {
-                let f = w * (w2 / r2 - 1.0).sqrt();
-                [f * x, f * y]
-            } else {
-                [w * x, w * y]
-            }
-        }
         // modulus: x, y
         68 => [w * modulus(x, k[0]), w * modulus(y, k[1])],
-        // oscilloscope: separation, frequency, amplitude, damping
-        69 => {
-            let tpf = 2.0 * PI * k[1];
-            let t = if k[3] == 0.0 {
-                k[2] * (tpf * x).cos() + k[0]
-            } else {
-                k[2] * (-x.abs() * k[3]).exp() * (tpf * x).cos() + k[0]
-            };
-            if y.abs() <= t { [w * x, -(w * y)] } else { [w * x, w * y] }
-        }
-        // polar2
-        70 => {
-            let p2v = w / PI;
-            [p2v * a, p2v / 2.0 * r2.ln()]
-        }
-        // popcorn2: x, y, c
-        71 => [w * (x + k[0] * (y * k[2]).tan().sin()), w * (y + k[1] * (x * k[2]).tan().sin())],
-        // scry
-        72 => {
-            let f = 1.0 / (r * (r2 + 1.0 / (w + EPS)));
-            [x * f, y * f]
-        }
-        // separation: x, xinside, y, yinside
-        73 => {
-            let nx = if x > 0.0 {
-                w * ((x * x + k[0] * k[0]).sqrt() - x * k[1])
-            } else {
-                -(w * ((x * x + k[0] * k[0]).sqrt() + x * k[1]))
-            };
-            let ny = if y > 0.0 {
-                w * ((y * y + k[2] * k[2]).sqrt() - y * k[3])
-            } else {
-                -(w * ((y * y + k[2] * k[2]).sqrt() + y * k[3]))
-            };
-            [nx, ny]
-        }
-        // split: xsize, ysize
-        74 => {
-            let ny = if (x * k[0] * PI).cos() >= 0.0 { w * y } else { -(w * y) };
-            let nx = if (y * k[1] * PI).cos() >= 0.0 { w * x } else { -(w * x) };
-            [nx, ny]
-        }
-        // splits: x, y
-        75 => [
-            if x >= 0.0 { w * (x + k[0]) } else { w * (x - k[0]) },
-            if y >= 0.0 { w * (y + k[1]) } else { w * (y - k[1]) },
-        ],
-        // stripes: space, warp
-        76 => {
-            let rx = (x + 0.5).floor();
-            let ox = x - rx;
-            [w * (ox * (1.0 - k[0]) + rx), w * (y + ox * ox * k[1])]
-        }
-        // wedge: angle, hole, count, swirl, compensation
-        77 => {
-            let aa = ayx + k[3] * r;
-            let c = wedge_index(k[2], aa);
-            let aa = aa * k[4] + c * k[0];
-            let (s, co) = aa.sin_cos();
-            let f = w * (r + k[1]);
-            [f * co, f * s]
-        }
-        // wedge_julia: angle, count, power, cn, |power|, compensation
-        78 => {
-            let f = w * r2.powf(k[3]);
-            let branch = c_int(k[4] * rng.next_f64()) as f64;
-            let aa = (ayx + 2.0 * PI * branch) / k[2];
-            let c = wedge_index(k[1], aa);
-            let aa = aa * k[5] + c * k[0];
-            let (s, co) = aa.sin_cos();
-            [f * co, f * s]
-        }
-        // wedge_sph: angle, count, hole, swirl, compensation
-        79 => {
-            let rr = 1.0 / (r + EPS);
-            let aa = ayx + k[3] * rr;
-            let c = wedge_index(k[1], aa);
-            let aa = aa * k[4] + c * k[0];
-            let (s, co) = aa.sin_cos();
-            let f = w * (rr + k[2]);
-            [f * co, f * s]
-        }
-        // whorl: inside, outside
-        80 => {
-            let aa = if r < w { ayx + k[0] / (w - r) } else { ayx + k[1] / (w - r) };
-            let (s, c) = aa.sin_cos();
-            [w * r * c, w * r * s]
-        }
-        // waves2: scalex, scaley, freqx, freqy
-        81 => [w * (x + k[0] * (y * k[2]).sin()), w * (y + k[1] * (x * k[3]).sin())],
-        // exp
-        82 => {
-            let e = x.exp();
-            let (s, c) = y.sin_cos();
-            [w * e * c, w * e * s]
-        }
-        // log
-        83 => [w * 0.5 * r2.ln(), w * ayx],
-        // sin
-        84 => {
-            let (s, c) = x.sin_cos();
-            [w * s * y.cosh(), w * c * y.sinh()]
-        }
-        // cos
-        85 => {
-            let (s, c) = x.sin_cos();
-            [w * c * y.cosh(), -(w * s * y.sinh())]
-        }
-        // tan
-        86 => {
-            let (s, c) = (2.0 * x).sin_cos();
-            let den = 1.0 / (c + (2.0 * y).cosh());
-            [w * den * s, w * den * (2.0 * y).sinh()]
-        }
-        // sec
-        87 => {
-            let (s, c) = x.sin_cos();
-            let den = 2.0 / ((2.0 * x).cos() + (2.0 * y).cosh());
-            [w * den * c * y.cosh(), w * den * s * y.sinh()]
-        }
-        // csc
-        88 => {
-            let (s, c) = x.sin_cos();
-            let den = 2.0 / ((2.0 * y).cosh() - (2.0 * x).cos());
-            [w * den * s * y.cosh(), -(w * den * c * y.sinh())]
-        }
-        // cot
-        89 => {
-            let (s, c) = (2.0 * x).sin_cos();
-            let den = 1.0 / ((2.0 * y).cosh() - c);
-            [w * den * s, -(w * den) * (2.0 * y).sinh()]
-        }
-        // sinh
-        90 => {
-            let (s, c) = y.sin_cos();
-            [w * x.sinh() * c, w * x.cosh() * s]
-        }
-        // cosh
-        91 => {
-            let (s, c) = y.sin_cos();
-            [w * x.cosh() * c, w * x.sinh() * s]
-        }
-        // tanh
-        92 => {
-            let (s, c) = (2.0 * y).sin_cos();
-            let den = 1.0 / (c + (2.0 * x).cosh());
-            [w * den * (2.0 * x).sinh(), w * den * s]
-        }
-        // sech
-        93 => {
-            let (s, c) = y.sin_cos();
-            let den = 2.0 / ((2.0 * y).cos() + (2.0 * x).cosh());
-            [w * den * c * x.cosh(), -(w * den * s * x.sinh())]
-        }
-        // csch
-        94 => {
-            let (s, c) = y.sin_cos();
-            let den = 2.0 / ((2.0 * x).cosh() - (2.0 * y).cos());
-            [w * den * x.sinh() * c, -(w * den * x.cosh() * s)]
-        }
-        // coth
-        95 => {
-            let (s, c) = (2.0 * y).sin_cos();
-            let den = 1.0 / ((2.0 * x).cosh() - c);
-            [w * den * (2.0 * x).sinh(), w * den * s]
-        }
-        // auger: freq, weight, sym, scale
-        96 => {
-            let s = (k[0] * x).sin();
-            let t = (k[0] * y).sin();
-            let dy = y + k[1] * (k[3] * s / 2.0 + y.abs() * s);
-            let dx = x + k[1] * (k[3] * t / 2.0 + x.abs() * t);
-            [w * (x + k[2] * (dx - x)), w * dy]
-        }
-        // flux: spread
-        97 => {
-            let xpw = x + w;
-            let xmw = x - w;
-            let avgr = w * (2.0 + k[0]) * ((y * y + xpw * xpw).sqrt() / (y * y + xmw * xmw).sqrt()).sqrt();
-            let avga = (y.atan2(xmw) - y.atan2(xpw)) * 0.5;
-            [avgr * avga.cos(), avgr * avga.sin()]
-        }
-        // mobius: (a t + b) / (c t + d) in complex numbers
-        98 => {
-            let (re_a, im_a, re_b, im_b, re_c, im_c, re_d, im_d) = (k[0], k[1], k[2], k[3], k[4], k[5], k[6], k[7]);
-            let re_u = re_a * x - im_a * y + re_b;
-            let im_u = re_a * y + im_a * x + im_b;
-            let re_v = re_c * x - im_c * y + re_d;
-            let im_v = re_c * y + im_c * x + im_d;
-            let rad_v = w / (re_v * re_v + im_v * im_v);
-            [rad_v * (re_u * re_v + im_u * im_v), rad_v * (im_u * re_v - re_u * im_v)]
-        }
-        // linear3D
-        99 => [w * x, w * y],
         // flatten (z = 0 only) and anything unknown: nothing in the plane.
         _ => [0.0, 0.0],
     }
