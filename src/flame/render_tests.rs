@@ -121,3 +121,40 @@ fn batched_chains_sum_what_one_run_after_another_sums() {
         assert!(got == expected, "{threads} thread(s): the histograms or re-seed counts differ");
     }
 }
+
+/// The chaos game's AVX-512 and AVX2 builds (where the CPU runs them) sum the bits of the
+/// portable one: no fused multiply-add, and `flame::trig`'s functions are the same operations
+/// in every build.
+#[test]
+fn every_build_sums_the_same_bits() {
+    let flame = flame();
+    let layout = Layout::new(&flame).expect("layout");
+    let game = ChaosGame::new(&flame, &layout).expect("game");
+    let samples = (CHAINS as u64 + 3) * RUN_SAMPLES + 77;
+    let cells = layout.hist_width * layout.hist_height;
+    let one_worker = |build: &dyn Fn(&AtomicU64, &mut [Bucket]) -> u64| {
+        let mut histogram = vec![[0u32; 5]; cells];
+        let bad = build(&AtomicU64::new(0), &mut histogram);
+        (histogram, bad)
+    };
+    let portable = one_worker(&|next, h| game.run_chains(5, samples, next, h, &|_| {}));
+    assert!(portable.0.iter().any(|b| b[4] != 0), "nothing plotted");
+    #[cfg(target_arch = "x86_64")]
+    {
+        use crate::simd::SimdLevel;
+        #[expect(unsafe_code, reason = "the AVX2 and AVX-512 builds, entered after the CPU check")]
+        {
+            let level = SimdLevel::detect();
+            if level.avx2() {
+                // SAFETY: the CPU runs AVX2 (detected).
+                let avx2 = one_worker(&|next, h| unsafe { game.run_chains_avx2(5, samples, next, h, &|_| {}) });
+                assert!(avx2 == portable, "the AVX2 build differs");
+            }
+            if level == SimdLevel::Avx512 {
+                // SAFETY: the CPU runs AVX-512F (detected).
+                let avx512 = one_worker(&|next, h| unsafe { game.run_chains_avx512(5, samples, next, h, &|_| {}) });
+                assert!(avx512 == portable, "the AVX-512 build differs");
+            }
+        }
+    }
+}
