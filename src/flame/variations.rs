@@ -35,11 +35,15 @@
 
 #[path = "variations_basic.rs"]
 mod basic;
+#[path = "variations_batch.rs"]
+mod batch;
 #[path = "variations_plugins.rs"]
 mod plugins;
 #[cfg(test)]
 #[path = "variations_tests.rs"]
 mod tests;
+
+pub use batch::{BATCH, BatchScratch};
 
 use super::{Coefs, Xform, apply_coefs, trig};
 use crate::rng::Pcg32;
@@ -304,75 +308,10 @@ pub(crate) struct Point {
     pub atan_yx: f64,
 }
 
-/// Most points [`CompiledXform::apply_batch`] maps in one call.
-pub const BATCH: usize = 64;
-
-/// The work space of [`CompiledXform::apply_batch`], [`Point`]'s quantities as one array each
-/// (so that the loops over them are vector loops), kept by the caller between calls.
-#[derive(Clone, Debug)]
-pub struct BatchScratch {
-    tx: [f64; BATCH],
-    ty: [f64; BATCH],
-    sumsq: [f64; BATCH],
-    sqrt: [f64; BATCH],
-    atan_xy: [f64; BATCH],
-    sina: [f64; BATCH],
-    cosa: [f64; BATCH],
-    atan_yx: [f64; BATCH],
-    ox: [f64; BATCH],
-    oy: [f64; BATCH],
-    /// One term's contribution, and its random draws (`basic::smooth_draw`).
-    dx: [f64; BATCH],
-    dy: [f64; BATCH],
-    draw: [f64; BATCH],
-}
-
-impl Default for BatchScratch {
-    fn default() -> Self {
-        let zero = [0.0; BATCH];
-        Self {
-            tx: zero,
-            ty: zero,
-            sumsq: zero,
-            sqrt: zero,
-            atan_xy: zero,
-            sina: zero,
-            cosa: zero,
-            atan_yx: zero,
-            ox: zero,
-            oy: zero,
-            dx: zero,
-            dy: zero,
-            draw: zero,
-        }
-    }
-}
-
 /// Which optional quantities of [`Point`] a variation reads.
 pub(crate) const NEEDS_ATAN_XY: u8 = 1;
 pub(crate) const NEEDS_ANGLES: u8 = 2;
 pub(crate) const NEEDS_ATAN_YX: u8 = 4;
-
-/// Whether `basic::eval_smooth` or `plugins::eval_smooth` holds variation `v`'s formula.
-fn smooth(v: u8) -> bool {
-    if v < plugins::FIRST { basic::smooth(v) } else { plugins::smooth(v) }
-}
-
-/// The random number variation `v`'s smooth formula takes, drawn from `rng`.
-#[inline(always)]
-fn smooth_draw(v: u8, rng: &mut Pcg32) -> f64 {
-    if v < plugins::FIRST { basic::smooth_draw(v, rng) } else { plugins::smooth_draw(v, rng) }
-}
-
-/// Variation `v`'s smooth formula (`basic::eval_smooth`, `plugins::eval_smooth`).
-#[inline(always)]
-fn eval_smooth(v: u8, w: f64, k: &[f64; 8], pt: &Point, draw: f64, m: &mut impl trig::Elementary) -> Option<[f64; 2]> {
-    if v < plugins::FIRST {
-        basic::eval_smooth(v, w, k, pt, draw, m)
-    } else {
-        plugins::eval_smooth(v, w, k, pt, draw, m)
-    }
-}
 
 /// One weighted variation with its constants.
 #[derive(Clone, Copy, Debug)]
@@ -463,245 +402,6 @@ impl CompiledXform {
         match &self.post {
             Some(post) => apply_coefs(post, out),
             None => out,
-        }
-    }
-
-    /// [`Self::apply`] of each point (`x[j]`, `y[j]`) in place, drawing from `rngs[chain[j]]`: the
-    /// point-by-point path of the chaos game's groups. Not inlined: inside the chaos game's
-    /// vector build, next to [`Self::apply_batch`]'s loops, the scalar code was compiled
-    /// worse (spiral-julian 2.0 → 2.6 s).
-    #[inline(never)]
-    pub fn apply_each(&self, x: &mut [f64], y: &mut [f64], chain: &[u8], rngs: &mut [Pcg32]) {
-        for ((x, y), &k) in x.iter_mut().zip(y.iter_mut()).zip(chain) {
-            [*x, *y] = self.apply([*x, *y], &mut rngs[k as usize]);
-        }
-    }
-
-    /// Whether [`Self::apply_batch`] gains over [`Self::apply`] point by point: every term is
-    /// one of the arithmetic variations or the smooth ones (`basic::eval_smooth`), computed in
-    /// vector registers. (With the others the batch's bookkeeping measured slower than the
-    /// point-by-point path.)
-    #[inline]
-    pub fn batches(&self) -> bool {
-        self.terms.iter().all(|t| matches!(t.variation, 0 | 2 | 4 | 5 | 10) || smooth(t.variation))
-    }
-
-    /// [`Self::apply`] of up to [`BATCH`] points at once, in place: point j is
-    /// (`x[j]`, `y[j]`) and draws its random numbers from `rngs[chain[j]]`. Each quantity is
-    /// computed for all the points in a loop of its own, so the affine maps, the shared
-    /// quantities, the arithmetic variations (linear, spherical, horseshoe, polar, hyperbolic)
-    /// and the smooth ones (`basic::eval_smooth`, with `trig`'s functions) run in vector
-    /// registers; the other variations run point by point. Every point goes through the same
-    /// operations in the same order as in `apply`, and draws the same numbers in the same
-    /// order from its generator, so the results are the same bits.
-    #[inline(always)]
-    pub fn apply_batch(&self, x: &mut [f64], y: &mut [f64], chain: &[u8], rngs: &mut [Pcg32], s: &mut BatchScratch) {
-        let m = x.len().min(y.len()).min(chain.len()).min(BATCH);
-        let (x, y, chain) = (&mut x[..m], &mut y[..m], &chain[..m]);
-        for j in 0..m {
-            [s.tx[j], s.ty[j]] = apply_coefs(&self.coefs, [x[j], y[j]]);
-        }
-        if self.pre_blur != 0.0 {
-            for j in 0..m {
-                let [dx, dy] = plugins::pre_blur_offset(self.pre_blur, &mut rngs[chain[j] as usize]);
-                s.tx[j] += dx;
-                s.ty[j] += dy;
-            }
-        }
-        for j in 0..m {
-            s.sumsq[j] = s.tx[j] * s.tx[j] + s.ty[j] * s.ty[j];
-            s.sqrt[j] = s.sumsq[j].sqrt();
-        }
-        let needs = |flag: u8| self.needs & flag != 0;
-        // The angles by `trig`'s branch-free atan2 (a vector loop); where a lane's arguments
-        // are not finite, every lane again by `trig::atan2`, which gives the same bits for the
-        // others.
-        if needs(NEEDS_ATAN_XY) {
-            let mut finite = true;
-            for j in 0..m {
-                let (a, ok) = trig::atan2_core(s.tx[j], s.ty[j]);
-                s.atan_xy[j] = a;
-                finite &= ok;
-            }
-            if !finite {
-                for j in 0..m {
-                    s.atan_xy[j] = trig::atan2(s.tx[j], s.ty[j]);
-                }
-            }
-        }
-        if needs(NEEDS_ANGLES) {
-            for j in 0..m {
-                s.sina[j] = s.tx[j] / s.sqrt[j];
-                s.cosa[j] = s.ty[j] / s.sqrt[j];
-            }
-        }
-        if needs(NEEDS_ATAN_YX) {
-            let mut finite = true;
-            for j in 0..m {
-                let (a, ok) = trig::atan2_core(s.ty[j], s.tx[j]);
-                s.atan_yx[j] = a;
-                finite &= ok;
-            }
-            if !finite {
-                for j in 0..m {
-                    s.atan_yx[j] = trig::atan2(s.ty[j], s.tx[j]);
-                }
-            }
-        }
-        // The quantities `apply` leaves at 0 stay 0 here, whatever earlier calls left.
-        let (xy, angles, yx) = (needs(NEEDS_ATAN_XY), needs(NEEDS_ANGLES), needs(NEEDS_ATAN_YX));
-        let point = |s: &BatchScratch, j: usize| Point {
-            tx: s.tx[j],
-            ty: s.ty[j],
-            sumsq: s.sumsq[j],
-            sqrt: s.sqrt[j],
-            atan_xy: if xy { s.atan_xy[j] } else { 0.0 },
-            sina: if angles { s.sina[j] } else { 0.0 },
-            cosa: if angles { s.cosa[j] } else { 0.0 },
-            atan_yx: if yx { s.atan_yx[j] } else { 0.0 },
-        };
-        s.ox[..m].fill(0.0);
-        s.oy[..m].fill(0.0);
-        for t in &self.terms {
-            let w = t.weight;
-            // One loop per arithmetic variation, its number a constant, so that each is a
-            // straight vector loop.
-            macro_rules! each {
-                ($v:literal) => {
-                    for j in 0..m {
-                        let d = basic::eval_arithmetic($v, w, &point(s, j)).unwrap_or_default();
-                        s.ox[j] += d[0];
-                        s.oy[j] += d[1];
-                    }
-                };
-            }
-            // The smooth variations (`basic::eval_smooth`) likewise, their sin, cos, tan, exp
-            // and pow `trig`'s cores; where a lane's argument is beyond a core's range, every
-            // lane again with `trig`'s exact functions, which give the same bits for the others.
-            // julia's, julian's and juliascope's random numbers are drawn first, one per point,
-            // as `apply` draws them.
-            macro_rules! smooth {
-                ($v:literal) => {{
-                    // (For a variation that draws nothing this is a fill with 0.)
-                    for j in 0..m {
-                        s.draw[j] = smooth_draw($v, &mut rngs[chain[j] as usize]);
-                    }
-                    let mut in_range = true;
-                    for j in 0..m {
-                        let mut lane = trig::InRange { in_range: true };
-                        let d = eval_smooth($v, w, &t.k, &point(s, j), s.draw[j], &mut lane).unwrap_or_default();
-                        s.dx[j] = d[0];
-                        s.dy[j] = d[1];
-                        in_range &= lane.in_range;
-                    }
-                    if !in_range {
-                        for j in 0..m {
-                            let d =
-                                eval_smooth($v, w, &t.k, &point(s, j), s.draw[j], &mut trig::Exact).unwrap_or_default();
-                            s.dx[j] = d[0];
-                            s.dy[j] = d[1];
-                        }
-                    }
-                    for j in 0..m {
-                        s.ox[j] += s.dx[j];
-                        s.oy[j] += s.dy[j];
-                    }
-                }};
-            }
-            match t.variation {
-                0 => each!(0),
-                2 => each!(2),
-                4 => each!(4),
-                5 => each!(5),
-                10 => each!(10),
-                1 => smooth!(1),
-                3 => smooth!(3),
-                6 => smooth!(6),
-                7 => smooth!(7),
-                8 => smooth!(8),
-                9 => smooth!(9),
-                11 => smooth!(11),
-                12 => smooth!(12),
-                13 => smooth!(13),
-                14 => smooth!(14),
-                15 => smooth!(15),
-                16 => smooth!(16),
-                17 => smooth!(17),
-                18 => smooth!(18),
-                19 => smooth!(19),
-                20 => smooth!(20),
-                23 => smooth!(23),
-                24 => smooth!(24),
-                27 => smooth!(27),
-                28 => smooth!(28),
-                29 => smooth!(29),
-                30 => smooth!(30),
-                32 => smooth!(32),
-                33 => smooth!(33),
-                51 => smooth!(51),
-                52 => smooth!(52),
-                54 => smooth!(54),
-                60 => smooth!(60),
-                63 => smooth!(63),
-                64 => smooth!(64),
-                66 => smooth!(66),
-                69 => smooth!(69),
-                70 => smooth!(70),
-                71 => smooth!(71),
-                72 => smooth!(72),
-                73 => smooth!(73),
-                74 => smooth!(74),
-                75 => smooth!(75),
-                76 => smooth!(76),
-                77 => smooth!(77),
-                78 => smooth!(78),
-                79 => smooth!(79),
-                80 => smooth!(80),
-                81 => smooth!(81),
-                82 => smooth!(82),
-                83 => smooth!(83),
-                84 => smooth!(84),
-                85 => smooth!(85),
-                86 => smooth!(86),
-                87 => smooth!(87),
-                88 => smooth!(88),
-                89 => smooth!(89),
-                90 => smooth!(90),
-                91 => smooth!(91),
-                92 => smooth!(92),
-                93 => smooth!(93),
-                94 => smooth!(94),
-                95 => smooth!(95),
-                96 => smooth!(96),
-                97 => smooth!(97),
-                98 => smooth!(98),
-                99 => smooth!(99),
-                39 => smooth!(39),
-                40 => smooth!(40),
-                42 => smooth!(42),
-                46 => smooth!(46),
-                48 => smooth!(48),
-                49 => smooth!(49),
-                v => {
-                    for j in 0..m {
-                        let rng = &mut rngs[chain[j] as usize];
-                        let pt = point(s, j);
-                        let d = if v < plugins::FIRST {
-                            basic::eval(v, w, &t.k, &pt, rng)
-                        } else {
-                            plugins::eval(v, w, &t.k, &pt, rng)
-                        };
-                        s.ox[j] += d[0];
-                        s.oy[j] += d[1];
-                    }
-                }
-            }
-        }
-        for j in 0..m {
-            [x[j], y[j]] = match &self.post {
-                Some(post) => apply_coefs(post, [s.ox[j], s.oy[j]]),
-                None => [s.ox[j], s.oy[j]],
-            };
         }
     }
 
