@@ -182,7 +182,14 @@ impl Shot {
         let (ifs, seed, frame, plan) = (&self.compiled, self.settings.seed, self.stream, &self.plan);
         match accumulation {
             Accumulation::PerThread => {
-                let make = || Framebuffer::new(self.view, self.compiled.colors.clone());
+                let several = rayon::current_num_threads() > 1;
+                let make = || {
+                    let mut framebuffer = Framebuffer::new(self.view, self.compiled.colors.clone());
+                    if several {
+                        framebuffer.touch_pages();
+                    }
+                    framebuffer
+                };
                 chaos_game::run_per_thread(ifs, seed, frame, plan, chunks, make, progress)
                     .into_iter()
                     .reduce(Framebuffer::merge)

@@ -59,7 +59,9 @@ pub struct SharedFramebuffer {
 impl SharedFramebuffer {
     /// An empty shared framebuffer of `view`.
     pub fn new(view: SplatView, colors: Vec<[f32; 3]>) -> Self {
-        Self { framebuffer: Framebuffer::new(view, colors) }
+        let mut framebuffer = Framebuffer::new(view, colors);
+        framebuffer.touch_pages();
+        Self { framebuffer }
     }
 
     /// Runs `work` with a [`SharedTarget`] of this framebuffer for `threads` writers; when it
