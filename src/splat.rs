@@ -170,18 +170,10 @@ impl Framebuffer {
     }
 
     /// Writes a zero into every page of the accumulating modes' sums, for a framebuffer that
-    /// several threads' splats will update. A page that a splat reads before anything wrote it
-    /// maps the kernel's shared zero page, and its first write then replaces that mapping (copy
-    /// on write), which, while the process runs on several cores, flushes the other cores' TLBs
-    /// by interrupt: in a two-thread 1920×1080 average render of tapering, 0.12–0.15 s of system
-    /// time in 1.5 s. Written first, each page is faulted in once, without the flush. (Closest
-    /// mode's keys start as `EMPTY`, written at allocation.)
+    /// several threads' splats will update ([`crate::platform::write_every_page`]). Closest
+    /// mode's keys start as `EMPTY`, written at allocation.
     pub fn touch_pages(&mut self) {
-        const PIXELS_PER_PAGE: usize = 4096 / std::mem::size_of::<[u32; 4]>();
-        for i in (0..self.accum.len()).step_by(PIXELS_PER_PAGE) {
-            // Through black_box, so that the store of a zero into a zeroed allocation stays.
-            self.accum[i] = std::hint::black_box([0; 4]);
-        }
+        crate::platform::write_every_page(&mut self.accum, [0; 4]);
     }
 
     /// Elementwise merge (min of keys, sum of accumulators): order-independent.

@@ -237,6 +237,9 @@ impl ChaosGame {
             .into_par_iter()
             .map(|_| {
                 let mut histogram = vec![[0u32; 5]; cells];
+                if workers > 1 {
+                    crate::platform::write_every_page(&mut histogram, [0; 5]);
+                }
                 let bad = self.run_chains_dispatch(seed, samples, &next_run, &mut histogram, progress);
                 (histogram, bad)
             })

@@ -23,6 +23,8 @@
 //! - **Waiting for the GPU**: adapter and device requests are futures; [`run_async`] blocks on
 //!   them on the desktop and hands them to the page's event loop in the browser, where blocking
 //!   would never let them finish.
+//! - **Memory pages**: a zeroed buffer's pages are mapped on first touch; buffers that several
+//!   threads update at random have every page written first ([`write_every_page`]).
 
 #[cfg(target_arch = "wasm32")]
 pub mod web;
@@ -32,6 +34,21 @@ use std::future::Future;
 use std::rc::Rc;
 
 pub use web_time::Instant;
+
+/// Writes `zero` (the value a zeroed allocation already holds) into every 4 KiB page of
+/// `values`, for buffers that several threads will read and update at random. A page that is
+/// read before anything wrote it maps the kernel's shared zero page, and its first write then
+/// replaces that mapping (copy on write), which, while the process runs on several cores,
+/// flushes the other cores' TLBs by interrupt: in a two-thread 1920×1080 average render of
+/// tapering, 0.12–0.15 s of system time in 1.5 s. Written first, each page is faulted in once,
+/// without the flush.
+pub fn write_every_page<T: Copy>(values: &mut [T], zero: T) {
+    let per_page = (4096 / std::mem::size_of::<T>().max(1)).max(1);
+    for i in (0..values.len()).step_by(per_page) {
+        // Through black_box, so that a store of zero into a zeroed allocation stays.
+        values[i] = std::hint::black_box(zero);
+    }
+}
 
 /// True on the desktop, false in the browser: background jobs (threads), files by path,
 /// child processes and native dialogs are available.
