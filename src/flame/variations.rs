@@ -308,6 +308,9 @@ pub(crate) struct Point {
     pub atan_yx: f64,
 }
 
+/// The most random numbers a smooth variation draws per point (gaussian_blur's five).
+pub(crate) const DRAWS: usize = 5;
+
 /// Which optional quantities of [`Point`] a variation reads.
 pub(crate) const NEEDS_ATAN_XY: u8 = 1;
 pub(crate) const NEEDS_ANGLES: u8 = 2;

@@ -7,11 +7,11 @@
 //! ty/|t| (the swapped angle), fisheye swaps its output axes, radial_blur's rotated part is not
 //! scaled by the weight, arch, rays, blade, secant2 and twintrian use the weight inside as well.
 
-use super::{EPS, NEEDS_ANGLES, NEEDS_ATAN_XY, NEEDS_ATAN_YX, Point};
+use super::{DRAWS, EPS, NEEDS_ANGLES, NEEDS_ATAN_XY, NEEDS_ATAN_YX, Point};
 use crate::flame::Coefs;
 use crate::flame::trig::{Elementary, Exact};
 use crate::rng::Pcg32;
-use std::f64::consts::{FRAC_1_PI, PI};
+use std::f64::consts::{FRAC_1_PI, LOG10_E, PI};
 
 /// Which of [`Point`]'s optional quantities variation `v` reads.
 pub(super) fn needs(v: u8) -> u8 {
@@ -153,27 +153,35 @@ pub(super) fn eval_arithmetic(v: u8, w: f64, pt: &Point) -> Option<[f64; 2]> {
 
 /// Whether [`eval_smooth`] holds variation `v`'s formula.
 pub(super) fn smooth(v: u8) -> bool {
-    matches!(v, 1 | 3 | 6..=9 | 11..=20 | 23 | 24 | 27..=30 | 32 | 33 | 39 | 40 | 42 | 46 | 48 | 49)
+    matches!(v, 1 | 3 | 6..=9 | 11..=20 | 23 | 24 | 27..=37 | 39..=49)
 }
 
-/// The random number [`eval_smooth`] takes for variation `v`, drawn from `rng` as flam3 draws
-/// it: julia's bit (0 or 1), julian's and juliascope's uniform number in [0, 1); 0 (nothing
-/// drawn) for the others.
+/// The random numbers [`eval_smooth`] takes for variation `v`, drawn from `rng` in flam3's
+/// order and number: julia's bit (0 or 1), otherwise uniform numbers in [0, 1) (julian,
+/// juliascope, arch, rays, blade and twintrian one; noise, blur and square two; pie three;
+/// radial_blur four, gaussian_blur five); 0 where nothing is drawn.
 #[inline(always)]
-pub(super) fn smooth_draw(v: u8, rng: &mut Pcg32) -> f64 {
-    match v {
-        13 => (rng.next_u32() & 1) as f64,
-        32 | 33 => rng.next_f64(),
-        _ => 0.0,
+pub(super) fn smooth_draw(v: u8, rng: &mut Pcg32) -> [f64; DRAWS] {
+    let count = match v {
+        13 => return [(rng.next_u32() & 1) as f64, 0.0, 0.0, 0.0, 0.0],
+        32 | 33 | 41 | 44 | 45 | 47 => 1,
+        31 | 34 | 43 => 2,
+        37 => 3,
+        36 => 4,
+        35 => 5,
+        _ => 0,
+    };
+    let mut draw = [0.0; DRAWS];
+    for d in &mut draw[..count] {
+        *d = rng.next_f64();
     }
+    draw
 }
 
-/// w · V(t) for the variations that draw at most one random number (julia, julian and
-/// juliascope: `draw`, from [`smooth_draw`]) and need only arithmetic, square roots and sin,
-/// cos, tan, exp and pow from `m`: sinusoidal, swirl, handkerchief, heart, disc, spiral,
-/// diamond, ex, julia, bent, waves, fisheye, popcorn, exponential, power, cosine, blob, pdj,
-/// eyefish, bubble, cylinder, perspective, julian, juliascope, curl, rectangles, tangent,
-/// secant2, cross, disc2; `None` for the others. Inlined into a loop
+/// w · V(t) for the variations that draw a fixed count of random numbers (`draw`, from
+/// [`smooth_draw`]) and need only arithmetic, square roots, `floor` and `m`'s elementary
+/// functions: every one of 0–49 but rings, fan, fan2, rings2 (`%` or C's `int` of a quotient)
+/// and ngon; `None` for the others. Inlined into a loop
 /// over points with a constant `v`, each is a vector loop (`CompiledXform::apply_batch`).
 #[inline(always)]
 pub(super) fn eval_smooth(
@@ -181,7 +189,7 @@ pub(super) fn eval_smooth(
     w: f64,
     k: &[f64; 8],
     pt: &Point,
-    draw: f64,
+    draw: [f64; DRAWS],
     m: &mut impl Elementary,
 ) -> Option<[f64; 2]> {
     let Point { tx: x, ty: y, sumsq: r2, sqrt: r, atan_xy: a, sina: sa, cosa: ca, atan_yx: ayx } = *pt;
@@ -230,7 +238,7 @@ pub(super) fn eval_smooth(
         // julia: one of the two square roots, by a random bit.
         13 => {
             let mut aa = 0.5 * a;
-            if draw != 0.0 {
+            if draw[0] != 0.0 {
                 aa += PI;
             }
             let f = w * r.sqrt();
@@ -327,7 +335,7 @@ pub(super) fn eval_smooth(
         }
         // julian: one of |power| branches of t^(dist/power), by a uniform draw.
         32 => {
-            let branch = c_int(k[1] * draw) as f64;
+            let branch = c_int(k[1] * draw[0]) as f64;
             let ang = (ayx + 2.0 * PI * branch) / k[0];
             let f = w * m.pow(r2, k[2]);
             let (s, c) = m.sin_cos(ang);
@@ -335,13 +343,74 @@ pub(super) fn eval_smooth(
         }
         // juliascope: as julian, the odd branches mirrored.
         33 => {
-            let branch = (k[1] * draw).trunc();
+            let branch = (k[1] * draw[0]).trunc();
             // flam3's branch % 2 == 0 for a whole number: half of it is whole.
             let even = branch.is_finite() && (0.5 * branch).trunc() == 0.5 * branch;
             let ang = if even { (2.0 * PI * branch + ayx) / k[0] } else { (2.0 * PI * branch - ayx) / k[0] };
             let (s, c) = m.sin_cos(ang);
             let f = w * m.pow(r2, k[2]);
             [f * c, f * s]
+        }
+        // noise
+        31 => {
+            let (s, c) = m.sin_cos(draw[0] * 2.0 * PI);
+            let f = w * draw[1];
+            [x * f * c, y * f * s]
+        }
+        // blur
+        34 => {
+            let (s, c) = m.sin_cos(draw[0] * 2.0 * PI);
+            let f = w * draw[1];
+            [f * c, f * s]
+        }
+        // gaussian_blur
+        35 => {
+            let (s, c) = m.sin_cos(draw[0] * 2.0 * PI);
+            let f = w * (draw[1] + draw[2] + draw[3] + draw[4] - 2.0);
+            [f * c, f * s]
+        }
+        // radial_blur
+        36 => {
+            let g = w * (draw[0] + draw[1] + draw[2] + draw[3] - 2.0);
+            let (s, c) = m.sin_cos(ayx + k[0] * g);
+            let rz = k[1] * g - 1.0;
+            [r * c + rz * x, r * s + rz * y]
+        }
+        // pie: slices, rotation, thickness
+        37 => {
+            let slice = c_int(draw[0] * k[0] + 0.5) as f64;
+            let ang = k[1] + 2.0 * PI * (slice + draw[1] * k[2]) / k[0];
+            let f = w * draw[2];
+            let (s, c) = m.sin_cos(ang);
+            [f * c, f * s]
+        }
+        // arch
+        41 => {
+            let (s, c) = m.sin_cos(draw[0] * w * PI);
+            [w * s, w * (s * s) / c]
+        }
+        // square
+        43 => [w * (draw[0] - 0.5), w * (draw[1] - 0.5)],
+        // rays
+        44 => {
+            let ang = w * draw[0] * PI;
+            let f = w / (r2 + EPS);
+            let t = w * m.tan(ang) * f;
+            [t * m.cos(x), t * m.sin(y)]
+        }
+        // blade
+        45 => {
+            let (s, c) = m.sin_cos(draw[0] * w * r);
+            [w * x * (c + s), w * x * (c - s)]
+        }
+        // twintrian
+        47 => {
+            let (s, c) = m.sin_cos(draw[0] * w * r);
+            let mut diff = m.ln(s * s) * LOG10_E + c;
+            if !(diff.abs() <= 1e10) {
+                diff = -30.0;
+            }
+            [w * x * diff, w * x * (diff - s * PI)]
         }
         // cross
         48 => {
@@ -405,39 +474,6 @@ pub(super) fn eval(v: u8, w: f64, k: &[f64; 8], pt: &Point, rng: &mut Pcg32) -> 
             let f = r + (-2.0 * dx * c_int((r + dx) / (2.0 * dx)) as f64 + r * (1.0 - dx));
             [w * sa * f, w * ca * f]
         }
-        // noise
-        31 => {
-            let (s, c) = (rng.next_f64() * 2.0 * PI).sin_cos();
-            let f = w * rng.next_f64();
-            [x * f * c, y * f * s]
-        }
-        // blur
-        34 => {
-            let (s, c) = (rng.next_f64() * 2.0 * PI).sin_cos();
-            let f = w * rng.next_f64();
-            [f * c, f * s]
-        }
-        // gaussian_blur
-        35 => {
-            let (s, c) = (rng.next_f64() * 2.0 * PI).sin_cos();
-            let f = w * pseudo_gaussian(rng);
-            [f * c, f * s]
-        }
-        // radial_blur
-        36 => {
-            let g = w * pseudo_gaussian(rng);
-            let (s, c) = (ayx + k[0] * g).sin_cos();
-            let rz = k[1] * g - 1.0;
-            [r * c + rz * x, r * s + rz * y]
-        }
-        // pie: slices, rotation, thickness
-        37 => {
-            let slice = c_int(rng.next_f64() * k[0] + 0.5) as f64;
-            let ang = k[1] + 2.0 * PI * (slice + rng.next_f64() * k[2]) / k[0];
-            let f = w * rng.next_f64();
-            let (s, c) = ang.sin_cos();
-            [f * c, f * s]
-        }
         // ngon: 2π / sides, power / 2, circle, corners
         38 => {
             let r_factor = r2.powf(k[1]);
@@ -448,34 +484,6 @@ pub(super) fn eval(v: u8, w: f64, k: &[f64; 8], pt: &Point, rng: &mut Pcg32) -> 
             }
             let amp = (k[3] * (1.0 / (phi.cos() + EPS) - 1.0) + k[2]) / (r_factor + EPS);
             [w * x * amp, w * y * amp]
-        }
-        // arch
-        41 => {
-            let (s, c) = (rng.next_f64() * w * PI).sin_cos();
-            [w * s, w * (s * s) / c]
-        }
-        // square
-        43 => [w * (rng.next_f64() - 0.5), w * (rng.next_f64() - 0.5)],
-        // rays
-        44 => {
-            let ang = w * rng.next_f64() * PI;
-            let f = w / (r2 + EPS);
-            let t = w * ang.tan() * f;
-            [t * x.cos(), t * y.sin()]
-        }
-        // blade
-        45 => {
-            let (s, c) = (rng.next_f64() * w * r).sin_cos();
-            [w * x * (c + s), w * x * (c - s)]
-        }
-        // twintrian
-        47 => {
-            let (s, c) = (rng.next_f64() * w * r).sin_cos();
-            let mut diff = (s * s).log10() + c;
-            if !(diff.abs() <= 1e10) {
-                diff = -30.0;
-            }
-            [w * x * diff, w * x * (diff - s * PI)]
         }
         _ => [0.0, 0.0],
     }

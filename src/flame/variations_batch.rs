@@ -3,7 +3,7 @@
 //! smooth variations run in vector registers (the chaos game's AVX-512 and AVX2 builds,
 //! `flame/render.rs`); and the point-by-point path of a group, out of line.
 
-use super::{CompiledXform, NEEDS_ANGLES, NEEDS_ATAN_XY, NEEDS_ATAN_YX, Point, basic, plugins};
+use super::{CompiledXform, DRAWS, NEEDS_ANGLES, NEEDS_ATAN_XY, NEEDS_ATAN_YX, Point, basic, plugins};
 use crate::flame::{apply_coefs, trig};
 use crate::rng::Pcg32;
 
@@ -27,7 +27,7 @@ pub struct BatchScratch {
     /// One term's contribution, and its random draws (`basic::smooth_draw`).
     dx: [f64; BATCH],
     dy: [f64; BATCH],
-    draw: [f64; BATCH],
+    draw: [[f64; DRAWS]; BATCH],
 }
 
 impl Default for BatchScratch {
@@ -46,7 +46,7 @@ impl Default for BatchScratch {
             oy: zero,
             dx: zero,
             dy: zero,
-            draw: zero,
+            draw: [[0.0; DRAWS]; BATCH],
         }
     }
 }
@@ -58,13 +58,20 @@ fn smooth(v: u8) -> bool {
 
 /// The random number variation `v`'s smooth formula takes, drawn from `rng`.
 #[inline(always)]
-fn smooth_draw(v: u8, rng: &mut Pcg32) -> f64 {
+fn smooth_draw(v: u8, rng: &mut Pcg32) -> [f64; DRAWS] {
     if v < plugins::FIRST { basic::smooth_draw(v, rng) } else { plugins::smooth_draw(v, rng) }
 }
 
 /// Variation `v`'s smooth formula (`basic::eval_smooth`, `plugins::eval_smooth`).
 #[inline(always)]
-fn eval_smooth(v: u8, w: f64, k: &[f64; 8], pt: &Point, draw: f64, m: &mut impl trig::Elementary) -> Option<[f64; 2]> {
+fn eval_smooth(
+    v: u8,
+    w: f64,
+    k: &[f64; 8],
+    pt: &Point,
+    draw: [f64; DRAWS],
+    m: &mut impl trig::Elementary,
+) -> Option<[f64; 2]> {
     if v < plugins::FIRST {
         basic::eval_smooth(v, w, k, pt, draw, m)
     } else {
@@ -227,9 +234,9 @@ impl CompiledXform {
             }
             by_variation! {
                 arithmetic: 0 2 4 5 10;
-                smooth: 1 3 6 7 8 9 11 12 13 14 15 16 17 18 19 20 23 24 27 28 29 30 32 33 39 40 42 46 48 49
-                    51 52 54 60 63 64 66 69 70 71 72 73 74 75 76 77 78 79 80 81 82 83 84 85 86 87 88 89
-                    90 91 92 93 94 95 96 97 98 99;
+                smooth: 1 3 6 7 8 9 11 12 13 14 15 16 17 18 19 20 23 24 27 28 29 30 31 32 33 34 35 36 37
+                    39 40 41 42 43 44 45 46 47 48 49 50 51 52 53 54 60 63 64 66 69 70 71 72 73 74 75 76 77
+                    78 79 80 81 82 83 84 85 86 87 88 89 90 91 92 93 94 95 96 97 98 99;
                 other
                 v => {
                     for j in 0..m {

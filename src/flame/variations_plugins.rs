@@ -9,7 +9,7 @@
 //! `rint`), flux's weight shifts its poles.
 
 use super::basic::{c_int, pseudo_gaussian};
-use super::{EPS, NEEDS_ATAN_XY, NEEDS_ATAN_YX, Point};
+use super::{DRAWS, EPS, NEEDS_ATAN_XY, NEEDS_ATAN_YX, Point};
 use crate::flame::trig::{Elementary, Exact};
 use crate::rng::Pcg32;
 use std::f64::consts::{FRAC_1_PI, FRAC_2_PI, FRAC_PI_2, FRAC_PI_4, PI};
@@ -77,22 +77,28 @@ fn wedge_index(count: f64, a: f64) -> f64 {
 
 /// Whether [`eval_smooth`] holds variation `v`'s formula.
 pub(super) fn smooth(v: u8) -> bool {
-    matches!(v, 51 | 52 | 54 | 60 | 63 | 64 | 66 | 69..=99)
+    matches!(v, 50..=54 | 60 | 63 | 64 | 66 | 69..=99)
 }
 
-/// The random number [`eval_smooth`] takes for variation `v`, drawn from `rng` as flam3 draws
-/// it: flower's, conic's and wedge_julia's uniform number in [0, 1); 0 (nothing drawn) for the
-/// others.
+/// The random numbers [`eval_smooth`] takes for variation `v`, drawn from `rng` in flam3's
+/// order: super_shape, flower, conic and wedge_julia one uniform number in [0, 1), parabola
+/// two; 0 where nothing is drawn.
 #[inline(always)]
-pub(super) fn smooth_draw(v: u8, rng: &mut Pcg32) -> f64 {
-    match v {
-        51 | 52 | 78 => rng.next_f64(),
-        _ => 0.0,
+pub(super) fn smooth_draw(v: u8, rng: &mut Pcg32) -> [f64; DRAWS] {
+    let count = match v {
+        50 | 51 | 52 | 78 => 1,
+        53 => 2,
+        _ => 0,
+    };
+    let mut draw = [0.0; DRAWS];
+    for d in &mut draw[..count] {
+        *d = rng.next_f64();
     }
+    draw
 }
 
-/// w · V(t) for the variations 50 and up that draw at most one random number (`draw`, from
-/// [`smooth_draw`]) and need only arithmetic, square roots, `floor` and `m`'s elementary
+/// w · V(t) for the variations 50 and up that draw a fixed count of random numbers (`draw`,
+/// from [`smooth_draw`]) and need only arithmetic, square roots, `floor` and `m`'s elementary
 /// functions (as `basic::eval_smooth`); `None` for the others. Inlined into a loop over points
 /// with a constant `v`, each is a vector loop (`CompiledXform::apply_batch`).
 #[inline(always)]
@@ -101,20 +107,36 @@ pub(super) fn eval_smooth(
     w: f64,
     k: &[f64; 8],
     pt: &Point,
-    draw: f64,
+    draw: [f64; DRAWS],
     m: &mut impl Elementary,
 ) -> Option<[f64; 2]> {
     let Point { tx: x, ty: y, sumsq: r2, sqrt: r, atan_xy: a, atan_yx: ayx, .. } = *pt;
     Some(match v {
+        // super_shape: rnd, m/4, −1/n1, n2, n3, holes
+        50 => {
+            let (st, ct) = m.sin_cos(k[1] * ayx + FRAC_PI_4);
+            let t1 = m.pow(ct.abs(), k[3]);
+            let t2 = m.pow(st.abs(), k[4]);
+            let rnd = k[0];
+            let f = w * ((rnd * draw[0] + (1.0 - rnd) * r) - k[5]) * m.pow(t1 + t2, k[2]) / r;
+            [f * x, f * y]
+        }
+        // parabola: height, width
+        53 => {
+            let (s, c) = m.sin_cos(r);
+            let nx = k[0] * w * s * s * draw[0];
+            let ny = k[1] * w * c * draw[1];
+            [nx, ny]
+        }
         // flower: petals, holes
         51 => {
-            let f = w * (draw - k[1]) * m.cos(k[0] * ayx) / r;
+            let f = w * (draw[0] - k[1]) * m.cos(k[0] * ayx) / r;
             [f * x, f * y]
         }
         // conic: eccentricity, holes
         52 => {
             let ct = x / r;
-            let f = w * (draw - k[1]) * k[0] / (1.0 + k[0] * ct) / r;
+            let f = w * (draw[0] - k[1]) * k[0] / (1.0 + k[0] * ct) / r;
             [f * x, f * y]
         }
         // bent2: x, y
@@ -218,7 +240,7 @@ pub(super) fn eval_smooth(
         // wedge_julia: angle, count, power, cn, |power|, compensation
         78 => {
             let f = w * m.pow(r2, k[3]);
-            let branch = c_int(k[4] * draw) as f64;
+            let branch = c_int(k[4] * draw[0]) as f64;
             let aa = (ayx + 2.0 * PI * branch) / k[2];
             let c = wedge_index(k[1], aa);
             let aa = aa * k[5] + c * k[0];
@@ -361,24 +383,8 @@ pub(super) fn eval(v: u8, w: f64, k: &[f64; 8], pt: &Point, rng: &mut Pcg32) -> 
         let draw = smooth_draw(v, rng);
         return eval_smooth(v, w, k, pt, draw, &mut Exact).unwrap_or_default();
     }
-    let Point { tx: x, ty: y, sumsq: r2, sqrt: r, atan_yx: ayx, .. } = *pt;
+    let Point { tx: x, ty: y, sumsq: r2, atan_yx: ayx, .. } = *pt;
     match v {
-        // super_shape: rnd, m/4, −1/n1, n2, n3, holes
-        50 => {
-            let (st, ct) = (k[1] * ayx + FRAC_PI_4).sin_cos();
-            let t1 = ct.abs().powf(k[3]);
-            let t2 = st.abs().powf(k[4]);
-            let rnd = k[0];
-            let f = w * ((rnd * rng.next_f64() + (1.0 - rnd) * r) - k[5]) * (t1 + t2).powf(k[2]) / r;
-            [f * x, f * y]
-        }
-        // parabola: height, width
-        53 => {
-            let (s, c) = r.sin_cos();
-            let nx = k[0] * w * s * s * rng.next_f64();
-            let ny = k[1] * w * c * rng.next_f64();
-            [nx, ny]
-        }
         // bipolar: shift
         55 => {
             let t = r2 + 1.0;
