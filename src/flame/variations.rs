@@ -311,6 +311,17 @@ pub(crate) struct Point {
 /// The most random numbers a smooth variation draws per point (gaussian_blur's five).
 pub(crate) const DRAWS: usize = 5;
 
+/// `count` uniform numbers in [0, 1) from `rng`, in order, the rest of the array 0: what a
+/// smooth variation draws (`basic::smooth_draw`, `plugins::smooth_draw`).
+#[inline(always)]
+fn uniform_draws(count: usize, rng: &mut Pcg32) -> [f64; DRAWS] {
+    let mut draw = [0.0; DRAWS];
+    for d in &mut draw[..count.min(DRAWS)] {
+        *d = rng.next_f64();
+    }
+    draw
+}
+
 /// Which optional quantities of [`Point`] a variation reads.
 pub(crate) const NEEDS_ATAN_XY: u8 = 1;
 pub(crate) const NEEDS_ANGLES: u8 = 2;

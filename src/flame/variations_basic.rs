@@ -7,7 +7,7 @@
 //! ty/|t| (the swapped angle), fisheye swaps its output axes, radial_blur's rotated part is not
 //! scaled by the weight, arch, rays, blade, secant2 and twintrian use the weight inside as well.
 
-use super::{DRAWS, EPS, NEEDS_ANGLES, NEEDS_ATAN_XY, NEEDS_ATAN_YX, Point};
+use super::{DRAWS, EPS, NEEDS_ANGLES, NEEDS_ATAN_XY, NEEDS_ATAN_YX, Point, uniform_draws};
 use crate::flame::Coefs;
 use crate::flame::trig::{Elementary, Exact};
 use crate::rng::Pcg32;
@@ -171,11 +171,7 @@ pub(super) fn smooth_draw(v: u8, rng: &mut Pcg32) -> [f64; DRAWS] {
         35 => 5,
         _ => 0,
     };
-    let mut draw = [0.0; DRAWS];
-    for d in &mut draw[..count] {
-        *d = rng.next_f64();
-    }
-    draw
+    uniform_draws(count, rng)
 }
 
 /// w · V(t) for the variations that draw a fixed count of random numbers (`draw`, from

@@ -79,6 +79,24 @@ fn eval_smooth(
     }
 }
 
+/// `out[j]` = atan2(`y[j]`, `x[j]`): `trig`'s branch-free core, a vector loop; where a lane's
+/// arguments are not finite, every lane again by `trig::atan2`, which gives the same bits for
+/// the others.
+#[inline(always)]
+fn atan2_lanes(out: &mut [f64], y: &[f64], x: &[f64]) {
+    let mut finite = true;
+    for ((out, &y), &x) in out.iter_mut().zip(y).zip(x) {
+        let (a, ok) = trig::atan2_core(y, x);
+        *out = a;
+        finite &= ok;
+    }
+    if !finite {
+        for ((out, &y), &x) in out.iter_mut().zip(y).zip(x) {
+            *out = trig::atan2(y, x);
+        }
+    }
+}
+
 impl CompiledXform {
     /// [`Self::apply`] of each point (`x[j]`, `y[j]`) in place, drawing from `rngs[chain[j]]`: the
     /// point-by-point path of the chaos game's groups. Not inlined: inside the chaos game's
@@ -127,21 +145,8 @@ impl CompiledXform {
             s.sqrt[j] = s.sumsq[j].sqrt();
         }
         let needs = |flag: u8| self.needs & flag != 0;
-        // The angles by `trig`'s branch-free atan2 (a vector loop); where a lane's arguments
-        // are not finite, every lane again by `trig::atan2`, which gives the same bits for the
-        // others.
         if needs(NEEDS_ATAN_XY) {
-            let mut finite = true;
-            for j in 0..m {
-                let (a, ok) = trig::atan2_core(s.tx[j], s.ty[j]);
-                s.atan_xy[j] = a;
-                finite &= ok;
-            }
-            if !finite {
-                for j in 0..m {
-                    s.atan_xy[j] = trig::atan2(s.tx[j], s.ty[j]);
-                }
-            }
+            atan2_lanes(&mut s.atan_xy[..m], &s.tx[..m], &s.ty[..m]);
         }
         if needs(NEEDS_ANGLES) {
             for j in 0..m {
@@ -150,17 +155,7 @@ impl CompiledXform {
             }
         }
         if needs(NEEDS_ATAN_YX) {
-            let mut finite = true;
-            for j in 0..m {
-                let (a, ok) = trig::atan2_core(s.ty[j], s.tx[j]);
-                s.atan_yx[j] = a;
-                finite &= ok;
-            }
-            if !finite {
-                for j in 0..m {
-                    s.atan_yx[j] = trig::atan2(s.ty[j], s.tx[j]);
-                }
-            }
+            atan2_lanes(&mut s.atan_yx[..m], &s.ty[..m], &s.tx[..m]);
         }
         // The quantities `apply` leaves at 0 stay 0 here, whatever earlier calls left.
         let (xy, angles, yx) = (needs(NEEDS_ATAN_XY), needs(NEEDS_ANGLES), needs(NEEDS_ATAN_YX));

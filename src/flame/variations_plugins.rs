@@ -9,7 +9,7 @@
 //! `rint`), flux's weight shifts its poles.
 
 use super::basic::{c_int, pseudo_gaussian};
-use super::{DRAWS, EPS, NEEDS_ATAN_XY, NEEDS_ATAN_YX, Point};
+use super::{DRAWS, EPS, NEEDS_ATAN_XY, NEEDS_ATAN_YX, Point, uniform_draws};
 use crate::flame::trig::{Elementary, Exact};
 use crate::rng::Pcg32;
 use std::f64::consts::{FRAC_1_PI, FRAC_2_PI, FRAC_PI_2, FRAC_PI_4, PI};
@@ -90,11 +90,7 @@ pub(super) fn smooth_draw(v: u8, rng: &mut Pcg32) -> [f64; DRAWS] {
         53 => 2,
         _ => 0,
     };
-    let mut draw = [0.0; DRAWS];
-    for d in &mut draw[..count] {
-        *d = rng.next_f64();
-    }
-    draw
+    uniform_draws(count, rng)
 }
 
 /// w · V(t) for the variations 50 and up that draw a fixed count of random numbers (`draw`,
