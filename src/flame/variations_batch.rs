@@ -56,7 +56,7 @@ fn smooth(v: u8) -> bool {
     if v < plugins::FIRST { basic::smooth(v) } else { plugins::smooth(v) }
 }
 
-/// The random number variation `v`'s smooth formula takes, drawn from `rng`.
+/// The random numbers variation `v`'s smooth formula takes, drawn from `rng`.
 #[inline(always)]
 fn smooth_draw(v: u8, rng: &mut Pcg32) -> [f64; DRAWS] {
     if v < plugins::FIRST { basic::smooth_draw(v, rng) } else { plugins::smooth_draw(v, rng) }
