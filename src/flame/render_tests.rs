@@ -54,6 +54,13 @@ fn flame() -> Flame {
     }
 }
 
+/// The layout and chaos game of `flame`.
+fn game_of(flame: &Flame) -> (Layout, ChaosGame) {
+    let layout = Layout::new(flame).expect("layout");
+    let game = ChaosGame::new(flame, &layout).expect("game");
+    (layout, game)
+}
+
 /// The oracle: flam3's loop, one run after another, each sample added at once.
 fn one_run_after_another(game: &ChaosGame, seed: u32, samples: u64, cells: usize) -> (Vec<Bucket>, u64) {
     let mut histogram = vec![[0u32; 5]; cells];
@@ -108,9 +115,7 @@ fn one_run_after_another(game: &ChaosGame, seed: u32, samples: u64, cells: usize
 /// in a partial run and is more runs than one worker's chains.
 #[test]
 fn batched_chains_sum_what_one_run_after_another_sums() {
-    let flame = flame();
-    let layout = Layout::new(&flame).expect("layout");
-    let game = ChaosGame::new(&flame, &layout).expect("game");
+    let (layout, game) = game_of(&flame());
     let samples = (CHAINS as u64 + 9) * RUN_SAMPLES + 1234;
     let cells = layout.hist_width * layout.hist_height;
     let expected = one_run_after_another(&game, 5, samples, cells);
@@ -127,9 +132,7 @@ fn batched_chains_sum_what_one_run_after_another_sums() {
 /// in every build.
 #[test]
 fn every_build_sums_the_same_bits() {
-    let flame = flame();
-    let layout = Layout::new(&flame).expect("layout");
-    let game = ChaosGame::new(&flame, &layout).expect("game");
+    let (layout, game) = game_of(&flame());
     let samples = (CHAINS as u64 + 3) * RUN_SAMPLES + 77;
     let cells = layout.hist_width * layout.hist_height;
     let one_worker = |build: &dyn Fn(&AtomicU64, &mut [Bucket]) -> u64| {
