@@ -185,13 +185,8 @@ impl Framebuffer {
             *a = (*a).min(*b);
         }
         for (a, b) in self.accum.iter_mut().zip(&other.accum) {
-            // Most pixels of an attractor's image are never hit: skipping their zero sums
-            // leaves the pages of this framebuffer that no point touched unwritten (never
-            // faulted in and zeroed), which was most of a two-thread render's system time.
-            if *b != [0; 4] {
-                for c in 0..4 {
-                    a[c] = a[c].saturating_add(b[c]);
-                }
+            for c in 0..4 {
+                a[c] = a[c].saturating_add(b[c]);
             }
         }
         for (a, b) in self.shadow.iter_mut().zip(&other.shadow) {
