@@ -29,6 +29,8 @@ use rayon::prelude::*;
 
 pub use super::render_base::RenderError;
 use super::render_base::{Bucket, WHITE_LEVEL};
+pub use super::render_chains::FUSE_ITERATIONS;
+use super::render_chains::{Chains, Round};
 use super::render_layout::Layout;
 use super::variations::{BatchScratch, CompiledXform};
 use super::{Flame, PaletteMode, Xform};
@@ -36,14 +38,8 @@ use crate::rng::Pcg32;
 
 /// Samples of one run of the chaos game (flam3's `sub_batch_size`).
 pub const RUN_SAMPLES: u64 = 10_000;
-/// Iterations dropped at the start of every run (flam3's `FUSE_27`).
-pub const FUSE_ITERATIONS: i64 = 15;
 /// Entries of the xform choice table (flam3's `CHOOSE_XFORM_GRAIN`).
 const CHOICE_ENTRIES: usize = 16_384;
-/// Runs one worker advances together: their iterations are independent, so the core overlaps
-/// them, and it maps the chains that drew one xform as a batch in vector registers.
-const CHAINS: usize = super::variations::BATCH;
-const _: () = assert!(CHAINS <= u8::MAX as usize, "chain numbers are bytes");
 /// Samples between a bucket's prefetch and its add: enough for the line to arrive, few enough
 /// that the prefetches do not queue up.
 const IN_FLIGHT: usize = 16;
@@ -127,22 +123,35 @@ impl Camera {
 
     /// The bucket of `p` and whether `p` is in view; out of view the bucket is some bucket
     /// of the histogram (the chaos game adds nothing there), so that no branch is needed.
+    #[cfg_attr(not(test), expect(dead_code, reason = "the chaos game rotates and buckets in loops of their own"))]
     #[inline(always)]
     fn bucket(&self, p: [f64; 2]) -> (usize, bool) {
-        let [x, y] = match &self.rotation {
-            Some(r) => {
-                let d = [p[0] - self.center[0], p[1] - self.center[1]];
-                [d[0] * r[0][0] + d[1] * r[0][1] + self.center[0], d[0] * r[1][0] + d[1] * r[1][1] + self.center[1]]
-            }
+        let p = match &self.rotation {
+            Some(r) => self.rotate(r, p),
             None => p,
         };
+        self.bucket_of_rotated(p)
+    }
+
+    /// `p` rotated by `rotation` (the camera's) about the center.
+    #[inline(always)]
+    fn rotate(&self, r: &[[f64; 2]; 2], p: [f64; 2]) -> [f64; 2] {
+        let d = [p[0] - self.center[0], p[1] - self.center[1]];
+        [d[0] * r[0][0] + d[1] * r[0][1] + self.center[0], d[0] * r[1][0] + d[1] * r[1][1] + self.center[1]]
+    }
+
+    /// [`Self::bucket`] of a point already rotated.
+    #[inline(always)]
+    fn bucket_of_rotated(&self, [x, y]: [f64; 2]) -> (usize, bool) {
         let b = &self.bounds;
         let inside = (x >= b[0]) & (y >= b[1]) & (x <= b[2]) & (y <= b[3]);
         // In view the scaled coordinates are ≥ 0 (truncated toward 0 as flam3 does); out of
         // view (NaN included, which converts to 0) the clamps keep the bucket in the histogram.
         // On the far edge (x = bounds[2]) flam3 steps into the next row; this stays in the last.
-        let i = ((self.x_scale * x - self.x_offset) as i64).clamp(0, self.hist_width as i64 - 1) as usize;
-        let j = ((self.y_scale * y - self.y_offset) as i64).clamp(0, self.hist_height as i64 - 1) as usize;
+        // (Converted to i32, which saturates, so that a loop of them is a vector loop: the
+        // histogram's sides are far below 2^31, so the clamped result is the i64 one.)
+        let i = ((self.x_scale * x - self.x_offset) as i32).clamp(0, self.hist_width as i32 - 1) as usize;
+        let j = ((self.y_scale * y - self.y_offset) as i32).clamp(0, self.hist_height as i32 - 1) as usize;
         (i + j * self.hist_width, inside)
     }
 }
@@ -328,15 +337,16 @@ impl ChaosGame {
         self.run_chains(seed, samples, next_run, histogram, progress)
     }
 
-    /// One worker: [`CHAINS`] runs advanced together, each taking the next run when its own is
+    /// One worker: `render_chains::CHAINS` runs advanced together, each taking the next run when its own is
     /// done, until no run is left. Returns the re-seeds.
     ///
-    /// A round is one iteration of every chain, in phases: each chain draws its xform; the
-    /// chains are grouped by xform and each group mapped by [`CompiledXform::apply_batch`]
-    /// (the vector path); then chain by chain the re-seeds and the final xform's draw; the
-    /// final xform's points as one batch; and the plot, whose buckets are prefetched and
-    /// added at the next round. Each chain draws the same numbers in the same order as flam3's
-    /// loop does, so the sums are those of one run after another.
+    /// A round is one iteration of every chain, in phases, each a loop over the chains (most
+    /// of them vector loops): each chain draws its xform; the chains are grouped by xform and
+    /// each group mapped by [`CompiledXform::apply_batch`] (the vector path); the re-seeds
+    /// (chain by chain only in a round that has one) and the final xform's draw; the final
+    /// xform's points as one batch; the buckets; and the adds, whose buckets are prefetched
+    /// [`IN_FLIGHT`] samples ahead. Each chain draws the same numbers in the same order as
+    /// flam3's loop does, so the sums are those of one run after another.
     #[inline(always)]
     fn run_chains(
         &self,
@@ -347,19 +357,8 @@ impl ChaosGame {
         progress: &(dyn Fn(u64) + Sync),
     ) -> u64 {
         let mut c = Chains::new();
+        let mut r = Round::new(self.xforms.len());
         let mut bad = 0;
-        // Per xform: chains that drew it this round, and where its group starts in `order`.
-        let mut count = vec![0u8; self.xforms.len()];
-        let mut start = vec![0u8; self.xforms.len()];
-        let mut drawn: Vec<usize> = Vec::with_capacity(CHAINS);
-        let mut order = [0u8; CHAINS];
-        let mut chosen = [0usize; CHAINS];
-        let (mut gx, mut gy) = ([0.0f64; CHAINS], [0.0f64; CHAINS]);
-        let (mut qx, mut qy) = ([0.0f64; CHAINS], [0.0f64; CHAINS]);
-        let mut next_color = [0.0f64; CHAINS];
-        let mut plot = [false; CHAINS];
-        let (mut shown, mut shown_color) = ([[0.0f64; 2]; CHAINS], [0.0f64; CHAINS]);
-        let mut finals: Vec<u8> = Vec::with_capacity(CHAINS);
         let mut scratch = BatchScratch::default();
         // The last IN_FLIGHT samples' buckets (prefetched) and increments, not yet added.
         let mut in_flight = [EMPTY_SLOT; IN_FLIGHT];
@@ -388,113 +387,180 @@ impl ChaosGame {
                 }
                 return bad;
             }
-            // Each chain's xform, and the chains grouped by xform (a counting sort).
-            drawn.clear();
-            for (k, chosen) in chosen[..live].iter_mut().enumerate() {
-                let entry = c.rng[k].next_u32() as usize & (CHOICE_ENTRIES - 1);
-                let row = if self.xaos { c.last[k] } else { 0 };
-                let x = self.choice[row * CHOICE_ENTRIES + entry] as usize;
-                *chosen = x;
-                if count[x] == 0 {
-                    drawn.push(x);
-                }
-                count[x] += 1;
-            }
-            let mut at = 0u8;
-            for &x in &drawn {
-                start[x] = at;
-                at += count[x];
-            }
-            for (k, &x) in chosen[..live].iter().enumerate() {
-                order[start[x] as usize] = k as u8;
-                start[x] += 1;
-            }
+            self.choose(&mut c, &mut r);
             // Each group mapped by its xform (start[x] is now the group's end).
-            for &x in &drawn {
-                let (end, m) = (start[x] as usize, count[x] as usize);
-                let members = &order[end - m..end];
+            for &x in &r.drawn {
+                let (end, m) = (r.start[x] as usize, r.count[x] as usize);
+                let members = &r.order[end - m..end];
                 let xf = &self.xforms[x];
                 for (j, &k) in members.iter().enumerate() {
                     let k = k as usize;
-                    (gx[j], gy[j]) = (c.x[k], c.y[k]);
-                    next_color[k] = xf.color_of(c.color[k]);
+                    (r.gx[j], r.gy[j]) = (c.x[k], c.y[k]);
+                    r.next_color[k] = xf.color_of(c.color[k]);
+                    r.weight[k] = xf.plotted_weight;
                 }
                 if xf.map.batches() {
-                    xf.map.apply_batch(&mut gx[..m], &mut gy[..m], members, &mut c.rng, &mut scratch);
+                    xf.map.apply_batch(&mut r.gx[..m], &mut r.gy[..m], members, &mut c.rng, &mut scratch);
                 } else {
-                    xf.map.apply_each(&mut gx[..m], &mut gy[..m], members, &mut c.rng);
+                    xf.map.apply_each(&mut r.gx[..m], &mut r.gy[..m], members, &mut c.rng);
                 }
                 for (j, &k) in members.iter().enumerate() {
-                    (qx[k as usize], qy[k as usize]) = (gx[j], gy[j]);
+                    (r.qx[k as usize], r.qy[k as usize]) = (r.gx[j], r.gy[j]);
                 }
-                count[x] = 0;
+                r.count[x] = 0;
             }
-            // Chain by chain: re-seeds (a retried step plots nothing) and the final xform's draw.
-            finals.clear();
+            bad += self.settle(&mut c, &mut r);
+            if let Some(f) = &self.final_xform {
+                self.apply_final(f, &mut c, &mut r, &mut scratch);
+            }
+            self.find_buckets(&mut c, &mut r);
+            // The adds, each bucket prefetched IN_FLIGHT samples before its add; a sample that
+            // adds nothing adds 0 to bucket 0.
             for k in 0..live {
-                let mut q = [qx[k], qy[k]];
-                plot[k] = false;
+                let b = r.bucket[k];
+                prefetch(&histogram[b]);
+                let weight = r.weight[k];
+                let inc = if !r.adds[k] {
+                    [0; 5]
+                } else if self.palette_mode == PaletteMode::Step && weight == 1.0 {
+                    self.step_increments[r.step_entry[k] as usize]
+                } else {
+                    self.increments_of(r.shown_color[k], weight)
+                };
+                let (earlier, earlier_inc) = std::mem::replace(&mut in_flight[next_in_flight], (b, inc));
+                add(&mut histogram[earlier], &earlier_inc);
+                next_in_flight = (next_in_flight + 1) % IN_FLIGHT;
+            }
+        }
+    }
+
+    /// Each live chain's xform (its draw from its generator, a vector loop, then the choice
+    /// table), and the chains grouped by xform (a counting sort): `r.drawn`, `r.count`,
+    /// `r.order` and `r.start` (each group's start in `order`).
+    #[inline(always)]
+    fn choose(&self, c: &mut Chains, r: &mut Round) {
+        let live = c.live;
+        for (entry, rng) in r.entry[..live].iter_mut().zip(&mut c.rng[..live]) {
+            *entry = rng.next_u32() & (CHOICE_ENTRIES as u32 - 1);
+        }
+        r.drawn.clear();
+        for k in 0..live {
+            let row = if self.xaos { c.last[k] } else { 0 };
+            let x = self.choice[row * CHOICE_ENTRIES + r.entry[k] as usize] as usize;
+            r.chosen[k] = x;
+            if r.count[x] == 0 {
+                r.drawn.push(x);
+            }
+            r.count[x] += 1;
+        }
+        let mut at = 0u8;
+        for &x in &r.drawn {
+            r.start[x] = at;
+            at += r.count[x];
+        }
+        for (k, &x) in r.chosen[..live].iter().enumerate() {
+            r.order[r.start[x] as usize] = k as u8;
+            r.start[x] += 1;
+        }
+    }
+
+    /// The mapped points into the chains, their re-seeds (a retried step plots nothing), and
+    /// what each shows before the final xform. Returns the re-seeds. Chain by chain only in a
+    /// round with a point out of the plane; otherwise vector loops.
+    #[inline(always)]
+    fn settle(&self, c: &mut Chains, r: &mut Round) -> u64 {
+        let live = c.live;
+        let any_bad = r.qx[..live].iter().zip(&r.qy[..live]).fold(false, |any, (&x, &y)| any | is_bad([x, y]));
+        let mut bad = 0;
+        if any_bad {
+            for k in 0..live {
+                let mut q = [r.qx[k], r.qy[k]];
+                r.plot[k] = false;
                 if is_bad(q) {
                     q = [uniform11(&mut c.rng[k]), uniform11(&mut c.rng[k])];
                     bad += 1;
                     c.consecutive_bad[k] += 1;
                     if c.consecutive_bad[k] < 5 {
                         [c.x[k], c.y[k]] = q;
-                        c.color[k] = next_color[k];
+                        c.color[k] = r.next_color[k];
                         continue;
                     }
                 }
                 c.consecutive_bad[k] = 0;
-                c.last[k] = chosen[k] + 1;
-                [c.x[k], c.y[k]] = q;
-                c.color[k] = next_color[k];
-                plot[k] = true;
-                (shown[k], shown_color[k]) = (q, next_color[k]);
-                if let Some(f) = &self.final_xform
-                    && (f.opacity == 1.0 || c.rng[k].next_f64() < f.opacity)
-                {
-                    finals.push(k as u8);
-                }
+                c.last[k] = r.chosen[k] + 1;
+                r.plot[k] = true;
+                [r.qx[k], r.qy[k]] = q;
             }
-            if let Some(f) = &self.final_xform
-                && !finals.is_empty()
-            {
-                let m = finals.len();
-                for (j, &k) in finals.iter().enumerate() {
-                    [gx[j], gy[j]] = shown[k as usize];
-                }
-                if f.map.batches() {
-                    f.map.apply_batch(&mut gx[..m], &mut gy[..m], &finals, &mut c.rng, &mut scratch);
-                } else {
-                    f.map.apply_each(&mut gx[..m], &mut gy[..m], &finals, &mut c.rng);
-                }
-                for (j, &k) in finals.iter().enumerate() {
-                    let k = k as usize;
-                    shown_color[k] = f.color_of(next_color[k]);
-                    shown[k] = [gx[j], gy[j]];
-                    if is_bad(shown[k]) {
-                        shown[k] = [uniform11(&mut c.rng[k]), uniform11(&mut c.rng[k])];
-                    }
-                }
+        } else {
+            c.consecutive_bad[..live].fill(0);
+            r.plot[..live].fill(true);
+            for (last, &chosen) in c.last[..live].iter_mut().zip(&r.chosen[..live]) {
+                *last = chosen + 1;
             }
-            // The plot: without branches (whether a sample is in view is as good as random),
-            // a sample that is not plotted adds 0 to bucket 0.
-            for k in 0..live {
-                if !plot[k] {
-                    continue;
-                }
-                let weight = self.xforms[chosen[k]].plotted_weight;
-                let (b, inside) = self.camera.bucket(shown[k]);
-                let plotted = inside & (c.i[k] >= 0) & (weight != 0.0);
-                let mask = 0u32.wrapping_sub(u32::from(plotted));
-                let b = b & (mask as usize);
-                prefetch(&histogram[b]);
-                let inc = self.increments_of(shown_color[k], weight).map(|v| v & mask);
-                let (earlier, earlier_inc) = std::mem::replace(&mut in_flight[next_in_flight], (b, inc));
-                add(&mut histogram[earlier], &earlier_inc);
-                next_in_flight = (next_in_flight + 1) % IN_FLIGHT;
-                c.i[k] += 1;
+        }
+        for k in 0..live {
+            if r.plot[k] {
+                (c.x[k], c.y[k]) = (r.qx[k], r.qy[k]);
+                c.color[k] = r.next_color[k];
             }
+        }
+        r.sx[..live].copy_from_slice(&c.x[..live]);
+        r.sy[..live].copy_from_slice(&c.y[..live]);
+        r.shown_color[..live].copy_from_slice(&r.next_color[..live]);
+        bad
+    }
+
+    /// The final xform: each plotting chain's draw, then the points of those that apply it,
+    /// as one batch, into what they show (a point out of the plane shown at random).
+    #[inline(always)]
+    fn apply_final(&self, f: &GameXform, c: &mut Chains, r: &mut Round, scratch: &mut BatchScratch) {
+        r.finals.clear();
+        for k in 0..c.live {
+            if r.plot[k] && (f.opacity == 1.0 || c.rng[k].next_f64() < f.opacity) {
+                r.finals.push(k as u8);
+            }
+        }
+        let m = r.finals.len();
+        if m == 0 {
+            return;
+        }
+        for (j, &k) in r.finals.iter().enumerate() {
+            (r.gx[j], r.gy[j]) = (r.sx[k as usize], r.sy[k as usize]);
+        }
+        if f.map.batches() {
+            f.map.apply_batch(&mut r.gx[..m], &mut r.gy[..m], &r.finals, &mut c.rng, scratch);
+        } else {
+            f.map.apply_each(&mut r.gx[..m], &mut r.gy[..m], &r.finals, &mut c.rng);
+        }
+        for (j, &k) in r.finals.iter().enumerate() {
+            let k = k as usize;
+            r.shown_color[k] = f.color_of(r.next_color[k]);
+            (r.sx[k], r.sy[k]) = (r.gx[j], r.gy[j]);
+            if is_bad([r.sx[k], r.sy[k]]) {
+                (r.sx[k], r.sy[k]) = (uniform11(&mut c.rng[k]), uniform11(&mut c.rng[k]));
+            }
+        }
+    }
+
+    /// Each live chain's bucket and whether it adds to it (its step counts, it is past the
+    /// fuse, its point is in view and its xform's plotted weight is not 0), a vector loop;
+    /// counts the chains' steps; the step palette's entry of each.
+    #[inline(always)]
+    fn find_buckets(&self, c: &mut Chains, r: &mut Round) {
+        let live = c.live;
+        if let Some(rotation) = &self.camera.rotation {
+            for (x, y) in r.sx[..live].iter_mut().zip(&mut r.sy[..live]) {
+                [*x, *y] = self.camera.rotate(rotation, [*x, *y]);
+            }
+        }
+        for k in 0..live {
+            let (b, inside) = self.camera.bucket_of_rotated([r.sx[k], r.sy[k]]);
+            let adds = r.plot[k] & inside & (c.i[k] >= 0) & (r.weight[k] != 0.0);
+            r.adds[k] = adds;
+            r.bucket[k] = if adds { b } else { 0 };
+            c.i[k] += i64::from(r.plot[k]);
+            // The step palette's entry, as `increments_of` finds it (NaN converts to 0).
+            r.step_entry[k] = (r.shown_color[k] * 256.0).clamp(0.0, 255.0) as u32;
         }
     }
 
@@ -525,52 +591,6 @@ impl ChaosGame {
 
 /// An empty slot of the samples in flight: 0 added to bucket 0.
 const EMPTY_SLOT: (usize, Bucket) = (0, [0; 5]);
-
-/// The runs one worker advances together, chain by chain in arrays; chains `0..live` are
-/// running.
-struct Chains {
-    live: usize,
-    rng: [Pcg32; CHAINS],
-    x: [f64; CHAINS],
-    y: [f64; CHAINS],
-    color: [f64; CHAINS],
-    /// The previous xform + 1 (0 at the start): the xaos row.
-    last: [usize; CHAINS],
-    consecutive_bad: [u32; CHAINS],
-    /// The iteration, from −[`FUSE_ITERATIONS`]; the run ends at `n`.
-    i: [i64; CHAINS],
-    n: [i64; CHAINS],
-}
-
-impl Chains {
-    /// Every chain live and finished, so that the first round starts a run on each.
-    fn new() -> Self {
-        Self {
-            live: CHAINS,
-            rng: [Pcg32::from_state(0); CHAINS],
-            x: [0.0; CHAINS],
-            y: [0.0; CHAINS],
-            color: [0.0; CHAINS],
-            last: [0; CHAINS],
-            consecutive_bad: [0; CHAINS],
-            i: [0; CHAINS],
-            n: [0; CHAINS],
-        }
-    }
-
-    fn start(&mut self, k: usize, (rng, p, color, n): (Pcg32, [f64; 2], f64, i64)) {
-        (self.rng[k], [self.x[k], self.y[k]], self.color[k]) = (rng, p, color);
-        (self.last[k], self.consecutive_bad[k], self.i[k], self.n[k]) = (0, 0, -FUSE_ITERATIONS, n);
-    }
-
-    /// Chain `from`'s state into chain `to`.
-    fn move_chain(&mut self, from: usize, to: usize) {
-        self.rng[to] = self.rng[from];
-        (self.x[to], self.y[to], self.color[to]) = (self.x[from], self.y[from], self.color[from]);
-        (self.last[to], self.consecutive_bad[to]) = (self.last[from], self.consecutive_bad[from]);
-        (self.i[to], self.n[to]) = (self.i[from], self.n[from]);
-    }
-}
 
 #[inline(always)]
 fn add(bucket: &mut Bucket, inc: &Bucket) {

@@ -61,7 +61,9 @@ impl Layout {
         let hist_width = oversample * w as usize + 2 * gutter;
         let hist_height = oversample * h as usize + 2 * gutter;
         let bytes = (hist_width * hist_height) as u64 * std::mem::size_of::<Bucket>() as u64;
-        if bytes > MAX_HISTOGRAM_BYTES {
+        // (Within the limit each side is below 2^31, which the chaos game's bucket arithmetic
+        // takes for granted; said here too, for a histogram one bucket high.)
+        if bytes > MAX_HISTOGRAM_BYTES || hist_width > i32::MAX as usize || hist_height > i32::MAX as usize {
             return Err(RenderError::TooLarge { width: hist_width, height: hist_height, bytes });
         }
         Ok(Self {

@@ -2,6 +2,7 @@
 //! flight) against flam3's loop run one run after another.
 
 use super::*;
+use crate::flame::render_chains::CHAINS;
 use crate::flame::{Variation, VariationTerm};
 
 /// Three xforms with xaos, an opacity, a spherical term that sends points out of the plane
@@ -52,6 +53,16 @@ fn flame() -> Flame {
         final_xform: Some(final_xform),
         ..Flame::default()
     }
+}
+
+/// The other branches of a round: a step palette, no final xform, no rotation, one xform
+/// plotted at weight 10^(log₂ 0.6) and the others at 1.
+fn step_flame() -> Flame {
+    let mut f = flame();
+    f.palette_mode = PaletteMode::Step;
+    f.final_xform = None;
+    f.rotate = 0.0;
+    f
 }
 
 /// The layout and chaos game of `flame`.
@@ -115,15 +126,18 @@ fn one_run_after_another(game: &ChaosGame, seed: u32, samples: u64, cells: usize
 /// in a partial run and is more runs than one worker's chains.
 #[test]
 fn batched_chains_sum_what_one_run_after_another_sums() {
-    let (layout, game) = game_of(&flame());
-    let samples = (CHAINS as u64 + 9) * RUN_SAMPLES + 1234;
-    let cells = layout.hist_width * layout.hist_height;
-    let expected = one_run_after_another(&game, 5, samples, cells);
-    assert!(expected.0.iter().any(|b| b[4] != 0), "nothing plotted");
-    for threads in [1, 3] {
-        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().expect("pool");
-        let got = pool.install(|| game.run(5, samples, &layout, &|_| {}));
-        assert!(got == expected, "{threads} thread(s): the histograms or re-seed counts differ");
+    for (name, flame) in [("flame", flame()), ("step_flame", step_flame())] {
+        let (layout, game) = game_of(&flame);
+        let samples = (CHAINS as u64 + 9) * RUN_SAMPLES + 1234;
+        let cells = layout.hist_width * layout.hist_height;
+        let expected = one_run_after_another(&game, 5, samples, cells);
+        assert!(expected.0.iter().any(|b| b[4] != 0), "{name}: nothing plotted");
+        assert!(expected.1 > 0, "{name}: no re-seed");
+        for threads in [1, 3] {
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().expect("pool");
+            let got = pool.install(|| game.run(5, samples, &layout, &|_| {}));
+            assert!(got == expected, "{name}, {threads} thread(s): the histograms or re-seed counts differ");
+        }
     }
 }
 

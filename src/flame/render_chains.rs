@@ -1,0 +1,122 @@
+//! The state a worker of the flame chaos game (`render.rs`) keeps: its chains, and the arrays of
+//! one round, one entry per chain, so that the round's phases are loops over the chains that
+//! the compiler can turn into vector loops.
+
+use crate::rng::Pcg32;
+
+/// Runs one worker advances together: their iterations are independent, so the core overlaps
+/// them, and it maps the chains that drew one xform as a batch in vector registers.
+pub(super) const CHAINS: usize = super::variations::BATCH;
+const _: () = assert!(CHAINS <= u8::MAX as usize, "chain numbers are bytes");
+
+/// The iteration a run starts at: flam3 drops its first 15 (its `FUSE_27`).
+pub const FUSE_ITERATIONS: i64 = 15;
+
+/// The runs one worker advances together, chain by chain in arrays; chains `0..live` are
+/// running.
+pub(super) struct Chains {
+    pub live: usize,
+    pub rng: [Pcg32; CHAINS],
+    pub x: [f64; CHAINS],
+    pub y: [f64; CHAINS],
+    pub color: [f64; CHAINS],
+    /// The previous xform + 1 (0 at the start): the xaos row.
+    pub last: [usize; CHAINS],
+    pub consecutive_bad: [u32; CHAINS],
+    /// The iteration, from −[`FUSE_ITERATIONS`]; the run ends at `n`.
+    pub i: [i64; CHAINS],
+    pub n: [i64; CHAINS],
+}
+
+impl Chains {
+    /// Every chain live and finished, so that the first round starts a run on each.
+    pub fn new() -> Self {
+        Self {
+            live: CHAINS,
+            rng: [Pcg32::from_state(0); CHAINS],
+            x: [0.0; CHAINS],
+            y: [0.0; CHAINS],
+            color: [0.0; CHAINS],
+            last: [0; CHAINS],
+            consecutive_bad: [0; CHAINS],
+            i: [0; CHAINS],
+            n: [0; CHAINS],
+        }
+    }
+
+    pub fn start(&mut self, k: usize, (rng, p, color, n): (Pcg32, [f64; 2], f64, i64)) {
+        (self.rng[k], [self.x[k], self.y[k]], self.color[k]) = (rng, p, color);
+        (self.last[k], self.consecutive_bad[k], self.i[k], self.n[k]) = (0, 0, -FUSE_ITERATIONS, n);
+    }
+
+    /// Chain `from`'s state into chain `to`.
+    pub fn move_chain(&mut self, from: usize, to: usize) {
+        self.rng[to] = self.rng[from];
+        (self.x[to], self.y[to], self.color[to]) = (self.x[from], self.y[from], self.color[from]);
+        (self.last[to], self.consecutive_bad[to]) = (self.last[from], self.consecutive_bad[from]);
+        (self.i[to], self.n[to]) = (self.i[from], self.n[from]);
+    }
+}
+
+/// One round's quantities, chain by chain (index k) or, for a group being mapped, member by
+/// member (index j).
+pub(super) struct Round {
+    /// Each chain's entry into the choice table, and the xform it picks.
+    pub entry: [u32; CHAINS],
+    pub chosen: [usize; CHAINS],
+    /// Per xform: chains that drew it, and where its group starts (then ends) in `order`.
+    pub count: Vec<u8>,
+    pub start: Vec<u8>,
+    /// The xforms drawn this round, in the order first drawn.
+    pub drawn: Vec<usize>,
+    /// The chains grouped by xform.
+    pub order: [u8; CHAINS],
+    /// A group's points, member by member, as the batch maps them.
+    pub gx: [f64; CHAINS],
+    pub gy: [f64; CHAINS],
+    /// Each chain's mapped point, colour, and its xform's plotted weight.
+    pub qx: [f64; CHAINS],
+    pub qy: [f64; CHAINS],
+    pub next_color: [f64; CHAINS],
+    pub weight: [f64; CHAINS],
+    /// Whether the chain's step counts (a retried step after a re-seed does not).
+    pub plot: [bool; CHAINS],
+    /// What the chain shows: its point, or the final xform's copy of it, and the colour.
+    pub sx: [f64; CHAINS],
+    pub sy: [f64; CHAINS],
+    pub shown_color: [f64; CHAINS],
+    /// The chains that apply the final xform this round.
+    pub finals: Vec<u8>,
+    /// The bucket each chain adds to (0 where it adds nothing) and whether it adds.
+    pub bucket: [usize; CHAINS],
+    pub adds: [bool; CHAINS],
+    /// The entry of the step palette each chain's colour picks.
+    pub step_entry: [u32; CHAINS],
+}
+
+impl Round {
+    pub fn new(xforms: usize) -> Self {
+        Self {
+            entry: [0; CHAINS],
+            chosen: [0; CHAINS],
+            count: vec![0; xforms],
+            start: vec![0; xforms],
+            drawn: Vec::with_capacity(CHAINS),
+            order: [0; CHAINS],
+            gx: [0.0; CHAINS],
+            gy: [0.0; CHAINS],
+            qx: [0.0; CHAINS],
+            qy: [0.0; CHAINS],
+            next_color: [0.0; CHAINS],
+            weight: [0.0; CHAINS],
+            plot: [false; CHAINS],
+            sx: [0.0; CHAINS],
+            sy: [0.0; CHAINS],
+            shown_color: [0.0; CHAINS],
+            finals: Vec::with_capacity(CHAINS),
+            bucket: [0; CHAINS],
+            adds: [false; CHAINS],
+            step_entry: [0; CHAINS],
+        }
+    }
+}
