@@ -228,7 +228,10 @@ pub fn run_per_thread<S: PointSink + Send>(
 ) -> Vec<S> {
     let threads = rayon::current_num_threads().max(1);
     let slots: Vec<std::sync::Mutex<Option<S>>> = (0..threads).map(|_| std::sync::Mutex::new(None)).collect();
-    chunks.into_par_iter().for_each(|c| {
+    // One chunk per job (about a millisecond of work): rayon otherwise runs a stretch of
+    // chunks as one piece that no idle thread can take, and at the end one thread went on
+    // alone for tens of milliseconds.
+    chunks.into_par_iter().with_max_len(1).for_each(|c| {
         // Inside the pool's workers the index is below the thread count; a thread's slot is
         // only ever taken by that thread, so the lock never waits.
         let slot = rayon::current_thread_index().unwrap_or(0) % threads;
