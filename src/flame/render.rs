@@ -419,14 +419,15 @@ impl ChaosGame {
             for k in 0..live {
                 let b = r.bucket[k];
                 prefetch(&histogram[b]);
+                // Whether it adds is as good as random: a mask, not a branch.
                 let weight = r.weight[k];
-                let inc = if !r.adds[k] {
-                    [0; 5]
-                } else if self.palette_mode == PaletteMode::Step && weight == 1.0 {
+                let mask = 0u32.wrapping_sub(u32::from(r.adds[k]));
+                let inc = if self.palette_mode == PaletteMode::Step && weight == 1.0 {
                     self.step_increments[r.step_entry[k] as usize]
                 } else {
                     self.increments_of(r.shown_color[k], weight)
-                };
+                }
+                .map(|v| v & mask);
                 let (earlier, earlier_inc) = std::mem::replace(&mut in_flight[next_in_flight], (b, inc));
                 add(&mut histogram[earlier], &earlier_inc);
                 next_in_flight = (next_in_flight + 1) % IN_FLIGHT;
