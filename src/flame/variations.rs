@@ -326,6 +326,9 @@ fn uniform_draws(count: usize, rng: &mut Pcg32) -> [f64; DRAWS] {
 pub(crate) const NEEDS_ATAN_XY: u8 = 1;
 pub(crate) const NEEDS_ANGLES: u8 = 2;
 pub(crate) const NEEDS_ATAN_YX: u8 = 4;
+/// √(tx² + ty²): the point-by-point path always computes it; the batch path only where a term
+/// reads it (`basic::needs` says which do not).
+pub(crate) const NEEDS_SQRT: u8 = 8;
 
 /// One weighted variation with its constants.
 #[derive(Clone, Copy, Debug)]

@@ -7,7 +7,7 @@
 //! ty/|t| (the swapped angle), fisheye swaps its output axes, radial_blur's rotated part is not
 //! scaled by the weight, arch, rays, blade, secant2 and twintrian use the weight inside as well.
 
-use super::{DRAWS, EPS, NEEDS_ANGLES, NEEDS_ATAN_XY, NEEDS_ATAN_YX, Point, uniform_draws};
+use super::{DRAWS, EPS, NEEDS_ANGLES, NEEDS_ATAN_XY, NEEDS_ATAN_YX, NEEDS_SQRT, Point, uniform_draws};
 use crate::flame::Coefs;
 use crate::flame::trig::{Elementary, Exact};
 use crate::rng::Pcg32;
@@ -15,13 +15,17 @@ use std::f64::consts::{FRAC_1_PI, LOG10_E, PI};
 
 /// Which of [`Point`]'s optional quantities variation `v` reads.
 pub(super) fn needs(v: u8) -> u8 {
-    match v {
+    let angles = match v {
         5..=8 | 12 | 13 | 22 | 25 | 49 => NEEDS_ATAN_XY,
         23 => NEEDS_ATAN_XY | NEEDS_ANGLES,
         9..=11 | 19 | 21 | 26 => NEEDS_ANGLES,
         32 | 33 | 36 | 38 => NEEDS_ATAN_YX,
         _ => 0,
-    }
+    };
+    // Those that do not read r: linear, sinusoidal, spherical, swirl, bent, waves, popcorn,
+    // exponential, cosine, bubble, cylinder.
+    let sqrt = if matches!(v, 0..=3 | 14 | 15 | 17 | 18 | 20 | 28 | 29) { 0 } else { NEEDS_SQRT };
+    angles | sqrt
 }
 
 /// The constants of variation `v` from its parameters `p` (in the table's order) and the

@@ -3,7 +3,7 @@
 //! smooth variations run in vector registers (the chaos game's AVX-512 and AVX2 builds,
 //! `flame/render.rs`); and the point-by-point path of a group, out of line.
 
-use super::{CompiledXform, DRAWS, NEEDS_ANGLES, NEEDS_ATAN_XY, NEEDS_ATAN_YX, Point, basic, plugins};
+use super::{CompiledXform, DRAWS, NEEDS_ANGLES, NEEDS_ATAN_XY, NEEDS_ATAN_YX, NEEDS_SQRT, Point, basic, plugins};
 use crate::flame::{apply_coefs, trig};
 use crate::rng::Pcg32;
 
@@ -140,11 +140,17 @@ impl CompiledXform {
                 s.ty[j] += dy;
             }
         }
+        let needs = |flag: u8| self.needs & flag != 0;
         for j in 0..m {
             s.sumsq[j] = s.tx[j] * s.tx[j] + s.ty[j] * s.ty[j];
-            s.sqrt[j] = s.sumsq[j].sqrt();
         }
-        let needs = |flag: u8| self.needs & flag != 0;
+        // (The terms that read none of r, sina and cosa see r = 0.)
+        let sqrt = needs(NEEDS_SQRT | NEEDS_ANGLES);
+        if sqrt {
+            for j in 0..m {
+                s.sqrt[j] = s.sumsq[j].sqrt();
+            }
+        }
         if needs(NEEDS_ATAN_XY) {
             atan2_lanes(&mut s.atan_xy[..m], &s.tx[..m], &s.ty[..m]);
         }
@@ -163,7 +169,7 @@ impl CompiledXform {
             tx: s.tx[j],
             ty: s.ty[j],
             sumsq: s.sumsq[j],
-            sqrt: s.sqrt[j],
+            sqrt: if sqrt { s.sqrt[j] } else { 0.0 },
             atan_xy: if xy { s.atan_xy[j] } else { 0.0 },
             sina: if angles { s.sina[j] } else { 0.0 },
             cosa: if angles { s.cosa[j] } else { 0.0 },

@@ -9,7 +9,7 @@
 //! `rint`), flux's weight shifts its poles.
 
 use super::basic::{c_int, pseudo_gaussian};
-use super::{DRAWS, EPS, NEEDS_ATAN_XY, NEEDS_ATAN_YX, Point, uniform_draws};
+use super::{DRAWS, EPS, NEEDS_ATAN_XY, NEEDS_ATAN_YX, NEEDS_SQRT, Point, uniform_draws};
 use crate::flame::trig::{Elementary, Exact};
 use crate::rng::Pcg32;
 use std::f64::consts::{FRAC_1_PI, FRAC_2_PI, FRAC_PI_2, FRAC_PI_4, PI};
@@ -19,11 +19,13 @@ pub(super) const FIRST: u8 = 50;
 
 /// Which of [`Point`]'s optional quantities variation `v` reads.
 pub(super) fn needs(v: u8) -> u8 {
-    match v {
-        70 => NEEDS_ATAN_XY,
-        50 | 51 | 59 | 63 | 77..=80 | 83 => NEEDS_ATAN_YX,
-        _ => 0,
-    }
+    // Every one of these is taken to read r.
+    NEEDS_SQRT
+        | match v {
+            70 => NEEDS_ATAN_XY,
+            50 | 51 | 59 | 63 | 77..=80 | 83 => NEEDS_ATAN_YX,
+            _ => 0,
+        }
 }
 
 /// The constants of variation `v` from its parameters `p` (in the table's order).
