@@ -388,10 +388,10 @@ impl ChaosGame {
                 return bad;
             }
             self.choose(&mut c, &mut r);
-            // Each group mapped by its xform (start[x] is now the group's end).
+            // Each group mapped by its xform.
             for &x in &r.drawn {
-                let (end, m) = (r.start[x] as usize, r.count[x] as usize);
-                let members = &r.order[end - m..end];
+                let (start, m) = (r.start[x] as usize, r.count[x] as usize);
+                let members = &r.order[start..start + m];
                 let xf = &self.xforms[x];
                 for (j, &k) in members.iter().enumerate() {
                     let k = k as usize;
@@ -437,7 +437,8 @@ impl ChaosGame {
 
     /// Each live chain's xform (its draw from its generator, a vector loop, then the choice
     /// table), and the chains grouped by xform (a counting sort): `r.drawn`, `r.count`,
-    /// `r.order` and `r.start` (each group's start in `order`).
+    /// `r.order` and `r.start` (each group's start in `order`), `r.rank` (each chain's place
+    /// in its group).
     #[inline(always)]
     fn choose(&self, c: &mut Chains, r: &mut Round) {
         let live = c.live;
@@ -452,6 +453,7 @@ impl ChaosGame {
             if r.count[x] == 0 {
                 r.drawn.push(x);
             }
+            r.rank[k] = r.count[x];
             r.count[x] += 1;
         }
         let mut at = 0u8;
@@ -459,9 +461,9 @@ impl ChaosGame {
             r.start[x] = at;
             at += r.count[x];
         }
-        for (k, &x) in r.chosen[..live].iter().enumerate() {
-            r.order[r.start[x] as usize] = k as u8;
-            r.start[x] += 1;
+        // (With the ranks, no store here feeds a later load, as a running `start[x] += 1` did.)
+        for (k, (&x, &rank)) in r.chosen[..live].iter().zip(&r.rank[..live]).enumerate() {
+            r.order[(r.start[x] + rank) as usize] = k as u8;
         }
     }
 

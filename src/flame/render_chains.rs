@@ -64,13 +64,14 @@ pub(super) struct Round {
     /// Each chain's entry into the choice table, and the xform it picks.
     pub entry: [u32; CHAINS],
     pub chosen: [usize; CHAINS],
-    /// Per xform: chains that drew it, and where its group starts (then ends) in `order`.
+    /// Per xform: chains that drew it, and where its group starts in `order`.
     pub count: Vec<u8>,
     pub start: Vec<u8>,
     /// The xforms drawn this round, in the order first drawn.
     pub drawn: Vec<usize>,
-    /// The chains grouped by xform.
+    /// The chains grouped by xform, and each chain's place in its group.
     pub order: [u8; CHAINS],
+    pub rank: [u8; CHAINS],
     /// A group's points, member by member, as the batch maps them.
     pub gx: [f64; CHAINS],
     pub gy: [f64; CHAINS],
@@ -103,6 +104,7 @@ impl Round {
             start: vec![0; xforms],
             drawn: Vec::with_capacity(CHAINS),
             order: [0; CHAINS],
+            rank: [0; CHAINS],
             gx: [0.0; CHAINS],
             gy: [0.0; CHAINS],
             qx: [0.0; CHAINS],
