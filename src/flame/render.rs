@@ -30,7 +30,7 @@ use rayon::prelude::*;
 pub use super::render_base::RenderError;
 use super::render_base::{Bucket, WHITE_LEVEL};
 pub use super::render_chains::FUSE_ITERATIONS;
-use super::render_chains::{Chains, Round};
+use super::render_chains::{CHAINS, Chains, Round};
 use super::render_layout::Layout;
 use super::variations::{BatchScratch, CompiledXform};
 use super::{Flame, PaletteMode, Xform};
@@ -130,7 +130,8 @@ impl Camera {
             Some(r) => self.rotate(r, p),
             None => p,
         };
-        self.bucket_of_rotated(p)
+        let (b, inside) = self.bucket_of_rotated(p);
+        (b as usize, inside)
     }
 
     /// `p` rotated by `rotation` (the camera's) about the center.
@@ -142,17 +143,18 @@ impl Camera {
 
     /// [`Self::bucket`] of a point already rotated.
     #[inline(always)]
-    fn bucket_of_rotated(&self, [x, y]: [f64; 2]) -> (usize, bool) {
+    fn bucket_of_rotated(&self, [x, y]: [f64; 2]) -> (u32, bool) {
         let b = &self.bounds;
         let inside = (x >= b[0]) & (y >= b[1]) & (x <= b[2]) & (y <= b[3]);
         // In view the scaled coordinates are ≥ 0 (truncated toward 0 as flam3 does); out of
         // view (NaN included, which converts to 0) the clamps keep the bucket in the histogram.
         // On the far edge (x = bounds[2]) flam3 steps into the next row; this stays in the last.
-        // (Converted to i32, which saturates, so that a loop of them is a vector loop: the
-        // histogram's sides are far below 2^31, so the clamped result is the i64 one.)
-        let i = ((self.x_scale * x - self.x_offset) as i32).clamp(0, self.hist_width as i32 - 1) as usize;
-        let j = ((self.y_scale * y - self.y_offset) as i32).clamp(0, self.hist_height as i32 - 1) as usize;
-        (i + j * self.hist_width, inside)
+        // (In 32 bits: the conversion to i32 saturates and the histogram's sides are below
+        // 2^31, so the clamped result is the i64 one; its buckets number below 2^32,
+        // `render_layout.rs`.)
+        let i = ((self.x_scale * x - self.x_offset) as i32).clamp(0, self.hist_width as i32 - 1) as u32;
+        let j = ((self.y_scale * y - self.y_offset) as i32).clamp(0, self.hist_height as i32 - 1) as u32;
+        (i + j * self.hist_width as u32, inside)
     }
 }
 
@@ -340,8 +342,9 @@ impl ChaosGame {
     /// One worker: `render_chains::CHAINS` runs advanced together, each taking the next run when its own is
     /// done, until no run is left. Returns the re-seeds.
     ///
-    /// A round is one iteration of every chain, in phases, each a loop over the chains (most
-    /// of them vector loops): each chain draws its xform; the chains are grouped by xform and
+    /// A round is one iteration of every chain, in phases, each a loop over the chains (the
+    /// draws and the settling vector loops, the buckets without branches): each chain draws
+    /// its xform; the chains are grouped by xform and
     /// each group mapped by [`CompiledXform::apply_batch`] (the vector path); the re-seeds
     /// (chain by chain only in a round that has one) and the final xform's draw; the final
     /// xform's points as one batch; the buckets; and the adds, whose buckets are prefetched
@@ -380,7 +383,8 @@ impl ChaosGame {
                     }
                 }
             }
-            let live = c.live;
+            // (At most CHAINS, which the compiler then knows: no bounds checks in the loops.)
+            let live = c.live.min(CHAINS);
             if live == 0 {
                 for (b, inc) in &in_flight {
                     add(&mut histogram[*b], inc);
@@ -417,7 +421,7 @@ impl ChaosGame {
             // The adds, each bucket prefetched IN_FLIGHT samples before its add; a sample that
             // adds nothing adds 0 to bucket 0.
             for k in 0..live {
-                let b = r.bucket[k];
+                let b = r.bucket[k] as usize;
                 prefetch(&histogram[b]);
                 // Whether it adds is as good as random: a mask, not a branch.
                 let weight = r.weight[k];
@@ -441,7 +445,8 @@ impl ChaosGame {
     /// in its group).
     #[inline(always)]
     fn choose(&self, c: &mut Chains, r: &mut Round) {
-        let live = c.live;
+        // (At most CHAINS, which the compiler then knows: no bounds checks in the loops.)
+        let live = c.live.min(CHAINS);
         for (entry, rng) in r.entry[..live].iter_mut().zip(&mut c.rng[..live]) {
             *entry = rng.next_u32() & (CHOICE_ENTRIES as u32 - 1);
         }
@@ -472,7 +477,8 @@ impl ChaosGame {
     /// round with a point out of the plane; otherwise vector loops.
     #[inline(always)]
     fn settle(&self, c: &mut Chains, r: &mut Round) -> u64 {
-        let live = c.live;
+        // (At most CHAINS, which the compiler then knows: no bounds checks in the loops.)
+        let live = c.live.min(CHAINS);
         let any_bad = r.qx[..live].iter().zip(&r.qy[..live]).fold(false, |any, (&x, &y)| any | is_bad([x, y]));
         let mut bad = 0;
         if any_bad {
@@ -546,11 +552,12 @@ impl ChaosGame {
     }
 
     /// Each live chain's bucket and whether it adds to it (its step counts, it is past the
-    /// fuse, its point is in view and its xform's plotted weight is not 0), a vector loop;
+    /// fuse, its point is in view and its xform's plotted weight is not 0), a loop without branches;
     /// counts the chains' steps; the step palette's entry of each.
     #[inline(always)]
     fn find_buckets(&self, c: &mut Chains, r: &mut Round) {
-        let live = c.live;
+        // (At most CHAINS, which the compiler then knows: no bounds checks in the loops.)
+        let live = c.live.min(CHAINS);
         if let Some(rotation) = &self.camera.rotation {
             for (x, y) in r.sx[..live].iter_mut().zip(&mut r.sy[..live]) {
                 [*x, *y] = self.camera.rotate(rotation, [*x, *y]);

@@ -89,7 +89,7 @@ pub(super) struct Round {
     /// The chains that apply the final xform this round.
     pub finals: Vec<u8>,
     /// The bucket each chain adds to (0 where it adds nothing) and whether it adds.
-    pub bucket: [usize; CHAINS],
+    pub bucket: [u32; CHAINS],
     pub adds: [bool; CHAINS],
     /// The entry of the step palette each chain's colour picks.
     pub step_entry: [u32; CHAINS],

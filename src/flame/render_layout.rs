@@ -7,6 +7,7 @@ use super::render_filter::{DensityFilters, SpatialFilter};
 
 /// The largest histogram this renderer allocates per thread.
 const MAX_HISTOGRAM_BYTES: u64 = 8 << 30;
+const _: () = assert!(MAX_HISTOGRAM_BYTES / std::mem::size_of::<Bucket>() as u64 <= u32::MAX as u64);
 
 /// The histogram's geometry: the image supersampled, with a gutter around it wide enough for
 /// the spatial filter and the density estimator (flam3's `gutter_width`, `de_offset`).
@@ -61,8 +62,9 @@ impl Layout {
         let hist_width = oversample * w as usize + 2 * gutter;
         let hist_height = oversample * h as usize + 2 * gutter;
         let bytes = (hist_width * hist_height) as u64 * std::mem::size_of::<Bucket>() as u64;
-        // (Within the limit each side is below 2^31, which the chaos game's bucket arithmetic
-        // takes for granted; said here too, for a histogram one bucket high.)
+        // (Within the limit each side is below 2^31 and the buckets number below 2^32, which
+        // the chaos game's bucket arithmetic takes for granted; the sides said here too, for a
+        // histogram one bucket high.)
         if bytes > MAX_HISTOGRAM_BYTES || hist_width > i32::MAX as usize || hist_height > i32::MAX as usize {
             return Err(RenderError::TooLarge { width: hist_width, height: hist_height, bytes });
         }

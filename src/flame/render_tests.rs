@@ -2,7 +2,6 @@
 //! flight) against flam3's loop run one run after another.
 
 use super::*;
-use crate::flame::render_chains::CHAINS;
 use crate::flame::{Variation, VariationTerm};
 
 /// Three xforms with xaos, an opacity, a spherical term that sends points out of the plane
