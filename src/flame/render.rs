@@ -339,17 +339,17 @@ impl ChaosGame {
         self.run_chains(seed, samples, next_run, histogram, progress)
     }
 
-    /// One worker: `render_chains::CHAINS` runs advanced together, each taking the next run when its own is
+    /// One worker: [`CHAINS`] runs advanced together, each taking the next run when its own is
     /// done, until no run is left. Returns the re-seeds.
     ///
     /// A round is one iteration of every chain, in phases, each a loop over the chains (the
     /// draws and the settling vector loops, the buckets without branches): each chain draws
-    /// its xform; the chains are grouped by xform and
-    /// each group mapped by [`CompiledXform::apply_batch`] (the vector path); the re-seeds
-    /// (chain by chain only in a round that has one) and the final xform's draw; the final
-    /// xform's points as one batch; the buckets; and the adds, whose buckets are prefetched
-    /// [`IN_FLIGHT`] samples ahead. Each chain draws the same numbers in the same order as
-    /// flam3's loop does, so the sums are those of one run after another.
+    /// its xform; the chains are grouped by xform and each group mapped by
+    /// [`CompiledXform::apply_batch`] (the vector path); the re-seeds (chain by chain only in a
+    /// round that has one) and the final xform's draw; the final xform's points as one batch;
+    /// the buckets; and the adds, whose buckets are prefetched [`IN_FLIGHT`] samples ahead.
+    /// Each chain draws the same numbers in the same order as flam3's loop does, so the sums
+    /// are those of one run after another.
     #[inline(always)]
     fn run_chains(
         &self,
@@ -552,8 +552,8 @@ impl ChaosGame {
     }
 
     /// Each live chain's bucket and whether it adds to it (its step counts, it is past the
-    /// fuse, its point is in view and its xform's plotted weight is not 0), a loop without branches;
-    /// counts the chains' steps; the step palette's entry of each.
+    /// fuse, its point is in view and its xform's plotted weight is not 0), a loop without
+    /// branches; counts the chains' steps; the step palette's entry of each.
     #[inline(always)]
     fn find_buckets(&self, c: &mut Chains, r: &mut Round) {
         // (At most CHAINS, which the compiler then knows: no bounds checks in the loops.)
