@@ -149,11 +149,11 @@ impl Camera {
         // In view the scaled coordinates are ≥ 0 (truncated toward 0 as flam3 does); out of
         // view (NaN included, which converts to 0) the clamps keep the bucket in the histogram.
         // On the far edge (x = bounds[2]) flam3 steps into the next row; this stays in the last.
-        // (In 32 bits: the conversion to i32 saturates and the histogram's sides are below
-        // 2^31, so the clamped result is the i64 one; its buckets number below 2^32,
-        // `render_layout.rs`.)
-        let i = ((self.x_scale * x - self.x_offset) as i32).clamp(0, self.hist_width as i32 - 1) as u32;
-        let j = ((self.y_scale * y - self.y_offset) as i32).clamp(0, self.hist_height as i32 - 1) as u32;
+        // Clamped before the truncation (NaN: `max` gives 0), which gives what truncating and
+        // then clamping gives, and converted by `whole_u32`, so that a loop of them is a vector
+        // loop. The buckets number below 2^32 (`render_layout.rs`).
+        let i = whole_u32((self.x_scale * x - self.x_offset).max(0.0).min(self.hist_width as f64 - 1.0));
+        let j = whole_u32((self.y_scale * y - self.y_offset).max(0.0).min(self.hist_height as f64 - 1.0));
         (i + j * self.hist_width as u32, inside)
     }
 }
@@ -343,8 +343,7 @@ impl ChaosGame {
     /// done, until no run is left. Returns the re-seeds.
     ///
     /// A round is one iteration of every chain, in phases, each a loop over the chains (the
-    /// draws and the settling vector loops, the buckets without branches): each chain draws
-    /// its xform; the chains are grouped by xform and each group mapped by
+    /// draws, the settling and the buckets vector loops): each chain draws its xform; the chains are grouped by xform and each group mapped by
     /// [`CompiledXform::apply_batch`] (the vector path); the re-seeds (chain by chain only in a
     /// round that has one) and the final xform's draw; the final xform's points as one batch;
     /// the buckets; and the adds, whose buckets are prefetched [`IN_FLIGHT`] samples ahead.
@@ -552,8 +551,8 @@ impl ChaosGame {
     }
 
     /// Each live chain's bucket and whether it adds to it (its step counts, it is past the
-    /// fuse, its point is in view and its xform's plotted weight is not 0), a loop without
-    /// branches; counts the chains' steps; the step palette's entry of each.
+    /// fuse, its point is in view and its xform's plotted weight is not 0), a vector loop;
+    /// counts the chains' steps; the step palette's entry of each.
     #[inline(always)]
     fn find_buckets(&self, c: &mut Chains, r: &mut Round) {
         // (At most CHAINS, which the compiler then knows: no bounds checks in the loops.)
@@ -569,8 +568,11 @@ impl ChaosGame {
             r.adds[k] = adds;
             r.bucket[k] = if adds { b } else { 0 };
             c.i[k] += i64::from(r.plot[k]);
-            // The step palette's entry, as `increments_of` finds it (NaN converts to 0).
-            r.step_entry[k] = (r.shown_color[k] * 256.0).clamp(0.0, 255.0) as u32;
+            // The step palette's entry, as `increments_of` finds it (NaN converts to 0 there,
+            // and `max` gives 0 here, where `clamp` would keep it).
+            #[expect(clippy::manual_clamp, reason = "NaN must give 0")]
+            let entry = whole_u32((r.shown_color[k] * 256.0).max(0.0).min(255.0));
+            r.step_entry[k] = entry;
         }
     }
 
@@ -671,6 +673,16 @@ fn choice_row(weights: &[f64]) -> Option<Vec<u16>> {
 #[inline(always)]
 fn uniform11(rng: &mut Pcg32) -> f64 {
     rng.next_f64() * 2.0 - 1.0
+}
+
+/// `v` truncated toward 0, as `v as u32` for 0 ≤ v < 2^32 (not NaN), with operations that
+/// vector loops have: the truncation, then 2^52 added, which puts the integer in the low bits
+/// (LLVM does not vectorize `as` from a double: the chaos game's buckets and palette entries
+/// were computed lane by lane).
+#[inline(always)]
+fn whole_u32(v: f64) -> u32 {
+    const TWO_52: f64 = 4_503_599_627_370_496.0;
+    (v.trunc() + TWO_52).to_bits() as u32
 }
 
 /// flam3's `badvalue`: NaN or beyond ±1e10.

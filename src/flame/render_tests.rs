@@ -174,3 +174,33 @@ fn every_build_sums_the_same_bits() {
         }
     }
 }
+
+/// The chaos game's bucket and palette entry arithmetic (clamp, then `whole_u32`, so that it
+/// vectorizes) gives what converting with `as` and then clamping gives, for points in and far
+/// out of view, NaN and infinities included.
+#[test]
+fn buckets_and_palette_entries_are_those_of_as_then_clamp() {
+    let (_, game) = game_of(&step_flame());
+    let cam = &game.camera;
+    let mut rng = Pcg32::for_stream(7, 0, 0);
+    let specials = [0.0, -0.0, 1e-300, -1e-300, 0.5, 1.0, 1e10, -1e10, f64::INFINITY, f64::NEG_INFINITY, f64::NAN];
+    for n in 0..200_000 {
+        let coordinate = |rng: &mut Pcg32| match n % 4 {
+            0 => specials[rng.next_u32() as usize % specials.len()],
+            1 => (rng.next_f64() * 2.0 - 1.0) * 1e12,
+            _ => (rng.next_f64() * 2.0 - 1.0) * 4.0,
+        };
+        let p = [coordinate(&mut rng), coordinate(&mut rng)];
+        let i = ((cam.x_scale * p[0] - cam.x_offset) as i64).clamp(0, cam.hist_width as i64 - 1) as usize;
+        let j = ((cam.y_scale * p[1] - cam.y_offset) as i64).clamp(0, cam.hist_height as i64 - 1) as usize;
+        assert_eq!(cam.bucket_of_rotated(p).0 as usize, i + j * cam.hist_width, "{p:?}");
+        let color = coordinate(&mut rng) / 4.0;
+        let entry = (color * 256.0).clamp(0.0, 255.0) as usize;
+        #[expect(clippy::manual_clamp, reason = "the chaos game's form: NaN gives 0")]
+        let got = whole_u32((color * 256.0).max(0.0).min(255.0)) as usize;
+        assert_eq!(got, entry, "colour {color}");
+    }
+    for v in [0.0, 0.25, 0.999_999, 1.0, 254.5, 255.0, 65_535.9, 2_147_483_647.0, 4_294_967_295.0] {
+        assert_eq!(whole_u32(v), v as u32, "{v}");
+    }
+}
