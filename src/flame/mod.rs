@@ -15,6 +15,7 @@
 pub mod palette;
 pub mod render;
 mod render_base;
+mod render_camera;
 mod render_chains;
 mod render_density;
 pub mod render_filter;

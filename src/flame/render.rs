@@ -1,7 +1,8 @@
 //! A flame rendered as flam3 renders it (its `rect.c`): the chaos game into a supersampled
 //! histogram, then density estimation, the spatial filter and the log-density tone map
 //! (`render_density.rs`, `render_filter.rs`, `render_tone.rs`; the histogram's geometry in
-//! `render_layout.rs`, what the stages share in `render_base.rs`).
+//! `render_layout.rs`, the camera in `render_camera.rs`, the workers' state in
+//! `render_chains.rs`, what the stages share in `render_base.rs`).
 //!
 //! The chaos game keeps flam3's semantics so that the pictures agree: the next xform is drawn
 //! from a table of 16384 entries built from the weights (one row per previous xform when the
@@ -28,7 +29,8 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use rayon::prelude::*;
 
 pub use super::render_base::RenderError;
-use super::render_base::{Bucket, WHITE_LEVEL};
+use super::render_base::{Bucket, WHITE_LEVEL, whole_u32};
+use super::render_camera::Camera;
 pub use super::render_chains::FUSE_ITERATIONS;
 use super::render_chains::{CHAINS, Chains, Round};
 use super::render_layout::Layout;
@@ -73,89 +75,6 @@ pub fn render(flame: &Flame, seed: u32, progress: &(dyn Fn(u64) + Sync)) -> Resu
     let accumulated = super::render_density::accumulate(flame, &layout, &histogram)?;
     let rgba = super::render_tone::tone_map(flame, &layout, &accumulated);
     Ok(FlameImage { width: flame.size[0], height: flame.size[1], rgba, samples, bad_values })
-}
-
-/// flam3's camera: pixels per unit scale·2^zoom, rotation about the center, +y down; maps a
-/// point of the plane to its bucket.
-struct Camera {
-    bounds: [f64; 4],
-    /// Buckets per unit and the first bucket's offset, each axis.
-    x_scale: f64,
-    x_offset: f64,
-    y_scale: f64,
-    y_offset: f64,
-    rotation: Option<[[f64; 2]; 2]>,
-    center: [f64; 2],
-    hist_width: usize,
-    hist_height: usize,
-}
-
-impl Camera {
-    fn new(flame: &Flame, layout: &Layout) -> Self {
-        let ppu = flame.scale * 2f64.powf(flame.zoom);
-        let gutter_units = layout.gutter as f64 / (layout.oversample as f64 * ppu);
-        let corner =
-            [flame.center[0] - layout.width as f64 / ppu / 2.0, flame.center[1] - layout.height as f64 / ppu / 2.0];
-        let bounds = [
-            corner[0] - gutter_units,
-            corner[1] - gutter_units,
-            corner[0] + layout.width as f64 / ppu + gutter_units,
-            corner[1] + layout.height as f64 / ppu + gutter_units,
-        ];
-        let x_scale = layout.hist_width as f64 / (bounds[2] - bounds[0]);
-        let y_scale = layout.hist_height as f64 / (bounds[3] - bounds[1]);
-        let rotation = (flame.rotate != 0.0).then(|| {
-            let (s, c) = flame.rotate.to_radians().sin_cos();
-            [[c, -s], [s, c]]
-        });
-        Self {
-            bounds,
-            x_scale,
-            x_offset: x_scale * bounds[0],
-            y_scale,
-            y_offset: y_scale * bounds[1],
-            rotation,
-            center: flame.center,
-            hist_width: layout.hist_width,
-            hist_height: layout.hist_height,
-        }
-    }
-
-    /// The bucket of `p` and whether `p` is in view; out of view the bucket is some bucket
-    /// of the histogram (the chaos game adds nothing there), so that no branch is needed.
-    #[cfg_attr(not(test), expect(dead_code, reason = "the chaos game rotates and buckets in loops of their own"))]
-    #[inline(always)]
-    fn bucket(&self, p: [f64; 2]) -> (usize, bool) {
-        let p = match &self.rotation {
-            Some(r) => self.rotate(r, p),
-            None => p,
-        };
-        let (b, inside) = self.bucket_of_rotated(p);
-        (b as usize, inside)
-    }
-
-    /// `p` rotated by `rotation` (the camera's) about the center.
-    #[inline(always)]
-    fn rotate(&self, r: &[[f64; 2]; 2], p: [f64; 2]) -> [f64; 2] {
-        let d = [p[0] - self.center[0], p[1] - self.center[1]];
-        [d[0] * r[0][0] + d[1] * r[0][1] + self.center[0], d[0] * r[1][0] + d[1] * r[1][1] + self.center[1]]
-    }
-
-    /// [`Self::bucket`] of a point already rotated.
-    #[inline(always)]
-    fn bucket_of_rotated(&self, [x, y]: [f64; 2]) -> (u32, bool) {
-        let b = &self.bounds;
-        let inside = (x >= b[0]) & (y >= b[1]) & (x <= b[2]) & (y <= b[3]);
-        // In view the scaled coordinates are ≥ 0 (truncated toward 0 as flam3 does); out of
-        // view (NaN included, which converts to 0) the clamps keep the bucket in the histogram.
-        // On the far edge (x = bounds[2]) flam3 steps into the next row; this stays in the last.
-        // Clamped before the truncation (NaN: `max` gives 0), which gives what truncating and
-        // then clamping gives, and converted by `whole_u32`, so that a loop of them is a vector
-        // loop. The buckets number below 2^32 (`render_layout.rs`).
-        let i = whole_u32((self.x_scale * x - self.x_offset).max(0.0).min(self.hist_width as f64 - 1.0));
-        let j = whole_u32((self.y_scale * y - self.y_offset).max(0.0).min(self.hist_height as f64 - 1.0));
-        (i + j * self.hist_width as u32, inside)
-    }
 }
 
 /// An xform as the chaos game uses it.
@@ -673,16 +592,6 @@ fn choice_row(weights: &[f64]) -> Option<Vec<u16>> {
 #[inline(always)]
 fn uniform11(rng: &mut Pcg32) -> f64 {
     rng.next_f64() * 2.0 - 1.0
-}
-
-/// `v` truncated toward 0, as `v as u32` for 0 ≤ v < 2^32 (not NaN), with operations that
-/// vector loops have: the truncation, then 2^52 added, which puts the integer in the low bits
-/// (LLVM does not vectorize `as` from a double: the chaos game's buckets and palette entries
-/// were computed lane by lane).
-#[inline(always)]
-fn whole_u32(v: f64) -> u32 {
-    const TWO_52: f64 = 4_503_599_627_370_496.0;
-    (v.trunc() + TWO_52).to_bits() as u32
 }
 
 /// flam3's `badvalue`: NaN or beyond ±1e10.

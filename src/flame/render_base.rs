@@ -1,5 +1,5 @@
-//! What the stages of a flame's render share: its errors, the histogram's cell and flam3's
-//! white level.
+//! What the stages of a flame's render share: its errors, the histogram's cell, flam3's white
+//! level and a conversion to integers that vector loops have.
 
 /// flam3's white level: palette colours are scaled to 0..255 in the histogram.
 pub(super) const WHITE_LEVEL: f64 = 255.0;
@@ -28,4 +28,14 @@ pub enum RenderError {
     BadFilter(f64),
     #[error("the histogram ({width}×{height} buckets, {bytes} bytes) is too large")]
     TooLarge { width: usize, height: usize, bytes: u64 },
+}
+
+/// `v` truncated toward 0, as `v as u32` for 0 ≤ v < 2^32 (not NaN), with operations that
+/// vector loops have: the truncation, then 2^52 added, which puts the integer in the low bits
+/// (LLVM does not vectorize `as` from a double: the chaos game's buckets and palette entries
+/// were computed lane by lane).
+#[inline(always)]
+pub(super) fn whole_u32(v: f64) -> u32 {
+    const TWO_52: f64 = 4_503_599_627_370_496.0;
+    (v.trunc() + TWO_52).to_bits() as u32
 }
