@@ -9,7 +9,8 @@ use crate::rng::Pcg32;
 pub(super) const CHAINS: usize = super::variations::BATCH;
 const _: () = assert!(CHAINS <= u8::MAX as usize, "chain numbers are bytes");
 
-/// The iteration a run starts at: flam3 drops its first 15 (its `FUSE_27`).
+/// Iterations dropped at the start of every run (flam3's `FUSE_27`): a run starts at
+/// iteration −`FUSE_ITERATIONS` and plots from 0.
 pub const FUSE_ITERATIONS: i64 = 15;
 
 /// The runs one worker advances together, chain by chain in arrays; chains `0..live` are
