@@ -140,6 +140,7 @@ fn live_cpu_route_estimate_matches_the_gpu_estimate() {
             ..ProgressiveSettings::default()
         },
         chaos_backend: ChaosBackend::Cpu,
+        render_density: None,
     };
     let mut live = LiveView::new(&ctx, settings, width, height).unwrap();
     live.set_ifs(&ctx, &compiled, bounds, true);
@@ -200,6 +201,7 @@ fn a_converged_view_with_density_estimation_comes_to_rest() {
                 ..ProgressiveSettings::default()
             },
             chaos_backend: backend,
+            render_density: None,
         };
         let mut live = LiveView::new(&ctx, settings, width, height).unwrap();
         live.set_ifs(&ctx, &compiled, bounds, true);
@@ -227,4 +229,74 @@ fn a_converged_view_with_density_estimation_comes_to_rest() {
         .unwrap();
         assert!(live.at_rest(), "{backend:?}, estimate {density_estimation:?}: a draw at rest woke it");
     }
+}
+
+/// Density mode stops where the view has drawn the render's points per pixel (`RenderDensity`:
+/// a longer accumulation would flatten the log density and wash the picture out), scaled by the
+/// square of the view's height over the render's, never within the first frame, and again when
+/// the view is resized; closest mode goes on to `max_splats`. Both routes.
+#[test]
+fn density_mode_stops_at_the_renders_points_per_pixel() {
+    use nlifs::chaos_game::{self, CompiledIfs};
+    use nlifs::gpu::progressive::ProgressiveSettings;
+    use nlifs::live::{ChaosBackend, LiveSettings, LiveView, RenderDensity};
+    use nlifs::scene::Scene;
+    use nlifs::scene::spec::SplatMode;
+    let Some(ctx) = gpu() else { return };
+    let (width, height) = (96u32, 64u32);
+    let path = format!("{}/scenes/plant2.toml", env!("CARGO_MANIFEST_DIR"));
+    let scene = Scene::parse(&std::fs::read_to_string(&path).unwrap(), &path).unwrap();
+    let compiled = CompiledIfs::new(&scene.at(0.0)).unwrap();
+    let bounds = chaos_game::attractor_bounds(&compiled, 1);
+    let point_count = 1u32 << 12;
+    let frame = point_count as u64;
+    // 40 frames' points into an image twice the view's height: 10 frames at the view's.
+    let render_density = Some(RenderDensity { points: 40 * frame, height_px: 2 * height });
+    let frames_to_stop = |live: &mut LiveView| {
+        let mut frames = 0;
+        while !live.converged() {
+            assert!(frames < 100, "no stop after {frames} frames");
+            let mut encoder = ctx.device.create_command_encoder(&Default::default());
+            live.advance(&ctx, &mut encoder);
+            ctx.queue.submit([encoder.finish()]);
+            frames += 1;
+        }
+        frames
+    };
+    for backend in [ChaosBackend::Cpu, ChaosBackend::Gpu] {
+        for (mode, frames) in [(SplatMode::Density, 10), (SplatMode::Closest, 50)] {
+            let settings = LiveSettings {
+                draw: ProgressiveSettings {
+                    point_count,
+                    mode,
+                    max_splats: 50 * frame,
+                    ..ProgressiveSettings::default()
+                },
+                chaos_backend: backend,
+                render_density,
+            };
+            let mut live = LiveView::new(&ctx, settings, width, height).unwrap();
+            live.set_ifs(&ctx, &compiled, bounds, true);
+            live.set_camera(&scene.camera_for(bounds));
+            assert_eq!(frames_to_stop(&mut live), frames, "{backend:?}, {mode:?}");
+            assert_eq!(live.splats_since_clear(), frames as u64 * frame, "{backend:?}, {mode:?}");
+            if mode == SplatMode::Density {
+                // A resize clears the accumulation; at the render's own height the stop is
+                // the render's 40 frames.
+                live.resize(&ctx, width, 2 * height);
+                assert!(!live.converged(), "{backend:?}: a taller view draws on");
+                assert_eq!(frames_to_stop(&mut live), 40, "{backend:?}: the render's points");
+            }
+        }
+    }
+    // A render of fewer points than one frame still draws that frame.
+    let settings = LiveSettings {
+        draw: ProgressiveSettings { point_count, mode: SplatMode::Density, ..ProgressiveSettings::default() },
+        chaos_backend: ChaosBackend::Cpu,
+        render_density: Some(RenderDensity { points: 10, height_px: height }),
+    };
+    let mut live = LiveView::new(&ctx, settings, width, height).unwrap();
+    live.set_ifs(&ctx, &compiled, bounds, true);
+    live.set_camera(&scene.camera_for(bounds));
+    assert_eq!(frames_to_stop(&mut live), 1);
 }

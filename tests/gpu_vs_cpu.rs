@@ -143,7 +143,7 @@ fn route_settings(backend: ChaosBackend, mode: SplatMode, points: u32, steps: u3
         max_splats: u64::MAX,
         ..ProgressiveSettings::default()
     };
-    LiveSettings { draw, chaos_backend: backend }
+    LiveSettings { draw, chaos_backend: backend, render_density: None }
 }
 
 /// The CPU route (`chaos_backend = cpu`) uploads exactly the framebuffer that the CPU chaos

@@ -41,7 +41,7 @@ fn settings(mode: SplatMode) -> LiveSettings {
         max_splats: u64::MAX,
         ..ProgressiveSettings::default()
     };
-    LiveSettings { draw, chaos_backend: ChaosBackend::Cpu }
+    LiveSettings { draw, chaos_backend: ChaosBackend::Cpu, render_density: None }
 }
 
 /// plant2 in a live view of [`SIZE`] after `frames` frames.

@@ -85,6 +85,7 @@ fn live_view_frames_keep_host_memory_flat() {
             ..ProgressiveSettings::default()
         },
         chaos_backend: ChaosBackend::Cpu,
+        render_density: None,
     };
     let cases = [
         (

@@ -43,6 +43,7 @@ fn reference(ctx: &GpuContext, settings: LiveSettings, ifs: &CompiledIfs, view: 
     let settings = LiveSettings {
         draw: ProgressiveSettings { steps_per_frame: 16, seed: 99, ..settings.draw },
         chaos_backend: ChaosBackend::Cpu,
+        render_density: None,
     };
     let mut r = LiveView::new(ctx, settings, W, H).unwrap();
     r.set_ifs(ctx, ifs, view.bounds, true);
@@ -173,6 +174,7 @@ fn an_edit_reconverges() {
                     ..ProgressiveSettings::default()
                 },
                 chaos_backend: backend,
+                render_density: None,
             };
             let mut live = LiveView::new(&ctx, settings, W, H).unwrap();
             live.set_ifs(&ctx, &ifs, bounds, true);

@@ -322,6 +322,12 @@ impl Progressive {
         Ok(())
     }
 
+    /// Accumulation stops after `max_splats` splats from now on (the settings' own, changed
+    /// alone: a view resized keeps its density stop).
+    pub fn set_max_splats(&mut self, max_splats: u64) {
+        self.settings.max_splats = max_splats;
+    }
+
     /// Restarts the persistent points in the domain (they skip the full transient again) and
     /// clears the accumulation.
     pub fn restart_points(&mut self) {

@@ -31,9 +31,10 @@ use crate::gpu::progressive::{EstimateDue, Progressive, ProgressiveSettings};
 use crate::gpu::{GpuContext, GpuError};
 use crate::platform::Instant;
 use crate::resolve::density_estimation;
+use crate::scene::spec::SplatMode;
 
 use self::cpu_source::CpuChaosGame;
-pub use self::settings::{ChaosBackend, ChaosRoute, Imaging, LiveSettings};
+pub use self::settings::{ChaosBackend, ChaosRoute, Imaging, LiveSettings, RenderDensity};
 
 /// The live view refreshes the solid look's light a quarter of the rows per frame while the
 /// view rests ([`Progressive::light_bands`]): the look's cost a frame drops about fourfold.
@@ -94,7 +95,7 @@ impl LiveView {
         let software_adapter = ctx.adapter.get_info().device_type == wgpu::DeviceType::Cpu;
         gpu.light_bands = LIGHT_BANDS;
         let gpu_unable = (!gpu.computes()).then_some(NO_COMPUTE);
-        Self {
+        let mut live = Self {
             route: settings.chaos_backend.route(software_adapter, gpu_unable),
             gpu,
             settings,
@@ -104,7 +105,9 @@ impl LiveView {
             navigating: false,
             bounded_frame_time: false,
             cpu_points_per_sec: None,
-        }
+        };
+        live.gpu.set_max_splats(live.max_splats(&settings));
+        live
     }
 
     /// Bounds the time of the CPU route's frames to [`CPU_FRAME_SECS`] (the viewer does). A
@@ -135,7 +138,21 @@ impl LiveView {
             p.normal_radius_px = crate::resolve::NAVIGATING_NORMAL_RADIUS_PX;
         }
         p.settle_steps = self.settle_steps();
+        p.max_splats = self.max_splats(settings);
         p
+    }
+
+    /// Splats after which accumulation stops: in density mode, the render's points per pixel
+    /// ([`RenderDensity`]), though never within the first frame.
+    fn max_splats(&self, settings: &LiveSettings) -> u64 {
+        let cap = settings.draw.max_splats;
+        match settings.render_density {
+            Some(d) if settings.draw.mode == SplatMode::Density => {
+                let frame = settings.draw.point_count as u64 * settings.draw.steps_per_frame.max(1) as u64;
+                cap.min(d.splats_at_height(self.size().1).max(frame))
+            }
+            _ => cap,
+        }
     }
 
     /// Steps the kept points run unsplatted after an edit: fewer while navigating, where the
@@ -213,6 +230,8 @@ impl LiveView {
 
     pub fn resize(&mut self, ctx: &GpuContext, width: u32, height: u32) {
         self.gpu.resize(ctx, width, height);
+        // The density stop scales with the view's height.
+        self.gpu.set_max_splats(self.max_splats(&self.settings));
     }
 
     /// Where the chaos game runs, and why.

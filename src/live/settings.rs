@@ -19,6 +19,29 @@ pub struct LiveSettings {
     /// Where the chaos game runs (the GPU only resolves on the CPU route). The default, `gpu`,
     /// is what `render --backend gpu` and the benchmarks run; the viewer starts on `auto`.
     pub chaos_backend: ChaosBackend,
+    /// Density mode: the points of the scene's render, at which the live view stops
+    /// accumulating (scaled to its own height). None: it accumulates to `draw.max_splats`.
+    pub render_density: Option<RenderDensity>,
+}
+
+/// The density of the scene's render: `points` into an image `height_px` tall. Density mode
+/// shows log(1 + count) / log(1 + max count), which flattens towards 1 as the counts grow: a
+/// view that went on accumulating past the render's points per pixel would drift from the
+/// render's picture and wash out (a flame of quality 1 did within a second). The live view
+/// stops where it has drawn as many points per pixel as the render (its camera frames the same
+/// height, so a pixel covers (render height / view height)² of a render's pixel).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RenderDensity {
+    pub points: u64,
+    pub height_px: u32,
+}
+
+impl RenderDensity {
+    /// The splats of a view `height_px` tall at the render's points per pixel (at least 1).
+    pub fn splats_at_height(&self, height_px: u32) -> u64 {
+        let scale = f64::from(height_px) / f64::from(self.height_px.max(1));
+        ((self.points as f64 * scale * scale).ceil() as u64).max(1)
+    }
 }
 
 /// The live view's imaging: its tone map and density estimation (the viewer's render panel
@@ -106,6 +129,16 @@ impl ChaosRoute {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_density_stop_scales_with_the_square_of_the_height() {
+        let d = RenderDensity { points: 1_000_000, height_px: 1000 };
+        assert_eq!(d.splats_at_height(1000), 1_000_000);
+        assert_eq!(d.splats_at_height(500), 250_000);
+        assert_eq!(d.splats_at_height(2000), 4_000_000);
+        assert_eq!(d.splats_at_height(0), 1, "never 0: a stop before the first splat");
+        assert_eq!(RenderDensity { points: 5, height_px: 0 }.splats_at_height(10), 500, "a height of 0 counts as 1");
+    }
 
     #[test]
     fn auto_takes_the_cpu_on_software_adapters_only() {

@@ -6,7 +6,7 @@
 //! and saved with the scene, that do not clear the accumulation (the resolve alone changes).
 
 use crate::edit::Edit;
-use crate::live::Imaging;
+use crate::live::{Imaging, RenderDensity};
 use crate::resolve::Tone;
 use crate::scene::spec::DensityEstimation;
 
@@ -31,13 +31,15 @@ impl ViewerState {
     }
 
     /// The live view's tone and density estimation from the scene at the current time, as
-    /// `render` takes them; true when they changed.
+    /// `render` takes them, and the render's points and height, where density mode stops
+    /// accumulating ([`RenderDensity`]); true when they changed.
     pub fn take_scene_imaging(&mut self) -> bool {
         let render = self.scene.render_at(self.t_secs);
-        let before = self.imaging();
+        let before = (self.imaging(), self.live.render_density);
         self.live.draw.tone = Tone::of(&render);
         self.live.draw.density_estimation = render.density_estimation;
-        self.imaging() != before
+        self.live.render_density = Some(RenderDensity { points: render.points, height_px: render.height });
+        (self.imaging(), self.live.render_density) != before
     }
 
     /// The render panel's imaging edit: tone fields into `[render]`, or into the key at the

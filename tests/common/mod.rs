@@ -122,7 +122,7 @@ pub fn raw_density_settings(orbits: u32, k: u32) -> LiveSettings {
         settle_steps: 0,
         ..ProgressiveSettings::default()
     };
-    LiveSettings { draw, chaos_backend: ChaosBackend::Gpu }
+    LiveSettings { draw, chaos_backend: ChaosBackend::Gpu, render_density: None }
 }
 
 /// A GPU chaos game's hit counts against the CPU's: `orbits` orbits of `k` steps (seed 77,
