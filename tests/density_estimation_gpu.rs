@@ -111,6 +111,15 @@ fn gpu_density_estimation_matches_cpu() {
     }
 }
 
+/// The paper's plant 2 at time 0: the scene, its compiled IFS and its attractor's bounds.
+fn plant2() -> (nlifs::scene::Scene, nlifs::chaos_game::CompiledIfs, (glam::DVec3, glam::DVec3)) {
+    let path = format!("{}/scenes/plant2.toml", env!("CARGO_MANIFEST_DIR"));
+    let scene = nlifs::scene::Scene::parse(&std::fs::read_to_string(&path).unwrap(), &path).unwrap();
+    let compiled = nlifs::chaos_game::CompiledIfs::new(&scene.at(0.0)).unwrap();
+    let bounds = nlifs::chaos_game::attractor_bounds(&compiled, 1);
+    (scene, compiled, bounds)
+}
+
 /// The live view's CPU route makes its density estimate on the CPU and uploads it; a snapshot
 /// (which filters afresh on the GPU) of the same accumulation must show the same image. Both
 /// images resolve estimates within [`summation_bound`] of each other with the same shader, so
@@ -118,18 +127,13 @@ fn gpu_density_estimation_matches_cpu() {
 /// at most one level, and in under 1 % of the channels.
 #[test]
 fn live_cpu_route_estimate_matches_the_gpu_estimate() {
-    use nlifs::chaos_game::{self, CompiledIfs};
     use nlifs::gpu::progressive::ProgressiveSettings;
     use nlifs::live::{ChaosBackend, LiveSettings, LiveView};
     use nlifs::resolve::Tone;
-    use nlifs::scene::Scene;
     use nlifs::scene::spec::SplatMode;
     let Some(ctx) = gpu() else { return };
     let (width, height) = (160u32, 120u32);
-    let path = format!("{}/scenes/plant2.toml", env!("CARGO_MANIFEST_DIR"));
-    let scene = Scene::parse(&std::fs::read_to_string(&path).unwrap(), &path).unwrap();
-    let compiled = CompiledIfs::new(&scene.at(0.0)).unwrap();
-    let bounds = chaos_game::attractor_bounds(&compiled, 1);
+    let (scene, compiled, bounds) = plant2();
     let settings = LiveSettings {
         draw: ProgressiveSettings {
             point_count: 1 << 16,
@@ -175,17 +179,12 @@ fn live_cpu_route_estimate_matches_the_gpu_estimate() {
 /// the estimate rests too.
 #[test]
 fn a_converged_view_with_density_estimation_comes_to_rest() {
-    use nlifs::chaos_game::{self, CompiledIfs};
     use nlifs::gpu::progressive::ProgressiveSettings;
     use nlifs::live::{ChaosBackend, LiveSettings, LiveView};
-    use nlifs::scene::Scene;
     use nlifs::scene::spec::SplatMode;
     let Some(ctx) = gpu() else { return };
     let (width, height) = (96u32, 64u32);
-    let path = format!("{}/scenes/plant2.toml", env!("CARGO_MANIFEST_DIR"));
-    let scene = Scene::parse(&std::fs::read_to_string(&path).unwrap(), &path).unwrap();
-    let compiled = CompiledIfs::new(&scene.at(0.0)).unwrap();
-    let bounds = chaos_game::attractor_bounds(&compiled, 1);
+    let (scene, compiled, bounds) = plant2();
     let de = Some(DensityEstimation { max_radius_px: 5.0, min_radius_px: 0.0, curve: 0.4 });
     for (backend, density_estimation) in
         [(ChaosBackend::Cpu, de), (ChaosBackend::Gpu, de), (ChaosBackend::Cpu, None), (ChaosBackend::Gpu, None)]
@@ -237,17 +236,12 @@ fn a_converged_view_with_density_estimation_comes_to_rest() {
 /// the view is resized; closest mode goes on to `max_splats`. Both routes.
 #[test]
 fn density_mode_stops_at_the_renders_points_per_pixel() {
-    use nlifs::chaos_game::{self, CompiledIfs};
     use nlifs::gpu::progressive::ProgressiveSettings;
     use nlifs::live::{ChaosBackend, LiveSettings, LiveView, RenderDensity};
-    use nlifs::scene::Scene;
     use nlifs::scene::spec::SplatMode;
     let Some(ctx) = gpu() else { return };
     let (width, height) = (96u32, 64u32);
-    let path = format!("{}/scenes/plant2.toml", env!("CARGO_MANIFEST_DIR"));
-    let scene = Scene::parse(&std::fs::read_to_string(&path).unwrap(), &path).unwrap();
-    let compiled = CompiledIfs::new(&scene.at(0.0)).unwrap();
-    let bounds = chaos_game::attractor_bounds(&compiled, 1);
+    let (scene, compiled, bounds) = plant2();
     let point_count = 1u32 << 12;
     let frame = point_count as u64;
     // 40 frames' points into an image twice the view's height: 10 frames at the view's.
