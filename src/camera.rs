@@ -161,6 +161,11 @@ impl OrbitCamera {
             far = far.max(d);
         }
         let pad = 1e-3 * (far - near).max(1e-3);
+        // A flat scene (a flame) seen from a distance of more than about 8 has its near and
+        // far within a few f32 steps of each other, and 1e-6 of padding would round away:
+        // 1 / (far − near) infinite, every depth fraction NaN and the picture black. Two steps
+        // at the larger distance keep them apart; nearer, the padding is as it was.
+        let pad = pad.max(2.0 * f32::EPSILON * near.abs().max(far.abs()));
         let near = match self.projection {
             Projection::Perspective => (near - pad).max(far * 1e-4).max(1e-4),
             Projection::Parallel => near - pad,
@@ -192,6 +197,28 @@ impl OrbitCamera {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A flat scene far away (an imported flame whose view is wide: distance 67 and more) keeps
+    /// a depth range whose inverse is finite, so its points get depth fractions in [0, 1], not
+    /// NaN (which drew them black).
+    #[test]
+    fn a_flat_scene_far_away_has_finite_depth_fractions() {
+        let bounds = (DVec3::new(-50.0, -30.0, 0.0), DVec3::new(50.0, 30.0, 0.0));
+        for distance in [0.5f32, 3.0, 37.4, 67.2, 1000.0, 1.0e6] {
+            for projection in [Projection::Perspective, Projection::Parallel] {
+                let mut cam = OrbitCamera::framing(bounds, 2);
+                (cam.projection, cam.distance) = (projection, distance);
+                let (near, far) = cam.depth_range(bounds);
+                let inv_range = 1.0 / (far - near);
+                assert!(inv_range.is_finite() && near < far, "{projection:?} at {distance}: {near}..{far}");
+                let view = cam.view_from_world();
+                for p in [Vec3::ZERO, Vec3::new(49.0, -29.0, 0.0), Vec3::new(-13.0, 7.0, 0.0)] {
+                    let t = (-view.transform_point3(p).z - near) * inv_range;
+                    assert!((0.0..=1.0).contains(&t), "{projection:?} at {distance}: t = {t} for {p}");
+                }
+            }
+        }
+    }
 
     #[test]
     fn framing_sees_all_corners() {

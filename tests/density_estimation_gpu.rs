@@ -232,7 +232,7 @@ fn a_converged_view_with_density_estimation_comes_to_rest() {
 
 /// Density mode stops where the view has drawn the render's points per pixel (`RenderDensity`:
 /// a longer accumulation would flatten the log density and wash the picture out), scaled by the
-/// square of the view's height over the render's, never within the first frame, and again when
+/// square of the view's size over the render's, never within the first frame, and again when
 /// the view is resized; closest mode goes on to `max_splats`. Both routes.
 #[test]
 fn density_mode_stops_at_the_renders_points_per_pixel() {
@@ -244,8 +244,8 @@ fn density_mode_stops_at_the_renders_points_per_pixel() {
     let (scene, compiled, bounds) = plant2();
     let point_count = 1u32 << 12;
     let frame = point_count as u64;
-    // 40 frames' points into an image twice the view's height: 10 frames at the view's.
-    let render_density = Some(RenderDensity { points: 40 * frame, height_px: 2 * height });
+    // 40 frames' points into an image twice the view's size: 10 frames at the view's.
+    let render_density = Some(RenderDensity { points: 40 * frame, width_px: 2 * width, height_px: 2 * height });
     let frames_to_stop = |live: &mut LiveView| {
         let mut frames = 0;
         while !live.converged() {
@@ -277,7 +277,7 @@ fn density_mode_stops_at_the_renders_points_per_pixel() {
             if mode == SplatMode::Density {
                 // A resize clears the accumulation; at the render's own height the stop is
                 // the render's 40 frames.
-                live.resize(&ctx, width, 2 * height);
+                live.resize(&ctx, 2 * width, 2 * height);
                 assert!(!live.converged(), "{backend:?}: a taller view draws on");
                 assert_eq!(frames_to_stop(&mut live), 40, "{backend:?}: the render's points");
             }
@@ -287,7 +287,7 @@ fn density_mode_stops_at_the_renders_points_per_pixel() {
     let settings = LiveSettings {
         draw: ProgressiveSettings { point_count, mode: SplatMode::Density, ..ProgressiveSettings::default() },
         chaos_backend: ChaosBackend::Cpu,
-        render_density: Some(RenderDensity { points: 10, height_px: height }),
+        render_density: Some(RenderDensity { points: 10, width_px: width, height_px: height }),
     };
     let mut live = LiveView::new(&ctx, settings, width, height).unwrap();
     live.set_ifs(&ctx, &compiled, bounds, true);

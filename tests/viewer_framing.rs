@@ -186,3 +186,44 @@ fn animate_and_a_resize_keep_the_users_framed_camera() {
     assert_eq!(s.camera, refitted);
     assert_eq!((s.camera.yaw_deg, s.camera.pitch_deg), nlifs::viewer::command::ViewAxis::Top.angles_deg());
 }
+
+/// A scene that places its camera (an imported flame) frames its render's image: in a view
+/// narrower than the image the camera moves back until the image's width fits (the sides were
+/// cut off: a 1920×1080 flame in a 743×720 view showed 58 % of its width); in a wider view it
+/// is the scene's camera as it is.
+#[test]
+fn a_placed_camera_fits_the_renders_width_in_a_narrow_view() {
+    let text = "version = 1\n[grid]\nx = [0, 1]\ny = [0, 1]\n\
+        [[function]]\nkind = \"affine\"\nmatrix = [[0.5, 0], [0, 0.5]]\n\
+        [[function]]\nkind = \"affine\"\nmatrix = [[0.5, 0], [0, 0.5]]\noffset = [0.5, 0]\n\
+        [[function]]\nkind = \"affine\"\nmatrix = [[0.5, 0], [0, 0.5]]\noffset = [0, 0.5]\n\
+        [camera]\ntarget = [0.5, 0.5, 0]\ndistance = 40\nprojection = \"parallel\"\n\
+        [render]\nwidth = 1920\nheight = 1080\n";
+    let scene = nlifs::scene::Scene::parse(text, "placed").unwrap();
+    let mut s = ViewerState::new(scene, None, LiveSettings::default());
+    let render_aspect = 1920.0f32 / 1080.0;
+    for ([w, h], distance) in
+        [([743.0, 720.0], 40.0 * render_aspect / (743.0 / 720.0)), ([1600.0, 600.0], 40.0), ([1920.0, 1080.0], 40.0)]
+    {
+        s.apply([Command::SetViewRect { origin_px: [0.0, 0.0], size_px: [w, h] }]);
+        assert!(
+            (s.camera.distance - distance).abs() < 1e-3 * distance,
+            "{w}×{h}: {} for {distance}",
+            s.camera.distance
+        );
+        // The render's image (its visible height at distance 40, its aspect) lies in the view.
+        let half_h = 40.0 * (0.5 * s.camera.fov_y_deg.to_radians()).tan();
+        let view = s.splat_view();
+        for (dx, dy) in [(-1.0, -1.0), (1.0, 1.0), (-1.0, 1.0), (1.0, -1.0)] {
+            let corner = glam::DVec3::new(
+                0.5 + 0.999 * dx * f64::from(half_h * render_aspect),
+                0.5 + 0.999 * dy * f64::from(half_h),
+                0.0,
+            );
+            assert!(
+                project(&view, corner).is_some(),
+                "{w}×{h}: corner {corner} of the render's image outside the view"
+            );
+        }
+    }
+}

@@ -149,7 +149,8 @@ impl LiveView {
         match settings.render_density {
             Some(d) if settings.draw.mode == SplatMode::Density => {
                 let frame = settings.draw.point_count as u64 * settings.draw.steps_per_frame.max(1) as u64;
-                cap.min(d.splats_at_height(self.size().1).max(frame))
+                let (width, height) = self.size();
+                cap.min(d.splats_in_view(width, height).max(frame))
             }
             _ => cap,
         }

@@ -24,22 +24,28 @@ pub struct LiveSettings {
     pub render_density: Option<RenderDensity>,
 }
 
-/// The density of the scene's render: `points` into an image `height_px` tall. Density mode
-/// shows log(1 + count) / log(1 + max count), which flattens towards 1 as the counts grow: a
+/// The density of the scene's render: `points` into an image `width_px` × `height_px`. Density
+/// mode shows log(1 + count) / log(1 + max count), which flattens towards 1 as the counts grow: a
 /// view that went on accumulating past the render's points per pixel would drift from the
-/// render's picture and wash out (a flame of quality 1 did within a second). The live view
-/// stops where it has drawn as many points per pixel as the render (its camera frames the same
-/// height, so a pixel covers (render height / view height)² of a render's pixel).
+/// render's picture and wash out (a flame of quality 1 did within a second). The live view stops
+/// where it has drawn as many points per pixel as the render. The viewer frames the render's
+/// image in the view (its height, or its width where the view is narrower), so a view pixel covers
+/// (render height / framed height)² of a render's pixel.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct RenderDensity {
     pub points: u64,
+    pub width_px: u32,
     pub height_px: u32,
 }
 
 impl RenderDensity {
-    /// The splats of a view `height_px` tall at the render's points per pixel (at least 1).
-    pub fn splats_at_height(&self, height_px: u32) -> u64 {
-        let scale = f64::from(height_px) / f64::from(self.height_px.max(1));
+    /// The splats of a view of `width_px` × `height_px` at the render's points per pixel (at
+    /// least 1).
+    pub fn splats_in_view(&self, width_px: u32, height_px: u32) -> u64 {
+        let (w, h) = (f64::from(self.width_px.max(1)), f64::from(self.height_px.max(1)));
+        // The height of the render's image framed in the view.
+        let framed = f64::from(height_px).min(f64::from(width_px) * h / w);
+        let scale = framed / h;
         ((self.points as f64 * scale * scale).ceil() as u64).max(1)
     }
 }
@@ -131,13 +137,16 @@ mod tests {
     use super::*;
 
     #[test]
-    fn the_density_stop_scales_with_the_square_of_the_height() {
-        let d = RenderDensity { points: 1_000_000, height_px: 1000 };
-        assert_eq!(d.splats_at_height(1000), 1_000_000);
-        assert_eq!(d.splats_at_height(500), 250_000);
-        assert_eq!(d.splats_at_height(2000), 4_000_000);
-        assert_eq!(d.splats_at_height(0), 1, "never 0: a stop before the first splat");
-        assert_eq!(RenderDensity { points: 5, height_px: 0 }.splats_at_height(10), 500, "a height of 0 counts as 1");
+    fn the_density_stop_scales_with_the_square_of_the_framed_height() {
+        let d = RenderDensity { points: 1_000_000, width_px: 2000, height_px: 1000 };
+        assert_eq!(d.splats_in_view(2000, 1000), 1_000_000);
+        assert_eq!(d.splats_in_view(1000, 500), 250_000);
+        assert_eq!(d.splats_in_view(4000, 2000), 4_000_000);
+        assert_eq!(d.splats_in_view(3000, 500), 250_000, "a wider view: the height frames it");
+        assert_eq!(d.splats_in_view(1000, 1000), 250_000, "a narrower view: the width frames it");
+        assert_eq!(d.splats_in_view(0, 0), 1, "never 0: a stop before the first splat");
+        let flat = RenderDensity { points: 5, width_px: 0, height_px: 0 };
+        assert_eq!(flat.splats_in_view(10, 10), 500, "sizes of 0 count as 1");
     }
 
     #[test]

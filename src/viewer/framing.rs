@@ -34,12 +34,22 @@ pub fn fit(camera: &mut OrbitCamera, points: &[Vec3], aspect: f32) {
 }
 
 /// The scene's camera at `t_secs`, fitted around `sample` where the scene leaves target and
-/// distance open (the same rule as `nlifs render`), with the viewer's margin.
+/// distance open (the same rule as `nlifs render`), with the viewer's margin. A camera the scene
+/// places (an imported flame's) frames the render's image, `[render] width` × `height`: in a view
+/// narrower than that image it moves back until the image's width fits, as Blender's camera view
+/// shows the whole frame, instead of cutting off its sides.
 pub fn scene_camera(scene: &Scene, t_secs: f64, bounds: (DVec3, DVec3), sample: &[Vec3], aspect: f32) -> OrbitCamera {
     let mut camera = crate::shot::frame_camera(scene, t_secs, bounds, sample, aspect);
     let spec = scene.camera_at(t_secs);
-    if spec.target.is_none() && spec.distance.is_none() && !sample.is_empty() {
-        camera.distance *= 1.0 + EXTRA_MARGIN;
+    if spec.target.is_none() && spec.distance.is_none() {
+        if !sample.is_empty() {
+            camera.distance *= 1.0 + EXTRA_MARGIN;
+        }
+    } else {
+        let render_aspect = scene.render.width as f32 / scene.render.height.max(1) as f32;
+        if aspect > 0.0 && aspect < render_aspect {
+            camera.distance *= render_aspect / aspect;
+        }
     }
     camera
 }

@@ -38,7 +38,8 @@ impl ViewerState {
         let before = (self.imaging(), self.live.render_density);
         self.live.draw.tone = Tone::of(&render);
         self.live.draw.density_estimation = render.density_estimation;
-        self.live.render_density = Some(RenderDensity { points: render.points, height_px: render.height });
+        self.live.render_density =
+            Some(RenderDensity { points: render.points, width_px: render.width, height_px: render.height });
         (self.imaging(), self.live.render_density) != before
     }
 
