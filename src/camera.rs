@@ -161,10 +161,11 @@ impl OrbitCamera {
             far = far.max(d);
         }
         let pad = 1e-3 * (far - near).max(1e-3);
-        // A flat scene (a flame) seen from a distance of more than about 8 has its near and
-        // far within a few f32 steps of each other, and 1e-6 of padding would round away:
-        // 1 / (far − near) infinite, every depth fraction NaN and the picture black. Two steps
-        // at the larger distance keep them apart; nearer, the padding is as it was.
+        // A flat scene (a flame) seen from farther than about 16 has its near and far within
+        // an f32 step of each other, and 1e-6 of padding rounds away: 1 / (far − near)
+        // infinite, every depth fraction NaN and the picture black. Two steps at the larger
+        // distance keep them apart (below a distance of about 4 they are less than 1e-6, and
+        // the padding is as it was).
         let pad = pad.max(2.0 * f32::EPSILON * near.abs().max(far.abs()));
         let near = match self.projection {
             Projection::Perspective => (near - pad).max(far * 1e-4).max(1e-4),

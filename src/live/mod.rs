@@ -231,7 +231,7 @@ impl LiveView {
 
     pub fn resize(&mut self, ctx: &GpuContext, width: u32, height: u32) {
         self.gpu.resize(ctx, width, height);
-        // The density stop scales with the view's height.
+        // The density stop scales with the view's size.
         self.gpu.set_max_splats(self.max_splats(&self.settings));
     }
 

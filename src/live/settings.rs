@@ -20,7 +20,7 @@ pub struct LiveSettings {
     /// is what `render --backend gpu` and the benchmarks run; the viewer starts on `auto`.
     pub chaos_backend: ChaosBackend,
     /// Density mode: the points of the scene's render, at which the live view stops
-    /// accumulating (scaled to its own height). None: it accumulates to `draw.max_splats`.
+    /// accumulating (scaled to its own size). None: it accumulates to `draw.max_splats`.
     pub render_density: Option<RenderDensity>,
 }
 

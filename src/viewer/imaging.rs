@@ -31,7 +31,7 @@ impl ViewerState {
     }
 
     /// The live view's tone and density estimation from the scene at the current time, as
-    /// `render` takes them, and the render's points and height, where density mode stops
+    /// `render` takes them, and the render's points and size, where density mode stops
     /// accumulating ([`RenderDensity`]); true when they changed.
     pub fn take_scene_imaging(&mut self) -> bool {
         let render = self.scene.render_at(self.t_secs);
