@@ -161,7 +161,7 @@ impl OrbitCamera {
             far = far.max(d);
         }
         let pad = 1e-3 * (far - near).max(1e-3);
-        // A flat scene (a flame) seen from farther than about 16 has its near and far within
+        // A flat scene (a flame) seen from farther than 32 has its near and far within
         // an f32 step of each other, and 1e-6 of padding rounds away: 1 / (far − near)
         // infinite, every depth fraction NaN and the picture black. Two steps at the larger
         // distance keep them apart (below a distance of about 4 they are less than 1e-6, and
