@@ -8,7 +8,9 @@
 
 mod common;
 
+use nlifs::gpu::GpuContext;
 use nlifs::gpu::density_estimation::GpuDensityEstimation;
+use nlifs::live::{LiveSettings, LiveView};
 use nlifs::resolve::density_estimation::{KernelTables, estimate};
 use nlifs::rng::Pcg32;
 use nlifs::scene::spec::DensityEstimation;
@@ -111,13 +113,24 @@ fn gpu_density_estimation_matches_cpu() {
     }
 }
 
-/// The paper's plant 2 at time 0: the scene, its compiled IFS and its attractor's bounds.
-fn plant2() -> (nlifs::scene::Scene, nlifs::chaos_game::CompiledIfs, (glam::DVec3, glam::DVec3)) {
+/// A live view of `settings` on the paper's plant 2 at time 0, its camera framing the attractor.
+fn plant2_view(ctx: &GpuContext, settings: LiveSettings, width: u32, height: u32) -> LiveView {
     let path = format!("{}/scenes/plant2.toml", env!("CARGO_MANIFEST_DIR"));
     let scene = nlifs::scene::Scene::parse(&std::fs::read_to_string(&path).unwrap(), &path).unwrap();
     let compiled = nlifs::chaos_game::CompiledIfs::new(&scene.at(0.0)).unwrap();
     let bounds = nlifs::chaos_game::attractor_bounds(&compiled, 1);
-    (scene, compiled, bounds)
+    let mut live = LiveView::new(ctx, settings, width, height).unwrap();
+    live.set_ifs(ctx, &compiled, bounds, true);
+    live.set_camera(&scene.camera_for(bounds));
+    live
+}
+
+/// One frame of `live`'s chaos game, submitted; the points it splatted.
+fn advance(ctx: &GpuContext, live: &mut LiveView) -> u64 {
+    let mut encoder = ctx.device.create_command_encoder(&Default::default());
+    let splats = live.advance(ctx, &mut encoder);
+    ctx.queue.submit([encoder.finish()]);
+    splats
 }
 
 /// The live view's CPU route makes its density estimate on the CPU and uploads it; a snapshot
@@ -128,12 +141,11 @@ fn plant2() -> (nlifs::scene::Scene, nlifs::chaos_game::CompiledIfs, (glam::DVec
 #[test]
 fn live_cpu_route_estimate_matches_the_gpu_estimate() {
     use nlifs::gpu::progressive::ProgressiveSettings;
-    use nlifs::live::{ChaosBackend, LiveSettings, LiveView};
+    use nlifs::live::ChaosBackend;
     use nlifs::resolve::Tone;
     use nlifs::scene::spec::SplatMode;
     let Some(ctx) = gpu() else { return };
     let (width, height) = (160u32, 120u32);
-    let (scene, compiled, bounds) = plant2();
     let settings = LiveSettings {
         draw: ProgressiveSettings {
             point_count: 1 << 16,
@@ -146,14 +158,10 @@ fn live_cpu_route_estimate_matches_the_gpu_estimate() {
         chaos_backend: ChaosBackend::Cpu,
         render_density: None,
     };
-    let mut live = LiveView::new(&ctx, settings, width, height).unwrap();
-    live.set_ifs(&ctx, &compiled, bounds, true);
-    live.set_camera(&scene.camera_for(bounds));
+    let mut live = plant2_view(&ctx, settings, width, height);
     // Past the frames before the first estimate, so that the draw makes one.
     for _ in 0..12 {
-        let mut encoder = ctx.device.create_command_encoder(&Default::default());
-        live.advance(&ctx, &mut encoder);
-        ctx.queue.submit([encoder.finish()]);
+        advance(&ctx, &mut live);
     }
     let drawn = nlifs::gpu::readback::draw_offscreen(&ctx, width, height, |encoder, target, format| {
         live.draw(&ctx, encoder, target, format, [0, 0])
@@ -180,11 +188,10 @@ fn live_cpu_route_estimate_matches_the_gpu_estimate() {
 #[test]
 fn a_converged_view_with_density_estimation_comes_to_rest() {
     use nlifs::gpu::progressive::ProgressiveSettings;
-    use nlifs::live::{ChaosBackend, LiveSettings, LiveView};
+    use nlifs::live::ChaosBackend;
     use nlifs::scene::spec::SplatMode;
     let Some(ctx) = gpu() else { return };
     let (width, height) = (96u32, 64u32);
-    let (scene, compiled, bounds) = plant2();
     let de = Some(DensityEstimation { max_radius_px: 5.0, min_radius_px: 0.0, curve: 0.4 });
     for (backend, density_estimation) in
         [(ChaosBackend::Cpu, de), (ChaosBackend::Gpu, de), (ChaosBackend::Cpu, None), (ChaosBackend::Gpu, None)]
@@ -202,15 +209,11 @@ fn a_converged_view_with_density_estimation_comes_to_rest() {
             chaos_backend: backend,
             render_density: None,
         };
-        let mut live = LiveView::new(&ctx, settings, width, height).unwrap();
-        live.set_ifs(&ctx, &compiled, bounds, true);
-        live.set_camera(&scene.camera_for(bounds));
+        let mut live = plant2_view(&ctx, settings, width, height);
         let mut frames = 0;
         while !live.at_rest() {
             assert!(frames < 60, "{backend:?}, estimate {density_estimation:?}: not at rest after {frames} frames");
-            let mut encoder = ctx.device.create_command_encoder(&Default::default());
-            live.advance(&ctx, &mut encoder);
-            ctx.queue.submit([encoder.finish()]);
+            advance(&ctx, &mut live);
             nlifs::gpu::readback::draw_offscreen(&ctx, width, height, |encoder, target, format| {
                 live.draw(&ctx, encoder, target, format, [0, 0])
             })
@@ -219,9 +222,7 @@ fn a_converged_view_with_density_estimation_comes_to_rest() {
         }
         assert!(live.converged(), "{backend:?}: at rest before converging");
         // And it stays at rest: the draws that follow change nothing.
-        let mut encoder = ctx.device.create_command_encoder(&Default::default());
-        assert_eq!(live.advance(&ctx, &mut encoder), 0);
-        ctx.queue.submit([encoder.finish()]);
+        assert_eq!(advance(&ctx, &mut live), 0);
         nlifs::gpu::readback::draw_offscreen(&ctx, width, height, |encoder, target, format| {
             live.draw(&ctx, encoder, target, format, [0, 0])
         })
@@ -237,11 +238,10 @@ fn a_converged_view_with_density_estimation_comes_to_rest() {
 #[test]
 fn density_mode_stops_at_the_renders_points_per_pixel() {
     use nlifs::gpu::progressive::ProgressiveSettings;
-    use nlifs::live::{ChaosBackend, LiveSettings, LiveView, RenderDensity};
+    use nlifs::live::{ChaosBackend, RenderDensity};
     use nlifs::scene::spec::SplatMode;
     let Some(ctx) = gpu() else { return };
     let (width, height) = (96u32, 64u32);
-    let (scene, compiled, bounds) = plant2();
     let point_count = 1u32 << 12;
     let frame = point_count as u64;
     // 40 frames' points into an image twice the view's size: 10 frames at the view's.
@@ -250,9 +250,7 @@ fn density_mode_stops_at_the_renders_points_per_pixel() {
         let mut frames = 0;
         while !live.converged() {
             assert!(frames < 100, "no stop after {frames} frames");
-            let mut encoder = ctx.device.create_command_encoder(&Default::default());
-            live.advance(&ctx, &mut encoder);
-            ctx.queue.submit([encoder.finish()]);
+            advance(&ctx, live);
             frames += 1;
         }
         frames
@@ -269,9 +267,7 @@ fn density_mode_stops_at_the_renders_points_per_pixel() {
                 chaos_backend: backend,
                 render_density,
             };
-            let mut live = LiveView::new(&ctx, settings, width, height).unwrap();
-            live.set_ifs(&ctx, &compiled, bounds, true);
-            live.set_camera(&scene.camera_for(bounds));
+            let mut live = plant2_view(&ctx, settings, width, height);
             assert_eq!(frames_to_stop(&mut live), frames, "{backend:?}, {mode:?}");
             assert_eq!(live.splats_since_clear(), frames as u64 * frame, "{backend:?}, {mode:?}");
             if mode == SplatMode::Density {
@@ -289,8 +285,6 @@ fn density_mode_stops_at_the_renders_points_per_pixel() {
         chaos_backend: ChaosBackend::Cpu,
         render_density: Some(RenderDensity { points: 10, width_px: width, height_px: height }),
     };
-    let mut live = LiveView::new(&ctx, settings, width, height).unwrap();
-    live.set_ifs(&ctx, &compiled, bounds, true);
-    live.set_camera(&scene.camera_for(bounds));
+    let mut live = plant2_view(&ctx, settings, width, height);
     assert_eq!(frames_to_stop(&mut live), 1);
 }
