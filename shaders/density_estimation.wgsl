@@ -177,8 +177,7 @@ fn resolve_estimated(in: VertexOutput) -> @location(0) vec4<f32> {
         if s.w > 0.0 {
             let avg = s.rgb / (s.w * COLOR_SCALE);
             let max_count = max(bitcast<f32>(estimated_max_in[0]), 1.0);
-            let a0 = log(1.0 + s.w) / log(1.0 + max_count);
-            c = toned(avg, a0, true);
+            c = toned(avg, log_density(s.w, max_count), true);
         }
     }
     if ENCODE_SRGB {

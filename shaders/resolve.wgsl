@@ -57,6 +57,12 @@ struct ResolveParams {
     // The normal's plane fit reads the (2r + 1)² window of this radius (the pipeline constant
     // NORMAL_RADIUS_PX below holds the same value).
     normal_radius_px: u32,
+    // Density mode: s of the absolute density log(1 + count · s); 0: relative to the densest
+    // pixel (`log_density` below).
+    count_scale: f32,
+    pad0: u32,
+    pad1: u32,
+    pad2: u32,
 }
 
 // Pipeline constants (src/gpu/resolve.rs makes one pipeline per target format, mode and
@@ -428,6 +434,31 @@ fn gamma_ramp(x: f32) -> f32 {
 }
 
 // The toned colour of average colour `avg` and linear density `a0` (src/resolve/tone.rs).
+// Density mode's linear density of a pixel with `count` points, the largest being `max_count`
+// (≥ 1): log(1 + count) / log(1 + max count), or log(1 + count · s) on the absolute scale
+// (params.count_scale s > 0). The twin of `log_density` in src/resolve.rs.
+fn log_density(count: f32, max_count: f32) -> f32 {
+    if params.count_scale > 0.0 {
+        return log_1p(count * params.count_scale);
+    }
+    return log(1.0 + count) / log(1.0 + max_count);
+}
+
+// log(1 + x) for x ≥ 0 to a few ULP also where x is small: below 1/8 its series to x⁸ (WGSL's
+// log is held to 2^-21 absolute near 1), log(1 + x) above. The twin of `log_1p` in
+// src/resolve.rs (the same terms in the same order).
+fn log_1p(x: f32) -> f32 {
+    if x < 0.125 {
+        var sum = -1.0 / 8.0;
+        for (var k = 7; k >= 1; k--) {
+            let term = 1.0 / f32(k);
+            sum = select(-term, term, k % 2 == 1) + x * sum;
+        }
+        return x * sum;
+    }
+    return log(1.0 + x);
+}
+
 fn toned(avg: vec3<f32>, a0: f32, density: bool) -> vec3<f32> {
     let a = a0 * params.brightness;
     let alpha = gamma_ramp(a);
@@ -492,9 +523,7 @@ fn resolve(in: VertexOutput) -> @location(0) vec4<f32> {
                 if RESOLVE_MODE == MODE_AVERAGE {
                     c = toned(avg, 1.0, false);
                 } else {
-                    let log_max = log(1.0 + f32(max(stats[0], 1u)));
-                    let b = log(1.0 + f32(count)) / log_max;
-                    c = toned(avg, b, true);
+                    c = toned(avg, log_density(f32(count), f32(max(stats[0], 1u))), true);
                 }
             }
         }

@@ -42,7 +42,7 @@ use rayon::prelude::*;
 
 use crate::camera::{OrbitCamera, Projection};
 use crate::color::linear_to_srgb;
-use crate::scene::spec::{Look, RenderSettings, SplatMode};
+use crate::scene::spec::{DensityScale, Look, RenderSettings, SplatMode};
 use crate::splat::{Framebuffer, ShadowView, SplatView};
 
 mod light_rows;
@@ -175,8 +175,12 @@ pub struct ResolveParams {
     pub shadow_inv_depth_world: f32,
     /// The normal's plane fit reads the (2r + 1)² window of this radius, 1 ..= [`NORMAL_RADIUS_PX`].
     pub normal_radius_px: u32,
+    /// Density mode: s of the absolute density ln(1 + count · s); 0: relative to the densest
+    /// pixel ([`ResolveArgs::count_scale`]).
+    pub count_scale: f32,
+    pub pad: [u32; 3],
 }
-const _: () = assert!(std::mem::size_of::<ResolveParams>() == 192);
+const _: () = assert!(std::mem::size_of::<ResolveParams>() == 208);
 
 /// How the resolve draws, beyond the splat's own settings (mode, background, depth cue). The
 /// default is the paper look: flat colours, one pixel per key, the bytes `nlifs render` has
@@ -286,6 +290,18 @@ pub struct ResolveArgs {
     pub shadow: Option<ShadowView>,
     /// The radius of the normals' plane fit (clamped to 1 ..= [`NORMAL_RADIUS_PX`]).
     pub normal_radius_px: u32,
+    // The absolute density scale (density mode, `Tone::density_scale`).
+    /// The area of a pixel in square scene units at the camera's target.
+    pub pixel_area: f32,
+    /// The points the chaos game drew into the accumulation (those outside the view counted).
+    pub points_drawn: u64,
+}
+
+/// The area of one of `height_px` rows' square pixels in square scene units at the camera's
+/// target (where a parallel projection's pixels all are).
+pub fn pixel_area(camera: &OrbitCamera, height_px: u32) -> f32 {
+    let side = 2.0 * camera.half_height_at_target() / height_px.max(1) as f32;
+    side * side
 }
 
 /// View-space size of one of `height_px` pixel rows at unit distance (perspective) or
@@ -318,7 +334,24 @@ impl ResolveArgs {
             key_light: style.key_light().to_array(),
             shadow: view.shadow,
             normal_radius_px: NORMAL_RADIUS_PX,
+            pixel_area: pixel_area(camera, view.height),
+            points_drawn: 0,
         }
+    }
+
+    /// These arguments for an accumulation of `points_drawn` points.
+    pub fn drawn(self, points_drawn: u64) -> Self {
+        Self { points_drawn, ..self }
+    }
+
+    /// The factor s of the absolute density ln(1 + count · s): 1 / (points drawn · pixel area);
+    /// 0 selects the relative scale (and average and closest modes ignore it).
+    pub fn count_scale(&self) -> f32 {
+        if self.tone.density_scale != DensityScale::Absolute {
+            return 0.0;
+        }
+        let s = 1.0 / (self.points_drawn.max(1) as f64 * f64::from(self.pixel_area));
+        if s.is_finite() && s > 0.0 { s as f32 } else { f32::MIN_POSITIVE }
     }
 
     /// The shader's parameters for an accumulation of `width`×`height` pixels. Shading,
@@ -356,6 +389,8 @@ impl ResolveArgs {
             shadow_texel_world: 0.0,
             shadow_inv_depth_world: 0.0,
             normal_radius_px: self.normal_radius_px.clamp(1, NORMAL_RADIUS_PX),
+            count_scale: if self.mode == SplatMode::Density { self.count_scale() } else { 0.0 },
+            pad: [0; 3],
         }
         .with_shadow(self, closest)
     }
@@ -526,13 +561,39 @@ fn fragment(p: &ResolveParams, inputs: &ResolveInputs<'_>, x: u32, y: u32, light
 }
 
 /// The linear density of a pixel with `count` points: 1 in average mode, else
-/// log(1 + count) / log(1 + max count).
+/// [`log_density`].
 fn density_of(p: &ResolveParams, inputs: &ResolveInputs<'_>, count: u32) -> f32 {
     if p.mode == MODE_AVERAGE {
         return 1.0;
     }
-    let log_max = (1.0 + inputs.max_count.max(1) as f32).ln();
-    (1.0 + count as f32).ln() / log_max
+    log_density(p, count as f32, inputs.max_count.max(1) as f32)
+}
+
+/// Density mode's linear density of a pixel with `count` points (a float: density estimation
+/// spreads counts), the largest being `max_count` (≥ 1): log(1 + count) / log(1 + max count),
+/// or log(1 + count · s) on the absolute scale (`p.count_scale` s > 0). The shader's
+/// `log_density`.
+pub fn log_density(p: &ResolveParams, count: f32, max_count: f32) -> f32 {
+    if p.count_scale > 0.0 {
+        return log_1p(count * p.count_scale);
+    }
+    (1.0 + count).ln() / (1.0 + max_count).ln()
+}
+
+/// log(1 + x) for x ≥ 0 to a few ULP also where x is small, the shader's `log_1p`: below 1/8 its
+/// series to x⁸ (the rest is below 2^-24 relative), where 1 + x would round away most of x and
+/// WGSL's log is only held to 2^-21 absolute; log(1 + x) above, where that is ≤ 2^-17.9 relative.
+fn log_1p(x: f32) -> f32 {
+    if x < 0.125 {
+        let mut sum = -1.0 / 8.0;
+        for k in (1..8).rev() {
+            let term = 1.0 / k as f32;
+            sum = if k % 2 == 1 { term } else { -term } + x * sum;
+        }
+        x * sum
+    } else {
+        (1.0 + x).ln()
+    }
 }
 
 fn background(p: &ResolveParams) -> [f32; 3] {
@@ -559,7 +620,8 @@ fn unorm8(v: f32) -> u8 {
 /// Rows are resolved in parallel (every pixel is a pure function of the accumulation).
 pub fn resolve_image(framebuffer: &Framebuffer, camera: &OrbitCamera, style: &ResolveStyle) -> image::RgbImage {
     let view = &framebuffer.view;
-    let params = ResolveArgs::new(view, camera, style).params(view.width, view.height, true);
+    let params =
+        ResolveArgs::new(view, camera, style).drawn(framebuffer.points_drawn).params(view.width, view.height, true);
     let inputs = ResolveInputs::of(framebuffer);
     let width_px = view.width as usize;
     let mut bytes = vec![0u8; 3 * width_px * view.height as usize];

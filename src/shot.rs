@@ -180,7 +180,8 @@ impl Shot {
         progress: impl Fn() + Sync,
     ) -> Framebuffer {
         let (ifs, seed, frame, plan) = (&self.compiled, self.settings.seed, self.stream, &self.plan);
-        match accumulation {
+        let points_drawn = plan.splats_of(chunks.clone());
+        let mut framebuffer = match accumulation {
             Accumulation::PerThread => {
                 let several = rayon::current_num_threads() > 1;
                 let make = || {
@@ -205,7 +206,9 @@ impl Shot {
                 });
                 shared.into_framebuffer()
             }
-        }
+        };
+        framebuffer.points_drawn = points_drawn;
+        framebuffer
     }
 }
 

@@ -156,6 +156,9 @@ pub struct Framebuffer {
     pub colors: Vec<[f32; 3]>,
     /// The shadow map's keys (`view.shadow`'s texels; empty without shadows).
     pub shadow: Vec<u32>,
+    /// The points drawn into it, those outside the view included (the absolute density's
+    /// normalisation, `resolve::ResolveArgs::points_drawn`); set by whoever runs the chaos game.
+    pub points_drawn: u64,
 }
 
 impl Framebuffer {
@@ -166,7 +169,7 @@ impl Framebuffer {
             _ => (Vec::new(), vec![[0; 4]; n]),
         };
         let shadow = view.shadow.map_or_else(Vec::new, |s| vec![EMPTY; s.texels()]);
-        Self { view, closest, accum, colors, shadow }
+        Self { view, closest, accum, colors, shadow, points_drawn: 0 }
     }
 
     /// Writes a zero into every page of the accumulating modes' sums, for a framebuffer that
@@ -192,6 +195,7 @@ impl Framebuffer {
         for (a, b) in self.shadow.iter_mut().zip(&other.shadow) {
             *a = (*a).min(*b);
         }
+        self.points_drawn += other.points_drawn;
         self
     }
 

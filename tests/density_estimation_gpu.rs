@@ -11,6 +11,7 @@ mod common;
 use nlifs::gpu::GpuContext;
 use nlifs::gpu::density_estimation::GpuDensityEstimation;
 use nlifs::live::{LiveSettings, LiveView};
+use nlifs::resolve::Tone;
 use nlifs::resolve::density_estimation::{KernelTables, estimate};
 use nlifs::rng::Pcg32;
 use nlifs::scene::spec::DensityEstimation;
@@ -142,7 +143,6 @@ fn advance(ctx: &GpuContext, live: &mut LiveView) -> u64 {
 fn live_cpu_route_estimate_matches_the_gpu_estimate() {
     use nlifs::gpu::progressive::ProgressiveSettings;
     use nlifs::live::ChaosBackend;
-    use nlifs::resolve::Tone;
     use nlifs::scene::spec::SplatMode;
     let Some(ctx) = gpu() else { return };
     let (width, height) = (160u32, 120u32);
@@ -234,12 +234,14 @@ fn a_converged_view_with_density_estimation_comes_to_rest() {
 /// Density mode stops where the view has drawn the render's points per pixel (`RenderDensity`:
 /// a longer accumulation would flatten the log density and wash the picture out), scaled by the
 /// square of the view's size over the render's, never within the first frame, and again when
-/// the view is resized; closest mode goes on to `max_splats`. Both routes.
+/// the view is resized; closest mode, and density mode on the absolute scale (which converges
+/// as points are added), go on to `max_splats`. Both routes.
 #[test]
 fn density_mode_stops_at_the_renders_points_per_pixel() {
     use nlifs::gpu::progressive::ProgressiveSettings;
     use nlifs::live::{ChaosBackend, RenderDensity};
-    use nlifs::scene::spec::SplatMode;
+    use nlifs::scene::spec::{DensityScale, SplatMode};
+    let absolute = Tone { density_scale: DensityScale::Absolute, ..Tone::NEUTRAL };
     let Some(ctx) = gpu() else { return };
     let (width, height) = (96u32, 64u32);
     let point_count = 1u32 << 12;
@@ -256,11 +258,13 @@ fn density_mode_stops_at_the_renders_points_per_pixel() {
         frames
     };
     for backend in [ChaosBackend::Cpu, ChaosBackend::Gpu] {
-        for (mode, frames) in [(SplatMode::Density, 10), (SplatMode::Closest, 50)] {
+        let cases = [(SplatMode::Density, Tone::NEUTRAL, 10), (SplatMode::Closest, Tone::NEUTRAL, 50)];
+        for (mode, tone, frames) in cases.into_iter().chain([(SplatMode::Density, absolute, 50)]) {
             let settings = LiveSettings {
                 draw: ProgressiveSettings {
                     point_count,
                     mode,
+                    tone,
                     max_splats: 50 * frame,
                     ..ProgressiveSettings::default()
                 },
@@ -270,7 +274,7 @@ fn density_mode_stops_at_the_renders_points_per_pixel() {
             let mut live = plant2_view(&ctx, settings, width, height);
             assert_eq!(frames_to_stop(&mut live), frames, "{backend:?}, {mode:?}");
             assert_eq!(live.splats_since_clear(), frames as u64 * frame, "{backend:?}, {mode:?}");
-            if mode == SplatMode::Density {
+            if mode == SplatMode::Density && tone == Tone::NEUTRAL {
                 // A resize clears the accumulation; at the render's own height the stop is
                 // the render's 40 frames.
                 live.resize(&ctx, 2 * width, 2 * height);

@@ -279,6 +279,7 @@ fn malformed_scenes_give_specific_errors() {
         (format!("{GRID}{AFFINE}[camera]\nprojection = \"fisheye\"\n"), "`camera.projection`", 9),
         (format!("{GRID}{AFFINE}[render]\nwidth = 0\n"), "`render.width`", 9),
         (format!("{GRID}{AFFINE}[render]\nmode = \"additive\"\n"), "`render.mode`", 9),
+        (format!("{GRID}{AFFINE}[render]\ndensity_scale = \"linear\"\n"), "`render.density_scale`", 9),
         (format!("{GRID}{AFFINE}[render]\ndepth_cue = 1.5\n"), "`render.depth_cue`", 9),
         (GRID.to_string(), "has no [[function]]", 1),
         (format!("{GRID}{AFFINE}matrix = 3\n"), "duplicate key", 8),

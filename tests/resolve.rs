@@ -18,7 +18,7 @@ use nlifs::resolve::{
     resolve_fragment_perturbed,
 };
 use nlifs::scene::Scene;
-use nlifs::scene::spec::SplatMode;
+use nlifs::scene::spec::{DensityScale, SplatMode};
 use nlifs::splat::{Framebuffer, SplatView};
 
 use common::gpu;
@@ -61,7 +61,8 @@ fn plant2(mode: SplatMode) -> Accumulation {
         height,
         words: inputs.accum.to_vec(),
         colors: fb.colors.clone(),
-        args: ResolveArgs::new(&fb.view, &camera, &ResolveStyle::default()),
+        args: ResolveArgs::new(&fb.view, &camera, &ResolveStyle::default())
+            .drawn(512 * 8 * chaos_game::ORBITS_PER_CHUNK as u64),
         shadow: fb.shadow.clone(),
     }
 }
@@ -111,6 +112,8 @@ fn depth_field(perspective: bool) -> Accumulation {
             key_light: nlifs::resolve::KEY_LIGHT,
             shadow: None,
             normal_radius_px: nlifs::resolve::NORMAL_RADIUS_PX,
+            pixel_area: pixel_size * pixel_size,
+            points_drawn: 0,
         },
         shadow: Vec::new(),
     }
@@ -158,7 +161,8 @@ impl Gpu {
 ///    range; the depth cue (a convex blend with the background by t · cue) moves by as much:
 ///    a relative error of the linear colour c below 2^-20.
 /// 2. The other operations (the colour divisions at 2.5 ULP, density's logs at 3 ULP, the
-///    convex blends): a relative error ρ_ops below 2^-16 of c, generously.
+///    absolute density's log(1 + x): a series below x = 1/8, log(1 + x) at ≤ 2^-17.9 relative
+///    above; the convex blends): a relative error ρ_ops below 2^-16 of c, generously.
 /// 3. The sRGB encode: its slope times its argument, s'(c) · c, is ≤ 1.055 / 2.4 on [0, 1]
 ///    (≤ 12.92 · 0.0031308 on the linear segment), so a relative error ρ of c moves the encoded
 ///    value by ≤ 0.44 ρ; WGSL's pow (exp2 of y · log2 x) adds ≤ 2e-6 of the value.
@@ -412,8 +416,9 @@ fn resolve_matches_cpu() {
 
 /// Every combination of flam3's tone settings on the average and density accumulations:
 /// exposure 0 and 1.5 stops; gamma 1, and 2.2 with a wide linear threshold (0.05); vibrancy 0
-/// and 1; highlight power off (−1), 0 (hue kept) and 2 (towards white). Tolerance: item 8 of
-/// [`Tolerance`] (the exponents are ≤ 2, within its |y| ≤ 3).
+/// and 1; highlight power off (−1), 0 (hue kept) and 2 (towards white); density relative and
+/// absolute (density mode). Tolerance: item 8 of [`Tolerance`] (the exponents are ≤ 2, within
+/// its |y| ≤ 3).
 #[test]
 fn every_tone_setting_matches_cpu() {
     let Some(ctx) = gpu() else { return };
@@ -424,8 +429,11 @@ fn every_tone_setting_matches_cpu() {
             for (gamma, gamma_threshold) in [(1.0, Tone::NEUTRAL.gamma_threshold), (2.2, 0.05)] {
                 for vibrancy in [0.0, 1.0] {
                     for highlight_power in [-1.0, 0.0, 2.0] {
-                        let tone = Tone { exposure, gamma, gamma_threshold, vibrancy, highlight_power };
-                        compare(&mut gpu, &acc, &ResolveArgs { tone, ..acc.args });
+                        for density_scale in DensityScale::ALL {
+                            let tone =
+                                Tone { exposure, gamma, gamma_threshold, vibrancy, highlight_power, density_scale };
+                            compare(&mut gpu, &acc, &ResolveArgs { tone, ..acc.args });
+                        }
                     }
                 }
             }
@@ -440,7 +448,8 @@ fn every_tone_setting_matches_cpu() {
 /// tests/density_estimation_gpu.rs: 2 γ_N, N ≤ 4 (2r + 1)² + 2 terms, here r = 4, so
 /// β ≈ 3.9e-5); the average colour s / n moves by ≤ 2β relative, the density ln(1 + s) /
 /// ln(1 + max) by ≤ 2β relative (ln(1 + s(1 + β)) − ln(1 + s) ≤ β · s / (1 + s) ≤ β ln(1 + s)
-/// for s ≤ 1, and ≤ β ≪ β ln(1 + s) · 3 above), and the tone map multiplies relative errors by
+/// for s ≤ 1, and ≤ β ≪ β ln(1 + s) · 3 above), the absolute density ln(1 + k s) by ≤ β
+/// relative (k s / (1 + k s) ≤ ln(1 + k s)), and the tone map multiplies relative errors by
 /// at most 2 + g + 2 h (the colour times the gamma'd alpha; the highlight's (1 / mα)^h): a
 /// relative error ≤ (6 + 2 · 2) · 2β of the linear colour, added to item 8's; E as in 3.
 /// That is under a quarter level: the GPU must give the CPU's byte wherever the exact value
@@ -463,8 +472,11 @@ fn density_estimation_resolve_matches_cpu() {
     let n = (4 * (2 * 4 + 1) * (2 * 4 + 1) + 2) as f32;
     let u = 2f32.powi(-24);
     let beta = 2.0 * n * u / (1.0 - n * u);
-    let tones =
-        [Tone::NEUTRAL, Tone { exposure: 1.0, gamma: 2.2, vibrancy: 0.5, highlight_power: 2.0, ..Tone::NEUTRAL }];
+    let tones = [
+        Tone::NEUTRAL,
+        Tone { exposure: 1.0, gamma: 2.2, vibrancy: 0.5, highlight_power: 2.0, ..Tone::NEUTRAL },
+        Tone { exposure: 2.0, gamma: 1.8, density_scale: DensityScale::Absolute, ..Tone::NEUTRAL },
+    ];
     for tone in tones {
         let args = ResolveArgs { tone, ..acc.args };
         let image = nlifs::gpu::readback::draw_offscreen(&ctx, w, h, |encoder, target, format| {

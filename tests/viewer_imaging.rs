@@ -1,14 +1,15 @@
-//! The viewer's imaging (`src/viewer/imaging.rs`): the live view takes the scene's tone and
-//! density estimation at the current time, keyed values included; the render panel's edits are
-//! scene edits that keep the accumulation, one undo step per drag, saved with the scene and
-//! read back by `render` as the same style. Plain state: commands in, scene out, no GPU.
+//! The viewer's imaging (`src/viewer/imaging.rs`): the live view takes the scene's tone, density
+//! scale and density estimation at the current time, keyed values included; the render panel's
+//! edits are scene edits that keep the accumulation, one undo step per drag, saved with the
+//! scene and read back by `render` as the same style. Plain state: commands in, scene out, no
+//! GPU.
 
 mod common;
 
 use nlifs::live::{Imaging, LiveSettings};
 use nlifs::resolve::{ResolveStyle, Tone};
 use nlifs::scene::Scene;
-use nlifs::scene::spec::{DensityEstimation, SplatMode};
+use nlifs::scene::spec::{DensityEstimation, DensityScale, SplatMode};
 use nlifs::viewer::command::Command;
 use nlifs::viewer::state::ViewerState;
 
@@ -35,7 +36,13 @@ fn a_tone_drag_is_one_scene_edit_that_keeps_the_accumulation_and_saves() {
     let de = DensityEstimation { max_radius_px: 6.0, min_radius_px: 0.5, curve: 0.4 };
     // A drag: several values, then the gesture ends.
     for k in 1..=5 {
-        let tone = Tone { exposure: 0.25 * k as f32, gamma: 2.2, highlight_power: 1.0, ..Tone::NEUTRAL };
+        let tone = Tone {
+            exposure: 0.25 * k as f32,
+            gamma: 2.2,
+            highlight_power: 1.0,
+            density_scale: DensityScale::Absolute,
+            ..Tone::NEUTRAL
+        };
         let c = s.apply([Command::SetImaging(Imaging { tone, density_estimation: Some(de) })]);
         assert!(c.live_settings && !c.scene_edited && !c.scene_replaced, "step {k}: {c:?}");
         assert_eq!(s.live.draw.tone.exposure, 0.25 * k as f32);
@@ -45,6 +52,7 @@ fn a_tone_drag_is_one_scene_edit_that_keeps_the_accumulation_and_saves() {
     assert_eq!(s.scene.render.exposure, 1.25);
     assert_eq!(s.scene.render.gamma, 2.2);
     assert_eq!(s.scene.render.density_estimation, Some(de));
+    assert_eq!(s.scene.render.density_scale, DensityScale::Absolute);
     assert_eq!(s.imaging(), render_imaging(&s.scene, s.t_secs), "the view shows what render draws");
     let edited = s.scene.clone();
     // One undo step restores the scene and the view's imaging exactly.

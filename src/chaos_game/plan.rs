@@ -98,6 +98,14 @@ impl ChunkPlan {
         let orbits = ORBITS_PER_CHUNK as u64;
         (self.chunks as u64 - 1) * orbits * self.steps as u64 + orbits * self.last_steps as u64
     }
+
+    /// Points chunks `chunks` make (those past the plan's end make none).
+    pub fn splats_of(&self, chunks: std::ops::Range<u32>) -> u64 {
+        let full = chunks.start..chunks.end.min(self.chunks.saturating_sub(1)).max(chunks.start);
+        let last = u64::from(chunks.contains(&(self.chunks - 1)));
+        let orbits = ORBITS_PER_CHUNK as u64;
+        orbits * (u64::from(full.end - full.start) * self.steps as u64 + last * self.last_steps as u64)
+    }
 }
 
 #[cfg(test)]

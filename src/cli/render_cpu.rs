@@ -130,7 +130,8 @@ fn stream_png(
 ) -> anyhow::Result<usize> {
     let view = &framebuffer.view;
     let (width, height) = (view.width, view.height);
-    let params = ResolveArgs::new(view, &shot.camera, &shot.style).params(width, height, true);
+    let params =
+        ResolveArgs::new(view, &shot.camera, &shot.style).drawn(framebuffer.points_drawn).params(width, height, true);
     let inputs = ResolveInputs::of(framebuffer);
     let estimated: Option<Estimated> =
         density_estimation::applies(shot.settings.density_estimation.as_ref(), view.mode)

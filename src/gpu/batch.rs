@@ -191,10 +191,11 @@ impl GpuSplatter {
         stats.secs = start.elapsed().as_secs_f64();
         stats.splats = plan.splats();
         let last = read_framebuffer(ctx, game, shot)?;
-        let framebuffer = match passes {
+        let mut framebuffer = match passes {
             None => last,
             Some(sum) => sum.merge(last),
         };
+        framebuffer.points_drawn = stats.splats;
         Ok((framebuffer, stats))
     }
 }
@@ -214,7 +215,7 @@ fn read_framebuffer(ctx: &GpuContext, game: &GpuChaosGame, shot: &Shot) -> Resul
         }
     };
     let shadow = super::shadow::read_shadow_map(ctx, &game.shadow, &shot.view)?;
-    Ok(Framebuffer { view: shot.view, closest, accum, colors: shot.compiled.colors.clone(), shadow })
+    Ok(Framebuffer { view: shot.view, closest, accum, colors: shot.compiled.colors.clone(), shadow, points_drawn: 0 })
 }
 
 /// Whether `ctx`'s adapter is a software rasterizer.

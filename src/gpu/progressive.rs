@@ -23,7 +23,7 @@
 
 use glam::DVec3;
 
-use crate::camera::{OrbitCamera, Projection};
+use crate::camera::OrbitCamera;
 use crate::chaos_game::CompiledIfs;
 use crate::scene::spec::SplatMode;
 use crate::splat::{Lens, SplatView};
@@ -493,12 +493,9 @@ impl Progressive {
     ) {
         let s = &self.settings;
         let (near, far) = self.view.map_or((0.0, 1.0), |v| (v.near, v.far));
-        let (pixel_size, perspective) = match &self.camera {
-            Some(c) if c.projection == Projection::Perspective => {
-                (2.0 * (0.5 * c.fov_y_deg.to_radians()).tan() / self.height as f32, true)
-            }
-            Some(c) => (2.0 * c.half_height_at_target() / self.height as f32, false),
-            None => (1.0, false),
+        let ((pixel_size, perspective), pixel_area) = match &self.camera {
+            Some(c) => (crate::resolve::pixel_footprint(c, self.height), crate::resolve::pixel_area(c, self.height)),
+            None => ((1.0, false), 1.0),
         };
         let args = ResolveArgs {
             mode: s.mode,
@@ -517,6 +514,10 @@ impl Progressive {
             key_light: crate::resolve::shadow::key_light(s.light_yaw_deg, s.light_pitch_deg),
             shadow: self.view.and_then(|v| v.shadow),
             normal_radius_px: s.normal_radius_px,
+            pixel_area,
+            // Density mode only: the other modes' arguments (the light cache's) stay the same
+            // from frame to frame.
+            points_drawn: if s.mode == SplatMode::Density { self.splats_since_clear } else { 0 },
         };
         let due = self.estimate_due();
         let estimated = matches!(due, EstimateDue::Keep | EstimateDue::Make(_));

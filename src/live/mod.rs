@@ -31,7 +31,7 @@ use crate::gpu::progressive::{EstimateDue, Progressive, ProgressiveSettings};
 use crate::gpu::{GpuContext, GpuError};
 use crate::platform::Instant;
 use crate::resolve::density_estimation;
-use crate::scene::spec::SplatMode;
+use crate::scene::spec::{DensityScale, SplatMode};
 
 use self::cpu_source::CpuChaosGame;
 pub use self::settings::{ChaosBackend, ChaosRoute, Imaging, LiveSettings, RenderDensity};
@@ -142,12 +142,14 @@ impl LiveView {
         p
     }
 
-    /// Splats after which accumulation stops: in density mode, the render's points per pixel
-    /// ([`RenderDensity`]), though never within the first frame.
+    /// Splats after which accumulation stops: in density mode on the relative scale, the
+    /// render's points per pixel ([`RenderDensity`]), though never within the first frame (the
+    /// absolute scale converges as points are added: it refines on).
     fn max_splats(&self, settings: &LiveSettings) -> u64 {
         let cap = settings.draw.max_splats;
+        let relative = settings.draw.tone.density_scale == DensityScale::Relative;
         match settings.render_density {
-            Some(d) if settings.draw.mode == SplatMode::Density => {
+            Some(d) if settings.draw.mode == SplatMode::Density && relative => {
                 let frame = settings.draw.point_count as u64 * settings.draw.steps_per_frame.max(1) as u64;
                 let (width, height) = self.size();
                 cap.min(d.splats_in_view(width, height).max(frame))

@@ -19,18 +19,19 @@ pub struct LiveSettings {
     /// Where the chaos game runs (the GPU only resolves on the CPU route). The default, `gpu`,
     /// is what `render --backend gpu` and the benchmarks run; the viewer starts on `auto`.
     pub chaos_backend: ChaosBackend,
-    /// Density mode: the points of the scene's render, at which the live view stops
-    /// accumulating (scaled to its own size). None: it accumulates to `draw.max_splats`.
+    /// Density mode on the relative scale: the points of the scene's render, at which the live
+    /// view stops accumulating (scaled to its own size). None: it accumulates to
+    /// `draw.max_splats`, as it does on the absolute scale.
     pub render_density: Option<RenderDensity>,
 }
 
 /// The density of the scene's render: `points` into an image `width_px` × `height_px`. Density
-/// mode shows log(1 + count) / log(1 + max count), which flattens towards 1 as the counts grow: a
-/// view that went on accumulating past the render's points per pixel would drift from the
-/// render's picture and wash out (a flame of quality 1 did within a second). The live view stops
-/// where it has drawn as many points per pixel as the render. The viewer frames the render's
-/// image in the view (its height, or its width where the view is narrower), so a view pixel covers
-/// (render height / framed height)² of a render's pixel.
+/// mode on the relative scale shows log(1 + count) / log(1 + max count), which flattens towards
+/// 1 as the counts grow: a view that went on accumulating past the render's points per pixel
+/// would drift from the render's picture and wash out (a flame of quality 1 did within a
+/// second). The live view stops where it has drawn as many points per pixel as the render. The
+/// viewer frames the render's image in the view (its height, or its width where the view is
+/// narrower), so a view pixel covers (render height / framed height)² of a render's pixel.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct RenderDensity {
     pub points: u64,
@@ -67,7 +68,14 @@ impl Imaging {
     }
 
     pub fn with_tone_fields(self, v: [f32; 5]) -> Self {
-        let tone = Tone { exposure: v[0], gamma: v[1], gamma_threshold: v[2], vibrancy: v[3], highlight_power: v[4] };
+        let tone = Tone {
+            exposure: v[0],
+            gamma: v[1],
+            gamma_threshold: v[2],
+            vibrancy: v[3],
+            highlight_power: v[4],
+            density_scale: self.tone.density_scale,
+        };
         Self { tone, ..self }
     }
 }

@@ -312,7 +312,7 @@ pub fn merge_parts(paths: &[std::path::PathBuf]) -> Result<Merged, OutputError> 
         absorb(fb, &part.payload);
         seen.push((part.spec.k, name));
     }
-    let (first, s, framebuffer) = merged.expect("at least one part");
+    let (first, s, mut framebuffer) = merged.expect("at least one part");
     let missing: Vec<String> = (1..=first.spec.n)
         .filter(|k| !seen.iter().any(|(s, _)| s == k))
         .map(|k| format!("{k}/{}", first.spec.n))
@@ -323,6 +323,8 @@ pub fn merge_parts(paths: &[std::path::PathBuf]) -> Result<Merged, OutputError> 
             message: format!("missing parts {} of this still", missing.join(", ")),
         });
     }
+    // Every chunk of the still, in one part or another.
+    framebuffer.points_drawn = s.plan.splats();
     let density_estimation = s.settings.density_estimation;
     Ok(Merged { framebuffer, camera: s.camera, style: s.style, density_estimation, provenance: first.provenance })
 }

@@ -201,8 +201,8 @@ pub fn estimate(accum: &[[u32; 4]], width: u32, height: u32, de: &DensityEstimat
 
 impl Estimated {
     /// The density-mode colour of pixel (x, y) with `p` ([`crate::resolve::ResolveArgs::params`]):
-    /// the average colour laid over the background with log(1 + count) / log(1 + max count)
-    /// through the tone map, as [`crate::resolve::resolve_fragment`] does with integer counts;
+    /// the average colour laid over the background with the log density
+    /// ([`crate::resolve::log_density`]) through the tone map, as [`crate::resolve::resolve_fragment`] does with integer counts;
     /// sRGB-encoded when `p.encode_srgb` is set.
     pub fn fragment(&self, p: &ResolveParams, x: u32, y: u32) -> [f32; 3] {
         let mut c = [p.background[0], p.background[1], p.background[2]];
@@ -210,7 +210,7 @@ impl Estimated {
         if s[3] > 0.0 {
             let n = s[3] * COLOR_SCALE;
             let avg = [s[0] / n, s[1] / n, s[2] / n];
-            let a0 = (1.0 + s[3]).ln() / (1.0 + self.max_count.max(1.0)).ln();
+            let a0 = crate::resolve::log_density(p, s[3], self.max_count.max(1.0));
             // The tone map of the unfiltered resolve (the neutral tone is the line above).
             let tone = crate::resolve::ToneUniforms {
                 brightness: p.brightness,
@@ -247,7 +247,11 @@ pub fn image_of(
     style: &super::ResolveStyle,
 ) -> image::RgbImage {
     let view = &framebuffer.view;
-    let params = super::ResolveArgs::new(view, camera, style).params(view.width, view.height, true);
+    let params = super::ResolveArgs::new(view, camera, style).drawn(framebuffer.points_drawn).params(
+        view.width,
+        view.height,
+        true,
+    );
     let width_px = view.width as usize;
     let mut bytes = vec![0u8; 3 * width_px * view.height as usize];
     bytes.par_chunks_mut(3 * width_px.max(1)).enumerate().for_each(|(y, row)| {

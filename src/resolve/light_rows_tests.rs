@@ -43,6 +43,8 @@ fn params(width: u32, height: u32, perspective: bool, shadows: f32) -> ResolvePa
         key_light: shadow::key_light(40.0, 25.0),
         shadow: None,
         normal_radius_px: NORMAL_RADIUS_PX,
+        pixel_area: 4e-4,
+        points_drawn: 0,
     };
     let side = 24u32;
     // A map from view space: texels across x and y, depth along z, turned a little.

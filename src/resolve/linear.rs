@@ -32,7 +32,8 @@ pub struct LinearImage {
 /// quantisation) and the coverage of every pixel; rows in parallel.
 pub fn resolve_linear(framebuffer: &Framebuffer, camera: &OrbitCamera, style: &ResolveStyle) -> LinearImage {
     let view = &framebuffer.view;
-    let params = ResolveArgs::new(view, camera, style).params(view.width, view.height, false);
+    let params =
+        ResolveArgs::new(view, camera, style).drawn(framebuffer.points_drawn).params(view.width, view.height, false);
     let inputs = ResolveInputs::of(framebuffer);
     let width_px = view.width as usize;
     let pixels = width_px * view.height as usize;

@@ -23,6 +23,8 @@ fn params(size: u32, style: ResolveStyle) -> ResolveParams {
         key_light: style.key_light().to_array(),
         shadow: None,
         normal_radius_px: NORMAL_RADIUS_PX,
+        pixel_area: 1e-4,
+        points_drawn: 0,
     };
     args.params(size, size, false)
 }

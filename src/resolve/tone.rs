@@ -2,8 +2,9 @@
 //! half of the tone map that `shaders/resolve.wgsl` repeats in `toned` (keep in sync).
 //!
 //! A pixel with points has an average colour `avg` (linear, channels in 0..=1) and a linear
-//! density `a0`: ln(1 + count) / ln(1 + max count) in density mode (today's log density), 1 in
-//! average mode. With brightness B = 2^exposure, g = 1 / gamma and τ = gamma_threshold:
+//! density `a0`: 1 in average mode; in density mode ln(1 + count) / ln(1 + max count) on the
+//! relative scale, ln(1 + count · s) on the absolute one (flam3's; s = 1 / (points drawn · a
+//! pixel's area in square scene units at the camera's target), see [`DensityScale`]). With brightness B = 2^exposure, g = 1 / gamma and τ = gamma_threshold:
 //!
 //! ```text
 //! a      = B · a0                                  linear alpha (flam3's k1 · log(1 + k2 n) / n)
@@ -26,7 +27,7 @@
 //! The defaults (exposure 0, gamma 1, vibrancy 1, highlight power −1: off) skip every power, so
 //! the image is today's byte for byte: B = 1, α = a0, c = avg, the vibrancy term is exactly 0.
 
-use crate::scene::spec::RenderSettings;
+use crate::scene::spec::{DensityScale, RenderSettings};
 
 /// Highlight power below 0: overflowing channels are clipped one by one (flam3's default −1).
 pub const HIGHLIGHT_OFF: f32 = -1.0;
@@ -45,12 +46,20 @@ pub struct Tone {
     pub vibrancy: f32,
     /// Negative: highlights clip per channel; ≥ 0: they keep their hue (0) or fade to white.
     pub highlight_power: f32,
+    /// Density mode: relative to the densest pixel, or absolute.
+    pub density_scale: DensityScale,
 }
 
 impl Tone {
     /// The tone that changes nothing.
-    pub const NEUTRAL: Self =
-        Self { exposure: 0.0, gamma: 1.0, gamma_threshold: 0.01, vibrancy: 1.0, highlight_power: HIGHLIGHT_OFF };
+    pub const NEUTRAL: Self = Self {
+        exposure: 0.0,
+        gamma: 1.0,
+        gamma_threshold: 0.01,
+        vibrancy: 1.0,
+        highlight_power: HIGHLIGHT_OFF,
+        density_scale: DensityScale::Relative,
+    };
 
     /// The tone a scene's render settings ask for.
     pub fn of(settings: &RenderSettings) -> Self {
@@ -60,6 +69,7 @@ impl Tone {
             gamma_threshold: settings.gamma_threshold,
             vibrancy: settings.vibrancy,
             highlight_power: settings.highlight_power,
+            density_scale: settings.density_scale,
         }
     }
 }

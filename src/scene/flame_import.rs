@@ -18,14 +18,14 @@
 //!   the nearest palette entry).
 //! - **Camera.** Parallel projection seen from +z, the target at M(center), the visible height
 //!   size_y / (scale · 2^zoom); the image size is the flame's.
-//! - **Look.** Density mode coloured by the palette (entries as sRGB bytes, linear for the
-//!   resolve), the flame's background, and flam3's tone: its gamma divided by 3 (nlifs encodes
-//!   its output to sRGB, itself about a power 1/2.2, which flam3 does not, and nlifs's log
-//!   density is relative to the densest pixel where flam3's is absolute: 3 and the exposure
-//!   below were chosen by eye against `flam3-render` on flam3's own `test.flam3`), the exposure
-//!   ½ + log₂(brightness / 4) stops, its gamma threshold, vibrancy and highlight power; density
-//!   estimation with flam3's estimator radius, minimum and curve; as many points as flam3 draws
-//!   samples (quality × width × height × 4^zoom).
+//! - **Look.** Density mode on the absolute scale (flam3's log density: log(1 + points per
+//!   point drawn and square unit)) coloured by the palette (entries as sRGB bytes, linear for
+//!   the resolve), the flame's background, and flam3's tone: the exposure log₂(brightness ·
+//!   268 / 256) stops (flam3's k1), its gamma divided by 2.2 (nlifs encodes its output to sRGB,
+//!   about a power 1 / 2.2, which flam3 does not), its gamma threshold, vibrancy and highlight
+//!   power; density estimation with flam3's estimator radius, minimum and curve; as many points
+//!   as flam3 draws samples (quality × width × height × 4^zoom). Not drawn: flam3's spatial
+//!   filter and supersampling (a small attractor looks sharper than flam3's).
 
 use std::path::Path;
 
@@ -37,8 +37,8 @@ use crate::flame::{Coefs, Flame, IDENTITY, PaletteMode, Xform};
 use crate::model::{ProbabilityMode, RectGrid};
 use crate::palette::Palette;
 use crate::scene::spec::{
-    CameraSpec, ColorMode, DensityEstimation, FlameDef, FunctionDef, FunctionSpec, MAX_POINTS, RenderSettings,
-    SplatMode, TONE_FIELDS,
+    CameraSpec, ColorMode, DensityEstimation, DensityScale, FlameDef, FunctionDef, FunctionSpec, MAX_POINTS,
+    RenderSettings, SplatMode, TONE_FIELDS,
 };
 use crate::scene::{LoadError, Scene};
 
@@ -61,10 +61,10 @@ pub enum FlameImportError {
 const FOV_Y_DEG: f64 = 30.0;
 
 /// flam3's gamma is divided by this (see the module note).
-const GAMMA_DIVISOR: f64 = 3.0;
+const GAMMA_DIVISOR: f64 = 2.2;
 
-/// The exposure in stops of a flame of flam3's default brightness 4 (see the module note).
-const EXPOSURE_AT_DEFAULT_BRIGHTNESS: f64 = 0.5;
+/// flam3's brightness is multiplied by this (its k1's 268 / 256).
+const BRIGHTNESS_FACTOR: f64 = 268.0 / 256.0;
 
 /// An affine map in flam3's coefficient order as a 3 × 3 matrix (rows x, y, 1).
 fn matrix(c: &Coefs) -> [[f64; 3]; 3] {
@@ -181,11 +181,12 @@ pub fn scene_of_flame(flame: &Flame, palette_file: &str) -> Result<FlameImport, 
         mode: SplatMode::Density,
         background: bg,
         depth_cue: 0.0,
-        exposure: tone(0, EXPOSURE_AT_DEFAULT_BRIGHTNESS + (flame.brightness.max(1e-3) / 4.0).log2()),
+        exposure: tone(0, (flame.brightness.max(1e-3) * BRIGHTNESS_FACTOR).log2()),
         gamma: tone(1, flame.gamma / GAMMA_DIVISOR),
         gamma_threshold: tone(2, flame.gamma_threshold),
         vibrancy: tone(3, flame.vibrancy),
         highlight_power: tone(4, flame.highlight_power),
+        density_scale: DensityScale::Absolute,
         density_estimation: estimator,
         color: ColorMode::Palette,
         palette: Some(palette),

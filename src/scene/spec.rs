@@ -86,6 +86,38 @@ impl SplatMode {
     }
 }
 
+/// What density mode's full brightness means (`[render] density_scale`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum DensityScale {
+    /// log(1 + count) / log(1 + max count): the densest pixel is full. A picture keeps its
+    /// contrast whatever it shows, but flattens as the points grow.
+    #[default]
+    Relative,
+    /// flam3's: log(1 + d), d the pixel's points per point drawn and per square scene unit
+    /// (at the camera's target): the attractor's own density, so a picture converges as points
+    /// are added and keeps its brightness when the camera zooms.
+    Absolute,
+}
+
+impl DensityScale {
+    pub const ALL: [DensityScale; 2] = [DensityScale::Relative, DensityScale::Absolute];
+
+    pub fn parse(s: &str) -> Option<Self> {
+        match s {
+            "relative" => Some(DensityScale::Relative),
+            "absolute" => Some(DensityScale::Absolute),
+            _ => None,
+        }
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            DensityScale::Relative => "relative",
+            DensityScale::Absolute => "absolute",
+        }
+    }
+}
+
 /// How a function is defined in the scene.
 #[derive(Clone, Debug, PartialEq)]
 pub enum FunctionDef {
@@ -234,6 +266,8 @@ pub struct RenderSettings {
     pub vibrancy: f32,
     /// Negative: highlights clip per channel; ≥ 0: they keep their hue (0) or fade to white.
     pub highlight_power: f32,
+    /// Density mode: relative to the densest pixel, or flam3's absolute density.
+    pub density_scale: DensityScale,
     /// flam3's adaptive density estimation (density mode; `src/resolve/density_estimation.rs`);
     /// None: off.
     pub density_estimation: Option<DensityEstimation>,
@@ -357,6 +391,7 @@ impl Default for RenderSettings {
             gamma_threshold: 0.01,
             vibrancy: 1.0,
             highlight_power: -1.0,
+            density_scale: DensityScale::Relative,
             density_estimation: None,
             shadows: None,
             light_yaw_deg: KEY_LIGHT_YAW_DEG,

@@ -13,7 +13,7 @@ use crate::color;
 use crate::model::builder::Step;
 use crate::scene::Scene;
 use crate::scene::file::FORMAT_VERSION;
-use crate::scene::spec::{CameraSpec, ColorMode, FunctionDef, LIGHT_FIELDS, RenderSettings, TONE_FIELDS};
+use crate::scene::spec::{CameraSpec, ColorMode, DensityScale, FunctionDef, LIGHT_FIELDS, RenderSettings, TONE_FIELDS};
 use crate::scene::timeline::RenderKey;
 
 /// TOML text of a number that reads back to the same f64 (Rust's shortest round-trip form).
@@ -288,6 +288,9 @@ impl Scene {
             if v != d {
                 let _ = writeln!(out, "{name} = {v:?}");
             }
+        }
+        if r.density_scale != DensityScale::Relative {
+            let _ = writeln!(out, "density_scale = \"{}\"", r.density_scale.name());
         }
         if let Some(de) = r.density_estimation {
             let _ = writeln!(

@@ -1,5 +1,5 @@
-//! The scene's imaging in the viewer: flam3's tone map and density estimation (`[render]`
-//! `exposure` … `highlight_power`, `estimator_*`). The live view takes them from the scene at
+//! The scene's imaging in the viewer: flam3's tone map, the density scale and density
+//! estimation (`[render]` `exposure` … `highlight_power`, `density_scale`, `estimator_*`). The live view takes them from the scene at
 //! the current time ([`ViewerState::take_scene_imaging`], keyed `[key.render]` values included),
 //! so that it looks as `render` and `record` draw the same scene; the render panel's edits
 //! ([`Imaging`], sent as `Command::SetImaging`, UI in `ui/tone.rs`) are scene edits, undoable
@@ -45,7 +45,8 @@ impl ViewerState {
 
     /// The render panel's imaging edit: tone fields into `[render]`, or into the key at the
     /// playhead where the timeline keys them (a keyed field without a key there is left as
-    /// it is; the panel does not offer it); density estimation into `[render]`. Part of the
+    /// it is; the panel does not offer it); the density scale and density estimation into
+    /// `[render]`. Part of the
     /// running gesture (a slider's drag is one undo step).
     pub(super) fn set_imaging(&mut self, imaging: Imaging) {
         let mut after = self.scene.clone();
@@ -66,6 +67,7 @@ impl ViewerState {
                 (true, _, _) => {}
             }
         }
+        after.render.density_scale = imaging.tone.density_scale;
         after.render.density_estimation = imaging.density_estimation;
         if after != self.scene {
             self.preview(Edit::ReplaceScene { before: Box::new(self.scene.clone()), after: Box::new(after) });

@@ -1,8 +1,8 @@
 //! Reading a scene: the second pass over the file, which gives the `*Toml` structs of
 //! `file.rs` their meaning. It checks counts, ranges and names and reports the first problem
 //! with the file, line, column and the dotted path of the field (`function[2].points`), so a
-//! bad scene becomes a message and never a panic. The `[timeline]` and `[[key]]` sections are
-//! checked in `keys.rs`, against the functions read here.
+//! bad scene becomes a message and never a panic. `[render]` is checked in `render.rs`, the
+//! `[timeline]` and `[[key]]` sections in `keys.rs`, against the functions read here.
 
 use std::ops::Range;
 
@@ -13,12 +13,8 @@ use crate::camera::Projection;
 use crate::color;
 use crate::model::builder::{Axis, Builder, Step};
 use crate::model::{AffineMap, JuliaMap, ProbabilityMode, RectGrid};
-use crate::scene::file::{
-    CameraToml, ColorToml, FORMAT_VERSION, FunctionToml, RenderToml, SceneToml, StepToml, VectorToml,
-};
-use crate::scene::spec::{
-    CameraSpec, FunctionDef, FunctionSpec, Look, MAX_COORDINATE, MAX_POINTS, RenderSettings, SplatMode, TONE_FIELDS,
-};
+use crate::scene::file::{CameraToml, ColorToml, FORMAT_VERSION, FunctionToml, SceneToml, StepToml, VectorToml};
+use crate::scene::spec::{CameraSpec, FunctionDef, FunctionSpec, MAX_COORDINATE, RenderSettings};
 use crate::scene::{Scene, SceneError};
 
 mod flame;
@@ -27,6 +23,7 @@ mod lens;
 mod numbers;
 mod palette;
 mod read;
+mod render;
 mod words;
 
 impl Scene {
@@ -603,93 +600,6 @@ impl Checker<'_> {
                 }
             });
         }
-        Ok(out)
-    }
-
-    fn render(&self, r: &RenderToml) -> Res<RenderSettings> {
-        let mut out = RenderSettings::default();
-        let int = |v: &Spanned<i64>, field: &str, lo: i64, hi: i64| -> Res<i64> {
-            let x = *v.get_ref();
-            if x < lo || x > hi {
-                return Err(self.err(v.span(), field, format!("must lie in {lo}..={hi}, found {x}")));
-            }
-            Ok(x)
-        };
-        if let Some(v) = &r.width {
-            out.width = int(v, "render.width", 1, 16384)? as u32;
-        }
-        if let Some(v) = &r.height {
-            out.height = int(v, "render.height", 1, 16384)? as u32;
-        }
-        if let Some(v) = &r.points {
-            out.points = int(v, "render.points", 1, MAX_POINTS as i64)? as u64;
-        }
-        if let Some(v) = &r.seed {
-            out.seed = int(v, "render.seed", 0, u32::MAX as i64)? as u32;
-        }
-        if let Some(m) = &r.mode {
-            out.mode = SplatMode::parse(m.get_ref()).ok_or_else(|| {
-                self.err(
-                    m.span(),
-                    "render.mode",
-                    format!("`{}` is not a mode; use \"closest\", \"average\" or \"density\"", m.get_ref()),
-                )
-            })?;
-        }
-        if let Some(b) = &r.background {
-            out.background = self.color(b, "render.background")?;
-        }
-        if let Some(d) = &r.depth_cue {
-            let v = self.finite(d, "render.depth_cue")?;
-            if !(0.0..=1.0).contains(&v) {
-                return Err(self.err(d.span(), "render.depth_cue", "must lie in 0..1"));
-            }
-            out.depth_cue = v as f32;
-        }
-        if let Some(l) = &r.look {
-            out.look = Some(Look::parse(l.get_ref()).ok_or_else(|| {
-                self.err(
-                    l.span(),
-                    "render.look",
-                    format!("`{}` is not a look; use \"solid\" or \"paper\"", l.get_ref()),
-                )
-            })?);
-        }
-        for (value, field, slot) in
-            [(&r.shading, "render.shading", &mut out.shading), (&r.occlusion, "render.occlusion", &mut out.occlusion)]
-        {
-            if let Some(s) = value {
-                let v = self.finite(s, field)?;
-                if !(0.0..=1.0).contains(&v) {
-                    return Err(self.err(s.span(), field, "must lie in 0..1"));
-                }
-                *slot = Some(v as f32);
-            }
-        }
-        // The tone controls.
-        for ((value, (name, lo, hi)), slot) in r.tone().into_iter().zip(TONE_FIELDS).zip(out.tone_mut()) {
-            if let Some(v) = value {
-                *slot = self.in_range(v, &format!("render.{name}"), lo, hi)? as f32;
-            }
-        }
-        out.density_estimation = self.density_estimation(r)?;
-        // The key light.
-        let [shadows, yaw, pitch] = r.light();
-        let [(_, lo, hi), yaw_field, pitch_field] = crate::scene::spec::LIGHT_FIELDS;
-        if let Some(v) = shadows {
-            out.shadows = Some(self.in_range(v, "render.shadows", lo, hi)? as f32);
-        }
-        for ((value, (name, lo, hi)), slot) in
-            [yaw, pitch].into_iter().zip([yaw_field, pitch_field]).zip(out.light_mut())
-        {
-            if let Some(v) = value {
-                *slot = self.in_range(v, &format!("render.{name}"), lo, hi)? as f32;
-            }
-        }
-        let (aperture, focus_distance) = self.lens(&r.aperture, &r.focus_distance, "render")?;
-        out.aperture = aperture.unwrap_or(0.0);
-        out.focus_distance = focus_distance;
-        self.color_fields(r, &mut out)?;
         Ok(out)
     }
 }

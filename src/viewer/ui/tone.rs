@@ -1,8 +1,8 @@
 //! The render panel's imaging controls (average and density modes): flam3's tone map and, in
-//! density mode, density estimation. They read the live view's values (the scene's at the
+//! density mode, the density scale and density estimation. They read the live view's values (the scene's at the
 //! current time) and send `Command::SetImaging` (`imaging.rs` turns it into a scene edit).
 
-use crate::scene::spec::{DensityEstimation, SplatMode, TONE_FIELDS};
+use crate::scene::spec::{DensityEstimation, DensityScale, SplatMode, TONE_FIELDS};
 
 use super::super::command::Command;
 use super::super::imaging::DEFAULT_DENSITY_ESTIMATION;
@@ -33,6 +33,16 @@ pub fn imaging_ui(ui: &mut egui::Ui, state: &ViewerState, commands: &mut Vec<Com
     }
     let mut imaging = before.with_tone_fields(fields);
     if mode == SplatMode::Density {
+        ui.horizontal(|ui| {
+            ui.label("density");
+            for (scale, hint) in [
+                (DensityScale::Relative, "log(1 + count) / log(1 + max count): the densest pixel is full"),
+                (DensityScale::Absolute, "flam3's: points per point drawn and square unit; refines as points grow"),
+            ] {
+                let response = ui.radio_value(&mut imaging.tone.density_scale, scale, scale.name()).on_hover_text(hint);
+                changed |= response.changed();
+            }
+        });
         let mut on = imaging.density_estimation.is_some();
         if ui
             .checkbox(&mut on, "density estimation")
