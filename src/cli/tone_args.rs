@@ -1,12 +1,13 @@
 //! The tone overrides `nlifs render` and `nlifs record` share: `--exposure`, `--gamma`,
-//! `--gamma-threshold`, `--vibrancy`, `--highlight-power` over the scene's `[render]` values
-//! (flam3's tone controls of the average and density modes, `nlifs::resolve::Tone`), each
-//! checked against the scene format's range (`TONE_FIELDS`).
+//! `--gamma-threshold`, `--vibrancy`, `--highlight-power` and `--density-scale` over the
+//! scene's `[render]` values (flam3's tone controls of the average and density modes,
+//! `nlifs::resolve::Tone`), the numbers checked against the scene format's range
+//! (`TONE_FIELDS`).
 
 use clap::Args;
 
 use nlifs::scene::Scene;
-use nlifs::scene::spec::{RenderSettings, TONE_FIELDS};
+use nlifs::scene::spec::{DensityScale, RenderSettings, TONE_FIELDS};
 
 #[derive(Args, Clone, Debug, Default)]
 pub struct ToneArgs {
@@ -26,6 +27,10 @@ pub struct ToneArgs {
     /// white: -1..16.
     #[arg(long, allow_hyphen_values = true, value_parser = |s: &str| in_range(s, 4))]
     highlight_power: Option<f32>,
+    /// Density mode's log density: relative (the densest pixel full) or absolute (flam3's: a
+    /// pixel's points per point drawn and square unit; converges as points grow).
+    #[arg(long, value_name = "SCALE", value_parser = density_scale)]
+    density_scale: Option<DensityScale>,
 }
 
 impl ToneArgs {
@@ -33,12 +38,15 @@ impl ToneArgs {
         [self.exposure, self.gamma, self.gamma_threshold, self.vibrancy, self.highlight_power]
     }
 
-    /// Sets the given tone values in `settings`.
+    /// Sets the given tone values and density scale in `settings`.
     pub fn apply(&self, settings: &mut RenderSettings) {
         for (value, slot) in self.values().into_iter().zip(settings.tone_mut()) {
             if let Some(v) = value {
                 *slot = v;
             }
+        }
+        if let Some(scale) = self.density_scale {
+            settings.density_scale = scale;
         }
     }
 
@@ -66,4 +74,9 @@ fn in_range(s: &str, field: usize) -> Result<f32, String> {
         return Err(format!("{v} is not in {lo}..={hi}"));
     }
     Ok(v as f32)
+}
+
+/// A density scale by its scene-file name.
+fn density_scale(s: &str) -> Result<DensityScale, String> {
+    DensityScale::parse(s.trim()).ok_or_else(|| format!("`{s}` is not a density scale; use relative or absolute"))
 }
