@@ -96,3 +96,28 @@ fn relative_density_brightens_as_points_grow() {
     let (many, _) = inside_mean(&square("relative", 3.732, 64, 16_000_000), None);
     assert!(many > few + 1.0, "relative scale: {few:.2} at 1 M points, {many:.2} at 16 M");
 }
+
+/// `render --density-scale absolute` over a relative scene draws the absolute picture (the
+/// bytes of the scene that sets it); a scale it does not know exits 2 and writes nothing.
+#[test]
+fn render_takes_the_density_scale_from_the_command_line() {
+    let dir = common::temp_dir("density-scale");
+    let write = |scale: &str| {
+        let path = dir.join(format!("{scale}.toml"));
+        std::fs::write(&path, square(scale, 3.732, 64, 200_000).to_toml()).unwrap();
+        path.to_str().unwrap().to_string()
+    };
+    let (relative, absolute) = (write("relative"), write("absolute"));
+    let out = |name: &str| dir.join(name).to_str().unwrap().to_string();
+    let render = |args: &[&str]| common::run_nlifs(&[&["render"], args].concat());
+    assert!(render(&[&absolute, "-o", &out("scene.png")]).status.success());
+    assert!(render(&[&relative, "--density-scale", "absolute", "-o", &out("flag.png")]).status.success());
+    assert!(render(&[&relative, "-o", &out("relative.png")]).status.success());
+    let pixels = |name: &str| image::open(dir.join(name)).unwrap().to_rgb8().into_raw();
+    assert_eq!(pixels("flag.png"), pixels("scene.png"), "the flag draws what the scene's field draws");
+    assert_ne!(pixels("flag.png"), pixels("relative.png"));
+    let o = render(&[&relative, "--density-scale", "linear", "-o", &out("bad.png")]);
+    assert_eq!(o.status.code(), Some(2), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("relative or absolute"));
+    assert!(!dir.join("bad.png").exists());
+}
