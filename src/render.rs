@@ -3,7 +3,7 @@
 
 use std::sync::atomic::{AtomicU64, Ordering};
 
-use crate::resolve::resolve_image;
+use crate::resolve::density_estimation;
 use crate::shot::Shot;
 use crate::splat::Framebuffer;
 
@@ -13,12 +13,13 @@ pub struct Rendered {
     pub framebuffer: Framebuffer,
 }
 
-/// Renders `shot` on the CPU. `progress(done, total)` is called as chunks finish (from worker
-/// threads).
+/// Renders `shot` on the CPU, with its density estimation where it asks for one (as `nlifs
+/// render` does). `progress(done, total)` is called as chunks finish (from worker threads).
 pub fn render_cpu(shot: &Shot, progress: &(dyn Fn(u64, u64) + Sync)) -> Rendered {
     let chunks = shot.plan.chunks() as u64;
     let done = AtomicU64::new(0);
     let framebuffer = shot.splat(|| progress(done.fetch_add(1, Ordering::Relaxed) + 1, chunks));
-    let image = resolve_image(&framebuffer, &shot.camera, &shot.style);
+    let de = shot.settings.density_estimation.as_ref();
+    let image = density_estimation::resolve_image(&framebuffer, &shot.camera, &shot.style, de);
     Rendered { image, framebuffer }
 }

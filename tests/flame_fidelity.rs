@@ -7,6 +7,9 @@
 //! within twice flam3's own difference between two of its seeds (`isaac_seed`), plus 3: the
 //! two renderers draw different random numbers, so flam3's seed-to-seed noise is the scale.
 //!
+//! Eleven of them are also imported as scenes and drawn by the scene renderer ([`IMPORTED`]),
+//! with the same metric.
+//!
 //! Without `flam3-render` the test says so loudly and passes, unless `CI` or
 //! `NLIFS_REQUIRE_TOOLS=1` is set, where it fails. The images go to
 //! `target/flame-fidelity/NAME-{nlifs,flam3}.png` to be looked at side by side.
@@ -57,7 +60,17 @@ fn var(name: &str, weight: f64) -> VariationTerm {
 }
 
 fn xform(weight: f64, color: f64, coefs: Coefs, variations: Vec<VariationTerm>) -> Xform {
-    Xform { weight, color, color_speed: 0.5, opacity: 1.0, coefs, post: None, variations, chaos: Vec::new() }
+    Xform {
+        weight,
+        color,
+        color_speed: 0.5,
+        opacity: 1.0,
+        coefs,
+        post: None,
+        variation_coefs: None,
+        variations,
+        chaos: Vec::new(),
+    }
 }
 
 /// A three-xform Sierpinski-like base with the given variations on every xform.
@@ -332,6 +345,33 @@ fn difference(a: &image::RgbaImage, b: &image::RgbaImage, background: [u8; 3]) -
     if n == 0 { 0.0 } else { sum as f64 / n as f64 }
 }
 
+/// Flames whose features the import keeps (no final xform, xaos, opacity or wide filter) and
+/// whose attractor is large enough for flam3's spatial filter not to matter, also imported as
+/// scenes (`nlifs import flame`) and rendered by the scene renderer: the conjugation into
+/// nlifs's view (a rotated camera; waves and popcorn keep their xform's coefs), the absolute
+/// density with flam3's brightness and gamma, density estimation and the palette.
+const IMPORTED: &[&str] = &[
+    "camera",
+    "color-speed",
+    "density-estimation",
+    "linear",
+    "mix-sinusoidal-swirl",
+    "palette-hex",
+    "var-julian",
+    "var-popcorn",
+    "var-spherical",
+    "var-swirl",
+    "var-waves",
+];
+
+/// The imported scene of `flame` rendered on the CPU as `nlifs render SCENE.toml` does.
+fn imported_render(flame: &Flame) -> image::RgbaImage {
+    use nlifs::shot::{Framing, Shot};
+    let scene = nlifs::scene::flame_import::scene_of_flame(flame, "palette.png").expect("import").scene;
+    let shot = Shot::prepare(&scene, 0.0, &scene.render, Framing::Scene, None).expect("shot");
+    image::DynamicImage::ImageRgb8(nlifs::render::render_cpu(&shot, &|_, _| {}).image).to_rgba8()
+}
+
 #[test]
 fn flames_match_flam3_render() {
     let Some(tool) = flam3_render_path() else {
@@ -370,7 +410,24 @@ fn flames_match_flam3_render() {
         if !ok {
             failures.push(flame.name.clone());
         }
+        if IMPORTED.contains(&flame.name.as_str()) {
+            let scene = imported_render(&flame);
+            scene.save(dir.join(format!("{}-imported.png", flame.name))).expect("png");
+            let d = difference(&scene, &a, bg);
+            let ok = d <= bound;
+            let name = format!("{} (imported)", flame.name);
+            let _ =
+                writeln!(table, "{name:<30} {d:>11.2} {d_self:>12.2} {bound:>6.2}   {}", if ok { "yes" } else { "NO" });
+            if !ok {
+                failures.push(name);
+            }
+        }
     }
+    assert_eq!(
+        IMPORTED.iter().filter(|n| table.contains(&format!("{n} (imported)"))).count(),
+        IMPORTED.len(),
+        "every flame of IMPORTED is in the set"
+    );
     eprintln!("\n{table}images in {}", dir.display());
     assert!(failures.is_empty(), "flames that do not match flam3-render: {failures:?}\n{table}");
 }

@@ -22,6 +22,7 @@ fn flame() -> Flame {
         opacity: 1.0,
         coefs,
         post: None,
+        variation_coefs: None,
         variations: vec![term("linear", 0.7), term("swirl", 0.3)],
         chaos: Vec::new(),
     };

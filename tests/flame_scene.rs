@@ -15,13 +15,13 @@ use nlifs::scene::flame_import::{load_flame, scene_of_flame};
 use nlifs::scene::spec::FunctionDef;
 use nlifs::shot::{Framing, Shot};
 
-/// Two flames: one with a post-affine, julian's parameters, a rotated camera and an off-centre
-/// view; one with a final xform and xaos (which the import leaves out, with warnings).
+/// Two flames: one with a post-affine, julian's parameters, waves (which reads its xform's
+/// coefs), a rotated camera and an off-centre view; one with a final xform and xaos (which the import leaves out, with warnings).
 const FILE: &str = r#"<flames>
 <flame name="spiral" size="64 48" center="0.2 -0.1" scale="18" rotate="30" quality="40" brightness="4" gamma="4">
   <xform weight="0.5" color="0" linear="1" coefs="0.5 0.2 -0.2 0.5 -0.5 0.1" color_speed="0.3"/>
   <xform weight="0.3" color="0.7" julian="0.8" julian_power="3" julian_dist="1" coefs="0.6 0 0 0.6 0.4 0" post="1 0 0.2 1 0 0.1"/>
-  <xform weight="0.2" color="1" spherical="0.5" swirl="0.5" coefs="0.4 -0.1 0.1 0.4 0 0.5"/>
+  <xform weight="0.2" color="1" spherical="0.5" swirl="0.3" waves="0.2" coefs="0.4 -0.1 0.1 0.4 0.3 0.5"/>
   <color index="0" rgb="255 40 0"/><color index="128" rgb="40 255 120"/><color index="255" rgb="0 60 255"/>
 </flame>
 <flame name="finals" size="40 30" scale="12" quality="10">
@@ -114,6 +114,9 @@ fn imported_scene_draws_where_the_flame_renderer_draws() {
     let scene = scene_of_flame(flame, "p.png").expect("import").scene;
     let shot = Shot::prepare(&scene, 0.0, &scene.render, Framing::Scene, None).expect("shot");
     assert!(shot.compiled.has_flames());
+    // waves reads the file's coefs, not the conjugated ones.
+    let FunctionDef::Flame(waves) = &scene.functions[2].def else { panic!("a flame function") };
+    assert_eq!(waves.variation_coefs, Some([0.4, -0.1, 0.1, 0.4, 0.3, 0.5]));
     let rendered = nlifs::render::render_cpu(&shot, &|_, _| {});
     assert_eq!((rendered.image.width() as usize, rendered.image.height() as usize), (w, h));
     let cells = (8, 6);
@@ -159,7 +162,7 @@ fn error_of(text: &str) -> String {
 
 #[test]
 fn bad_flame_tables_give_located_errors() {
-    let cases: [(&str, &str, &[&str]); 7] = [
+    let cases: [(&str, &str, &[&str]); 8] = [
         (
             "coefs = [1, 0, 0, 1, 0, 0]\nvariations = { linear = 0.5, spherica = 0.5 }\n",
             "bad.toml:9:",
@@ -176,6 +179,11 @@ fn bad_flame_tables_give_located_errors() {
             &["function[0].params.julian_power", "parameter of `julian`, which the function does not use"],
         ),
         ("coefs = [1, 0, 0, 1]\nvariations = { linear = 1 }\n", "bad.toml:8:", &["function[0].coefs", "6 numbers"]),
+        (
+            "coefs = [1, 0, 0, 1, 0, 0]\nvariation_coefs = [1, 0]\nvariations = { waves = 1 }\n",
+            "bad.toml:9:",
+            &["function[0].variation_coefs", "6 numbers"],
+        ),
         ("variations = { linear = 1 }\n", "bad.toml:", &["function[0].coefs", "needs `coefs`"]),
         (
             "coefs = [1, 0, 0, 1, 0, 0]\nvariations = { linear = 1 }\ncolor_speed = 1.5\n",

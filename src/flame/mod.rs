@@ -65,6 +65,9 @@ pub struct Xform {
     pub opacity: f64,
     pub coefs: Coefs,
     pub post: Option<Coefs>,
+    /// The coefficients waves, popcorn, rings and fan read where they are not `coefs` (an
+    /// xform conjugated by a change of view, `scene::flame_import`); None: `coefs`, as in a file.
+    pub variation_coefs: Option<Coefs>,
     pub variations: Vec<VariationTerm>,
     /// Xaos row: the weight multipliers of the next xform after this one; empty = all 1.
     pub chaos: Vec<f64>,

@@ -18,6 +18,7 @@ fn flame() -> Flame {
         opacity: 1.0,
         coefs,
         post: None,
+        variation_coefs: None,
         variations: vec![term("linear", 0.6), term("spherical", 0.4)],
         chaos,
     };

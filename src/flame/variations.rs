@@ -272,6 +272,12 @@ impl Variation {
         &VARIATIONS[self.0 as usize]
     }
 
+    /// Whether the variation reads its xform's coefficients (waves: c, d, e, f; popcorn: e, f;
+    /// rings: e; fan: e, f), not only its point and parameters (`basic::prepare`).
+    pub fn reads_xform_coefs(self) -> bool {
+        matches!(self.0, 15 | 17 | 21 | 22)
+    }
+
     pub fn name(self) -> &'static str {
         self.info().name
     }
@@ -372,7 +378,11 @@ impl CompiledXform {
             for (i, (_, default)) in v.info().params.iter().enumerate() {
                 p[i] = t.params.get(i).copied().unwrap_or(*default);
             }
-            let k = if v.0 < plugins::FIRST { basic::prepare(v.0, p, &x.coefs) } else { plugins::prepare(v.0, p) };
+            let k = if v.0 < plugins::FIRST {
+                basic::prepare(v.0, p, x.variation_coefs.as_ref().unwrap_or(&x.coefs))
+            } else {
+                plugins::prepare(v.0, p)
+            };
             needs |= if v.0 < plugins::FIRST { basic::needs(v.0) } else { plugins::needs(v.0) };
             terms.push(Term { variation: v.0, weight: t.weight, k });
         }

@@ -13,6 +13,7 @@ fn xform(terms: &[(&str, f64, &[f64])], coefs: Coefs, post: Option<Coefs>) -> Xf
         opacity: 1.0,
         coefs,
         post,
+        variation_coefs: None,
         variations: terms
             .iter()
             .map(|(name, weight, params)| {

@@ -53,6 +53,7 @@ fn xform_in(ctx: &mut Ctx, node: roxmltree::Node, is_final: bool, array_len: usi
         opacity: 1.0,
         coefs: IDENTITY,
         post: None,
+        variation_coefs: None,
         variations: Vec::new(),
         chaos: Vec::new(),
     };
@@ -212,6 +213,7 @@ pub(super) fn symmetry(ctx: &mut Ctx, node: roxmltree::Node) -> Result<Vec<Xform
         opacity: 1.0,
         coefs,
         post: None,
+        variation_coefs: None,
         variations: vec![VariationTerm { variation: Variation::LINEAR, weight: 1.0, params: Vec::new() }],
         chaos: Vec::new(),
     };

@@ -91,6 +91,7 @@ mod tests {
                 opacity: 1.0,
                 coefs,
                 post: None,
+                variation_coefs: None,
                 variations: vec![VariationTerm { variation: v, weight: 1.0, params: v.default_params() }],
                 chaos: Vec::new(),
             },

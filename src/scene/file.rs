@@ -65,6 +65,7 @@ pub(super) struct KeyFunctionToml {
     // A flame's (`kind = "flame"`): flam3's xform.
     pub(super) coefs: Option<Spanned<Vec<f64>>>,
     pub(super) post: Option<Spanned<Vec<f64>>>,
+    pub(super) variation_coefs: Option<Spanned<Vec<f64>>>,
     /// Weight by variation name (flam3's names).
     pub(super) variations: Option<NamedNumbers>,
     /// Parameter by flam3's attribute name (`julian_power`).
@@ -79,6 +80,7 @@ pub(super) type NamedNumbers = Spanned<BTreeMap<Spanned<String>, Spanned<f64>>>;
 pub(super) struct FlameFields<'a> {
     pub(super) coefs: &'a Option<Spanned<Vec<f64>>>,
     pub(super) post: &'a Option<Spanned<Vec<f64>>>,
+    pub(super) variation_coefs: &'a Option<Spanned<Vec<f64>>>,
     pub(super) variations: &'a Option<NamedNumbers>,
     pub(super) params: &'a Option<NamedNumbers>,
     pub(super) color_speed: &'a Option<Spanned<f64>>,
@@ -89,6 +91,7 @@ impl FunctionToml {
         FlameFields {
             coefs: &self.coefs,
             post: &self.post,
+            variation_coefs: &self.variation_coefs,
             variations: &self.variations,
             params: &self.params,
             color_speed: &self.color_speed,
@@ -101,6 +104,7 @@ impl KeyFunctionToml {
         FlameFields {
             coefs: &self.coefs,
             post: &self.post,
+            variation_coefs: &self.variation_coefs,
             variations: &self.variations,
             params: &self.params,
             color_speed: &self.color_speed,
@@ -114,6 +118,7 @@ impl FlameFields<'_> {
         [
             ("coefs", self.coefs.as_ref().map(|v| v.span())),
             ("post", self.post.as_ref().map(|v| v.span())),
+            ("variation_coefs", self.variation_coefs.as_ref().map(|v| v.span())),
             ("variations", self.variations.as_ref().map(|v| v.span())),
             ("params", self.params.as_ref().map(|v| v.span())),
             ("color_speed", self.color_speed.as_ref().map(|v| v.span())),
@@ -250,6 +255,7 @@ pub(super) struct FunctionToml {
     // A flame's (`kind = "flame"`): flam3's xform.
     pub(super) coefs: Option<Spanned<Vec<f64>>>,
     pub(super) post: Option<Spanned<Vec<f64>>>,
+    pub(super) variation_coefs: Option<Spanned<Vec<f64>>>,
     /// Weight by variation name (flam3's names).
     pub(super) variations: Option<NamedNumbers>,
     /// Parameter by flam3's attribute name (`julian_power`).

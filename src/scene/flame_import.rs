@@ -97,13 +97,17 @@ fn view_map(flame: &Flame) -> ([[f64; 3]; 3], [[f64; 3]; 3]) {
     (compose(&mirror, &rotate(s)), compose(&rotate(-s), &mirror))
 }
 
-/// `x` conjugated by M (see the module note) as a flame function's definition.
+/// `x` conjugated by M (see the module note) as a flame function's definition. The variations
+/// that read their xform's coefficients (waves, popcorn, rings, fan) keep the file's
+/// (`variation_coefs`), or the conjugate would be another function.
 fn conjugated(x: &Xform, m: &[[f64; 3]; 3], m_inv: &[[f64; 3]; 3]) -> FlameDef {
     let pre = coefs(&compose(&matrix(&x.coefs), m_inv));
     let post = coefs(&compose(m, &matrix(&x.post.unwrap_or(IDENTITY))));
     let mut variations = x.variations.clone();
     variations.sort_by_key(|t| t.variation.0);
-    FlameDef { coefs: pre, post: Some(post), variations, color_speed: x.color_speed.clamp(0.0, 1.0) }
+    let reads_coefs = variations.iter().any(|t| t.weight != 0.0 && t.variation.reads_xform_coefs());
+    let variation_coefs = (reads_coefs && pre != x.coefs).then_some(x.coefs);
+    FlameDef { coefs: pre, post: Some(post), variation_coefs, variations, color_speed: x.color_speed.clamp(0.0, 1.0) }
 }
 
 /// The scene of `flame`; its palette is named `palette_file` (an image path relative to the

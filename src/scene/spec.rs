@@ -146,6 +146,10 @@ pub struct FlameDef {
     pub coefs: Coefs,
     /// flam3's `post`, the same form; None: none.
     pub post: Option<Coefs>,
+    /// The coefficients the variations that read their xform's (waves, popcorn, rings, fan)
+    /// take, where they are not `coefs`: an imported flame's xform conjugated into nlifs's
+    /// view keeps its file's here (`scene::flame_import`). None: `coefs`, flam3's rule.
+    pub variation_coefs: Option<Coefs>,
     pub variations: Vec<VariationTerm>,
     /// s in c' = s·c_i + (1 − s)·c, in [0, 1] (flam3's `color_speed`; the other kinds' rule is
     /// s = ½).
@@ -166,6 +170,7 @@ impl FlameDef {
             opacity: 1.0,
             coefs: self.coefs,
             post: self.post,
+            variation_coefs: self.variation_coefs,
             variations: self.variations.clone(),
             chaos: Vec::new(),
         }
@@ -449,6 +454,9 @@ pub fn flatten(def: &FunctionDef) -> Vec<f64> {
             if let Some(post) = &f.post {
                 out.extend_from_slice(post);
             }
+            if let Some(c) = &f.variation_coefs {
+                out.extend_from_slice(c);
+            }
             for t in &f.variations {
                 out.push(t.weight);
                 out.extend_from_slice(&t.params);
@@ -509,6 +517,9 @@ pub fn unflatten(template: &FunctionDef, values: &[f64]) -> Option<FunctionDef> 
             if let Some(post) = &mut f.post {
                 *post = std::array::from_fn(|_| next());
             }
+            if let Some(c) = &mut f.variation_coefs {
+                *c = std::array::from_fn(|_| next());
+            }
             for t in f.variations.iter_mut() {
                 t.weight = next();
                 t.params.iter_mut().for_each(|p| *p = next());
@@ -557,6 +568,12 @@ pub fn same_structure(a: &FunctionDef, b: &FunctionDef) -> Result<(), String> {
                     "{} a post-affine and the function {}; keys may change only numbers",
                     if fb.post.is_some() { "has" } else { "has no" },
                     if fa.post.is_some() { "has one" } else { "has none" }
+                ))
+            } else if fa.variation_coefs.is_some() != fb.variation_coefs.is_some() {
+                Err(format!(
+                    "{} variation_coefs and the function {}; keys may change only numbers",
+                    if fb.variation_coefs.is_some() { "has" } else { "has no" },
+                    if fa.variation_coefs.is_some() { "has them" } else { "has none" }
                 ))
             } else if names(fa) != names(fb) {
                 Err(format!(
@@ -608,6 +625,7 @@ mod tests {
         let def = FunctionDef::Flame(FlameDef {
             coefs: [0.5, 0.1, -0.2, 0.6, 0.3, -0.4],
             post: Some([1.0, 0.0, 0.2, -1.0, 0.0, 0.5]),
+            variation_coefs: Some([0.7, 0.0, 0.1, 0.7, -0.2, 0.3]),
             variations: vec![
                 VariationTerm { variation: Variation::LINEAR, weight: 0.25, params: vec![] },
                 VariationTerm { variation: julian, weight: 0.75, params: vec![3.0, 1.5] },

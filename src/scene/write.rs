@@ -125,6 +125,9 @@ fn def_fields(def: &FunctionDef, dim: usize) -> String {
             if let Some(post) = &f.post {
                 let _ = writeln!(out, "post = {}", nums(post));
             }
+            if let Some(c) = &f.variation_coefs {
+                let _ = writeln!(out, "variation_coefs = {}", nums(c));
+            }
             let weights: Vec<String> =
                 f.variations.iter().map(|t| format!("{} = {}", t.variation.name(), num(t.weight))).collect();
             let _ = writeln!(out, "variations = {{ {} }}", weights.join(", "));

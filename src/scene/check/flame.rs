@@ -1,5 +1,5 @@
-//! A `kind = "flame"` function's fields, checked (and a key's override of them): `coefs` and
-//! `post` as flam3's six numbers, `variations` (weight by flam3's variation name), `params`
+//! A `kind = "flame"` function's fields, checked (and a key's override of them): `coefs`,
+//! `post` and `variation_coefs` as flam3's six numbers, `variations` (weight by flam3's variation name), `params`
 //! (flam3's attribute names, `julian_power`; every parameter belongs to a variation the function
 //! uses, the ones left out take flam3's defaults) and `color_speed` in 0..1. An unknown
 //! variation or parameter is named in the error, with its line and column.
@@ -15,7 +15,7 @@ use crate::scene::spec::FlameDef;
 use super::{Checker, Res};
 
 /// The names of the fields of a flame function.
-pub(super) const FLAME_FIELDS: [&str; 5] = ["coefs", "post", "variations", "params", "color_speed"];
+pub(super) const FLAME_FIELDS: [&str; 6] = ["coefs", "post", "variation_coefs", "variations", "params", "color_speed"];
 
 impl Checker<'_> {
     /// A flame function's definition from its fields (`base` None), or a key's override of
@@ -48,6 +48,18 @@ impl Checker<'_> {
             (None, Some(b)) => b.post,
             (None, None) => None,
         };
+        let variation_coefs = match (f.variation_coefs, base) {
+            (Some(c), Some(b)) if b.variation_coefs.is_none() => {
+                return Err(self.err(
+                    c.span(),
+                    &field("variation_coefs"),
+                    "the function has no variation_coefs; a key may change only numbers it has",
+                ));
+            }
+            (Some(c), _) => Some(self.coefs(c, &field("variation_coefs"))?),
+            (None, Some(b)) => b.variation_coefs,
+            (None, None) => None,
+        };
         let mut variations = match (f.variations, base) {
             (Some(v), None) => self.variations(v, &field("variations"))?,
             (Some(v), Some(b)) => self.variation_weights(v, &field("variations"), &b.variations)?,
@@ -68,7 +80,7 @@ impl Checker<'_> {
             (None, Some(b)) => b.color_speed,
             (None, None) => FlameDef::DEFAULT_COLOR_SPEED,
         };
-        Ok(FlameDef { coefs, post, variations, color_speed })
+        Ok(FlameDef { coefs, post, variation_coefs, variations, color_speed })
     }
 
     fn coefs(&self, c: &Spanned<Vec<f64>>, field: &str) -> Res<Coefs> {
