@@ -632,11 +632,12 @@ mod tests {
             ],
             color_speed: 0.3,
         });
-        // 6 coefs, 6 post, (1 + 0) + (1 + 2) variation numbers, 1 speed.
-        assert_eq!(flatten(&def).len(), 17);
+        // 6 coefs, 6 post, 6 variation coefs, (1 + 0) + (1 + 2) variation numbers, 1 speed.
+        assert_eq!(flatten(&def).len(), 23);
         assert_eq!(unflatten(&def, &flatten(&def)), Some(def.clone()));
         let shifted: Vec<f64> = flatten(&def).iter().map(|v| v + 1.0).collect();
         let FunctionDef::Flame(f) = unflatten(&def, &shifted).unwrap() else { panic!("a flame") };
         assert_eq!((f.coefs[0], f.variations[1].params[1], f.color_speed), (1.5, 2.5, 1.3));
+        assert_eq!(f.variation_coefs.map(|c| c[4]), Some(0.8));
     }
 }
