@@ -360,6 +360,11 @@ fn chaos_game(@builtin(global_invocation_id) id: vec3<u32>) {
             let q = apply_xform(fi, p.xy, &rng);
             if abs(q.x) <= FLAME_BAD_VALUE && abs(q.y) <= FLAME_BAD_VALUE {
                 p = vec3<f32>(q, p.z);
+                // The plotted weight (`opacity`): the point is drawn with that chance.
+                let weight = flame_op_at(fi).k1.w;
+                if weight < 1.0 {
+                    shown = flame_random(&rng) < weight;
+                }
             } else {
                 let x = flame_random(&rng) * 2.0 - 1.0;
                 let y = flame_random(&rng) * 2.0 - 1.0;

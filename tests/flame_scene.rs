@@ -16,11 +16,11 @@ use nlifs::scene::spec::FunctionDef;
 use nlifs::shot::{Framing, Shot};
 
 /// Two flames: one with a post-affine, julian's parameters, waves (which reads its xform's
-/// coefs), a rotated camera and an off-centre view; one with a final xform and xaos (which the import leaves out, with warnings).
+/// coefs), an opacity, a rotated camera and an off-centre view; one with a final xform and xaos (which the import leaves out, with warnings).
 const FILE: &str = r#"<flames>
 <flame name="spiral" size="64 48" center="0.2 -0.1" scale="18" rotate="30" quality="40" brightness="4" gamma="4">
   <xform weight="0.5" color="0" linear="1" coefs="0.5 0.2 -0.2 0.5 -0.5 0.1" color_speed="0.3"/>
-  <xform weight="0.3" color="0.7" julian="0.8" julian_power="3" julian_dist="1" coefs="0.6 0 0 0.6 0.4 0" post="1 0 0.2 1 0 0.1"/>
+  <xform weight="0.3" color="0.7" julian="0.8" julian_power="3" julian_dist="1" coefs="0.6 0 0 0.6 0.4 0" post="1 0 0.2 1 0 0.1" opacity="0.8"/>
   <xform weight="0.2" color="1" spherical="0.5" swirl="0.3" waves="0.2" coefs="0.4 -0.1 0.1 0.4 0.3 0.5"/>
   <color index="0" rgb="255 40 0"/><color index="128" rgb="40 255 120"/><color index="255" rgb="0 60 255"/>
 </flame>
@@ -84,6 +84,49 @@ fn the_import_warns_of_what_it_leaves_out() {
     let finals = scene_of_flame(&file.flames[1], "p.png").expect("import");
     let text = finals.warnings.join("\n");
     assert!(text.contains("final xform is left out") && text.contains("xaos is left out"), "{text}");
+}
+
+/// Sierpiński's triangle as three linear flame functions of opacity 1, ½ and 0: each point of
+/// a function is drawn with chance 10^(log₂ opacity) (flam3's plotted weight), so 1, 0.1 and 0,
+/// and the orbit goes on through every function whatever its opacity.
+#[test]
+fn opacity_draws_a_functions_points_with_its_plotted_weight() {
+    let mut text = String::from("version = 1\n[grid]\nx = [-1.0, 1.0]\ny = [-1.0, 1.0]\n");
+    for ((vx, vy), opacity) in [((-1.0, -1.0), 1.0), ((1.0, -1.0), 0.5), ((0.0, 1.0), 0.0)] {
+        let (e, f) = (0.5 * vx, 0.5 * vy);
+        text += &format!(
+            "[[function]]\nkind = \"flame\"\nprobability = 1\ncoefs = [0.5, 0, 0, 0.5, {e}, {f}]\n\
+             variations = {{ linear = 1 }}\nopacity = {opacity}\n"
+        );
+    }
+    let scene = Scene::parse(&text, "opacity.toml").unwrap_or_else(|e| panic!("{text}\n{e}"));
+    let compiled = nlifs::chaos_game::CompiledIfs::new(&scene.at(0.0)).expect("compiled");
+    let mut sink = nlifs::chaos_game::CollectSink::default();
+    for chunk in 0..16 {
+        nlifs::chaos_game::run_chunk(&compiled, 7, 0, chunk, 4096, &mut sink);
+    }
+    let (mut chosen, mut drawn) = ([0u64; 3], [0u64; 3]);
+    for (p, &fi) in sink.points.iter().zip(&sink.functions) {
+        chosen[fi as usize] += 1;
+        if p.is_finite() {
+            drawn[fi as usize] += 1;
+            // Every drawn point lies in its own function's corner (the orbit is the triangle's).
+            let corner = if p.y > 0.0 {
+                2
+            } else if p.x < 0.0 {
+                0
+            } else {
+                1
+            };
+            assert!(corner == fi as usize || p.y.abs() < 1e-6, "{p} drawn by function {fi}");
+        }
+    }
+    let fraction = |i: usize| drawn[i] as f64 / chosen[i] as f64;
+    assert!(chosen.iter().all(|&n| n > 1_000_000), "each function chosen about a third of the time: {chosen:?}");
+    assert_eq!(fraction(0), 1.0);
+    // 1.4 M draws: the fraction's standard deviation is 0.00025.
+    assert!((fraction(1) - 0.1).abs() < 0.002, "function 1 drew {:.4} of its points, not 0.1", fraction(1));
+    assert_eq!(drawn[2], 0);
 }
 
 /// Luminance summed over `cells` blocks of an RGB(A) image, normalized to sum 1.
@@ -162,7 +205,7 @@ fn error_of(text: &str) -> String {
 
 #[test]
 fn bad_flame_tables_give_located_errors() {
-    let cases: [(&str, &str, &[&str]); 8] = [
+    let cases: [(&str, &str, &[&str]); 9] = [
         (
             "coefs = [1, 0, 0, 1, 0, 0]\nvariations = { linear = 0.5, spherica = 0.5 }\n",
             "bad.toml:9:",
@@ -189,6 +232,11 @@ fn bad_flame_tables_give_located_errors() {
             "coefs = [1, 0, 0, 1, 0, 0]\nvariations = { linear = 1 }\ncolor_speed = 1.5\n",
             "bad.toml:10:",
             &["function[0].color_speed", "0..1"],
+        ),
+        (
+            "coefs = [1, 0, 0, 1, 0, 0]\nvariations = { linear = 1 }\nopacity = -0.2\n",
+            "bad.toml:10:",
+            &["function[0].opacity", "0..1"],
         ),
         (
             "coefs = [1, 0, 0, 1, 0, 0]\nvariations = { linear = 1 }\nmatrix = [[1, 0], [0, 1]]\n",

@@ -8,6 +8,7 @@
 //!    f32 image close to the f64 one for nearly every thread (the rule is at the assertion); the
 //!    colour coordinate stepped with the functions' colour speeds exactly as the CPU steps it.
 //! 2. Normalized densities on a coarse grid agree within the bound of `tests/gpu_vs_cpu.rs`.
+//! 3. An xform's opacity: the GPU draws a point with its plotted weight as the CPU does.
 
 mod common;
 
@@ -165,6 +166,56 @@ fn first_step_matches_the_cpu_for_every_variation() {
     }
 }
 
+/// The GPU's hits per pixel of `view`: every orbit from its start point, the transient not
+/// splatted, then `k` steps.
+fn gpu_density_counts(
+    ctx: &GpuContext,
+    game: &mut GpuChaosGame,
+    compiled: &CompiledIfs,
+    view: &SplatView,
+    k: u32,
+) -> Vec<u32> {
+    game.set_ifs(&ctx.device, &ctx.queue, compiled);
+    let mut encoder = ctx.device.create_command_encoder(&Default::default());
+    let steps = compiled.transient + k;
+    let args = FrameArgs { view, seed: 3, frame: 0, steps, skip_steps: compiled.transient, restart: true, clear: true };
+    game.encode(&ctx.device, &ctx.queue, &mut encoder, &args);
+    ctx.queue.submit([encoder.finish()]);
+    let accum: Vec<u32> = bytemuck::pod_collect_to_vec(&read_buffer(ctx, &game.accum).unwrap());
+    accum.chunks(4).map(|a| a[3]).take((view.width * view.height) as usize).collect()
+}
+
+/// Sierpiński's triangle as three flame functions of opacity 1, ½ and 0 (plotted weights 1,
+/// 0.1 and 0): the GPU draws (1 + 0.1 + 0) / 3 of its steps, as the CPU does, and its density
+/// agrees with the CPU's (the corner of opacity 0 empty on both).
+#[test]
+fn opacity_draws_as_on_the_cpu() {
+    let Some(ctx) = gpu() else { return };
+    let mut text = String::from("version = 1\n[grid]\nx = [-1.0, 1.0]\ny = [-1.0, 1.0]\n");
+    for ((vx, vy), opacity) in [((-1.0, -1.0), 1.0), ((1.0, -1.0), 0.5), ((0.0, 1.0), 0.0)] {
+        text += &format!(
+            "[[function]]\nkind = \"flame\"\nprobability = 1\ncoefs = [0.5, 0, 0, 0.5, {}, {}]\n\
+             variations = {{ linear = 1 }}\nopacity = {opacity}\n",
+            0.5 * vx,
+            0.5 * vy
+        );
+    }
+    let scene = Scene::parse(&text, "opacity.toml").unwrap_or_else(|e| panic!("{text}\n{e}"));
+    let compiled = CompiledIfs::new(&scene.at(0.0)).unwrap();
+    let (width, height, k, orbits) = (96u32, 72u32, 8u32, 1u32 << 16);
+    let bounds = (glam::DVec3::new(-1.05, -1.05, -0.1), glam::DVec3::new(1.05, 1.05, 0.1));
+    let view = SplatView::new(&scene.camera_for(bounds), width, height, bounds, SplatMode::Density, 0.0, [0.0; 3]);
+    let mut game = GpuChaosGame::new(&ctx.device, orbits, width, height);
+    let gpu_counts = gpu_density_counts(&ctx, &mut game, &compiled, &view, k);
+    let found = assert_gpu_density_matches_cpu("opacity", "GPU", &gpu_counts, &compiled, view, (orbits, k), (12, 9));
+    let expected = 1.1 / 3.0;
+    for (side, samples) in [("GPU", found.gpu_samples), ("CPU", found.cpu_samples)] {
+        let drawn = samples / (orbits as f64 * k as f64);
+        eprintln!("{side}: {drawn:.4} of the steps drawn ({expected:.4} expected)");
+        assert!((drawn - expected).abs() < 0.01, "the {side} drew {drawn:.4} of its steps, not {expected:.4}");
+    }
+}
+
 #[test]
 fn densities_match_the_cpu_for_every_variation() {
     let Some(ctx) = gpu() else { return };
@@ -183,23 +234,7 @@ fn densities_match_the_cpu_for_every_variation() {
         let camera = scene.camera_for(bounds);
         let view = SplatView::new(&camera, width, height, bounds, SplatMode::Density, 0.0, [0.0; 3]);
 
-        // GPU: the orbits from their start points, the transient not splatted, then k steps.
-        game.set_ifs(&ctx.device, &ctx.queue, &compiled);
-        let mut encoder = ctx.device.create_command_encoder(&Default::default());
-        let steps = compiled.transient + k;
-        let args = FrameArgs {
-            view: &view,
-            seed: 3,
-            frame: 0,
-            steps,
-            skip_steps: compiled.transient,
-            restart: true,
-            clear: true,
-        };
-        game.encode(&ctx.device, &ctx.queue, &mut encoder, &args);
-        ctx.queue.submit([encoder.finish()]);
-        let accum: Vec<u32> = bytemuck::pod_collect_to_vec(&read_buffer(&ctx, &game.accum).unwrap());
-        let gpu_counts: Vec<u32> = accum.chunks(4).map(|a| a[3]).take((width * height) as usize).collect();
+        let gpu_counts = gpu_density_counts(&ctx, &mut game, &compiled, &view, k);
 
         // CPU: as many orbits of k steps after the same transient, another seed; within 6
         // standard deviations of the difference of two frequencies with variance ≤ k p (1 − p) / N

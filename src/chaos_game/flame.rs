@@ -7,6 +7,11 @@
 //! the orbit is re-seeded at a random point of [−1, 1]², and that step is not drawn (its emitted
 //! point is NaN, which the splat skips), as flam3 retries such a step without plotting it.
 //!
+//! An xform's `opacity` (its plotted weight w = 10^(log₂ opacity), flam3's) draws each of its
+//! points with chance w, one more random draw after the xform where w < 1: flam3 adds the point
+//! with weight w, which the sums of the accumulating modes get on average; opacity 0 hides the
+//! function's points (the orbit still goes through it).
+//!
 //! An IFS with a flame function runs on the general path (the lane and vector kernels take only
 //! multilinear and affine maps); its other functions are mapped there as always. The kernel
 //! table holds, for a flame function, its pre-affine as one affine cell, so that the tables stay
@@ -58,6 +63,13 @@ impl FlameTable {
     }
 }
 
+/// A draw in [0, 1) of 24 bits, as the GPU's `flame_random` reads one f64 draw (the same two
+/// words of the stream, the top 24 bits of the first).
+#[inline(always)]
+fn random_24_bits(rng: &mut Pcg32) -> f32 {
+    (rng.next_f64() * 16_777_216.0).floor() as f32 * (1.0 / 16_777_216.0)
+}
+
 #[inline(always)]
 fn is_bad(v: [f64; 2]) -> bool {
     !(v[0].abs() <= BAD_VALUE && v[1].abs() <= BAD_VALUE)
@@ -71,8 +83,10 @@ impl CompiledIfs {
 
     /// Maps `p` by compiled function `fi` with the orbit's generator `rng`: returns the orbit's
     /// next point and the point to draw. For a flame function the xform (z unchanged), with
-    /// flam3's re-seed of a point that leaves the plane (drawn as NaN, skipped); any other
-    /// function as [`Self::map_fast`], both points the same.
+    /// flam3's re-seed of a point that leaves the plane (drawn as NaN, skipped), and, where its
+    /// plotted weight w is below 1 (`opacity`), one more draw that keeps the point with chance w
+    /// (else drawn as NaN): flam3 weighs the point by w, which the sums of the accumulating
+    /// modes get on average. Any other function as [`Self::map_fast`], both points the same.
     #[inline(always)]
     pub fn map_with_rng(&self, fi: usize, p: Vec3, rng: &mut Pcg32) -> (Vec3, Vec3) {
         if let Some(table) = &self.flames
@@ -84,6 +98,10 @@ impl CompiledIfs {
                 return (next, Vec3::NAN);
             }
             let q = Vec3::new(q[0] as f32, q[1] as f32, p.z);
+            let weight = x.plotted_weight() as f32;
+            if weight < 1.0 && !(random_24_bits(rng) < weight) {
+                return (q, Vec3::NAN);
+            }
             return (q, q);
         }
         let q = self.map_fast(fi, p);
@@ -96,7 +114,7 @@ impl CompiledIfs {
     pub fn flame_ops(&self) -> Vec<FlameOp> {
         let n = self.functions.len();
         let none =
-            FlameOp { kind: FLAME_OP_NONE, weight: 0.0, first: 0, count: 0, k: [[0.0; 4], [0.0, 0.0, 0.5, 0.0]] };
+            FlameOp { kind: FLAME_OP_NONE, weight: 0.0, first: 0, count: 0, k: [[0.0; 4], [0.0, 0.0, 0.5, 1.0]] };
         let mut headers = vec![none; n];
         let mut records = Vec::new();
         if let Some(table) = &self.flames {

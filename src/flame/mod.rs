@@ -73,6 +73,14 @@ pub struct Xform {
     pub chaos: Vec<f64>,
 }
 
+impl Xform {
+    /// flam3's weight of this xform's points in the histogram (`vis_adjusted`): 10^(log₂
+    /// opacity), so 1 for opacity 1, 0.1 for ½, 0 for 0.
+    pub fn plotted_weight(&self) -> f64 {
+        if self.opacity <= 0.0 { 0.0 } else { 10f64.powf(self.opacity.log2()) }
+    }
+}
+
 /// How the colour coordinate picks a palette entry (`palette_mode`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum PaletteMode {

@@ -90,7 +90,7 @@ struct GameXform {
 
 impl GameXform {
     fn new(x: &Xform) -> Self {
-        let plotted_weight = if x.opacity == 0.0 { 0.0 } else { 10f64.powf(x.opacity.log2()) };
+        let plotted_weight = x.plotted_weight();
         Self {
             map: CompiledXform::new(x),
             color: x.color,

@@ -356,6 +356,9 @@ pub struct CompiledXform {
     terms: Vec<Term>,
     color: f64,
     color_speed: f64,
+    /// [`super::Xform::plotted_weight`]: in the scene's chaos game, the chance that a point of
+    /// this xform is drawn.
+    plotted_weight: f64,
 }
 
 impl CompiledXform {
@@ -388,7 +391,13 @@ impl CompiledXform {
         }
         // flam3 applies the post-affine only when it differs from the identity.
         let post = x.post.filter(|p| *p != super::IDENTITY);
-        Self { coefs: x.coefs, post, pre_blur, needs, terms, color: x.color, color_speed: x.color_speed }
+        let (color, color_speed, plotted_weight) = (x.color, x.color_speed, x.plotted_weight());
+        Self { coefs: x.coefs, post, pre_blur, needs, terms, color, color_speed, plotted_weight }
+    }
+
+    /// flam3's weight of the xform's points ([`super::Xform::plotted_weight`]).
+    pub fn plotted_weight(&self) -> f64 {
+        self.plotted_weight
     }
 
     /// The xform's image of `p` (may be NaN or huge: the caller re-seeds such points, as flam3
@@ -439,7 +448,8 @@ impl CompiledXform {
     }
 
     /// This xform as records of the GPU's flame table (`shaders/variations.wgsl`): its header
-    /// (pre-affine, `pre_blur` weight, colour speed; its `count` records start at `first`) and
+    /// (pre-affine, `pre_blur` weight, colour speed, plotted weight; its `count` records start
+    /// at `first`) and
     /// those records: the terms in flam3's order with the constants [`Self::new`] prepared,
     /// then the post-affine when there is one. The f64 constants are rounded to f32 here.
     pub fn gpu_ops(&self, first: u32) -> (FlameOp, Vec<FlameOp>) {
@@ -470,7 +480,7 @@ impl CompiledXform {
             weight: self.pre_blur as f32,
             first,
             count: records.len() as u32,
-            k: [f(&c[..4]), f(&[c[4], c[5], self.color_speed])],
+            k: [f(&c[..4]), f(&[c[4], c[5], self.color_speed, self.plotted_weight])],
         };
         (header, records)
     }

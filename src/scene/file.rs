@@ -71,6 +71,7 @@ pub(super) struct KeyFunctionToml {
     /// Parameter by flam3's attribute name (`julian_power`).
     pub(super) params: Option<NamedNumbers>,
     pub(super) color_speed: Option<Spanned<f64>>,
+    pub(super) opacity: Option<Spanned<f64>>,
 }
 
 /// Numbers by name, each name and number with its place (a flame's `variations` and `params`).
@@ -84,6 +85,7 @@ pub(super) struct FlameFields<'a> {
     pub(super) variations: &'a Option<NamedNumbers>,
     pub(super) params: &'a Option<NamedNumbers>,
     pub(super) color_speed: &'a Option<Spanned<f64>>,
+    pub(super) opacity: &'a Option<Spanned<f64>>,
 }
 
 impl FunctionToml {
@@ -95,6 +97,7 @@ impl FunctionToml {
             variations: &self.variations,
             params: &self.params,
             color_speed: &self.color_speed,
+            opacity: &self.opacity,
         }
     }
 }
@@ -108,6 +111,7 @@ impl KeyFunctionToml {
             variations: &self.variations,
             params: &self.params,
             color_speed: &self.color_speed,
+            opacity: &self.opacity,
         }
     }
 }
@@ -122,6 +126,7 @@ impl FlameFields<'_> {
             ("variations", self.variations.as_ref().map(|v| v.span())),
             ("params", self.params.as_ref().map(|v| v.span())),
             ("color_speed", self.color_speed.as_ref().map(|v| v.span())),
+            ("opacity", self.opacity.as_ref().map(|v| v.span())),
         ]
         .into_iter()
         .filter_map(|(n, s)| s.map(|s| (n, s)))
@@ -261,6 +266,7 @@ pub(super) struct FunctionToml {
     /// Parameter by flam3's attribute name (`julian_power`).
     pub(super) params: Option<NamedNumbers>,
     pub(super) color_speed: Option<Spanned<f64>>,
+    pub(super) opacity: Option<Spanned<f64>>,
 }
 
 #[derive(Deserialize)]

@@ -10,12 +10,11 @@
 //!   the attractor is M of the flame's, exactly, and the picture is flam3's way up. The imported
 //!   coefs therefore differ from the file's (y negated for an unrotated flame).
 //! - **Functions.** An xform's `weight` is the function's `probability` (explicit
-//!   probabilities), its `color` the function's `palette_index`, its `color_speed`, variations
-//!   and parameters the flame function's own. The domain is flam3's start square [−1, 1]².
+//!   probabilities), its `color` the function's `palette_index`, its `color_speed`, `opacity`,
+//!   variations and parameters the flame function's own. The domain is flam3's start square [−1, 1]².
 //! - **Left out, with a warning:** the final xform (nlifs draws the orbit's points themselves;
 //!   a final transform has no place in an IFS), xaos (the next function is drawn by the weights
-//!   alone), an xform's opacity below 1, and flam3's linear palette interpolation (nlifs takes
-//!   the nearest palette entry).
+//!   alone) and flam3's linear palette interpolation (nlifs takes the nearest palette entry).
 //! - **Camera.** Parallel projection seen from +z, the target at M(center), the visible height
 //!   size_y / (scale · 2^zoom); the image size is the flame's.
 //! - **Look.** Density mode on the absolute scale (flam3's log density: log(1 + points per
@@ -46,7 +45,7 @@ use crate::scene::{LoadError, Scene};
 #[derive(Clone, Debug)]
 pub struct FlameImport {
     pub scene: Scene,
-    /// One line each (the final xform, xaos, opacity, palette interpolation).
+    /// One line each (the final xform, xaos, palette interpolation).
     pub warnings: Vec<String>,
 }
 
@@ -107,7 +106,14 @@ fn conjugated(x: &Xform, m: &[[f64; 3]; 3], m_inv: &[[f64; 3]; 3]) -> FlameDef {
     variations.sort_by_key(|t| t.variation.0);
     let reads_coefs = variations.iter().any(|t| t.weight != 0.0 && t.variation.reads_xform_coefs());
     let variation_coefs = (reads_coefs && pre != x.coefs).then_some(x.coefs);
-    FlameDef { coefs: pre, post: Some(post), variation_coefs, variations, color_speed: x.color_speed.clamp(0.0, 1.0) }
+    FlameDef {
+        coefs: pre,
+        post: Some(post),
+        variation_coefs,
+        variations,
+        color_speed: x.color_speed.clamp(0.0, 1.0),
+        opacity: x.opacity.clamp(0.0, 1.0),
+    }
 }
 
 /// The scene of `flame`; its palette is named `palette_file` (an image path relative to the
@@ -127,9 +133,6 @@ pub fn scene_of_flame(flame: &Flame, palette_file: &str) -> Result<FlameImport, 
     if flame.xforms.iter().any(|x| x.chaos.iter().take(n).any(|&c| (c - 1.0).abs() > 1e-10)) {
         warnings
             .push(format!("flame `{name}`: its xaos is left out (the next function is drawn by the weights alone)"));
-    }
-    if flame.xforms.iter().any(|x| x.opacity != 1.0) {
-        warnings.push(format!("flame `{name}`: xform opacity is left out (every function's points are drawn)"));
     }
     if flame.palette_mode == PaletteMode::Linear {
         warnings.push(format!(

@@ -154,11 +154,17 @@ pub struct FlameDef {
     /// s in c' = s·c_i + (1 − s)·c, in [0, 1] (flam3's `color_speed`; the other kinds' rule is
     /// s = ½).
     pub color_speed: f64,
+    /// flam3's `opacity` in [0, 1]: the function's points are drawn with chance 10^(log₂
+    /// opacity) (flam3's plotted weight; 1 draws all, 0 none), the orbit passes through it
+    /// whatever it is.
+    pub opacity: f64,
 }
 
 impl FlameDef {
     /// The default colour speed (flam3's, and the other kinds' (c + c_i) / 2).
     pub const DEFAULT_COLOR_SPEED: f64 = 0.5;
+    /// The default opacity: every point drawn.
+    pub const DEFAULT_OPACITY: f64 = 1.0;
 
     /// The xform this definition is, with selection weight 1 and colour coordinate 0 (the
     /// scene function's own are used where they matter).
@@ -167,7 +173,7 @@ impl FlameDef {
             weight: 1.0,
             color: 0.0,
             color_speed: self.color_speed,
-            opacity: 1.0,
+            opacity: self.opacity,
             coefs: self.coefs,
             post: self.post,
             variation_coefs: self.variation_coefs,
@@ -462,6 +468,7 @@ pub fn flatten(def: &FunctionDef) -> Vec<f64> {
                 out.extend_from_slice(&t.params);
             }
             out.push(f.color_speed);
+            out.push(f.opacity);
         }
     }
     out
@@ -525,6 +532,7 @@ pub fn unflatten(template: &FunctionDef, values: &[f64]) -> Option<FunctionDef> 
                 t.params.iter_mut().for_each(|p| *p = next());
             }
             f.color_speed = next();
+            f.opacity = next();
         }
     }
     Some(def)
@@ -631,13 +639,15 @@ mod tests {
                 VariationTerm { variation: julian, weight: 0.75, params: vec![3.0, 1.5] },
             ],
             color_speed: 0.3,
+            opacity: 0.6,
         });
-        // 6 coefs, 6 post, 6 variation coefs, (1 + 0) + (1 + 2) variation numbers, 1 speed.
-        assert_eq!(flatten(&def).len(), 23);
+        // 6 coefs, 6 post, 6 variation coefs, (1 + 0) + (1 + 2) variation numbers, 1 speed,
+        // 1 opacity.
+        assert_eq!(flatten(&def).len(), 24);
         assert_eq!(unflatten(&def, &flatten(&def)), Some(def.clone()));
         let shifted: Vec<f64> = flatten(&def).iter().map(|v| v + 1.0).collect();
         let FunctionDef::Flame(f) = unflatten(&def, &shifted).unwrap() else { panic!("a flame") };
-        assert_eq!((f.coefs[0], f.variations[1].params[1], f.color_speed), (1.5, 2.5, 1.3));
+        assert_eq!((f.coefs[0], f.variations[1].params[1], f.color_speed, f.opacity), (1.5, 2.5, 1.3, 1.6));
         assert_eq!(f.variation_coefs.map(|c| c[4]), Some(0.8));
     }
 }

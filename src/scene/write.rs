@@ -13,7 +13,9 @@ use crate::color;
 use crate::model::builder::Step;
 use crate::scene::Scene;
 use crate::scene::file::FORMAT_VERSION;
-use crate::scene::spec::{CameraSpec, ColorMode, DensityScale, FunctionDef, LIGHT_FIELDS, RenderSettings, TONE_FIELDS};
+use crate::scene::spec::{
+    CameraSpec, ColorMode, DensityScale, FlameDef, FunctionDef, LIGHT_FIELDS, RenderSettings, TONE_FIELDS,
+};
 use crate::scene::timeline::RenderKey;
 
 /// TOML text of a number that reads back to the same f64 (Rust's shortest round-trip form).
@@ -142,6 +144,9 @@ fn def_fields(def: &FunctionDef, dim: usize) -> String {
                 let _ = writeln!(out, "params = {{ {} }}", params.join(", "));
             }
             let _ = writeln!(out, "color_speed = {}", num(f.color_speed));
+            if f.opacity != FlameDef::DEFAULT_OPACITY {
+                let _ = writeln!(out, "opacity = {}", num(f.opacity));
+            }
         }
     }
     out

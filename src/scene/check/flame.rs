@@ -1,7 +1,7 @@
 //! A `kind = "flame"` function's fields, checked (and a key's override of them): `coefs`,
 //! `post` and `variation_coefs` as flam3's six numbers, `variations` (weight by flam3's variation name), `params`
 //! (flam3's attribute names, `julian_power`; every parameter belongs to a variation the function
-//! uses, the ones left out take flam3's defaults) and `color_speed` in 0..1. An unknown
+//! uses, the ones left out take flam3's defaults), `color_speed` and `opacity` in 0..1. An unknown
 //! variation or parameter is named in the error, with its line and column.
 
 use std::ops::Range;
@@ -15,7 +15,8 @@ use crate::scene::spec::FlameDef;
 use super::{Checker, Res};
 
 /// The names of the fields of a flame function.
-pub(super) const FLAME_FIELDS: [&str; 6] = ["coefs", "post", "variation_coefs", "variations", "params", "color_speed"];
+pub(super) const FLAME_FIELDS: [&str; 7] =
+    ["coefs", "post", "variation_coefs", "variations", "params", "color_speed", "opacity"];
 
 impl Checker<'_> {
     /// A flame function's definition from its fields (`base` None), or a key's override of
@@ -80,7 +81,12 @@ impl Checker<'_> {
             (None, Some(b)) => b.color_speed,
             (None, None) => FlameDef::DEFAULT_COLOR_SPEED,
         };
-        Ok(FlameDef { coefs, post, variation_coefs, variations, color_speed })
+        let opacity = match (f.opacity, base) {
+            (Some(o), _) => self.in_range(o, &field("opacity"), 0.0, 1.0)?,
+            (None, Some(b)) => b.opacity,
+            (None, None) => FlameDef::DEFAULT_OPACITY,
+        };
+        Ok(FlameDef { coefs, post, variation_coefs, variations, color_speed, opacity })
     }
 
     fn coefs(&self, c: &Spanned<Vec<f64>>, field: &str) -> Res<Coefs> {

@@ -55,6 +55,12 @@ pub fn flame_ui(ui: &mut egui::Ui, state: &ViewerState, commands: &mut Vec<Comma
                 ui.label("colour speed").on_hover_text("s in c' = s·c_i + (1 − s)·c (flam3's color_speed)");
                 changed |= ui.add(slider(&mut value.color_speed, 0.0..=1.0)).changed();
             });
+            ui.horizontal(|ui| {
+                ui.label("opacity").on_hover_text(
+                    "flam3's opacity: each point of this function is drawn with chance 10^(log₂ opacity)",
+                );
+                changed |= ui.add(slider(&mut value.opacity, 0.0..=1.0)).changed();
+            });
             if changed && value != def {
                 commands.push(Command::SetFlame { function, value });
             }
