@@ -97,6 +97,9 @@ override HAS_FLAMES: bool = false;
 // Palette colour with flame colour speeds (`CompiledIfs::color_speeds`): c ← s·c_i + (1 − s)·c
 // with each function's speed s from its flame-table header, as the CPU's `step_color_speed`.
 override COLOR_SPEEDS: bool = false;
+// A final xform (`CompiledIfs::has_final_xform`): its header follows the functions' in the
+// flame table (index `function_count()`); it maps each drawn point and its colour, not the orbit.
+override HAS_FINAL: bool = false;
 // flam3's limit of a coordinate in the plane (`BAD_VALUE` in src/chaos_game/flame.rs).
 const FLAME_BAD_VALUE: f32 = 1e10;
 
@@ -220,9 +223,14 @@ fn selection_cell(p: vec3<f32>) -> u32 {
     return (ix * n.y + iy) * n.z + iz;
 }
 
+// The number of functions: the pipeline's constant, else the uniforms'.
+fn function_count() -> u32 {
+    return select(params.selection_cells.w, FUNCTION_COUNT, FUNCTION_COUNT > 0u);
+}
+
 // The function chosen by random bits `r` in coarse cell `cell` (`SelectionTable::select`).
 fn select_function(cell: u32, r: u32) -> u32 {
-    let n = select(params.selection_cells.w, FUNCTION_COUNT, FUNCTION_COUNT > 0u);
+    let n = function_count();
     let first = select(cell * n, 0u, SINGLE_SELECTION_CELL);
     let r24 = r >> (32u - SELECT_BITS);
     var chosen = 0u;
@@ -382,10 +390,26 @@ fn chaos_game(@builtin(global_invocation_id) id: vec3<u32>) {
                 c = (c + color_coord_at(fi)) * 0.5;
             }
         }
+        // The point drawn and its colour coordinate: the orbit's, or their final xform's
+        // images (`CompiledIfs::map_with_rng`, `ColorCoordSink`).
+        var drawn = p;
+        var drawn_c = c;
+        if HAS_FINAL && shown {
+            let q = apply_xform(function_count(), p.xy, &rng);
+            if abs(q.x) <= FLAME_BAD_VALUE && abs(q.y) <= FLAME_BAD_VALUE {
+                drawn = vec3<f32>(q, p.z);
+            } else {
+                let x = flame_random(&rng) * 2.0 - 1.0;
+                let y = flame_random(&rng) * 2.0 - 1.0;
+                drawn = vec3<f32>(x, y, p.z);
+            }
+            let header = flame_op_at(function_count());
+            drawn_c = header.k1.z * header.k1.w + (1.0 - header.k1.z) * c;
+        }
         if s >= params.skip_steps && shown {
-            splat(p, select(fi, u32(c * COLOR_SCALE + 0.5), PALETTE));
+            splat(drawn, select(fi, u32(drawn_c * COLOR_SCALE + 0.5), PALETTE));
             if SHADOWED {
-                splat_shadow(p);
+                splat_shadow(drawn);
             }
         }
     }

@@ -20,7 +20,8 @@ struct FlameOp {
     first: u32,
     count: u32,
     // A term's constants; an affine map's a, b, c, d (k0) and e, f (k1.xy); a header's colour
-    // speed in k1.z and plotted weight (the chance its points are drawn) in k1.w.
+    // speed in k1.z and plotted weight (the chance its points are drawn) in k1.w; the final
+    // xform's header (after the functions') its colour coordinate in k1.w.
     k0: vec4<f32>,
     k1: vec4<f32>,
 }

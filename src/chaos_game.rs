@@ -165,6 +165,7 @@ impl CompiledIfs {
                     _ => None,
                 })
                 .collect(),
+            ifs.final_xform.as_ref(),
         );
         let color_speeds = flames.as_ref().map(FlameTable::color_speeds).filter(|s| s.iter().any(|&s| s != 0.5));
         let fast = FastKernel::new(&functions, &coords, &cells);

@@ -7,7 +7,7 @@
 //! within twice flam3's own difference between two of its seeds (`isaac_seed`), plus 3: the
 //! two renderers draw different random numbers, so flam3's seed-to-seed noise is the scale.
 //!
-//! Twelve of them are also imported as scenes and drawn by the scene renderer ([`IMPORTED`]),
+//! Thirteen of them are also imported as scenes and drawn by the scene renderer ([`IMPORTED`]),
 //! with the same metric.
 //!
 //! Without `flam3-render` the test says so loudly and passes, unless `CI` or
@@ -345,15 +345,17 @@ fn difference(a: &image::RgbaImage, b: &image::RgbaImage, background: [u8; 3]) -
     if n == 0 { 0.0 } else { sum as f64 / n as f64 }
 }
 
-/// Flames whose features the import keeps (no final xform, xaos or wide filter) and
+/// Flames whose features the import keeps (no xaos or wide filter) and
 /// whose attractor is large enough for flam3's spatial filter not to matter, also imported as
 /// scenes (`nlifs import flame`) and rendered by the scene renderer: the conjugation into
 /// nlifs's view (a rotated camera; waves and popcorn keep their xform's coefs), the absolute
-/// density with flam3's brightness and gamma, density estimation, opacity and the palette.
+/// density with flam3's brightness and gamma, density estimation, opacity, the final xform and
+/// the palette.
 const IMPORTED: &[&str] = &[
     "camera",
     "color-speed",
     "density-estimation",
+    "final-xform",
     "linear",
     "mix-sinusoidal-swirl",
     "opacity",

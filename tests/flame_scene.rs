@@ -16,18 +16,20 @@ use nlifs::scene::spec::FunctionDef;
 use nlifs::shot::{Framing, Shot};
 
 /// Two flames: one with a post-affine, julian's parameters, waves (which reads its xform's
-/// coefs), an opacity, a rotated camera and an off-centre view; one with a final xform and xaos (which the import leaves out, with warnings).
+/// coefs), an opacity, a final xform, a rotated camera and an off-centre view; one with xaos
+/// and a final xform of opacity ½ (which the import leaves out, with warnings).
 const FILE: &str = r#"<flames>
 <flame name="spiral" size="64 48" center="0.2 -0.1" scale="18" rotate="30" quality="40" brightness="4" gamma="4">
   <xform weight="0.5" color="0" linear="1" coefs="0.5 0.2 -0.2 0.5 -0.5 0.1" color_speed="0.3"/>
   <xform weight="0.3" color="0.7" julian="0.8" julian_power="3" julian_dist="1" coefs="0.6 0 0 0.6 0.4 0" post="1 0 0.2 1 0 0.1" opacity="0.8"/>
   <xform weight="0.2" color="1" spherical="0.5" swirl="0.3" waves="0.2" coefs="0.4 -0.1 0.1 0.4 0.3 0.5"/>
+  <finalxform color="0.4" color_speed="0.3" linear="0.8" spherical="0.25" coefs="0.9 0.15 -0.15 0.9 0.05 0"/>
   <color index="0" rgb="255 40 0"/><color index="128" rgb="40 255 120"/><color index="255" rgb="0 60 255"/>
 </flame>
 <flame name="finals" size="40 30" scale="12" quality="10">
   <xform weight="1" color="0" swirl="1" coefs="0.6 0.1 -0.1 0.6 0 0" chaos="1 0"/>
   <xform weight="1" color="1" linear="1" coefs="0.5 0 0 0.5 0.3 0.3"/>
-  <finalxform color="0.5" spherical="1" coefs="1 0 0 1 0 0"/>
+  <finalxform color="0.5" spherical="1" coefs="1 0 0 1 0 0" opacity="0.5"/>
   <color index="0" rgb="0 255 0"/><color index="255" rgb="255 255 0"/>
 </flame>
 </flames>
@@ -83,7 +85,9 @@ fn the_import_warns_of_what_it_leaves_out() {
     assert!(spiral.warnings.is_empty(), "{:?}", spiral.warnings);
     let finals = scene_of_flame(&file.flames[1], "p.png").expect("import");
     let text = finals.warnings.join("\n");
-    assert!(text.contains("final xform is left out") && text.contains("xaos is left out"), "{text}");
+    assert!(text.contains("final xform's opacity is left out") && text.contains("xaos is left out"), "{text}");
+    // The final xforms are kept.
+    assert!(spiral.scene.final_xform.is_some() && finals.scene.final_xform.is_some());
 }
 
 /// Sierpiński's triangle as three linear flame functions of opacity 1, ½ and 0: each point of
@@ -262,6 +266,29 @@ fn bad_flame_tables_give_located_errors() {
     );
     let e = error_of(&keyed);
     assert!(e.contains("key[0].function[0].variations.swirl") && e.contains("does not use `swirl`"), "{e}");
+    // The final xform: a flame's fields and its colour coordinate, no selection weight.
+    let with_final = |table: &str| {
+        format!("{}\n[final]\n{table}", scene_with("coefs = [1, 0, 0, 1, 0, 0]\nvariations = { linear = 1 }\n"))
+    };
+    let cases: [(&str, &[&str]); 3] = [
+        ("coefs = [1, 0, 0, 1, 0, 0]\nvariations = { linear = 1 }\nprobability = 1\n", &["bad.toml:", "probability"]),
+        ("variations = { linear = 1 }\n", &["bad.toml:", "final.coefs", "needs `coefs`"]),
+        (
+            "coefs = [1, 0, 0, 1, 0, 0]\nvariations = { linear = 1 }\npalette_index = 2\n",
+            &["bad.toml:14:", "final.palette_index", "0..1"],
+        ),
+    ];
+    for (table, words) in cases {
+        let e = error_of(&with_final(table));
+        for w in words {
+            assert!(e.contains(w), "{e}\n(expected {w:?})");
+        }
+    }
+    let scene = Scene::parse(&with_final("coefs = [1, 0, 0, 1, 0.5, 0]\nvariations = { spherical = 1 }\n"), "f.toml")
+        .expect("a scene with a final xform");
+    let f = scene.final_xform.as_ref().expect("the final xform");
+    assert_eq!((f.palette_index, f.def.color_speed, f.def.coefs[4]), (0.0, 0.5, 0.5));
+    assert_eq!(without_path(&Scene::parse(&scene.to_toml(), "again.toml").expect("again")), without_path(&scene));
 }
 
 #[test]
@@ -309,11 +336,12 @@ fn import_command_writes_the_scene_and_its_palette() {
     let o = run_nlifs(&["import", "flame", file.to_str().unwrap(), "--name", "finals", "-o", out.to_str().unwrap()]);
     let err = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(0), "{err}");
-    assert_eq!(err.matches("final xform is left out").count(), 1, "warned once: {err}");
+    assert_eq!(err.matches("xaos is left out").count(), 1, "warned once: {err}");
     assert!(dir.join("spiral.palette.png").exists());
     let scene = Scene::load(&out).expect("scene");
     assert_eq!(scene.name, "finals");
     assert_eq!(scene.functions.len(), 2);
+    assert!(scene.final_xform.is_some(), "the final xform is the scene's");
     let bad = run_nlifs(&["import", "flame", file.to_str().unwrap(), "-o", dir.join("x.png").to_str().unwrap()]);
     assert_eq!(bad.status.code(), Some(2));
     let missing = run_nlifs(&["import", "flame", "no-such.flame", "-o", out.to_str().unwrap()]);

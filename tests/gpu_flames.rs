@@ -9,6 +9,7 @@
 //!    colour coordinate stepped with the functions' colour speeds exactly as the CPU steps it.
 //! 2. Normalized densities on a coarse grid agree within the bound of `tests/gpu_vs_cpu.rs`.
 //! 3. An xform's opacity: the GPU draws a point with its plotted weight as the CPU does.
+//! 4. A final xform: the GPU draws its images, in its colour, as the CPU does.
 
 mod common;
 
@@ -175,6 +176,17 @@ fn gpu_density_counts(
     view: &SplatView,
     k: u32,
 ) -> Vec<u32> {
+    gpu_accum(ctx, game, compiled, view, k).iter().map(|a| a[3]).collect()
+}
+
+/// [`gpu_density_counts`]'s sums: r, g, b and the count per pixel.
+fn gpu_accum(
+    ctx: &GpuContext,
+    game: &mut GpuChaosGame,
+    compiled: &CompiledIfs,
+    view: &SplatView,
+    k: u32,
+) -> Vec<[u32; 4]> {
     game.set_ifs(&ctx.device, &ctx.queue, compiled);
     let mut encoder = ctx.device.create_command_encoder(&Default::default());
     let steps = compiled.transient + k;
@@ -182,7 +194,7 @@ fn gpu_density_counts(
     game.encode(&ctx.device, &ctx.queue, &mut encoder, &args);
     ctx.queue.submit([encoder.finish()]);
     let accum: Vec<u32> = bytemuck::pod_collect_to_vec(&read_buffer(ctx, &game.accum).unwrap());
-    accum.chunks(4).map(|a| a[3]).take((view.width * view.height) as usize).collect()
+    accum.chunks(4).map(|a| [a[0], a[1], a[2], a[3]]).take((view.width * view.height) as usize).collect()
 }
 
 /// Sierpiński's triangle as three flame functions of opacity 1, ½ and 0 (plotted weights 1,
@@ -214,6 +226,65 @@ fn opacity_draws_as_on_the_cpu() {
         eprintln!("{side}: {drawn:.4} of the steps drawn ({expected:.4} expected)");
         assert!((drawn - expected).abs() < 0.01, "the {side} drew {drawn:.4} of its steps, not {expected:.4}");
     }
+}
+
+/// Sierpiński's triangle of three flame functions with a final xform (swirl and linear, colour
+/// coordinate 1 at speed 0.9, palette colour): the GPU draws the final xform's images where the
+/// CPU draws them (densities within the bound) in its colour (the mean colour of every point
+/// drawn within 1 % of the CPU's; the final's colour step moves it by far more).
+#[test]
+fn a_final_xform_draws_as_on_the_cpu() {
+    let Some(ctx) = gpu() else { return };
+    let scene_text = |final_speed: f64| {
+        let mut text = String::from("version = 1\n[grid]\nx = [-1.0, 1.0]\ny = [-1.0, 1.0]\n");
+        for (vx, vy) in [(-1.0, -1.0), (1.0, -1.0), (0.0, 1.0)] {
+            text += &format!(
+                "[[function]]\nkind = \"flame\"\nprobability = 1\ncoefs = [0.5, 0, 0, 0.5, {}, {}]\n\
+                 variations = {{ linear = 1 }}\n",
+                0.5 * vx,
+                0.5 * vy
+            );
+        }
+        text + &format!(
+            "[final]\npalette_index = 1\ncolor_speed = {final_speed}\ncoefs = [0.9, 0.2, -0.2, 0.9, 0.1, 0]\n\
+             variations = {{ swirl = 0.5, linear = 0.5 }}\n"
+        )
+    };
+    let palette = nlifs::palette::Palette::builtin("ember").expect("a built-in palette");
+    let compile = |final_speed: f64| {
+        let text = scene_text(final_speed);
+        let scene = Scene::parse(&text, "final.toml").unwrap_or_else(|e| panic!("{text}\n{e}"));
+        let compiled = CompiledIfs::new(&scene.at(0.0)).unwrap().with_palette(vec![0.0, 0.5, 1.0], &palette);
+        assert!(compiled.has_final_xform());
+        (scene, compiled)
+    };
+    let (scene, compiled) = compile(0.9);
+    let (width, height, k, orbits) = (96u32, 72u32, 8u32, 1u32 << 16);
+    let bounds = chaos_game::attractor_bounds(&compiled, 1);
+    let view = SplatView::new(&scene.camera_for(bounds), width, height, bounds, SplatMode::Density, 0.0, [0.0; 3]);
+    let mut game = GpuChaosGame::new(&ctx.device, orbits, width, height);
+    let accum = gpu_accum(&ctx, &mut game, &compiled, &view, k);
+    let counts: Vec<u32> = accum.iter().map(|a| a[3]).collect();
+    let found = assert_gpu_density_matches_cpu("final xform", "GPU", &counts, &compiled, view, (orbits, k), (12, 9));
+    assert!(found.gpu_samples > 0.99 * (orbits * k) as f64, "every step drawn: {}", found.gpu_samples);
+    let mean_color = |accum: &[[u32; 4]]| {
+        let n: f64 = accum.iter().map(|a| a[3] as f64).sum();
+        [0, 1, 2].map(|c| accum.iter().map(|a| a[c] as f64).sum::<f64>() / n)
+    };
+    let cpu_mean = |compiled: &CompiledIfs| {
+        let mut fb = nlifs::splat::Framebuffer::new(view, compiled.colors.clone());
+        for c in 0..orbits / chaos_game::ORBITS_PER_CHUNK as u32 {
+            chaos_game::run_chunk(compiled, 77, 0, c, k as usize, &mut fb);
+        }
+        mean_color(&fb.accum)
+    };
+    let (gpu, cpu, cpu_without_step) = (mean_color(&accum), cpu_mean(&compiled), cpu_mean(&compile(0.0).1));
+    eprintln!("mean colour sums: GPU {gpu:?}, CPU {cpu:?}, CPU without the final's colour step {cpu_without_step:?}");
+    for c in 0..3 {
+        assert!((gpu[c] - cpu[c]).abs() <= 0.01 * cpu[c].max(1.0), "channel {c}: GPU {gpu:?}, CPU {cpu:?}");
+    }
+    let moved = (0..3).map(|c| (cpu[c] - cpu_without_step[c]).abs() / cpu[c].max(1.0)).fold(0.0, f64::max);
+    assert!(moved > 0.05, "the final's colour step moves the mean colour: {cpu:?} against {cpu_without_step:?}");
 }
 
 #[test]

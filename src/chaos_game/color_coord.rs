@@ -14,7 +14,8 @@
 //! weighs less than 2^-24.
 //!
 //! A flame function (`chaos_game/flame.rs`) has its own colour speed s and the step is flam3's
-//! c' = s·c_i + (1 − s)·c ([`step_color_speed`]).
+//! c' = s·c_i + (1 − s)·c ([`step_color_speed`]). With a final xform the point is drawn with
+//! s_f·c_f + (1 − s_f)·c, the final xform's step, while the orbit keeps c.
 //!
 //! The GPU twin is the palette branch of `shaders/chaos_game.wgsl` (the same update in f32,
 //! the same quantization; the colour speeds from the flame table's headers).
@@ -46,6 +47,8 @@ pub(super) struct ColorCoordSink<'a, S: PointSink> {
     coords: Box<[f32; 256]>,
     /// The colour speed by function index (flame functions'), when a function has one.
     speeds: Option<Box<[f32; 256]>>,
+    /// The final xform's colour coordinate and speed: the drawn coordinate is its step of c.
+    final_color: Option<(f32, f32)>,
     c: &'a mut [f32; ORBITS_PER_CHUNK],
     skip: usize,
     inner: &'a mut S,
@@ -56,13 +59,15 @@ impl<'a, S: PointSink> ColorCoordSink<'a, S> {
     pub(super) fn new(
         coords: &[f32],
         speeds: Option<&[f32]>,
+        final_color: Option<(f32, f32)>,
         c: &'a mut [f32; ORBITS_PER_CHUNK],
         skip: usize,
         inner: &'a mut S,
     ) -> Self {
         let coords = Box::new(std::array::from_fn(|i| coords.get(i).copied().unwrap_or(0.0)));
         let speeds = speeds.map(|s| Box::new(std::array::from_fn(|i| s.get(i).copied().unwrap_or(0.5))));
-        Self { coords, speeds, c, skip, inner, indices: vec![0; ORBITS_PER_CHUNK * STEPS_PER_BATCH] }
+        let indices = vec![0; ORBITS_PER_CHUNK * STEPS_PER_BATCH];
+        Self { coords, speeds, final_color, c, skip, inner, indices }
     }
 }
 
@@ -78,8 +83,17 @@ impl<S: PointSink> PointSink for ColorCoordSink<'_, S> {
         }
         // On copies, so that the compiler sees that c, the table and the output do not alias.
         let (mut c, coords) = (*self.c, &*self.coords);
-        match self.speeds.as_deref() {
-            None => {
+        match (self.speeds.as_deref(), self.final_color) {
+            (speeds, Some((c_f, s_f))) => {
+                let speeds = speeds.map_or([0.5; 256], |s| *s);
+                for (fs, out) in batch.functions.chunks_exact(K).zip(self.indices.chunks_exact_mut(K)) {
+                    for ((c, &f), out) in c.iter_mut().zip(fs).zip(out) {
+                        *c = step_color_speed(*c, coords[f as usize], speeds[f as usize]);
+                        *out = palette::index_of(step_color_speed(*c, c_f, s_f));
+                    }
+                }
+            }
+            (None, None) => {
                 for (fs, out) in batch.functions.chunks_exact(K).zip(self.indices.chunks_exact_mut(K)) {
                     for ((c, &f), out) in c.iter_mut().zip(fs).zip(out) {
                         *c = step_color(*c, coords[f as usize]);
@@ -87,7 +101,7 @@ impl<S: PointSink> PointSink for ColorCoordSink<'_, S> {
                     }
                 }
             }
-            Some(speeds) => {
+            (Some(speeds), None) => {
                 for (fs, out) in batch.functions.chunks_exact(K).zip(self.indices.chunks_exact_mut(K)) {
                     for ((c, &f), out) in c.iter_mut().zip(fs).zip(out) {
                         *c = step_color_speed(*c, coords[f as usize], speeds[f as usize]);

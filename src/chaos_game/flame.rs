@@ -12,6 +12,11 @@
 //! with weight w, which the sums of the accumulating modes get on average; opacity 0 hides the
 //! function's points (the orbit still goes through it).
 //!
+//! A final xform (flam3's `<finalxform>`, the scene's `[final]`) maps the point that is drawn,
+//! not the orbit: each step's drawn point is its image (a point it sends out of the plane is
+//! drawn at a random point of [−1, 1]², as flam3 does), drawn with the colour coordinate
+//! s_f·c_f + (1 − s_f)·c, while the orbit goes on from the point before it with c.
+//!
 //! An IFS with a flame function runs on the general path (the lane and vector kernels take only
 //! multilinear and affine maps); its other functions are mapped there as always. The kernel
 //! table holds, for a flame function, its pre-affine as one affine cell, so that the tables stay
@@ -33,34 +38,56 @@ use crate::rng::Pcg32;
 /// flam3's limit of a coordinate in the plane (`badvalue`).
 const BAD_VALUE: f64 = 1e10;
 
-/// The compiled IFS's flame functions, by compiled function index (None: not a flame).
+/// The compiled IFS's flame functions, by compiled function index (None: not a flame), and its
+/// final xform.
 #[derive(Clone, Debug)]
 pub struct FlameTable {
     xforms: Vec<Option<Xform>>,
     compiled: Vec<Option<CompiledXform>>,
+    final_xform: Option<(Xform, CompiledXform)>,
 }
 
 impl PartialEq for FlameTable {
     /// The compiled forms follow from the xforms.
     fn eq(&self, other: &Self) -> bool {
         self.xforms == other.xforms
+            && self.final_xform.as_ref().map(|f| &f.0) == other.final_xform.as_ref().map(|f| &f.0)
     }
 }
 
 impl FlameTable {
-    /// The table of `xforms` (one entry per compiled function); None when none is a flame.
-    pub(super) fn new(xforms: Vec<Option<Xform>>) -> Option<Self> {
-        if xforms.iter().all(Option::is_none) {
+    /// The table of `xforms` (one entry per compiled function) and `final_xform`; None when
+    /// there is neither a flame function nor a final xform.
+    pub(super) fn new(xforms: Vec<Option<Xform>>, final_xform: Option<&Xform>) -> Option<Self> {
+        if xforms.iter().all(Option::is_none) && final_xform.is_none() {
             return None;
         }
         let compiled = xforms.iter().map(|x| x.as_ref().map(CompiledXform::new)).collect();
-        Some(Self { xforms, compiled })
+        let final_xform = final_xform.map(|x| (x.clone(), CompiledXform::new(x)));
+        Some(Self { xforms, compiled, final_xform })
+    }
+
+    /// The final xform's colour coordinate c_f (clamped to [0, 1]) and colour speed s_f: the
+    /// drawn point's coordinate is s_f·c_f + (1 − s_f)·c.
+    pub fn final_color(&self) -> Option<(f32, f32)> {
+        self.final_xform.as_ref().map(|(x, _)| (x.color.clamp(0.0, 1.0) as f32, x.color_speed as f32))
     }
 
     /// The colour speeds of the compiled functions: a flame's `color_speed`, ½ for the others.
     pub(super) fn color_speeds(&self) -> Vec<f32> {
         self.xforms.iter().map(|x| x.as_ref().map_or(0.5, |x| x.color_speed as f32)).collect()
     }
+}
+
+/// The final xform's image of a drawn point `p` (z unchanged); a point it sends out of the
+/// plane is drawn at a random point of [−1, 1]² instead (flam3's rule for the final xform).
+#[inline(always)]
+fn apply_final(f: &CompiledXform, p: Vec3, rng: &mut Pcg32) -> Vec3 {
+    let q = f.apply([p.x as f64, p.y as f64], rng);
+    if is_bad(q) {
+        return Vec3::new((rng.next_f64() * 2.0 - 1.0) as f32, (rng.next_f64() * 2.0 - 1.0) as f32, p.z);
+    }
+    Vec3::new(q[0] as f32, q[1] as f32, p.z)
 }
 
 /// A draw in [0, 1) of 24 bits, as the GPU's `flame_random` reads one f64 draw (the same two
@@ -87,30 +114,44 @@ impl CompiledIfs {
     /// plotted weight w is below 1 (`opacity`), one more draw that keeps the point with chance w
     /// (else drawn as NaN): flam3 weighs the point by w, which the sums of the accumulating
     /// modes get on average. Any other function as [`Self::map_fast`], both points the same.
+    ///
+    /// With a final xform the point to draw is, where it is drawn at all, its image
+    /// (`apply_final`).
     #[inline(always)]
     pub fn map_with_rng(&self, fi: usize, p: Vec3, rng: &mut Pcg32) -> (Vec3, Vec3) {
-        if let Some(table) = &self.flames
-            && let Some(x) = &table.compiled[fi]
-        {
-            let q = x.apply([p.x as f64, p.y as f64], rng);
-            if is_bad(q) {
-                let next = Vec3::new((rng.next_f64() * 2.0 - 1.0) as f32, (rng.next_f64() * 2.0 - 1.0) as f32, p.z);
-                return (next, Vec3::NAN);
-            }
-            let q = Vec3::new(q[0] as f32, q[1] as f32, p.z);
-            let weight = x.plotted_weight() as f32;
-            if weight < 1.0 && !(random_24_bits(rng) < weight) {
-                return (q, Vec3::NAN);
-            }
+        let Some(table) = &self.flames else {
+            let q = self.map_fast(fi, p);
             return (q, q);
+        };
+        let (next, shown) = match &table.compiled[fi] {
+            Some(x) => {
+                let q = x.apply([p.x as f64, p.y as f64], rng);
+                if is_bad(q) {
+                    let next = Vec3::new((rng.next_f64() * 2.0 - 1.0) as f32, (rng.next_f64() * 2.0 - 1.0) as f32, p.z);
+                    return (next, Vec3::NAN);
+                }
+                let q = Vec3::new(q[0] as f32, q[1] as f32, p.z);
+                let weight = x.plotted_weight() as f32;
+                if weight < 1.0 && !(random_24_bits(rng) < weight) {
+                    return (q, Vec3::NAN);
+                }
+                (q, q)
+            }
+            None => {
+                let q = self.map_fast(fi, p);
+                (q, q)
+            }
+        };
+        match &table.final_xform {
+            Some((_, f)) => (next, apply_final(f, shown, rng)),
+            None => (next, shown),
         }
-        let q = self.map_fast(fi, p);
-        (q, q)
     }
 
     /// The GPU's flame table (`shaders/variations.wgsl`): one header per compiled function
-    /// (its xform's for a flame function, else [`FLAME_OP_NONE`] with colour speed ½), then the
-    /// flame functions' terms and post-affines ([`CompiledXform::gpu_ops`]).
+    /// (its xform's for a flame function, else [`FLAME_OP_NONE`] with colour speed ½), the
+    /// final xform's header where there is one (its colour coordinate c_f in place of the
+    /// plotted weight, `k1.w`), then the terms and post-affines ([`CompiledXform::gpu_ops`]).
     pub fn flame_ops(&self) -> Vec<FlameOp> {
         let n = self.functions.len();
         let none =
@@ -118,16 +159,29 @@ impl CompiledIfs {
         let mut headers = vec![none; n];
         let mut records = Vec::new();
         if let Some(table) = &self.flames {
+            let first = n + usize::from(table.final_xform.is_some());
             for (header, x) in headers.iter_mut().zip(&table.compiled) {
                 if let Some(x) = x {
-                    let (h, ops) = x.gpu_ops((n + records.len()) as u32);
+                    let (h, ops) = x.gpu_ops((first + records.len()) as u32);
                     *header = h;
                     records.extend(ops);
                 }
             }
+            if let (Some((_, f)), Some((c_f, _))) = (&table.final_xform, table.final_color()) {
+                let (mut h, ops) = f.gpu_ops((first + records.len()) as u32);
+                h.k[1][3] = c_f;
+                headers.push(h);
+                records.extend(ops);
+            }
         }
         headers.extend(records);
         headers
+    }
+
+    /// Whether the IFS has a final xform (its header follows the functions' in
+    /// [`Self::flame_ops`]).
+    pub fn has_final_xform(&self) -> bool {
+        self.flames.as_ref().is_some_and(|t| t.final_xform.is_some())
     }
 
     /// One step of an orbit's colour coordinate after compiled function `fi`:

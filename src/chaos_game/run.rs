@@ -67,7 +67,9 @@ fn run_chains(
     match &ifs.color_coords {
         None => run_kernel(ifs, path, rngs, pos, skip, steps, sink),
         Some(coords) => {
-            let mut colored = ColorCoordSink::new(coords, ifs.color_speeds.as_deref(), colors, skip as usize, sink);
+            let final_color = ifs.flames.as_ref().and_then(|t| t.final_color());
+            let speeds = ifs.color_speeds.as_deref();
+            let mut colored = ColorCoordSink::new(coords, speeds, final_color, colors, skip as usize, sink);
             run_kernel(ifs, path, rngs, pos, 0, skip as usize + steps, &mut colored);
         }
     }

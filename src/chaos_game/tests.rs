@@ -32,7 +32,7 @@ fn warped_ifs() -> Ifs {
             enabled: true,
         }))
         .collect();
-    Ifs { domain: grid, functions, probability_mode: ProbabilityMode::Contractivity }
+    Ifs { domain: grid, functions, probability_mode: ProbabilityMode::Contractivity, final_xform: None }
 }
 
 /// The compiled f32 kernel agrees with the f64 model within f32 rounding of the

@@ -500,7 +500,7 @@ pub struct FlameOp {
     pub first: u32,
     pub count: u32,
     /// A term's constants; an affine map's coefs a, b, c, d | e, f; a header's colour speed in
-    /// `k[1][2]`.
+    /// `k[1][2]` and its plotted weight in `k[1][3]` (a final xform's: its colour coordinate).
     pub k: [[f32; 4]; 2],
 }
 const _: () = assert!(std::mem::size_of::<FlameOp>() == 48);

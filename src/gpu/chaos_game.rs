@@ -91,6 +91,8 @@ pub struct IfsShape {
     pub flames: bool,
     /// The colour coordinate steps with per-function colour speeds (`COLOR_SPEEDS`).
     pub color_speeds: bool,
+    /// A final xform maps the drawn points (`HAS_FINAL`).
+    pub final_xform: bool,
     /// The variations the flame functions use: bit v % 32 of word v / 32 (the shader's
     /// `FLAME_VARIATIONS_*`; the others are compiled out). Adding a variation to a flame in
     /// the viewer makes a new pipeline.
@@ -106,12 +108,13 @@ impl IfsShape {
             palette: ifs.color_coords.is_some(),
             flames: ifs.has_flames(),
             color_speeds: ifs.color_speeds.is_some(),
+            final_xform: ifs.has_final_xform(),
             flame_variations: flame_variations(ifs),
         }
     }
 
     /// The shader's pipeline constants for this shape.
-    fn constants(&self) -> [(&'static str, f64); 12] {
+    fn constants(&self) -> [(&'static str, f64); 13] {
         let [x, y, z] = self.shared_cells.unwrap_or([0; 3]);
         [
             ("SHARED_CELLS_X", x as f64),
@@ -122,6 +125,7 @@ impl IfsShape {
             ("PALETTE", self.palette as u32 as f64),
             ("HAS_FLAMES", self.flames as u32 as f64),
             ("COLOR_SPEEDS", self.color_speeds as u32 as f64),
+            ("HAS_FINAL", self.final_xform as u32 as f64),
             ("FLAME_VARIATIONS_0", self.flame_variations[0] as f64),
             ("FLAME_VARIATIONS_1", self.flame_variations[1] as f64),
             ("FLAME_VARIATIONS_2", self.flame_variations[2] as f64),
@@ -454,8 +458,8 @@ impl GpuChaosGame {
         let uniform_tables = !self.force_storage_tables && fit_uniforms(&tables);
         self.has_julia = ifs.functions.iter().any(|f| f.coord_offset[3] == crate::chaos_game::KIND_JULIA);
         self.shape = if self.force_generic {
-            let IfsShape { palette, flames, color_speeds, flame_variations, .. } = IfsShape::of(ifs);
-            IfsShape { palette, flames, color_speeds, flame_variations, ..IfsShape::default() }
+            let IfsShape { palette, flames, color_speeds, final_xform, flame_variations, .. } = IfsShape::of(ifs);
+            IfsShape { palette, flames, color_speeds, final_xform, flame_variations, ..IfsShape::default() }
         } else {
             IfsShape::of(ifs)
         };
@@ -660,6 +664,7 @@ mod tests {
                 palette: false,
                 flames: false,
                 color_speeds: false,
+                final_xform: false,
                 flame_variations: [0; 4]
             }
         );

@@ -171,6 +171,9 @@ pub struct Ifs {
     pub domain: RectGrid,
     pub functions: Vec<Function>,
     pub probability_mode: ProbabilityMode,
+    /// flam3's final xform: maps each drawn point, not the orbit (`chaos_game/flame.rs`); its
+    /// `color` is its colour coordinate c_f.
+    pub final_xform: Option<crate::flame::Xform>,
 }
 
 /// Per-function figures reported by `nlifs info`.

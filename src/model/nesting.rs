@@ -155,6 +155,7 @@ mod tests {
                 })
                 .collect(),
             probability_mode: ProbabilityMode::default(),
+            final_xform: None,
         }
     }
 

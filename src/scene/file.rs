@@ -30,6 +30,37 @@ pub(super) struct SceneToml {
     pub(super) timeline: Option<Spanned<TimelineToml>>,
     #[serde(default, rename = "key")]
     pub(super) keys: Vec<Spanned<KeyToml>>,
+    /// flam3's final xform.
+    #[serde(rename = "final")]
+    pub(super) final_xform: Option<Spanned<FinalToml>>,
+}
+
+/// `[final]`: a flame definition without selection weight or opacity, and its colour
+/// coordinate.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct FinalToml {
+    pub(super) palette_index: Option<Spanned<f64>>,
+    pub(super) coefs: Option<Spanned<Vec<f64>>>,
+    pub(super) post: Option<Spanned<Vec<f64>>>,
+    pub(super) variation_coefs: Option<Spanned<Vec<f64>>>,
+    pub(super) variations: Option<NamedNumbers>,
+    pub(super) params: Option<NamedNumbers>,
+    pub(super) color_speed: Option<Spanned<f64>>,
+}
+
+impl FinalToml {
+    pub(super) fn flame(&self) -> FlameFields<'_> {
+        FlameFields {
+            coefs: &self.coefs,
+            post: &self.post,
+            variation_coefs: &self.variation_coefs,
+            variations: &self.variations,
+            params: &self.params,
+            color_speed: &self.color_speed,
+            opacity: &None,
+        }
+    }
 }
 
 #[derive(Deserialize)]

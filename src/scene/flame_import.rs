@@ -12,9 +12,11 @@
 //! - **Functions.** An xform's `weight` is the function's `probability` (explicit
 //!   probabilities), its `color` the function's `palette_index`, its `color_speed`, `opacity`,
 //!   variations and parameters the flame function's own. The domain is flam3's start square [−1, 1]².
-//! - **Left out, with a warning:** the final xform (nlifs draws the orbit's points themselves;
-//!   a final transform has no place in an IFS), xaos (the next function is drawn by the weights
-//!   alone) and flam3's linear palette interpolation (nlifs takes the nearest palette entry).
+//! - **The final xform** is the scene's `[final]`, conjugated as the xforms are, its `color`
+//!   the final's `palette_index`.
+//! - **Left out, with a warning:** xaos (the next function is drawn by the weights alone), the
+//!   final xform's opacity (it maps every point) and flam3's linear palette interpolation (nlifs
+//!   takes the nearest palette entry).
 //! - **Camera.** Parallel projection seen from +z, the target at M(center), the visible height
 //!   size_y / (scale · 2^zoom); the image size is the flame's.
 //! - **Look.** Density mode on the absolute scale (flam3's log density: log(1 + points per
@@ -36,8 +38,8 @@ use crate::flame::{Coefs, Flame, IDENTITY, PaletteMode, Xform};
 use crate::model::{ProbabilityMode, RectGrid};
 use crate::palette::Palette;
 use crate::scene::spec::{
-    CameraSpec, ColorMode, DensityEstimation, DensityScale, FlameDef, FunctionDef, FunctionSpec, MAX_POINTS,
-    RenderSettings, SplatMode, TONE_FIELDS,
+    CameraSpec, ColorMode, DensityEstimation, DensityScale, FinalXform, FlameDef, FunctionDef, FunctionSpec,
+    MAX_POINTS, RenderSettings, SplatMode, TONE_FIELDS,
 };
 use crate::scene::{LoadError, Scene};
 
@@ -45,7 +47,7 @@ use crate::scene::{LoadError, Scene};
 #[derive(Clone, Debug)]
 pub struct FlameImport {
     pub scene: Scene,
-    /// One line each (the final xform, xaos, palette interpolation).
+    /// One line each (xaos, the final xform's opacity, palette interpolation).
     pub warnings: Vec<String>,
 }
 
@@ -124,9 +126,9 @@ pub fn scene_of_flame(flame: &Flame, palette_file: &str) -> Result<FlameImport, 
     }
     let mut warnings = Vec::new();
     let name = if flame.name.is_empty() { "flame".to_string() } else { flame.name.clone() };
-    if flame.final_xform.is_some() {
+    if flame.final_xform.as_ref().is_some_and(|f| f.opacity < 1.0) {
         warnings.push(format!(
-            "flame `{name}`: its final xform is left out (nlifs has no final transform; the picture shows the points before it)"
+            "flame `{name}`: its final xform's opacity is left out (the final xform maps every point drawn)"
         ));
     }
     let n = flame.xforms.len();
@@ -160,6 +162,10 @@ pub fn scene_of_flame(flame: &Flame, palette_file: &str) -> Result<FlameImport, 
             palette_index: Some(x.color.clamp(0.0, 1.0)),
         })
         .collect();
+    let final_xform = flame.final_xform.as_ref().map(|x| FinalXform {
+        def: FlameDef { opacity: FlameDef::DEFAULT_OPACITY, ..conjugated(x, &m, &m_inv) },
+        palette_index: x.color.clamp(0.0, 1.0),
+    });
     let ppu = flame.scale * 2f64.powf(flame.zoom);
     let half_height = f64::from(flame.size[1].max(1)) / (2.0 * ppu);
     let target = apply(&m, flame.center);
@@ -209,6 +215,7 @@ pub fn scene_of_flame(flame: &Flame, palette_file: &str) -> Result<FlameImport, 
         camera,
         render,
         timeline: None,
+        final_xform,
     };
     Ok(FlameImport { scene, warnings })
 }

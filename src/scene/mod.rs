@@ -70,6 +70,8 @@ pub struct Scene {
     pub render: RenderSettings,
     /// Keys animating the functions, camera and render settings; None for a still scene.
     pub timeline: Option<Timeline>,
+    /// flam3's final xform (`[final]`), applied to every drawn point; not keyed.
+    pub final_xform: Option<spec::FinalXform>,
 }
 
 impl Scene {
@@ -88,7 +90,12 @@ impl Scene {
                 enabled: f.enabled,
             })
             .collect();
-        Ifs { domain: self.domain.clone(), functions, probability_mode: self.probability_mode }
+        Ifs {
+            domain: self.domain.clone(),
+            functions,
+            probability_mode: self.probability_mode,
+            final_xform: self.final_xform.as_ref().map(spec::FinalXform::xform),
+        }
     }
 
     /// Function `i`'s definition at scene time `t_secs` (interpolated, not yet resolved).

@@ -183,6 +183,24 @@ impl FlameDef {
     }
 }
 
+/// flam3's final xform as the scene holds it (`[final]`): a flame definition applied to every
+/// drawn point, not to the orbit (`chaos_game/flame.rs`), and its colour coordinate. It has no
+/// selection weight and no opacity (its `def.opacity` is 1).
+#[derive(Clone, Debug, PartialEq)]
+pub struct FinalXform {
+    pub def: FlameDef,
+    /// The colour coordinate c_f in [0, 1]: the drawn point's coordinate is s·c_f + (1 − s)·c
+    /// with s the definition's colour speed.
+    pub palette_index: f64,
+}
+
+impl FinalXform {
+    /// The xform the chaos game applies.
+    pub fn xform(&self) -> Xform {
+        Xform { color: self.palette_index, ..self.def.xform() }
+    }
+}
+
 impl FunctionDef {
     /// The function's `kind` as the scene file spells it.
     pub fn kind(&self) -> &'static str {

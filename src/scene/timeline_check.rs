@@ -161,6 +161,7 @@ pub fn check_timeline_capped(
                             enabled: true,
                         }],
                         probability_mode: scene.probability_mode,
+                        final_xform: None,
                     };
                     let bound = ifs.functions[0].map.lipschitz_bound();
                     let outside = match &ifs.functions[0].map {

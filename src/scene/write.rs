@@ -251,6 +251,11 @@ impl Scene {
             }
             out += &def_fields(&f.def, dim);
         }
+        if let Some(f) = &self.final_xform {
+            out += "\n[final]\n";
+            let _ = writeln!(out, "palette_index = {}", num(f.palette_index));
+            out += &def_fields(&FunctionDef::Flame(f.def.clone()), dim);
+        }
         let camera = camera_fields(&self.camera);
         if !camera.is_empty() {
             out += "\n[camera]\n";

@@ -78,6 +78,7 @@ impl ViewerState {
                     edited |= self.set_builder_step(function, step, value);
                 }
                 Command::SetFlame { function, value } => edited |= self.set_flame(function, value),
+                Command::SetFinalXform(value) => edited |= self.set_final_xform(value),
                 Command::SetLiveSettings(live) => {
                     self.live = live;
                     changes.live_settings = true;

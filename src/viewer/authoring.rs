@@ -125,6 +125,20 @@ impl ViewerState {
         self.preview_scene(after)
     }
 
+    /// Sets the final xform's numbers (part of the running gesture): the same variations and
+    /// post-affine, as a flame function's edit keeps them; the final xform is not keyed.
+    pub(super) fn set_final_xform(&mut self, value: crate::scene::spec::FinalXform) -> bool {
+        use crate::scene::spec::{FunctionDef, same_structure};
+        let Some(current) = &self.scene.final_xform else { return false };
+        let (a, b) = (FunctionDef::Flame(current.def.clone()), FunctionDef::Flame(value.def.clone()));
+        if *current == value || same_structure(&a, &b).is_err() || !(0.0..=1.0).contains(&value.palette_index) {
+            return false;
+        }
+        let mut after = self.scene.clone();
+        after.final_xform = Some(value);
+        self.preview_scene(after)
+    }
+
     /// Turns function `function` on or off (one undo step).
     pub(super) fn set_function_enabled(&mut self, function: usize, enabled: bool) -> bool {
         let Some(f) = self.scene.functions.get(function) else { return false };

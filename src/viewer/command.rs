@@ -45,6 +45,8 @@ pub enum Command {
         function: usize,
         value: crate::scene::spec::FlameDef,
     },
+    /// The final xform's numbers (same variations, same post-affine or none).
+    SetFinalXform(crate::scene::spec::FinalXform),
     SetLiveSettings(LiveSettings),
     SetProjection(Projection),
     Orbit {

@@ -14,7 +14,7 @@ use crate::color;
 use crate::model::builder::{Axis, Builder, Step};
 use crate::model::{AffineMap, JuliaMap, ProbabilityMode, RectGrid};
 use crate::scene::file::{CameraToml, ColorToml, FORMAT_VERSION, FunctionToml, SceneToml, StepToml, VectorToml};
-use crate::scene::spec::{CameraSpec, FunctionDef, FunctionSpec, MAX_COORDINATE, RenderSettings};
+use crate::scene::spec::{CameraSpec, FinalXform, FunctionDef, FunctionSpec, MAX_COORDINATE, RenderSettings};
 use crate::scene::{Scene, SceneError};
 
 mod flame;
@@ -215,6 +215,15 @@ impl Checker<'_> {
             Some(r) => self.render(r)?,
         };
         let timeline = self.timeline(raw.timeline.as_ref(), &raw.keys, &functions, &domain)?;
+        let final_xform = match &raw.final_xform {
+            None => None,
+            Some(f) => Some(FinalXform {
+                def: self.flame_def("final", f.span(), f.get_ref().flame(), None)?,
+                palette_index: self
+                    .palette_index(f.get_ref().palette_index.as_ref(), "final.palette_index")?
+                    .unwrap_or(0.0),
+            }),
+        };
         Ok(Scene {
             path: None,
             name: raw.name.unwrap_or_else(|| "untitled".into()),
@@ -225,6 +234,7 @@ impl Checker<'_> {
             camera,
             render,
             timeline,
+            final_xform,
         })
     }
 
