@@ -400,6 +400,25 @@ fn the_viewer_edits_a_flame_undoably_and_saves_it() {
     other.post = None;
     s.apply([Command::SetFlame { function: 1, value: other }]);
     assert_eq!(s.scene.functions[1].def, FunctionDef::Flame(def.clone()));
+    // The final xform's numbers and colour coordinate: one undo step a drag too.
+    let before_final = s.scene.clone();
+    let mut fin = s.scene.final_xform.clone().expect("the spiral's final xform");
+    fin.def.coefs[0] = 0.7;
+    fin.def.variations[0].weight = 0.5;
+    fin.palette_index = 0.9;
+    let mut half = fin.clone();
+    half.palette_index = 0.6;
+    s.apply([Command::SetFinalXform(half)]);
+    s.apply([Command::SetFinalXform(fin.clone()), Command::EndGesture]);
+    assert_eq!(s.scene.final_xform.as_ref(), Some(&fin));
+    s.apply([Command::Undo]);
+    assert_eq!(s.scene, before_final, "one undo step undoes the final xform's drag");
+    s.apply([Command::Redo]);
+    assert_eq!(s.scene.final_xform.as_ref(), Some(&fin));
+    let mut other = fin.clone();
+    other.def.variations.pop();
+    s.apply([Command::SetFinalXform(other)]);
+    assert_eq!(s.scene.final_xform.as_ref(), Some(&fin), "a change of structure is refused");
     s.apply([Command::SaveScene(file.clone())]);
     assert!(s.error.as_deref().is_some_and(|e| e.contains("cannot save over the flame file")), "{:?}", s.error);
     assert_eq!(std::fs::read_to_string(&file).expect("flame"), FILE, "the flame file is untouched");
@@ -407,6 +426,7 @@ fn the_viewer_edits_a_flame_undoably_and_saves_it() {
     s.apply([Command::SaveScene(out.clone())]);
     let back = Scene::load(&out).expect("reopen");
     assert_eq!(back.functions[1].def, FunctionDef::Flame(def));
+    assert_eq!(back.final_xform, Some(fin));
     assert_eq!(without_path(&back), without_path(&s.scene));
     std::fs::remove_dir_all(&dir).ok();
 }
