@@ -31,7 +31,7 @@ use crate::gpu::progressive::{EstimateDue, Progressive, ProgressiveSettings};
 use crate::gpu::{GpuContext, GpuError};
 use crate::platform::Instant;
 use crate::resolve::density_estimation;
-use crate::scene::spec::{DensityScale, SplatMode};
+use crate::scene::spec::SplatMode;
 
 use self::cpu_source::CpuChaosGame;
 pub use self::settings::{ChaosBackend, ChaosRoute, Imaging, LiveSettings, RenderDensity};
@@ -142,14 +142,15 @@ impl LiveView {
         p
     }
 
-    /// Splats after which accumulation stops: in density mode on the relative scale, the
-    /// render's points per pixel ([`RenderDensity`]), though never within the first frame (the
-    /// absolute scale converges as points are added: it refines on).
+    /// Splats after which accumulation stops: in density mode, the render's points per pixel
+    /// ([`RenderDensity`]), though never within the first frame. On the relative scale a longer
+    /// accumulation would wash the picture out; on the absolute scale it would only refine past
+    /// what `render` draws, for minutes on the CPU route (a flame's 2^30 points at 1–2 M a
+    /// second), where the view is meant to rest.
     fn max_splats(&self, settings: &LiveSettings) -> u64 {
         let cap = settings.draw.max_splats;
-        let relative = settings.draw.tone.density_scale == DensityScale::Relative;
         match settings.render_density {
-            Some(d) if settings.draw.mode == SplatMode::Density && relative => {
+            Some(d) if settings.draw.mode == SplatMode::Density => {
                 let frame = settings.draw.point_count as u64 * settings.draw.steps_per_frame.max(1) as u64;
                 let (width, height) = self.size();
                 cap.min(d.splats_in_view(width, height).max(frame))
