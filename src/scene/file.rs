@@ -35,6 +35,22 @@ pub(super) struct SceneToml {
     pub(super) final_xform: Option<Spanned<FinalToml>>,
 }
 
+/// The [`FlameFields`] of a table that has a flame's fields (a function, a key's override, the
+/// final xform; serde's `flatten` cannot be used with `deny_unknown_fields`), with `opacity`.
+macro_rules! flame_fields {
+    ($table:expr, $opacity:expr) => {
+        FlameFields {
+            coefs: &$table.coefs,
+            post: &$table.post,
+            variation_coefs: &$table.variation_coefs,
+            variations: &$table.variations,
+            params: &$table.params,
+            color_speed: &$table.color_speed,
+            opacity: $opacity,
+        }
+    };
+}
+
 /// `[final]`: a flame definition without selection weight or opacity, and its colour
 /// coordinate.
 #[derive(Deserialize)]
@@ -51,15 +67,7 @@ pub(super) struct FinalToml {
 
 impl FinalToml {
     pub(super) fn flame(&self) -> FlameFields<'_> {
-        FlameFields {
-            coefs: &self.coefs,
-            post: &self.post,
-            variation_coefs: &self.variation_coefs,
-            variations: &self.variations,
-            params: &self.params,
-            color_speed: &self.color_speed,
-            opacity: &None,
-        }
+        flame_fields!(self, &None)
     }
 }
 
@@ -121,29 +129,13 @@ pub(super) struct FlameFields<'a> {
 
 impl FunctionToml {
     pub(super) fn flame(&self) -> FlameFields<'_> {
-        FlameFields {
-            coefs: &self.coefs,
-            post: &self.post,
-            variation_coefs: &self.variation_coefs,
-            variations: &self.variations,
-            params: &self.params,
-            color_speed: &self.color_speed,
-            opacity: &self.opacity,
-        }
+        flame_fields!(self, &self.opacity)
     }
 }
 
 impl KeyFunctionToml {
     pub(super) fn flame(&self) -> FlameFields<'_> {
-        FlameFields {
-            coefs: &self.coefs,
-            post: &self.post,
-            variation_coefs: &self.variation_coefs,
-            variations: &self.variations,
-            params: &self.params,
-            color_speed: &self.color_speed,
-            opacity: &self.opacity,
-        }
+        flame_fields!(self, &self.opacity)
     }
 }
 
