@@ -24,6 +24,9 @@ use super::sink::{PointBatch, PointSink};
 use super::{ORBITS_PER_CHUNK, STEPS_PER_BATCH};
 use crate::palette;
 
+/// Colour speed ½ for every function (the step (c + c_i) / 2, bit for bit).
+const HALF_SPEEDS: [f32; 256] = [0.5; 256];
+
 /// The colour coordinate of an orbit at its start point.
 pub const C_START: f32 = 0.5;
 
@@ -85,7 +88,7 @@ impl<S: PointSink> PointSink for ColorCoordSink<'_, S> {
         let (mut c, coords) = (*self.c, &*self.coords);
         match (self.speeds.as_deref(), self.final_color) {
             (speeds, Some((c_f, s_f))) => {
-                let speeds = speeds.map_or([0.5; 256], |s| *s);
+                let speeds = speeds.unwrap_or(&HALF_SPEEDS);
                 for (fs, out) in batch.functions.chunks_exact(K).zip(self.indices.chunks_exact_mut(K)) {
                     for ((c, &f), out) in c.iter_mut().zip(fs).zip(out) {
                         *c = step_color_speed(*c, coords[f as usize], speeds[f as usize]);
