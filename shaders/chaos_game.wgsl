@@ -80,6 +80,10 @@ override SHARED_CELLS_Z: u32 = 0u;
 // a single coarse cell: then the threshold reads are at constant indices too.
 override FUNCTION_COUNT: u32 = 0u;
 override SINGLE_SELECTION_CELL: bool = false;
+// Xaos (`SelectionTable::xaos`): the selection row is the orbit's previous function + 1 (0 at a
+// (re)start) instead of its coarse cell; the stored point's w then holds 2·row + c (c: the
+// colour coordinate with PALETTE, else 0).
+override XAOS: bool = false;
 // Every splatted point also goes into the key light's shadow map (`splat_shadow`); off, the
 // shadow map is neither read nor written.
 override SHADOWED: bool = false;
@@ -353,14 +357,23 @@ fn chaos_game(@builtin(global_invocation_id) id: vec3<u32>) {
     let stored = points[thread];
     var p = stored.xyz;
     var fi = u32(stored.w);
+    // Xaos: w holds 2·row + c.
+    var row = 0u;
+    var stored_c = stored.w;
+    if XAOS {
+        row = min(u32(max(stored.w, 0.0) * 0.5), function_count());
+        stored_c = stored.w - 2.0 * f32(row);
+    }
     // Palette colour: w holds the colour coordinate c instead (src/chaos_game/color_coord.rs).
-    var c = select(C_START, stored.w, stored.w >= 0.0 && stored.w <= 1.0);
+    var c = select(C_START, stored_c, stored_c >= 0.0 && stored_c <= 1.0);
     if params.restart != 0u || !is_finite3(p) {
         p = start_point(&rng);
         c = C_START;
+        row = 0u;
     }
     for (var s = 0u; s < params.steps; s += 1u) {
-        fi = select_function(selection_cell(p), pcg_next_u32(&rng));
+        fi = select_function(select(selection_cell(p), row, XAOS), pcg_next_u32(&rng));
+        row = fi + 1u;
         // False where a flame function's image left the plane: flam3 re-seeds the orbit at a
         // random point of [−1, 1]² and does not draw that step (`CompiledIfs::map_with_rng`).
         var shown = true;
@@ -413,7 +426,8 @@ fn chaos_game(@builtin(global_invocation_id) id: vec3<u32>) {
             }
         }
     }
-    points[thread] = vec4<f32>(p, select(f32(fi), c, PALETTE));
+    let w = select(f32(fi), c, PALETTE);
+    points[thread] = vec4<f32>(p, select(w, 2.0 * f32(row) + select(0.0, c, PALETTE), XAOS));
 }
 
 // Empties the accumulation buffer: the closest key to u32::MAX, sums to zero.

@@ -345,12 +345,13 @@ fn difference(a: &image::RgbaImage, b: &image::RgbaImage, background: [u8; 3]) -
     if n == 0 { 0.0 } else { sum as f64 / n as f64 }
 }
 
-/// Flames whose features the import keeps (no xaos or wide filter) and
-/// whose attractor is large enough for flam3's spatial filter not to matter, also imported as
+/// Flames whose features the import keeps (no wide filter) and whose attractor is large enough
+/// for flam3's spatial filter not to matter (the "xaos" flame's pieces are thin: imported, it
+/// lights 159 pixels where flam3's filter lights 331; `tests/flame_scene.rs` checks its import), also imported as
 /// scenes (`nlifs import flame`) and rendered by the scene renderer: the conjugation into
 /// nlifs's view (a rotated camera; waves and popcorn keep their xform's coefs), the absolute
-/// density with flam3's brightness and gamma, density estimation, opacity, the final xform and
-/// the palette.
+/// density with flam3's brightness and gamma, density estimation, opacity, the final xform,
+/// xaos and the palette.
 const IMPORTED: &[&str] = &[
     "camera",
     "color-speed",

@@ -16,11 +16,11 @@ use nlifs::scene::spec::FunctionDef;
 use nlifs::shot::{Framing, Shot};
 
 /// Two flames: one with a post-affine, julian's parameters, waves (which reads its xform's
-/// coefs), an opacity, a final xform, a rotated camera and an off-centre view; one with xaos
-/// and a final xform of opacity ½ (which the import leaves out, with warnings).
+/// coefs), an opacity, xaos, a final xform, a rotated camera and an off-centre view; one with
+/// xaos and a final xform of opacity ½ (which the import leaves out, with a warning).
 const FILE: &str = r#"<flames>
 <flame name="spiral" size="64 48" center="0.2 -0.1" scale="18" rotate="30" quality="40" brightness="4" gamma="4">
-  <xform weight="0.5" color="0" linear="1" coefs="0.5 0.2 -0.2 0.5 -0.5 0.1" color_speed="0.3"/>
+  <xform weight="0.5" color="0" linear="1" coefs="0.5 0.2 -0.2 0.5 -0.5 0.1" color_speed="0.3" chaos="0 1 1"/>
   <xform weight="0.3" color="0.7" julian="0.8" julian_power="3" julian_dist="1" coefs="0.6 0 0 0.6 0.4 0" post="1 0 0.2 1 0 0.1" opacity="0.8"/>
   <xform weight="0.2" color="1" spherical="0.5" swirl="0.3" waves="0.2" coefs="0.4 -0.1 0.1 0.4 0.3 0.5"/>
   <finalxform color="0.4" color_speed="0.3" linear="0.8" spherical="0.25" coefs="0.9 0.15 -0.15 0.9 0.05 0"/>
@@ -85,9 +85,12 @@ fn the_import_warns_of_what_it_leaves_out() {
     assert!(spiral.warnings.is_empty(), "{:?}", spiral.warnings);
     let finals = scene_of_flame(&file.flames[1], "p.png").expect("import");
     let text = finals.warnings.join("\n");
-    assert!(text.contains("final xform's opacity is left out") && text.contains("xaos is left out"), "{text}");
-    // The final xforms are kept.
+    assert!(text.contains("final xform's opacity is left out") && !text.contains("xaos"), "{text}");
+    // The final xforms and the xaos rows are kept.
     assert!(spiral.scene.final_xform.is_some() && finals.scene.final_xform.is_some());
+    assert_eq!(spiral.scene.functions[0].xaos, [0.0, 1.0, 1.0]);
+    assert!(spiral.scene.functions[1].xaos.is_empty(), "a row of 1s is no row");
+    assert_eq!(finals.scene.functions[0].xaos, [1.0, 0.0]);
 }
 
 /// Sierpiński's triangle as three linear flame functions of opacity 1, ½ and 0: each point of
@@ -170,6 +173,14 @@ fn imported_scene_draws_where_the_flame_renderer_draws() {
     let ours = coarse_luminance(rendered.image.as_raw(), 3, w, h, cells);
     let theirs = coarse_luminance(&reference.rgba, 4, w, h, cells);
     let d = l1(&ours, &theirs);
+    // Without its xaos row the scene draws another picture.
+    let mut without = scene.clone();
+    without.functions[0].xaos.clear();
+    let shot = Shot::prepare(&without, 0.0, &without.render, Framing::Scene, None).expect("shot");
+    let rendered = nlifs::render::render_cpu(&shot, &|_, _| {});
+    let d_without = l1(&coarse_luminance(rendered.image.as_raw(), 3, w, h, cells), &theirs);
+    eprintln!("L1 of the coarse luminance without the xaos row: {d_without:.3}");
+    assert!(d_without > 2.0 * d, "the xaos row matters: {d_without:.3} without it against {d:.3}");
     // The same picture upside down (what the import's mirror corrects) or turned (its rotation)
     // is far from it: the comparison sees orientation.
     let flipped: Vec<u8> = (0..h).rev().flat_map(|y| reference.rgba[y * w * 4..(y + 1) * w * 4].to_vec()).collect();
@@ -336,12 +347,14 @@ fn import_command_writes_the_scene_and_its_palette() {
     let o = run_nlifs(&["import", "flame", file.to_str().unwrap(), "--name", "finals", "-o", out.to_str().unwrap()]);
     let err = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(0), "{err}");
-    assert_eq!(err.matches("xaos is left out").count(), 1, "warned once: {err}");
+    assert_eq!(err.matches("final xform's opacity is left out").count(), 1, "warned once: {err}");
+    assert!(!err.contains("xaos"), "xaos is kept: {err}");
     assert!(dir.join("spiral.palette.png").exists());
     let scene = Scene::load(&out).expect("scene");
     assert_eq!(scene.name, "finals");
     assert_eq!(scene.functions.len(), 2);
     assert!(scene.final_xform.is_some(), "the final xform is the scene's");
+    assert_eq!(scene.functions[0].xaos, [1.0, 0.0], "the xaos row is the function's");
     let bad = run_nlifs(&["import", "flame", file.to_str().unwrap(), "-o", dir.join("x.png").to_str().unwrap()]);
     assert_eq!(bad.status.code(), Some(2));
     let missing = run_nlifs(&["import", "flame", "no-such.flame", "-o", out.to_str().unwrap()]);

@@ -1,5 +1,5 @@
 //! Authoring from the viewer, headless: a function's kind changed (the map kept exactly where
-//! the new kind can hold it), colours, probabilities, a builder's steps added, removed and
+//! the new kind can hold it), colours, probabilities, xaos, a builder's steps added, removed and
 //! reordered, keys dragged along the timeline. Each through commands, each one undo step that
 //! undo and redo restore exactly; the changed scenes save, load back and pass `nlifs info`.
 
@@ -260,6 +260,52 @@ fn a_typed_probability_makes_the_scene_explicit_and_auto_goes_back() {
     let mean = s.scene.functions[..n - 1].iter().map(|f| f.probability.unwrap()).sum::<f64>() / (n - 1) as f64;
     assert_eq!(s.scene.functions[n - 1].probability, Some(mean));
     save_reload_info(&mut s, "explicit-menu");
+}
+
+/// The xaos table: a drag is one undo step, the file holds the row, a deleted function's
+/// column goes with it, a copy is reached as its original is, and adaptive probabilities (by
+/// the point's place) are refused while a row is set, and the other way round.
+#[test]
+fn xaos_edits_are_undoable_and_follow_deleted_and_copied_functions() {
+    let mut s = state_for("sierpinski.toml");
+    let original = s.scene.clone();
+    for v in [0.8, 0.4, 0.0] {
+        s.apply([Command::SetFunctionXaos { function: 0, to: 0, value: v }]);
+    }
+    s.apply([Command::EndGesture]);
+    assert_eq!(s.scene.functions[0].xaos, [0.0]);
+    s.apply([Command::SetFunctionXaos { function: 1, to: 2, value: 2.5 }]);
+    s.apply([Command::EndGesture]);
+    assert_eq!(s.scene.functions[1].xaos, [1.0, 1.0, 2.5]);
+    s.apply([Command::Undo]);
+    assert!(s.scene.functions[1].xaos.is_empty());
+    s.apply([Command::Undo]);
+    assert_eq!(s.scene.functions, original.functions, "the drag was one undo step");
+    s.apply([Command::Redo, Command::Redo]);
+    let loaded = save_reload_info(&mut s, "xaos");
+    assert_eq!(loaded.functions[1].xaos, [1.0, 1.0, 2.5]);
+    // A row of only 1s is no row.
+    s.apply([Command::SetFunctionXaos { function: 0, to: 0, value: 1.0 }, Command::EndGesture]);
+    assert!(s.scene.functions[0].xaos.is_empty());
+    s.apply([Command::SetProbabilityMode(ProbabilityMode::Adaptive)]);
+    assert!(s.error.take().is_some_and(|e| e.contains("xaos")), "adaptive refused with xaos");
+    assert_eq!(s.scene.probability_mode, original.probability_mode);
+    // A copy of w3 is reached as w3 is; deleting w1 takes its column out of every row.
+    s.apply([Command::DuplicateFunction(2)]);
+    assert_eq!(s.scene.functions[1].xaos, [1.0, 1.0, 2.5, 2.5]);
+    s.apply([Command::DeleteFunction(0)]);
+    assert_eq!(s.scene.functions[0].xaos, [1.0, 2.5, 2.5]);
+    save_reload_info(&mut s, "xaos-copied");
+    s.apply([Command::SetFunctionXaos { function: 0, to: 0, value: 1.0 }, Command::EndGesture]);
+    s.apply([Command::SetFunctionXaos { function: 0, to: 1, value: 1.0 }, Command::EndGesture]);
+    s.apply([Command::SetFunctionXaos { function: 0, to: 2, value: 1.0 }, Command::EndGesture]);
+    assert!(s.scene.functions.iter().all(|f| f.xaos.is_empty()));
+    s.apply([Command::SetProbabilityMode(ProbabilityMode::Adaptive)]);
+    assert_eq!(s.scene.probability_mode, ProbabilityMode::Adaptive);
+    let adaptive = s.scene.clone();
+    s.apply([Command::SetFunctionXaos { function: 0, to: 0, value: 0.0 }]);
+    assert_eq!(s.scene, adaptive, "no xaos on an adaptive scene");
+    assert!(s.error.is_some());
 }
 
 #[test]

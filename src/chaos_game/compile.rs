@@ -1,6 +1,7 @@
 //! Compiling an IFS into the flat tables the kernels read: per function a [`KernelFunction`],
 //! per grid cell its interpolant's coefficients ([`Cell`]), the coordinate pool, and the
-//! function-selection table ([`SelectionTable`], global or adaptive over a coarse grid).
+//! function-selection table ([`SelectionTable`], global, adaptive over a coarse grid, or by the
+//! previous function with xaos).
 
 use glam::{DVec3, Vec3};
 
@@ -12,9 +13,12 @@ use crate::model::{AffineMap, Ifs, Map, ProbabilityMode};
 /// Bounds used for unbounded (affine) maps.
 const UNBOUNDED: f32 = 3.0e38;
 
-/// Function selection: a coarse grid over the domain (1×1×1 when probabilities are global);
-/// each cell holds `n` cumulative thresholds t_0 ≤ … ≤ t_{n−1} = 2^24 and the function chosen
-/// by a 24-bit random r is the number of thresholds ≤ r. Mirrors the `selection` buffer.
+/// Function selection: rows of `n` cumulative thresholds t_0 ≤ … ≤ t_{n−1} = 2^24, the
+/// function chosen by a 24-bit random r being the number of thresholds ≤ r. One row when
+/// probabilities are global; a row per cell of a coarse grid over the domain when adaptive
+/// (found by [`Self::cell_of`]); with xaos a row per previous function: row 0 at an orbit's
+/// start, row i + 1 after compiled function i (`cells` is then 1×1×1). Mirrors the `selection`
+/// buffer.
 #[derive(Clone, Debug, PartialEq)]
 pub struct SelectionTable {
     pub cells: [u32; 3],
@@ -23,6 +27,8 @@ pub struct SelectionTable {
     pub inv_cell: Vec3,
     pub function_count: u32,
     pub thresholds: Vec<u32>,
+    /// Whether the rows are xaos rows (by the orbit's previous function).
+    pub xaos: bool,
 }
 
 impl SelectionTable {
@@ -41,7 +47,14 @@ impl SelectionTable {
                 thresholds.push(t);
             }
         }
-        Self { cells, lo, inv_cell, function_count: n as u32, thresholds }
+        Self { cells, lo, inv_cell, function_count: n as u32, thresholds, xaos: false }
+    }
+
+    /// The row an orbit at `p` draws from, `row` being its xaos row (its previous function + 1,
+    /// 0 at the start).
+    #[inline(always)]
+    pub fn row_of(&self, p: Vec3, row: u16) -> usize {
+        if self.xaos { row as usize } else { self.cell_of(p) }
     }
 
     /// Index of the coarse cell of `p` (0 for a global table).
@@ -186,6 +199,13 @@ pub(super) fn compile_map(map: &Map, dim: usize, coords: &mut Vec<[f32; 2]>, cel
 
 pub(super) fn selection_table(ifs: &Ifs, active: &[usize], lo: Vec3, hi: Vec3) -> SelectionTable {
     let pick = |p: Vec<f64>| -> Vec<f64> { active.iter().map(|&i| p[i]).collect() };
+    if ifs.probability_mode != ProbabilityMode::Adaptive && ifs.has_xaos() {
+        let rows: Vec<Vec<f64>> = std::iter::once(ifs.probabilities())
+            .chain(active.iter().map(|&i| ifs.probabilities_after(i)))
+            .map(pick)
+            .collect();
+        return SelectionTable { xaos: true, ..SelectionTable::from_probabilities([1, 1, 1], lo, Vec3::ZERO, &rows) };
+    }
     if ifs.probability_mode != ProbabilityMode::Adaptive {
         return SelectionTable::from_probabilities([1, 1, 1], lo, Vec3::ZERO, &[pick(ifs.probabilities())]);
     }

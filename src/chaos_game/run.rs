@@ -44,13 +44,9 @@ pub(super) fn run_chunk_on(
     steps: usize,
     sink: &mut impl PointSink,
 ) {
-    let ChunkChains { mut rngs, mut pos, mut colors } = ChunkChains::start(ifs, seed, frame, chunk);
-    run_chains(ifs, path, (&mut rngs, &mut pos, &mut colors), ifs.transient, steps, sink);
+    let mut chains = ChunkChains::start(ifs, seed, frame, chunk);
+    run_chains(ifs, path, &mut chains, ifs.transient, steps, sink);
 }
-
-/// The chains of one chunk, borrowed: generators, positions and colour coordinates.
-type ChainsMut<'a> =
-    (&'a mut [Pcg32; ORBITS_PER_CHUNK], &'a mut [Vec3A; ORBITS_PER_CHUNK], &'a mut [f32; ORBITS_PER_CHUNK]);
 
 /// Advances the chains `skip` steps not emitted, then `steps` into `sink`, on `path`; with
 /// colour coordinates (palette colour) the skipped steps run through the colour sink, which
@@ -58,34 +54,27 @@ type ChainsMut<'a> =
 fn run_chains(
     ifs: &CompiledIfs,
     path: Path,
-    chains: ChainsMut<'_>,
+    chains: &mut ChunkChains,
     skip: u32,
     steps: usize,
     sink: &mut impl PointSink,
 ) {
-    let (rngs, pos, colors) = chains;
+    let ChunkChains { rngs, pos, colors, rows } = chains;
+    let orbits = Orbits { rngs, pos, rows, transient: skip, steps };
     match &ifs.color_coords {
-        None => run_kernel(ifs, path, rngs, pos, skip, steps, sink),
+        None => run_kernel(ifs, path, orbits, sink),
         Some(coords) => {
             let final_color = ifs.flames.as_ref().and_then(|t| t.final_color());
             let speeds = ifs.color_speeds.as_deref();
             let mut colored = ColorCoordSink::new(coords, speeds, final_color, colors, skip as usize, sink);
-            run_kernel(ifs, path, rngs, pos, 0, skip as usize + steps, &mut colored);
+            run_kernel(ifs, path, Orbits { transient: 0, steps: skip as usize + steps, ..orbits }, &mut colored);
         }
     }
 }
 
-/// The kernel of `path` on the orbits `rngs`, `pos` (left where they end): `skip` steps not
-/// emitted, then `steps` into `sink`.
-fn run_kernel(
-    ifs: &CompiledIfs,
-    path: Path,
-    rngs: &mut [Pcg32; ORBITS_PER_CHUNK],
-    pos: &mut [Vec3A; ORBITS_PER_CHUNK],
-    skip: u32,
-    steps: usize,
-    sink: &mut impl PointSink,
-) {
+/// The kernel of `path` on `orbits` (left where they end): their transient steps not emitted,
+/// then their steps into `sink`.
+fn run_kernel(ifs: &CompiledIfs, path: Path, orbits: Orbits<'_>, sink: &mut impl PointSink) {
     #[cfg(target_arch = "x86_64")]
     if let Some(simd) = &ifs.simd {
         let lookup = match path {
@@ -96,9 +85,10 @@ fn run_kernel(
             Path::Simd(lookup) => Some(lookup),
         };
         if let Some(lookup) = lookup {
+            let Orbits { rngs, pos, transient, steps, .. } = orbits;
             let mut states = rngs.map(Pcg32::state);
             let mut xyz = pos.map(|p| p.to_array());
-            simd.run_kept(lookup, &mut states, &mut xyz, skip, steps, sink);
+            simd.run_kept(lookup, &mut states, &mut xyz, transient, steps, sink);
             *rngs = states.map(Pcg32::from_state);
             *pos = xyz.map(Vec3A::from_array);
             return;
@@ -107,32 +97,29 @@ fn run_kernel(
     #[cfg(all(test, target_arch = "x86_64"))]
     assert!(!matches!(path, Path::Simd(_)), "no vector kernel for this IFS");
     let _ = path;
-    let orbits = Orbits { rngs, pos, transient: skip, steps };
     run_orbits(ifs, orbits, sink);
 }
 
 /// The portable kernels on `orbits`: the lane kernel where the IFS has one, else the general
-/// loop (per-cell selection for adaptive probabilities; flame functions with the orbit's
-/// generator, `chaos_game/flame.rs`).
+/// loop (per-cell selection for adaptive probabilities, per previous function with xaos;
+/// flame functions with the orbit's generator, `chaos_game/flame.rs`).
 fn run_orbits(ifs: &CompiledIfs, orbits: Orbits<'_>, sink: &mut impl PointSink) {
     match &ifs.lanes {
         Some(lanes) => run_lanes(lanes, orbits, sink),
         None if ifs.has_flames() => {
             let sel = &ifs.selection;
-            let adaptive = sel.cells != [1, 1, 1];
-            orbits.run_shown(sink, |rng, p| {
-                let cell = if adaptive { sel.cell_of(p.into()) } else { 0 };
-                let fi = sel.select(cell, rng.next_u32());
+            orbits.run_shown(sink, |rng, p, row| {
+                let fi = sel.select(sel.row_of(p.into(), *row), rng.next_u32());
+                *row = fi as u16 + 1;
                 let (next, shown) = ifs.map_with_rng(fi, p.into(), rng);
                 (next.into(), shown.into(), fi)
             })
         }
         None => {
             let sel = &ifs.selection;
-            let adaptive = sel.cells != [1, 1, 1];
-            orbits.run(sink, |rng, p| {
-                let cell = if adaptive { sel.cell_of(p.into()) } else { 0 };
-                let fi = sel.select(cell, rng.next_u32());
+            orbits.run(sink, |rng, p, row| {
+                let fi = sel.select(sel.row_of(p.into(), *row), rng.next_u32());
+                *row = fi as u16 + 1;
                 (ifs.map_fast(fi, p.into()).into(), fi)
             })
         }
@@ -144,15 +131,17 @@ fn run_orbits(ifs: &CompiledIfs, orbits: Orbits<'_>, sink: &mut impl PointSink) 
 pub(super) struct Orbits<'a> {
     rngs: &'a mut [Pcg32; ORBITS_PER_CHUNK],
     pos: &'a mut [Vec3A; ORBITS_PER_CHUNK],
+    /// Each orbit's xaos row ([`ChunkChains::rows`]).
+    rows: &'a mut [u16; ORBITS_PER_CHUNK],
     transient: u32,
     steps: usize,
 }
 
 impl Orbits<'_> {
     #[inline(always)]
-    pub(super) fn run(self, sink: &mut impl PointSink, step: impl Fn(&mut Pcg32, Vec3A) -> (Vec3A, usize)) {
-        self.run_shown(sink, |rng, p| {
-            let (q, fi) = step(rng, p);
+    pub(super) fn run(self, sink: &mut impl PointSink, step: impl Fn(&mut Pcg32, Vec3A, &mut u16) -> (Vec3A, usize)) {
+        self.run_shown(sink, |rng, p, row| {
+            let (q, fi) = step(rng, p, row);
             (q, q, fi)
         })
     }
@@ -163,12 +152,12 @@ impl Orbits<'_> {
     pub(super) fn run_shown(
         self,
         sink: &mut impl PointSink,
-        step: impl Fn(&mut Pcg32, Vec3A) -> (Vec3A, Vec3A, usize),
+        step: impl Fn(&mut Pcg32, Vec3A, &mut u16) -> (Vec3A, Vec3A, usize),
     ) {
         const K: usize = ORBITS_PER_CHUNK;
         for _ in 0..self.transient {
-            for (rng, p) in self.rngs.iter_mut().zip(self.pos.iter_mut()) {
-                *p = step(rng, *p).0;
+            for ((rng, p), row) in self.rngs.iter_mut().zip(self.pos.iter_mut()).zip(self.rows.iter_mut()) {
+                *p = step(rng, *p, row).0;
             }
         }
         let mut out_x = vec![0f32; K * STEPS_PER_BATCH];
@@ -182,8 +171,9 @@ impl Orbits<'_> {
                 let row = s * K..s * K + K;
                 let (xs, ys, zs, fs) =
                     (&mut out_x[row.clone()], &mut out_y[row.clone()], &mut out_z[row.clone()], &mut out_fn[row]);
-                for (k, (rng, p)) in self.rngs.iter_mut().zip(self.pos.iter_mut()).enumerate() {
-                    let (q, shown, fi) = step(rng, *p);
+                let lanes = self.rngs.iter_mut().zip(self.pos.iter_mut()).zip(self.rows.iter_mut());
+                for (k, ((rng, p), row)) in lanes.enumerate() {
+                    let (q, shown, fi) = step(rng, *p, row);
                     *p = q;
                     (xs[k], ys[k], zs[k]) = (shown.x, shown.y, shown.z);
                     fs[k] = fi as u8;
@@ -295,7 +285,7 @@ fn run_lanes_for<const MX: bool, const MY: bool, const MZ: bool>(
     orbits: Orbits,
     sink: &mut impl PointSink,
 ) {
-    orbits.run(sink, |rng, p| {
+    orbits.run(sink, |rng, p, _| {
         let fi = lanes.select(rng.next_u32());
         (lanes.map::<MX, MY, MZ>(fi, p), fi)
     })
@@ -311,6 +301,9 @@ pub struct ChunkChains {
     // Palette colour (`chaos_game/color_coord.rs`):
     /// Lane k's colour coordinate (unused in function colour).
     pub colors: [f32; ORBITS_PER_CHUNK],
+    /// Lane k's xaos row: its previous function + 1, 0 at the start (read only with xaos,
+    /// [`super::SelectionTable::row_of`]).
+    pub rows: [u16; ORBITS_PER_CHUNK],
 }
 
 impl ChunkChains {
@@ -322,7 +315,7 @@ impl ChunkChains {
         let mut rngs: [Pcg32; ORBITS_PER_CHUNK] =
             std::array::from_fn(|k| Pcg32::for_stream(seed, frame, first_chain.wrapping_add(k as u32)));
         let pos = std::array::from_fn(|k| ifs.start_point(&mut rngs[k]).into());
-        Self { rngs, pos, colors: [C_START; ORBITS_PER_CHUNK] }
+        Self { rngs, pos, colors: [C_START; ORBITS_PER_CHUNK], rows: [0; ORBITS_PER_CHUNK] }
     }
 
     /// Restarts lane `lane` of chunk `chunk` as [`Self::start`] starts it for `frame` and runs
@@ -333,11 +326,11 @@ impl ChunkChains {
         let mut rng = Pcg32::for_stream(seed, frame, chain);
         let mut p = ifs.start_point(&mut rng);
         let sel = &ifs.selection;
-        let adaptive = sel.cells != [1, 1, 1];
         let mut c = C_START;
+        let mut row = 0;
         for _ in 0..ifs.transient {
-            let cell = if adaptive { sel.cell_of(p) } else { 0 };
-            let fi = sel.select(cell, rng.next_u32());
+            let fi = sel.select(sel.row_of(p, row), rng.next_u32());
+            row = fi as u16 + 1;
             p = ifs.map_with_rng(fi, p, &mut rng).0;
             if let Some(coords) = &ifs.color_coords {
                 c = ifs.step_color_of(c, fi, coords);
@@ -346,6 +339,7 @@ impl ChunkChains {
         self.rngs[lane] = rng;
         self.pos[lane] = p.into();
         self.colors[lane] = c;
+        self.rows[lane] = row;
     }
 }
 
@@ -355,6 +349,5 @@ impl ChunkChains {
 /// `ifs.transient` this makes exactly the points of `run_chunk(ifs, seed, frame, c, steps, _)`,
 /// and two calls of s₁ and s₂ steps make those of one call of s₁ + s₂.
 pub fn continue_chunk(ifs: &CompiledIfs, chains: &mut ChunkChains, skip: u32, steps: usize, sink: &mut impl PointSink) {
-    let ChunkChains { rngs, pos, colors } = chains;
-    run_chains(ifs, Path::Fastest, (rngs, pos, colors), skip, steps, sink);
+    run_chains(ifs, Path::Fastest, chains, skip, steps, sink);
 }

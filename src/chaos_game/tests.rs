@@ -23,6 +23,7 @@ fn warped_ifs() -> Ifs {
             color: [1.0; 3],
             weight: None,
             enabled: true,
+            xaos: Vec::new(),
         })
         .chain(std::iter::once(Function {
             name: "affine".into(),
@@ -30,6 +31,7 @@ fn warped_ifs() -> Ifs {
             color: [1.0; 3],
             weight: None,
             enabled: true,
+            xaos: Vec::new(),
         }))
         .collect();
     Ifs { domain: grid, functions, probability_mode: ProbabilityMode::Contractivity, final_xform: None }

@@ -83,6 +83,8 @@ pub struct IfsShape {
     pub function_count: u32,
     /// The selection table has one coarse cell (explicit or contractivity probabilities).
     pub single_selection_cell: bool,
+    /// The selection rows are by the previous function (the shader's `XAOS`).
+    pub xaos: bool,
     // Palette colour (`src/chaos_game/color_coord.rs`):
     /// The points carry a colour coordinate (the shader's `PALETTE`).
     pub palette: bool,
@@ -104,7 +106,8 @@ impl IfsShape {
         Self {
             shared_cells: shared_cells(ifs),
             function_count: ifs.selection.function_count,
-            single_selection_cell: ifs.selection.cells == [1, 1, 1],
+            single_selection_cell: ifs.selection.cells == [1, 1, 1] && !ifs.selection.xaos,
+            xaos: ifs.selection.xaos,
             palette: ifs.color_coords.is_some(),
             flames: ifs.has_flames(),
             color_speeds: ifs.color_speeds.is_some(),
@@ -114,7 +117,7 @@ impl IfsShape {
     }
 
     /// The shader's pipeline constants for this shape.
-    fn constants(&self) -> [(&'static str, f64); 13] {
+    fn constants(&self) -> [(&'static str, f64); 14] {
         let [x, y, z] = self.shared_cells.unwrap_or([0; 3]);
         [
             ("SHARED_CELLS_X", x as f64),
@@ -122,6 +125,7 @@ impl IfsShape {
             ("SHARED_CELLS_Z", z as f64),
             ("FUNCTION_COUNT", self.function_count as f64),
             ("SINGLE_SELECTION_CELL", self.single_selection_cell as u32 as f64),
+            ("XAOS", self.xaos as u32 as f64),
             ("PALETTE", self.palette as u32 as f64),
             ("HAS_FLAMES", self.flames as u32 as f64),
             ("COLOR_SPEEDS", self.color_speeds as u32 as f64),
@@ -458,8 +462,8 @@ impl GpuChaosGame {
         let uniform_tables = !self.force_storage_tables && fit_uniforms(&tables);
         self.has_julia = ifs.functions.iter().any(|f| f.coord_offset[3] == crate::chaos_game::KIND_JULIA);
         self.shape = if self.force_generic {
-            let IfsShape { palette, flames, color_speeds, final_xform, flame_variations, .. } = IfsShape::of(ifs);
-            IfsShape { palette, flames, color_speeds, final_xform, flame_variations, ..IfsShape::default() }
+            let IfsShape { xaos, palette, flames, color_speeds, final_xform, flame_variations, .. } = IfsShape::of(ifs);
+            IfsShape { xaos, palette, flames, color_speeds, final_xform, flame_variations, ..IfsShape::default() }
         } else {
             IfsShape::of(ifs)
         };
@@ -661,6 +665,7 @@ mod tests {
                 shared_cells: Some([1, 3, 1]),
                 function_count: 5,
                 single_selection_cell: true,
+                xaos: false,
                 palette: false,
                 flames: false,
                 color_speeds: false,

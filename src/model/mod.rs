@@ -137,6 +137,9 @@ pub struct Function {
     /// Explicit weight from the scene, if any.
     pub weight: Option<f64>,
     pub enabled: bool,
+    /// Xaos: the multipliers of the next function's probability after this one, by function
+    /// index (entries missing are 1; empty: none), as flam3's `chaos` row.
+    pub xaos: Vec<f64>,
 }
 
 /// How the chaos game picks functions.
@@ -269,6 +272,32 @@ impl Ifs {
                 p[i] = scales[k].powf(d);
             }
             apply_floor(&mut p, &active);
+        }
+        normalize(&mut p, &active);
+        p
+    }
+
+    /// Whether an enabled function's xaos row weights an enabled function by other than 1.
+    pub fn has_xaos(&self) -> bool {
+        let active = self.active();
+        active.iter().any(|&i| active.iter().any(|&j| (self.xaos_entry(i, j) - 1.0).abs() > 1e-10))
+    }
+
+    /// Function `i`'s xaos multiplier of function `j` (1 where its row has no entry; negative
+    /// and NaN entries count as 0).
+    pub fn xaos_entry(&self, i: usize, j: usize) -> f64 {
+        self.functions[i].xaos.get(j).copied().unwrap_or(1.0).max(0.0)
+    }
+
+    /// The probabilities after function `i` (`xaos_entry(i, j)` · p_j, normalized): a row
+    /// whose enabled functions all have 0 (nothing to go to) gives the probabilities alone, as
+    /// if function `i` had no xaos.
+    pub fn probabilities_after(&self, i: usize) -> Vec<f64> {
+        let base = self.probabilities();
+        let active = self.active();
+        let mut p: Vec<f64> = base.iter().enumerate().map(|(j, &pj)| pj * self.xaos_entry(i, j)).collect();
+        if !active.iter().any(|&j| p[j] > 0.0) {
+            return base;
         }
         normalize(&mut p, &active);
         p

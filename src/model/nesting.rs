@@ -152,6 +152,7 @@ mod tests {
                     color: [1.0; 3],
                     weight: None,
                     enabled: true,
+                    xaos: Vec::new(),
                 })
                 .collect(),
             probability_mode: ProbabilityMode::default(),

@@ -290,6 +290,8 @@ pub(super) struct FunctionToml {
     pub(super) params: Option<NamedNumbers>,
     pub(super) color_speed: Option<Spanned<f64>>,
     pub(super) opacity: Option<Spanned<f64>>,
+    /// The multipliers of the next function's probability after this one.
+    pub(super) xaos: Option<Spanned<Vec<f64>>>,
 }
 
 #[derive(Deserialize)]

@@ -11,11 +11,11 @@
 //!   coefs therefore differ from the file's (y negated for an unrotated flame).
 //! - **Functions.** An xform's `weight` is the function's `probability` (explicit
 //!   probabilities), its `color` the function's `palette_index`, its `color_speed`, `opacity`,
-//!   variations and parameters the flame function's own. The domain is flam3's start square [−1, 1]².
+//!   variations and parameters the flame function's own, its xaos row (`chaos`) the function's
+//!   `xaos`. The domain is flam3's start square [−1, 1]².
 //! - **The final xform** is the scene's `[final]`, conjugated as the xforms are, its `color`
 //!   the final's `palette_index`.
-//! - **Left out, with a warning:** xaos (the next function is drawn by the weights alone), the
-//!   final xform's opacity (it maps every point) and flam3's linear palette interpolation (nlifs
+//! - **Left out, with a warning:** the final xform's opacity (it maps every point) and flam3's linear palette interpolation (nlifs
 //!   takes the nearest palette entry).
 //! - **Camera.** Parallel projection seen from +z, the target at M(center), the visible height
 //!   size_y / (scale · 2^zoom); the image size is the flame's.
@@ -47,7 +47,7 @@ use crate::scene::{LoadError, Scene};
 #[derive(Clone, Debug)]
 pub struct FlameImport {
     pub scene: Scene,
-    /// One line each (xaos, the final xform's opacity, palette interpolation).
+    /// One line each (the final xform's opacity, palette interpolation).
     pub warnings: Vec<String>,
 }
 
@@ -132,10 +132,11 @@ pub fn scene_of_flame(flame: &Flame, palette_file: &str) -> Result<FlameImport, 
         ));
     }
     let n = flame.xforms.len();
-    if flame.xforms.iter().any(|x| x.chaos.iter().take(n).any(|&c| (c - 1.0).abs() > 1e-10)) {
-        warnings
-            .push(format!("flame `{name}`: its xaos is left out (the next function is drawn by the weights alone)"));
-    }
+    // An xform's xaos row, as the scene's (flam3 reads a missing entry as 1, a negative one as 0).
+    let xaos = |x: &Xform| -> Vec<f64> {
+        let row: Vec<f64> = x.chaos.iter().take(n).map(|&c| if c >= 0.0 { c } else { 0.0 }).collect();
+        if row.iter().all(|&c| (c - 1.0).abs() <= 1e-10) { Vec::new() } else { row }
+    };
     if flame.palette_mode == PaletteMode::Linear {
         warnings.push(format!(
             "flame `{name}`: palette_mode \"linear\" is drawn as the nearest palette entry, as \"step\" is"
@@ -160,6 +161,7 @@ pub fn scene_of_flame(flame: &Flame, palette_file: &str) -> Result<FlameImport, 
             enabled: true,
             def: FunctionDef::Flame(conjugated(x, &m, &m_inv)),
             palette_index: Some(x.color.clamp(0.0, 1.0)),
+            xaos: xaos(x),
         })
         .collect();
     let final_xform = flame.final_xform.as_ref().map(|x| FinalXform {

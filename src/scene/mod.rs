@@ -88,6 +88,7 @@ impl Scene {
                 color: f.color,
                 weight: f.probability,
                 enabled: f.enabled,
+                xaos: f.xaos.clone(),
             })
             .collect();
         Ifs {

@@ -225,6 +225,9 @@ pub struct FunctionSpec {
     // Palette colour (`src/palette.rs`):
     /// The colour coordinate c_i in [0, 1]; None: i / (n − 1) (`palette::default_index`).
     pub palette_index: Option<f64>,
+    /// Xaos: the multipliers (≥ 0) of each next function's probability after this one, by
+    /// function index; entries missing are 1, empty is none (`model::Function::xaos`).
+    pub xaos: Vec<f64>,
 }
 
 /// Camera settings from the scene; unset fields are derived from the attractor's bounds.

@@ -159,6 +159,7 @@ pub fn check_timeline_capped(
                             color: spec.color,
                             weight: spec.probability,
                             enabled: true,
+                            xaos: Vec::new(),
                         }],
                         probability_mode: scene.probability_mode,
                         final_xform: None,

@@ -236,6 +236,9 @@ impl Scene {
             if let Some(c) = f.palette_index {
                 let _ = writeln!(out, "palette_index = {}", num(c));
             }
+            if !f.xaos.is_empty() {
+                let _ = writeln!(out, "xaos = {}", nums(&f.xaos));
+            }
             match &f.def {
                 FunctionDef::Builder { resolution, .. } => {
                     let _ = writeln!(

@@ -339,6 +339,7 @@ impl ViewerState {
                     enabled: true,
                     def: FunctionDef::Affine(crate::model::AffineMap { matrix, offset }),
                     palette_index: None,
+                    xaos: Vec::new(),
                 });
                 Some(n)
             }
@@ -347,6 +348,13 @@ impl ViewerState {
                 copy.name = format!("{} copy", copy.name);
                 copy.color = crate::color::palette_color(n);
                 after.functions.push(copy);
+                // Xaos: every function goes to the copy as it goes to the original.
+                for g in &mut after.functions {
+                    if let Some(&to_original) = g.xaos.get(f) {
+                        g.xaos.resize(n, 1.0);
+                        g.xaos.push(to_original);
+                    }
+                }
                 // Keys animate the copy as they animate the original.
                 if let Some(tl) = &mut after.timeline {
                     for key in &mut tl.keys {
@@ -359,6 +367,11 @@ impl ViewerState {
             }
             Command::DeleteFunction(f) if f < n && n > 1 => {
                 after.functions.remove(f);
+                for g in &mut after.functions {
+                    if f < g.xaos.len() {
+                        g.xaos.remove(f);
+                    }
+                }
                 if let Some(tl) = &mut after.timeline {
                     for key in &mut tl.keys {
                         key.functions.retain(|k| k.function != f);

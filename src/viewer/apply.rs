@@ -73,6 +73,9 @@ impl ViewerState {
                 Command::SetFunctionProbability { function, probability } => {
                     edited |= self.set_function_probability(function, probability)
                 }
+                Command::SetFunctionXaos { function, to, value } => {
+                    edited |= self.set_function_xaos(function, to, value)
+                }
                 Command::SetFunctionColor { function, color } => edited |= self.set_function_color(function, color),
                 Command::SetBuilderStep { function, step, value } => {
                     edited |= self.set_builder_step(function, step, value);

@@ -21,6 +21,10 @@ use crate::scene::Scene;
 
 use super::state::{Gesture, ViewerState};
 
+/// Why a scene cannot have both xaos and adaptive probabilities (the scene check's rule).
+const XAOS_NOT_ADAPTIVE: &str =
+    "xaos draws the next function after the last, adaptive probabilities by the point's place: use one of them";
+
 impl ViewerState {
     /// Changes function `function` to `kind` (one undo step) and says how close the new map is.
     pub(super) fn set_function_kind(&mut self, function: usize, kind: FunctionKind) -> bool {
@@ -80,6 +84,10 @@ impl ViewerState {
         if mode == self.scene.probability_mode {
             return false;
         }
+        if mode == ProbabilityMode::Adaptive && self.scene.functions.iter().any(|f| !f.xaos.is_empty()) {
+            self.error = Some(XAOS_NOT_ADAPTIVE.into());
+            return false;
+        }
         let after = if mode == ProbabilityMode::Explicit {
             self.with_explicit_weights()
         } else {
@@ -110,6 +118,29 @@ impl ViewerState {
             None => self.scene.clone(),
         };
         after.functions[function].probability = probability.map(|w| w.max(0.0));
+        self.preview_scene(after)
+    }
+
+    /// Sets function `function`'s xaos multiplier of function `to` (part of the running
+    /// gesture); a row of only 1s is cleared.
+    pub(super) fn set_function_xaos(&mut self, function: usize, to: usize, value: f64) -> bool {
+        let n = self.scene.functions.len();
+        if function >= n || to >= n || !(value.is_finite() && value >= 0.0) {
+            return false;
+        }
+        if self.scene.probability_mode == ProbabilityMode::Adaptive {
+            self.error = Some(XAOS_NOT_ADAPTIVE.into());
+            return false;
+        }
+        let mut after = self.scene.clone();
+        let row = &mut after.functions[function].xaos;
+        if row.len() <= to {
+            row.resize(to + 1, 1.0);
+        }
+        row[to] = value;
+        if row.iter().all(|&v| v == 1.0) {
+            row.clear();
+        }
         self.preview_scene(after)
     }
 

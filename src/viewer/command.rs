@@ -30,6 +30,12 @@ pub enum Command {
         function: usize,
         probability: Option<f64>,
     },
+    /// Function `function`'s xaos multiplier (≥ 0) of the next function `to`.
+    SetFunctionXaos {
+        function: usize,
+        to: usize,
+        value: f64,
+    },
     /// Linear RGB.
     SetFunctionColor {
         function: usize,

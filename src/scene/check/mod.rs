@@ -206,6 +206,19 @@ impl Checker<'_> {
                 "explicit probabilities need a `probability` on every function",
             ));
         }
+        let n = functions.len();
+        for (i, f) in raw.functions.iter().enumerate() {
+            let Some(row) = &f.get_ref().xaos else { continue };
+            let field = format!("function[{i}].xaos");
+            if row.get_ref().len() > n {
+                let msg = format!("has {} entries; the scene has {n} functions (one entry each)", row.get_ref().len());
+                return Err(self.err(row.span(), &field, msg));
+            }
+            if probability_mode == ProbabilityMode::Adaptive {
+                let msg = "xaos draws the next function after the last; adaptive probabilities draw it by the point's place: use one of them";
+                return Err(self.err(row.span(), &field, msg));
+            }
+        }
         let camera = match &raw.camera {
             None => CameraSpec::default(),
             Some(c) => self.camera("camera", c, dim)?,
@@ -384,6 +397,15 @@ impl Checker<'_> {
             enabled: f.enabled.unwrap_or(true),
             def,
             palette_index: self.palette_index(f.palette_index.as_ref(), &field("palette_index"))?,
+            xaos: match &f.xaos {
+                None => Vec::new(),
+                Some(row) => {
+                    if let Some(v) = row.get_ref().iter().find(|v| !(v.is_finite() && **v >= 0.0)) {
+                        return Err(self.err(row.span(), &field("xaos"), format!("{v} is not a number ≥ 0")));
+                    }
+                    row.get_ref().clone()
+                }
+            },
         })
     }
 

@@ -91,6 +91,42 @@ pub fn functions_ui(ui: &mut egui::Ui, state: &ViewerState, commands: &mut Vec<C
         if ui.button("Add function").on_hover_text("an affine map halving the grid (Shift+A)").clicked() {
             commands.push(Command::AddFunction);
         }
+        xaos_ui(ui, state, commands);
+    });
+}
+
+const XAOS_HELP: &str = "Xaos (flam3's chaos): the row of a function multiplies the probabilities of the next \
+function drawn after it (0: never next, 1: as usual). A row of all 0 is as if all 1.";
+
+/// The xaos table: row i, column j is function i's multiplier of function j coming next.
+fn xaos_ui(ui: &mut egui::Ui, state: &ViewerState, commands: &mut Vec<Command>) {
+    let functions = &state.scene.functions;
+    let open = functions.iter().any(|f| !f.xaos.is_empty());
+    egui::CollapsingHeader::new("Xaos (which function comes next)").default_open(open).show(ui, |ui| {
+        if state.scene.probability_mode == ProbabilityMode::Adaptive {
+            ui.small("Adaptive probabilities draw by the point's place; choose another mode for xaos.");
+            return;
+        }
+        egui::Grid::new("xaos").spacing([4.0, 2.0]).show(ui, |ui| {
+            ui.small("after ↓ next →").on_hover_text(XAOS_HELP);
+            for f in functions {
+                ui.small(&f.name);
+            }
+            ui.end_row();
+            for (i, f) in functions.iter().enumerate() {
+                ui.small(&f.name);
+                for j in 0..functions.len() {
+                    let mut v = f.xaos.get(j).copied().unwrap_or(1.0);
+                    let drag = ui
+                        .add(egui::DragValue::new(&mut v).speed(0.01).range(0.0..=1e3).max_decimals(3))
+                        .on_hover_text(XAOS_HELP);
+                    if drag.changed() && v.is_finite() {
+                        commands.push(Command::SetFunctionXaos { function: i, to: j, value: v.max(0.0) });
+                    }
+                }
+                ui.end_row();
+            }
+        });
     });
 }
 
