@@ -7,7 +7,7 @@
 //! within twice flam3's own difference between two of its seeds (`isaac_seed`), plus 3: the
 //! two renderers draw different random numbers, so flam3's seed-to-seed noise is the scale.
 //!
-//! Thirteen of them are also imported as scenes and drawn by the scene renderer ([`IMPORTED`]),
+//! Fourteen of them are also imported as scenes and drawn by the scene renderer ([`IMPORTED`]),
 //! with the same metric.
 //!
 //! Without `flam3-render` the test says so loudly and passes, unless `CI` or
@@ -123,7 +123,11 @@ fn cases() -> Vec<(Flame, PaletteForm)> {
     f.xforms[0].chaos = vec![0.0, 1.0, 1.0];
     f.xforms[1].chaos = vec![1.0, 0.0, 3.0];
     f.xforms[2].chaos = vec![2.0, 1.0, 0.0];
+    // The same with a spatial filter too narrow to spread a point: its thin pieces are then
+    // drawn as the import draws them (it has no spatial filter), which checks the import's xaos.
+    let sharp = Flame { name: "xaos-sharp".into(), filter: 0.01, ..f.clone() };
     cases.push(f);
+    cases.push(sharp);
     let mut f = base("final-xform", &[("linear", 1.0)]);
     f.final_xform = Some(Xform {
         weight: 0.0,
@@ -347,7 +351,7 @@ fn difference(a: &image::RgbaImage, b: &image::RgbaImage, background: [u8; 3]) -
 
 /// Flames whose features the import keeps (no wide filter) and whose attractor is large enough
 /// for flam3's spatial filter not to matter (the "xaos" flame's pieces are thin: imported, it
-/// lights 159 pixels where flam3's filter lights 331; `tests/flame_scene.rs` checks its import), also imported as
+/// lights 159 pixels where flam3's filter lights 331, so its unfiltered twin is here), also imported as
 /// scenes (`nlifs import flame`) and rendered by the scene renderer: the conjugation into
 /// nlifs's view (a rotated camera; waves and popcorn keep their xform's coefs), the absolute
 /// density with flam3's brightness and gamma, density estimation, opacity, the final xform,
@@ -366,6 +370,7 @@ const IMPORTED: &[&str] = &[
     "var-spherical",
     "var-swirl",
     "var-waves",
+    "xaos-sharp",
 ];
 
 /// The imported scene of `flame` rendered on the CPU as `nlifs render SCENE.toml` does.

@@ -195,3 +195,34 @@ fn the_gpu_draws_xaos_as_the_cpu() {
         }
     }
 }
+
+/// Unequal probabilities and multipliers other than 0 and 1 (the fidelity test's "xaos"
+/// flame as affine maps): the shares of the functions are the stationary distribution of the
+/// chain whose row i is p_j · xaos_ij normalized.
+#[test]
+fn the_shares_are_the_chains_stationary_distribution() {
+    let text = sierpinski(
+        "probabilities = \"explicit\"",
+        [
+            "probability = 0.5\nxaos = [0, 1, 1]",
+            "probability = 0.3\nxaos = [1, 0, 3]",
+            "probability = 0.2\nxaos = [2, 1, 0]",
+        ],
+    );
+    let (scene, compiled) = compiled(&text);
+    let ifs = scene.at(0.0);
+    let rows: Vec<Vec<f64>> = (0..3).map(|i| ifs.probabilities_after(i)).collect();
+    let mut pi = vec![1.0 / 3.0; 3];
+    for _ in 0..1000 {
+        pi = (0..3).map(|j| (0..3).map(|i| pi[i] * rows[i][j]).sum()).collect();
+    }
+    let mut sink = CollectSink::default();
+    for chunk in 0..8 {
+        chaos_game::run_chunk(&compiled, 9, 0, chunk, 4096, &mut sink);
+    }
+    for (j, expected) in pi.iter().enumerate() {
+        let share = sink.functions.iter().filter(|&&f| f as usize == j).count() as f64 / sink.functions.len() as f64;
+        eprintln!("function {j}: share {share:.4}, stationary {expected:.4}");
+        assert!((share - expected).abs() < 0.005, "function {j}: share {share}, stationary {expected}");
+    }
+}
