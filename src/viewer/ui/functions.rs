@@ -108,7 +108,7 @@ fn xaos_ui(ui: &mut egui::Ui, state: &ViewerState, commands: &mut Vec<Command>) 
             return;
         }
         egui::Grid::new("xaos").spacing([4.0, 2.0]).show(ui, |ui| {
-            ui.small("after ↓ next →").on_hover_text(XAOS_HELP);
+            ui.small("after \\ next").on_hover_text(XAOS_HELP);
             for f in functions {
                 ui.small(&f.name);
             }
