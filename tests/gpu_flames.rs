@@ -179,7 +179,7 @@ fn gpu_density_counts(
     gpu_accum(ctx, game, compiled, view, k).iter().map(|a| a[3]).collect()
 }
 
-/// [`gpu_density_counts`]'s sums: r, g, b and the count per pixel.
+/// [`gpu_density_counts`]'s sums: r, g, b and the count per pixel, in one dispatch.
 fn gpu_accum(
     ctx: &GpuContext,
     game: &mut GpuChaosGame,
@@ -187,14 +187,7 @@ fn gpu_accum(
     view: &SplatView,
     k: u32,
 ) -> Vec<[u32; 4]> {
-    game.set_ifs(&ctx.device, &ctx.queue, compiled);
-    let mut encoder = ctx.device.create_command_encoder(&Default::default());
-    let steps = compiled.transient + k;
-    let args = FrameArgs { view, seed: 3, frame: 0, steps, skip_steps: compiled.transient, restart: true, clear: true };
-    game.encode(&ctx.device, &ctx.queue, &mut encoder, &args);
-    ctx.queue.submit([encoder.finish()]);
-    let accum: Vec<u32> = bytemuck::pod_collect_to_vec(&read_buffer(ctx, &game.accum).unwrap());
-    accum.chunks(4).map(|a| [a[0], a[1], a[2], a[3]]).take((view.width * view.height) as usize).collect()
+    common::gpu_accum(ctx, game, compiled, view, &[(compiled.transient + k, compiled.transient, true)])
 }
 
 /// Sierpiński's triangle as three flame functions of opacity 1, ½ and 0 (plotted weights 1,

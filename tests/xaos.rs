@@ -7,15 +7,14 @@
 //! chain of functions is a Markov chain whose stationary share of w1 is ¼ (π₁ = (π₂ + π₃) / 3).
 //! On the CPU (`chaos_game/run.rs`, `SelectionTable::row_of`) and on the GPU
 //! (`shaders/chaos_game.wgsl`, `XAOS`, the row kept in the stored point between dispatches),
-//! in function and palette colour; the scene's checks and its round trip.
+//! in function and palette colour; the deterministic sets W^n (nesting view, ray tracer); the
+//! scene's checks and its round trip.
 
 mod common;
 
 use common::{assert_gpu_density_matches_cpu, gpu};
 use nlifs::chaos_game::{self, CollectSink, CompiledIfs, ORBITS_PER_CHUNK};
-use nlifs::gpu::GpuContext;
-use nlifs::gpu::chaos_game::{FrameArgs, GpuChaosGame};
-use nlifs::gpu::readback::read_buffer;
+use nlifs::gpu::chaos_game::GpuChaosGame;
 use nlifs::scene::Scene;
 use nlifs::scene::spec::SplatMode;
 use nlifs::splat::SplatView;
@@ -125,28 +124,6 @@ fn xaos_survives_a_round_trip_through_the_scene_file() {
     assert_eq!(again.functions, scene.functions);
 }
 
-/// The GPU's sums per pixel after two dispatches: the transient alone (nothing splatted), then
-/// `k` steps continuing from the stored points (the xaos row and colour coordinate read back
-/// from the points' w).
-fn gpu_accum_in_two_dispatches(
-    ctx: &GpuContext,
-    game: &mut GpuChaosGame,
-    compiled: &CompiledIfs,
-    view: &SplatView,
-    k: u32,
-) -> Vec<[u32; 4]> {
-    game.set_ifs(&ctx.device, &ctx.queue, compiled);
-    let t = compiled.transient;
-    for (steps, skip_steps, first) in [(t, t, true), (k, 0, false)] {
-        let mut encoder = ctx.device.create_command_encoder(&Default::default());
-        let args = FrameArgs { view, seed: 3, frame: 0, steps, skip_steps, restart: first, clear: first };
-        game.encode(&ctx.device, &ctx.queue, &mut encoder, &args);
-        ctx.queue.submit([encoder.finish()]);
-    }
-    let accum: Vec<u32> = bytemuck::pod_collect_to_vec(&read_buffer(ctx, &game.accum).unwrap());
-    accum.chunks(4).map(|a| [a[0], a[1], a[2], a[3]]).take((view.width * view.height) as usize).collect()
-}
-
 /// The GPU draws the xaos attractor as the CPU does: nothing in [0, ¼)² (checked pixel by
 /// pixel), densities within the bound of `tests/gpu_vs_cpu.rs`, and in palette colour the mean
 /// colour within 1 % of the CPU's (the colour coordinate shares the stored w with the row).
@@ -161,7 +138,10 @@ fn the_gpu_draws_xaos_as_the_cpu() {
     let view = SplatView::new(&scene.camera_for(bounds), width, height, bounds, SplatMode::Density, 0.0, [0.0; 3]);
     let mut game = GpuChaosGame::new(&ctx.device, orbits, width, height);
     for (label, compiled) in [("function colour", &plain), ("palette colour", &colored)] {
-        let accum = gpu_accum_in_two_dispatches(&ctx, &mut game, compiled, &view, k);
+        // The transient alone (nothing splatted), then `k` steps from the stored points (the
+        // xaos row and colour coordinate read back from their w).
+        let t = compiled.transient;
+        let accum = common::gpu_accum(&ctx, &mut game, compiled, &view, &[(t, t, true), (k, 0, false)]);
         let counts: Vec<u32> = accum.iter().map(|a| a[3]).collect();
         // The pixels of [0, 0.24]²: those the CPU's splat of a fine lattice of it lights.
         let lattice: Vec<(f32, f32)> =
@@ -225,4 +205,38 @@ fn the_shares_are_the_chains_stationary_distribution() {
         eprintln!("function {j}: share {share:.4}, stationary {expected:.4}");
         assert!((share - expected).abs() < 0.005, "function {j}: share {share}, stationary {expected}");
     }
+}
+
+/// The deterministic sets keep the compositions the chaos game applies: the nesting view's
+/// W^k boxes and the ray tracer's W^n(A) leave out every word with w1 right after w1, and a
+/// function that no function may precede leaves no copy (it is drawn only at an orbit's
+/// start).
+#[test]
+fn the_deterministic_sets_keep_only_the_compositions_xaos_allows() {
+    let (scene, _) = compiled(&sierpinski("", NO_W1_AFTER_W1));
+    let ifs = scene.at(0.0);
+    // Words w_a ∘ w_b ∘ w_c (c applied first) without w1 following w1.
+    let allowed = |word: &[usize]| word.windows(2).all(|w| !(w[0] == 0 && w[1] == 0));
+    let words = |n: u32| {
+        let word = |k: usize| -> Vec<usize> { (0..n).map(|d| k / 3usize.pow(d) % 3).collect() };
+        (0..3usize.pow(n)).filter(|&k| allowed(&word(k))).count()
+    };
+    let boxes = nlifs::model::nesting::nested_boxes(&ifs, 3).expect("W^3");
+    assert_eq!(boxes.len(), words(3), "W^3: 27 words less those with w1 w1");
+    let in_square = |p: glam::DVec3| p.x < 0.249 && p.y < 0.249;
+    assert!(boxes.iter().all(|b| !b.faces.iter().flatten().all(|&p| in_square(p))), "a box inside w1(w1(T))");
+    let h = nlifs::raytrace::build_fixed(&ifs, &nlifs::raytrace::Initial::Sphere, 5).expect("W^5");
+    assert_eq!(h.leaf_count, words(5), "W^5(A): 243 words less those with w1 w1");
+    let leaves: Vec<_> = h.leaf_spheres().collect();
+    assert!(leaves.iter().all(|n| !(n.centre.x < 0.249 && n.centre.y < 0.249)), "a sphere in w1(w1(T))");
+    let plain = compiled(&sierpinski("", ["", "", ""])).0.at(0.0);
+    assert_eq!(nlifs::raytrace::build_fixed(&plain, &nlifs::raytrace::Initial::Sphere, 5).unwrap().leaf_count, 243);
+    // Rows w1, w2, w3 all [1, 1, 0]: nothing goes to w3, so an orbit applies it at most at its
+    // start and W^n(A) has no copy of it.
+    let (scene, _) = compiled(&sierpinski("", ["xaos = [1, 1, 0]", "xaos = [1, 1, 0]", "xaos = [1, 1, 0]"]));
+    let ifs = scene.at(0.0);
+    assert_eq!(ifs.recurrent_functions(), [0, 1]);
+    let h = nlifs::raytrace::build_fixed(&ifs, &nlifs::raytrace::Initial::Sphere, 4).expect("W^4");
+    assert_eq!(h.leaf_count, 16, "W^4 of w1 and w2 alone");
+    assert!(h.leaf_spheres().all(|n| n.function != 2));
 }

@@ -57,6 +57,15 @@ impl SelectionTable {
         if self.xaos { row as usize } else { self.cell_of(p) }
     }
 
+    /// An orbit's xaos row after it applied compiled function `fi` (unchanged without xaos, so
+    /// that every path leaves the same chains).
+    #[inline(always)]
+    pub fn step_row(&self, row: &mut u16, fi: usize) {
+        if self.xaos {
+            *row = fi as u16 + 1;
+        }
+    }
+
     /// Index of the coarse cell of `p` (0 for a global table).
     #[inline(always)]
     pub fn cell_of(&self, p: Vec3) -> usize {

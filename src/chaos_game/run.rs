@@ -110,7 +110,7 @@ fn run_orbits(ifs: &CompiledIfs, orbits: Orbits<'_>, sink: &mut impl PointSink) 
             let sel = &ifs.selection;
             orbits.run_shown(sink, |rng, p, row| {
                 let fi = sel.select(sel.row_of(p.into(), *row), rng.next_u32());
-                *row = fi as u16 + 1;
+                sel.step_row(row, fi);
                 let (next, shown) = ifs.map_with_rng(fi, p.into(), rng);
                 (next.into(), shown.into(), fi)
             })
@@ -119,7 +119,7 @@ fn run_orbits(ifs: &CompiledIfs, orbits: Orbits<'_>, sink: &mut impl PointSink) 
             let sel = &ifs.selection;
             orbits.run(sink, |rng, p, row| {
                 let fi = sel.select(sel.row_of(p.into(), *row), rng.next_u32());
-                *row = fi as u16 + 1;
+                sel.step_row(row, fi);
                 (ifs.map_fast(fi, p.into()).into(), fi)
             })
         }
@@ -301,8 +301,8 @@ pub struct ChunkChains {
     // Palette colour (`chaos_game/color_coord.rs`):
     /// Lane k's colour coordinate (unused in function colour).
     pub colors: [f32; ORBITS_PER_CHUNK],
-    /// Lane k's xaos row: its previous function + 1, 0 at the start (read only with xaos,
-    /// [`super::SelectionTable::row_of`]).
+    /// Lane k's xaos row: its previous function + 1, 0 at the start; always 0 without xaos
+    /// ([`super::SelectionTable::row_of`]).
     pub rows: [u16; ORBITS_PER_CHUNK],
 }
 
@@ -330,7 +330,7 @@ impl ChunkChains {
         let mut row = 0;
         for _ in 0..ifs.transient {
             let fi = sel.select(sel.row_of(p, row), rng.next_u32());
-            row = fi as u16 + 1;
+            sel.step_row(&mut row, fi);
             p = ifs.map_with_rng(fi, p, &mut rng).0;
             if let Some(coords) = &ifs.color_coords {
                 c = ifs.step_color_of(c, fi, coords);

@@ -289,6 +289,30 @@ impl Ifs {
         self.functions[i].xaos.get(j).copied().unwrap_or(1.0).max(0.0)
     }
 
+    /// Whether function `next` may follow function `prev` (source indices): its xaos multiplier
+    /// is above 0, or `prev`'s row has nothing to go to (then drawn as without xaos, as
+    /// [`Self::probabilities_after`]). The deterministic sets W^n keep only such compositions.
+    pub fn xaos_allows(&self, prev: usize, next: usize) -> bool {
+        self.xaos_entry(prev, next) > 0.0 || self.active().iter().all(|&j| self.xaos_entry(prev, j) <= 0.0)
+    }
+
+    /// The enabled functions an orbit keeps applying (source indices): those with an endless
+    /// chain of enabled predecessors that [`Self::xaos_allows`]. Without xaos every enabled
+    /// function; a function that only the start can draw (no function may precede it, or only
+    /// such functions) leaves no copy in the attractor.
+    pub fn recurrent_functions(&self) -> Vec<usize> {
+        let mut live = self.active();
+        loop {
+            let before = live.len();
+            let kept: Vec<usize> =
+                live.iter().copied().filter(|&j| live.iter().any(|&i| self.xaos_allows(i, j))).collect();
+            live = kept;
+            if live.len() == before {
+                return live;
+            }
+        }
+    }
+
     /// The probabilities after function `i` (`xaos_entry(i, j)` · p_j, normalized): a row
     /// whose enabled functions all have 0 (nothing to go to) gives the probabilities alone, as
     /// if function `i` had no xaos.

@@ -6,8 +6,10 @@
 //! A box is kept as its faces sampled on a small lattice (one face in 2D, six in 3D), because a
 //! nonlinear map bends the straight edges: the samples are mapped, not the corners. W^k is built
 //! as W(W^(k-1)) = ∪_i f_i(W^(k-1)), so box `b` of level k carries the word's outermost function
-//! (the colour the view draws it in). The count of boxes is m^k for m enabled functions, so a
-//! level is refused past [`MAX_NESTED_BOXES`].
+//! (the colour the view draws it in). With xaos a copy f_i(b) is left out where f_i may not
+//! follow b's outermost function ([`Ifs::xaos_allows`]: the chaos game never applies them in
+//! that order). The count of boxes is at most m^k for m enabled functions, so a level is
+//! refused past [`MAX_NESTED_BOXES`].
 
 use glam::DVec3;
 
@@ -90,7 +92,7 @@ pub fn nested_boxes(ifs: &Ifs, level: u32) -> Result<Vec<NestedBox>, NestingErro
     for _ in 0..level {
         let mut next = Vec::with_capacity(current.len() * active.len());
         for &i in &active {
-            for b in &current {
+            for b in current.iter().filter(|b| b.outer_function.is_none_or(|o| ifs.xaos_allows(o, i))) {
                 let faces: Vec<Face> =
                     b.faces.iter().map(|face| face.iter().map(|&p| ifs.eval(i, p)).collect()).collect();
                 // A map that sends the box to infinity (a broken edit) leaves that copy out

@@ -1,7 +1,9 @@
 //! The bounding hierarchy of the deterministic approximation W^n(A) (after Hart & DeFanti):
 //! node w_i1∘…∘w_ik(A) has children w_i1∘…∘w_ik∘w_j(A), one per function j. Because every
 //! w_j(A) ⊆ A, a child's geometry lies inside its parent's, so a ray only visits the children
-//! of nodes whose bound it hits.
+//! of nodes whose bound it hits. With xaos only the compositions the chaos game applies are
+//! built: a child j where w_ik may follow w_j, of the functions an orbit keeps applying
+//! ([`Ifs::xaos_allows`], [`Ifs::recurrent_functions`]).
 //!
 //! How it works. Each node carries a sphere S(i1…ik) that contains its geometry, built the way
 //! the paper builds W^{k+1}(A) from W^k(A): S(i1 i2…ik) = w_i1(S(i2…ik)), centre mapped, radius
@@ -151,6 +153,16 @@ impl Hierarchy {
         }
         let maps: Vec<&Map> = active.iter().map(|&i| &ifs.functions[i].map).collect();
         let m = maps.len();
+        // Xaos: the children of a node whose innermost function is k (None at the root).
+        let recurrent = ifs.recurrent_functions();
+        let children_of = |k: Option<u8>| -> Vec<usize> {
+            (0..m)
+                .filter(|&j| recurrent.contains(&active[j]))
+                .filter(|&j| k.is_none_or(|k| ifs.xaos_allows(active[j], active[k as usize])))
+                .collect()
+        };
+        let children: Vec<Vec<usize>> =
+            std::iter::once(None).chain((0..m).map(|k| Some(k as u8))).map(children_of).collect();
         let (lo, hi) = (ifs.domain.min(), ifs.domain.max());
         let sphere_a = match initial {
             InitialObject::Sphere => DSphere { centre: 0.5 * (lo + hi), radius: 0.5 * (hi - lo).length() },
@@ -210,9 +222,10 @@ impl Hierarchy {
                     continue;
                 }
                 let first = h.nodes.len() as u32;
+                let children = &children[path.last().map_or(0, |&k| k as usize + 1)];
                 h.nodes[index as usize].first = first;
-                h.nodes[index as usize].count = active.len() as u16;
-                for j in 0..active.len() {
+                h.nodes[index as usize].count = children.len() as u16;
+                for &j in children {
                     let mut child = path.clone();
                     child.push(j as u8);
                     next.push((h.nodes.len() as u32, child));

@@ -159,6 +159,35 @@ pub fn assert_gpu_density_matches_cpu(
     DensityAgreement { gpu_samples, cpu_samples, worst }
 }
 
+/// The GPU chaos game's sums per pixel (r, g, b, count) after `dispatches` of `compiled`, each
+/// (steps, steps not splatted, restart and clear): every orbit from its start point at a
+/// restart, else from where the dispatch before left it.
+pub fn gpu_accum(
+    ctx: &GpuContext,
+    game: &mut nlifs::gpu::chaos_game::GpuChaosGame,
+    compiled: &CompiledIfs,
+    view: &SplatView,
+    dispatches: &[(u32, u32, bool)],
+) -> Vec<[u32; 4]> {
+    game.set_ifs(&ctx.device, &ctx.queue, compiled);
+    for &(steps, skip_steps, first) in dispatches {
+        let mut encoder = ctx.device.create_command_encoder(&Default::default());
+        let args = nlifs::gpu::chaos_game::FrameArgs {
+            view,
+            seed: 3,
+            frame: 0,
+            steps,
+            skip_steps,
+            restart: first,
+            clear: first,
+        };
+        game.encode(&ctx.device, &ctx.queue, &mut encoder, &args);
+        ctx.queue.submit([encoder.finish()]);
+    }
+    let accum: Vec<u32> = bytemuck::pod_collect_to_vec(&nlifs::gpu::readback::read_buffer(ctx, &game.accum).unwrap());
+    accum.chunks(4).map(|a| [a[0], a[1], a[2], a[3]]).take((view.width * view.height) as usize).collect()
+}
+
 /// What [`assert_gpu_density_matches_cpu`] found.
 pub struct DensityAgreement {
     pub gpu_samples: f64,
