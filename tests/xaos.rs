@@ -192,9 +192,11 @@ fn the_shares_are_the_chains_stationary_distribution() {
     let (scene, compiled) = compiled(&text);
     let ifs = scene.at(0.0);
     let rows: Vec<Vec<f64>> = (0..3).map(|i| ifs.probabilities_after(i)).collect();
-    let mut pi = vec![1.0 / 3.0; 3];
-    for _ in 0..1000 {
-        pi = (0..3).map(|j| (0..3).map(|i| pi[i] * rows[i][j]).sum()).collect();
+    let pi = ifs.long_run_shares();
+    // Stationary: π P = π.
+    for j in 0..3 {
+        let flow: f64 = (0..3).map(|i| pi[i] * rows[i][j]).sum();
+        assert!((flow - pi[j]).abs() < 1e-9, "π P = π at {j}: {flow} against {}", pi[j]);
     }
     let mut sink = CollectSink::default();
     for chunk in 0..8 {
@@ -205,6 +207,14 @@ fn the_shares_are_the_chains_stationary_distribution() {
         eprintln!("function {j}: share {share:.4}, stationary {expected:.4}");
         assert!((share - expected).abs() < 0.005, "function {j}: share {share}, stationary {expected}");
     }
+    // `nlifs info` gives them beside the probabilities.
+    let dir = common::temp_dir("xaos-info");
+    let file = dir.join("xaos.toml");
+    std::fs::write(&file, &text).unwrap();
+    let out = common::run_nlifs(&["info", file.to_str().unwrap()]);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success() && stdout.contains("xaos share"), "{stdout}");
+    assert!(stdout.lines().any(|l| l.starts_with("f1 ") && l.ends_with(&format!("{:.4}", pi[0]))), "{stdout}");
 }
 
 /// The deterministic sets keep the compositions the chaos game applies: the nesting view's
@@ -239,4 +249,17 @@ fn the_deterministic_sets_keep_only_the_compositions_xaos_allows() {
     let h = nlifs::raytrace::build_fixed(&ifs, &nlifs::raytrace::Initial::Sphere, 4).expect("W^4");
     assert_eq!(h.leaf_count, 16, "W^4 of w1 and w2 alone");
     assert!(h.leaf_spheres().all(|n| n.function != 2));
+}
+
+/// Rows that make the chain periodic (w1 and w2 take turns) and leave w3 behind after the
+/// start: the long-run shares are ½, ½ and 0, as the chaos game draws them.
+#[test]
+fn the_long_run_shares_settle_on_a_periodic_chain() {
+    let (scene, compiled) = compiled(&sierpinski("", ["xaos = [0, 1, 0]", "xaos = [1, 0, 0]", ""]));
+    let shares = scene.at(0.0).long_run_shares();
+    assert!((shares[0] - 0.5).abs() < 1e-9 && (shares[1] - 0.5).abs() < 1e-9 && shares[2] < 1e-9, "{shares:?}");
+    let mut sink = CollectSink::default();
+    chaos_game::run_chunk(&compiled, 2, 0, 0, 4096, &mut sink);
+    let w3 = sink.functions.iter().filter(|&&f| f == 2).count();
+    assert_eq!(w3, 0, "w3 drawn after the transient");
 }

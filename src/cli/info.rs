@@ -80,8 +80,11 @@ pub fn info(args: InfoArgs) -> anyhow::Result<()> {
     if !scene.description.is_empty() {
         println!("{}", printable(&scene.description, true));
     }
+    // With xaos the long-run share of each function's points, beside the probability of the
+    // first draw.
+    let share_header = if report.xaos { format!(" {:>11}", "xaos share") } else { String::new() };
     println!(
-        "{:<12} {:<8} {:>10} {:>15} {:>10} {:>11}",
+        "{:<12} {:<8} {:>10} {:>15} {:>10} {:>11}{share_header}",
         "function", "kind", "grid_ratio", "lipschitz_bound", "contained", "probability"
     );
     for f in &report.functions {
@@ -90,8 +93,9 @@ pub fn info(args: InfoArgs) -> anyhow::Result<()> {
             Some(true) => "yes".to_string(),
             Some(false) => format!("NO ({})", f.outside.len()),
         };
+        let share = if report.xaos { format!(" {:>11.4}", f.share) } else { String::new() };
         println!(
-            "{:<12} {:<8} {:>10} {:>15} {:>10} {:>11.4}",
+            "{:<12} {:<8} {:>10} {:>15} {:>10} {:>11.4}{share}",
             printable(&f.name, false),
             f.kind,
             fmt_opt(f.grid_ratio),

@@ -190,6 +190,9 @@ pub struct FunctionReport {
     /// Transformed grid points (or box corners) outside the domain: index and position.
     pub outside: Vec<(usize, [f64; 3])>,
     pub probability: f64,
+    /// The share of the points it draws in the long run ([`Ifs::long_run_shares`]; the
+    /// probability without xaos).
+    pub share: f64,
 }
 
 #[derive(Clone, Debug, serde::Serialize)]
@@ -200,6 +203,8 @@ pub struct IfsReport {
     pub max_grid_ratio: Option<f64>,
     pub max_lipschitz_bound: Option<f64>,
     pub all_contained: Option<bool>,
+    /// Whether the functions are drawn by xaos rows (then `share` differs from `probability`).
+    pub xaos: bool,
 }
 
 /// Relative slack of the containment test: the paper's tables are printed to 0.01.
@@ -313,6 +318,32 @@ impl Ifs {
         }
     }
 
+    /// The share of the points each function draws in the long run (source indices): with
+    /// xaos the stationary distribution of the chain of functions an orbit runs through from
+    /// its start (found by iterating the lazy chain, (P + I) / 2, which has the same one and
+    /// settles even where the rows make the chain periodic); without, the probabilities.
+    pub fn long_run_shares(&self) -> Vec<f64> {
+        let start = self.probabilities();
+        if !self.has_xaos() {
+            return start;
+        }
+        let n = self.functions.len();
+        let rows: Vec<Vec<f64>> = (0..n).map(|i| self.probabilities_after(i)).collect();
+        let mut share = start;
+        // At most about 2·10^7 multiply-adds (a few milliseconds); a typical IFS settles to
+        // 10⁻¹² in a few hundred rounds.
+        for _ in 0..(20_000_000 / (n * n).max(1)).clamp(1, 20_000) {
+            let next: Vec<f64> =
+                (0..n).map(|j| 0.5 * share[j] + 0.5 * (0..n).map(|i| share[i] * rows[i][j]).sum::<f64>()).collect();
+            let change = next.iter().zip(&share).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
+            share = next;
+            if change < 1e-12 {
+                break;
+            }
+        }
+        share
+    }
+
     /// The probabilities after function `i` (`xaos_entry(i, j)` · p_j, normalized): a row
     /// whose enabled functions all have 0 (nothing to go to) gives the probabilities alone, as
     /// if function `i` had no xaos.
@@ -355,6 +386,7 @@ impl Ifs {
     pub fn report(&self) -> IfsReport {
         let dim = self.dimension();
         let probabilities = self.probabilities();
+        let shares = self.long_run_shares();
         let functions: Vec<FunctionReport> = self
             .functions
             .iter()
@@ -369,6 +401,7 @@ impl Ifs {
                     contained: outside.as_ref().map(|o| o.is_empty()),
                     outside: outside.unwrap_or_default().into_iter().map(|(k, p)| (k, p.to_array())).collect(),
                     probability: probabilities[i],
+                    share: shares[i],
                 }
             })
             .collect();
@@ -380,6 +413,7 @@ impl Ifs {
             max_grid_ratio: max_opt(functions.iter().map(|f| f.grid_ratio).collect()),
             max_lipschitz_bound: max_opt(functions.iter().map(|f| f.lipschitz_bound).collect()),
             all_contained: functions.iter().map(|f| f.contained).try_fold(true, |a, c| c.map(|c| a && c)),
+            xaos: self.has_xaos(),
             functions,
         }
     }
