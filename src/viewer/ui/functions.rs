@@ -126,6 +126,14 @@ fn xaos_ui(ui: &mut egui::Ui, state: &ViewerState, commands: &mut Vec<Command>) 
                 }
                 ui.end_row();
             }
+            // What the rows make of the probabilities: each function's share of the points.
+            if let Some(report) = state.report.as_ref().filter(|r| r.xaos) {
+                ui.small("share").on_hover_text("each function's share of the points in the long run");
+                for f in &report.functions {
+                    ui.small(format!("{:.0} %", 100.0 * f.share));
+                }
+                ui.end_row();
+            }
         });
     });
 }
