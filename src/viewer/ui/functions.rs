@@ -98,6 +98,9 @@ pub fn functions_ui(ui: &mut egui::Ui, state: &ViewerState, commands: &mut Vec<C
 const XAOS_HELP: &str = "Xaos (flam3's chaos): the row of a function multiplies the probabilities of the next \
 function drawn after it (0: never next, 1: as usual). A row of all 0 is as if all 1.";
 
+/// The most functions whose xaos table the panel shows.
+const MAX_XAOS_TABLE: usize = 16;
+
 /// The xaos table: row i, column j is function i's multiplier of function j coming next.
 fn xaos_ui(ui: &mut egui::Ui, state: &ViewerState, commands: &mut Vec<Command>) {
     let functions = &state.scene.functions;
@@ -105,6 +108,14 @@ fn xaos_ui(ui: &mut egui::Ui, state: &ViewerState, commands: &mut Vec<Command>) 
     egui::CollapsingHeader::new("Xaos (which function comes next)").default_open(open).show(ui, |ui| {
         if state.scene.probability_mode == ProbabilityMode::Adaptive {
             ui.small("Adaptive probabilities draw by the point's place; choose another mode for xaos.");
+            return;
+        }
+        if functions.len() > MAX_XAOS_TABLE {
+            // n² fields would take the panel (and every frame of it) over.
+            ui.small(format!(
+                "{} functions: the table is shown up to {MAX_XAOS_TABLE}; edit the rows (`xaos`) in the scene file.",
+                functions.len()
+            ));
             return;
         }
         egui::Grid::new("xaos").spacing([4.0, 2.0]).show(ui, |ui| {
