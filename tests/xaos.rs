@@ -191,7 +191,7 @@ fn the_shares_are_the_chains_stationary_distribution() {
     );
     let (scene, compiled) = compiled(&text);
     let ifs = scene.at(0.0);
-    let rows: Vec<Vec<f64>> = (0..3).map(|i| ifs.probabilities_after(i)).collect();
+    let rows = ifs.xaos_rows();
     let pi = ifs.long_run_shares();
     // Stationary: π P = π.
     for j in 0..3 {
@@ -245,7 +245,7 @@ fn the_deterministic_sets_keep_only_the_compositions_xaos_allows() {
     // start and W^n(A) has no copy of it.
     let (scene, _) = compiled(&sierpinski("", ["xaos = [1, 1, 0]", "xaos = [1, 1, 0]", "xaos = [1, 1, 0]"]));
     let ifs = scene.at(0.0);
-    assert_eq!(ifs.recurrent_functions(), [0, 1]);
+    assert_eq!(ifs.recurrent_functions(ifs.xaos_successors().as_deref()), [0, 1]);
     let h = nlifs::raytrace::build_fixed(&ifs, &nlifs::raytrace::Initial::Sphere, 4).expect("W^4");
     assert_eq!(h.leaf_count, 16, "W^4 of w1 and w2 alone");
     assert!(h.leaf_spheres().all(|n| n.function != 2));

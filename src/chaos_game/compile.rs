@@ -209,10 +209,9 @@ pub(super) fn compile_map(map: &Map, dim: usize, coords: &mut Vec<[f32; 2]>, cel
 pub(super) fn selection_table(ifs: &Ifs, active: &[usize], lo: Vec3, hi: Vec3) -> SelectionTable {
     let pick = |p: Vec<f64>| -> Vec<f64> { active.iter().map(|&i| p[i]).collect() };
     if ifs.probability_mode != ProbabilityMode::Adaptive && ifs.has_xaos() {
-        let rows: Vec<Vec<f64>> = std::iter::once(ifs.probabilities())
-            .chain(active.iter().map(|&i| ifs.probabilities_after(i)))
-            .map(pick)
-            .collect();
+        let after = ifs.xaos_rows();
+        let rows: Vec<Vec<f64>> =
+            std::iter::once(ifs.probabilities()).chain(active.iter().map(|&i| after[i].clone())).map(pick).collect();
         return SelectionTable { xaos: true, ..SelectionTable::from_probabilities([1, 1, 1], lo, Vec3::ZERO, &rows) };
     }
     if ifs.probability_mode != ProbabilityMode::Adaptive {

@@ -285,7 +285,10 @@ impl Ifs {
     /// Whether an enabled function's xaos row weights an enabled function by other than 1.
     pub fn has_xaos(&self) -> bool {
         let active = self.active();
-        active.iter().any(|&i| active.iter().any(|&j| (self.xaos_entry(i, j) - 1.0).abs() > 1e-10))
+        active
+            .iter()
+            .filter(|&&i| !self.functions[i].xaos.is_empty())
+            .any(|&i| active.iter().any(|&j| (self.xaos_entry(i, j) - 1.0).abs() > 1e-10))
     }
 
     /// Function `i`'s xaos multiplier of function `j` (1 where its row has no entry; negative
@@ -294,23 +297,40 @@ impl Ifs {
         self.functions[i].xaos.get(j).copied().unwrap_or(1.0).max(0.0)
     }
 
-    /// Whether function `next` may follow function `prev` (source indices): its xaos multiplier
-    /// is above 0, or `prev`'s row has nothing to go to (then drawn as without xaos, as
-    /// [`Self::probabilities_after`]). The deterministic sets W^n keep only such compositions.
-    pub fn xaos_allows(&self, prev: usize, next: usize) -> bool {
-        self.xaos_entry(prev, next) > 0.0 || self.active().iter().all(|&j| self.xaos_entry(prev, j) <= 0.0)
+    /// Which functions may follow which (source indices): `[i][j]` where function j's xaos
+    /// multiplier in i's row is above 0, or where i's row leaves nothing to draw (then drawn as
+    /// without xaos, [`Self::xaos_rows`]). The probabilities aside, as W^n takes every function:
+    /// the deterministic sets keep only such compositions. None without xaos: any may follow any.
+    pub fn xaos_successors(&self) -> Option<Vec<Vec<bool>>> {
+        if !self.has_xaos() {
+            return None;
+        }
+        let n = self.functions.len();
+        let (p, active) = (self.probabilities(), self.active());
+        let successors = (0..n)
+            .map(|i| {
+                let falls_back = !self.xaos_row_draws(i, &p, &active);
+                (0..n).map(|j| falls_back || self.xaos_entry(i, j) > 0.0).collect()
+            })
+            .collect();
+        Some(successors)
+    }
+
+    /// Whether function i's xaos row leaves something to draw under the probabilities `p`.
+    fn xaos_row_draws(&self, i: usize, p: &[f64], active: &[usize]) -> bool {
+        active.iter().any(|&j| p[j] * self.xaos_entry(i, j) > 0.0)
     }
 
     /// The enabled functions an orbit keeps applying (source indices): those with an endless
-    /// chain of enabled predecessors that [`Self::xaos_allows`]. Without xaos every enabled
-    /// function; a function that only the start can draw (no function may precede it, or only
-    /// such functions) leaves no copy in the attractor.
-    pub fn recurrent_functions(&self) -> Vec<usize> {
+    /// chain of enabled predecessors under `successors` ([`Self::xaos_successors`]). Without
+    /// xaos every enabled function; a function that only the start can draw (no function may
+    /// precede it, or only such functions) leaves no copy in the attractor.
+    pub fn recurrent_functions(&self, successors: Option<&[Vec<bool>]>) -> Vec<usize> {
         let mut live = self.active();
+        let Some(successors) = successors else { return live };
         loop {
             let before = live.len();
-            let kept: Vec<usize> =
-                live.iter().copied().filter(|&j| live.iter().any(|&i| self.xaos_allows(i, j))).collect();
+            let kept: Vec<usize> = live.iter().copied().filter(|&j| live.iter().any(|&i| successors[i][j])).collect();
             live = kept;
             if live.len() == before {
                 return live;
@@ -328,7 +348,7 @@ impl Ifs {
             return start;
         }
         let n = self.functions.len();
-        let rows: Vec<Vec<f64>> = (0..n).map(|i| self.probabilities_after(i)).collect();
+        let rows = self.xaos_rows();
         let mut share = start;
         // At most about 2·10^7 multiply-adds (a few milliseconds); a typical IFS settles to
         // 10⁻¹² in a few hundred rounds.
@@ -344,18 +364,21 @@ impl Ifs {
         share
     }
 
-    /// The probabilities after function `i` (`xaos_entry(i, j)` · p_j, normalized): a row
-    /// whose enabled functions all have 0 (nothing to go to) gives the probabilities alone, as
-    /// if function `i` had no xaos.
-    pub fn probabilities_after(&self, i: usize) -> Vec<f64> {
-        let base = self.probabilities();
-        let active = self.active();
-        let mut p: Vec<f64> = base.iter().enumerate().map(|(j, &pj)| pj * self.xaos_entry(i, j)).collect();
-        if !active.iter().any(|&j| p[j] > 0.0) {
-            return base;
-        }
-        normalize(&mut p, &active);
-        p
+    /// The chaos game's rows (source indices): row i, entry j the chance that function j
+    /// follows function i, `xaos_entry(i, j)` · p_j normalized; a row that leaves nothing to
+    /// draw is the probabilities alone, as if function i had no xaos.
+    pub fn xaos_rows(&self) -> Vec<Vec<f64>> {
+        let (base, active) = (self.probabilities(), self.active());
+        (0..self.functions.len())
+            .map(|i| {
+                if !self.xaos_row_draws(i, &base, &active) {
+                    return base.clone();
+                }
+                let mut p: Vec<f64> = base.iter().enumerate().map(|(j, &pj)| pj * self.xaos_entry(i, j)).collect();
+                normalize(&mut p, &active);
+                p
+            })
+            .collect()
     }
 
     /// The adaptive rule at point `q`: p_i ∝ (|det J_i(q)|^(1/d))^D with the global D.

@@ -7,7 +7,7 @@
 //! nonlinear map bends the straight edges: the samples are mapped, not the corners. W^k is built
 //! as W(W^(k-1)) = ∪_i f_i(W^(k-1)), so box `b` of level k carries the word's outermost function
 //! (the colour the view draws it in). With xaos a copy f_i(b) is left out where f_i may not
-//! follow b's outermost function ([`Ifs::xaos_allows`]: the chaos game never applies them in
+//! follow b's outermost function ([`Ifs::xaos_successors`]: the chaos game never applies them in
 //! that order). The count of boxes is at most m^k for m enabled functions, so a level is
 //! refused past [`MAX_NESTED_BOXES`].
 
@@ -88,11 +88,14 @@ pub fn nested_boxes(ifs: &Ifs, level: u32) -> Result<Vec<NestedBox>, NestingErro
     if boxes > MAX_NESTED_BOXES as u128 {
         return Err(NestingError::TooManyBoxes { level, functions: active.len(), boxes, max: MAX_NESTED_BOXES });
     }
+    let successors = ifs.xaos_successors();
     let mut current = vec![NestedBox { outer_function: None, faces: domain_faces(ifs) }];
     for _ in 0..level {
         let mut next = Vec::with_capacity(current.len() * active.len());
         for &i in &active {
-            for b in current.iter().filter(|b| b.outer_function.is_none_or(|o| ifs.xaos_allows(o, i))) {
+            for b in
+                current.iter().filter(|b| b.outer_function.is_none_or(|o| successors.as_ref().is_none_or(|s| s[o][i])))
+            {
                 let faces: Vec<Face> =
                     b.faces.iter().map(|face| face.iter().map(|&p| ifs.eval(i, p)).collect()).collect();
                 // A map that sends the box to infinity (a broken edit) leaves that copy out

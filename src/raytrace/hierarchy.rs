@@ -3,7 +3,7 @@
 //! w_j(A) ⊆ A, a child's geometry lies inside its parent's, so a ray only visits the children
 //! of nodes whose bound it hits. With xaos only the compositions the chaos game applies are
 //! built: a child j where w_ik may follow w_j, of the functions an orbit keeps applying
-//! ([`Ifs::xaos_allows`], [`Ifs::recurrent_functions`]).
+//! ([`Ifs::xaos_successors`], [`Ifs::recurrent_functions`]).
 //!
 //! How it works. Each node carries a sphere S(i1…ik) that contains its geometry, built the way
 //! the paper builds W^{k+1}(A) from W^k(A): S(i1 i2…ik) = w_i1(S(i2…ik)), centre mapped, radius
@@ -154,11 +154,12 @@ impl Hierarchy {
         let maps: Vec<&Map> = active.iter().map(|&i| &ifs.functions[i].map).collect();
         let m = maps.len();
         // Xaos: the children of a node whose innermost function is k (None at the root).
-        let recurrent = ifs.recurrent_functions();
+        let successors = ifs.xaos_successors();
+        let recurrent = ifs.recurrent_functions(successors.as_deref());
         let children_of = |k: Option<u8>| -> Vec<usize> {
             (0..m)
                 .filter(|&j| recurrent.contains(&active[j]))
-                .filter(|&j| k.is_none_or(|k| ifs.xaos_allows(active[j], active[k as usize])))
+                .filter(|&j| k.is_none_or(|k| successors.as_ref().is_none_or(|s| s[active[j]][active[k as usize]])))
                 .collect()
         };
         let children: Vec<Vec<usize>> =
