@@ -167,17 +167,56 @@ fn gather_image(v: vec2<i32>) -> vec4<f32> {
     return sum;
 }
 
+// An estimated pixel's average colour and linear density (w; 0: no points).
+fn sampled_estimate(x: i32, y: i32) -> vec4<f32> {
+    let s = estimated_in[u32(y * i32(params.width) + x)];
+    if s.w > 0.0 {
+        let max_count = max(bitcast<f32>(estimated_max_in[0]), 1.0);
+        return vec4<f32>(s.rgb / (s.w * COLOR_SCALE), log_density(s.w, max_count));
+    }
+    return vec4<f32>(0.0);
+}
+
+// `filtered` of resolve.wgsl over the estimate: the twin of `Estimated::fragment`'s call of
+// `filter::gather`.
+fn filtered_estimate(x: i32, y: i32) -> vec4<f32> {
+    let half = FILTER_TAPS / 2;
+    var sum = vec4<f32>(0.0);
+    for (var j = 0; j < FILTER_TAPS; j += 1) {
+        let sy = y + j - half;
+        if sy < 0 || sy >= i32(params.height) {
+            continue;
+        }
+        let wy = filter_weight(j);
+        for (var i = 0; i < FILTER_TAPS; i += 1) {
+            let sx = x + i - half;
+            if sx < 0 || sx >= i32(params.width) {
+                continue;
+            }
+            sum = filter_term(sum, sampled_estimate(sx, sy), wy * filter_weight(i));
+        }
+    }
+    return filter_result(sum);
+}
+
 @fragment
 fn resolve_estimated(in: VertexOutput) -> @location(0) vec4<f32> {
     let x = u32(in.position.x) - params.origin_x;
     let y = u32(in.position.y) - params.origin_y;
     var c = params.background.rgb;
     if x < params.width && y < params.height {
-        let s = estimated_in[y * params.width + x];
-        if s.w > 0.0 {
-            let avg = s.rgb / (s.w * COLOR_SCALE);
-            let max_count = max(bitcast<f32>(estimated_max_in[0]), 1.0);
-            c = toned(avg, log_density(s.w, max_count), true);
+        if FILTER_TAPS > 0 {
+            let f = filtered_estimate(i32(x), i32(y));
+            if f.w > 0.0 {
+                c = toned(f.rgb, f.w, true);
+            }
+        } else {
+            let s = estimated_in[y * params.width + x];
+            if s.w > 0.0 {
+                let avg = s.rgb / (s.w * COLOR_SCALE);
+                let max_count = max(bitcast<f32>(estimated_max_in[0]), 1.0);
+                c = toned(avg, log_density(s.w, max_count), true);
+            }
         }
     }
     if ENCODE_SRGB {

@@ -60,9 +60,13 @@ struct ResolveParams {
     // Density mode: s of the absolute density log(1 + count · s); 0: relative to the densest
     // pixel (`log_density` below).
     count_scale: f32,
+    // flam3's spatial filter (average and density modes, `filtered` below): the taps along each
+    // axis (the pipeline constant FILTER_TAPS holds the same value) and their weights, four to
+    // a vector.
+    filter_taps: u32,
     pad0: u32,
     pad1: u32,
-    pad2: u32,
+    filter_weights: array<vec4<f32>, 4>,
 }
 
 // Pipeline constants (src/gpu/resolve.rs makes one pipeline per target format, mode and
@@ -83,6 +87,9 @@ override OCCLUSION: bool = false;
 // The radius of the normals' plane fit (`params.normal_radius_px`), a constant so that the
 // window's loops unroll.
 override NORMAL_RADIUS_PX: i32 = 2;
+// The spatial filter's taps along each axis (`params.filter_taps`; 0: off), a constant so that
+// the unfiltered resolve stays as it was and the filter's loops unroll.
+override FILTER_TAPS: i32 = 0;
 
 const MODE_CLOSEST: u32 = 0u;
 const MODE_AVERAGE: u32 = 1u;
@@ -481,6 +488,66 @@ fn toned(avg: vec3<f32>, a0: f32, density: bool) -> vec3<f32> {
     return clamp(out, vec3<f32>(0.0), vec3<f32>(1.0));
 }
 
+// The spatial filter's weight of tap i along an axis.
+fn filter_weight(i: i32) -> f32 {
+    return params.filter_weights[i / 4][i % 4];
+}
+
+// A pixel's average colour and linear density (w; 0: no points) from the accumulation.
+fn sampled(x: i32, y: i32) -> vec4<f32> {
+    let slot = 4u * u32(y * i32(params.width) + x);
+    let count = accum[slot + 3u];
+    if count == 0u {
+        return vec4<f32>(0.0);
+    }
+    let n = f32(count) * COLOR_SCALE;
+    let avg = vec3<f32>(f32(accum[slot]), f32(accum[slot + 1u]), f32(accum[slot + 2u])) / n;
+    if RESOLVE_MODE == MODE_AVERAGE {
+        return vec4<f32>(avg, 1.0);
+    }
+    return vec4<f32>(avg, log_density(f32(count), f32(max(stats[0], 1u))));
+}
+
+// Adds a pixel's average colour and linear density `s` (from `sampled`) with weight `wgt` to
+// the filter's sum of colour times density and density.
+fn filter_term(sum: vec4<f32>, s: vec4<f32>, wgt: f32) -> vec4<f32> {
+    if s.w == 0.0 {
+        return sum;
+    }
+    let q = s.w * wgt;
+    return vec4<f32>(sum.x + s.x * q, sum.y + s.y * q, sum.z + s.z * q, sum.w + q);
+}
+
+// The filter's sum as an average colour and linear density (w ≤ 0: nothing drawn).
+fn filter_result(sum: vec4<f32>) -> vec4<f32> {
+    if sum.w > 0.0 {
+        return vec4<f32>(sum.x / sum.w, sum.y / sum.w, sum.z / sum.w, sum.w);
+    }
+    return vec4<f32>(0.0);
+}
+
+// flam3's spatial filter at pixel (x, y): the twin of `filter::gather` in src/resolve/filter.rs,
+// term by term.
+fn filtered(x: i32, y: i32) -> vec4<f32> {
+    let half = FILTER_TAPS / 2;
+    var sum = vec4<f32>(0.0);
+    for (var j = 0; j < FILTER_TAPS; j += 1) {
+        let sy = y + j - half;
+        if sy < 0 || sy >= i32(params.height) {
+            continue;
+        }
+        let wy = filter_weight(j);
+        for (var i = 0; i < FILTER_TAPS; i += 1) {
+            let sx = x + i - half;
+            if sx < 0 || sx >= i32(params.width) {
+                continue;
+            }
+            sum = filter_term(sum, sampled(sx, sy), wy * filter_weight(i));
+        }
+    }
+    return filter_result(sum);
+}
+
 @fragment
 fn resolve(in: VertexOutput) -> @location(0) vec4<f32> {
     // Outside the viewport nothing is rasterized, so the subtraction does not wrap in practice;
@@ -514,6 +581,11 @@ fn resolve(in: VertexOutput) -> @location(0) vec4<f32> {
                     base = light(at.x, at.y, key, base);
                 }
                 c = cue(base, t);
+            }
+        } else if FILTER_TAPS > 0 {
+            let f = filtered(i32(x), i32(y));
+            if f.w > 0.0 {
+                c = toned(f.rgb, f.w, RESOLVE_MODE != MODE_AVERAGE);
             }
         } else {
             let count = accum[slot + 3u];

@@ -178,9 +178,14 @@ pub struct ResolveParams {
     /// Density mode: s of the absolute density ln(1 + count · s); 0: relative to the densest
     /// pixel ([`ResolveArgs::count_scale`]).
     pub count_scale: f32,
-    pub pad: [u32; 3],
+    /// flam3's spatial filter (average and density modes, [`filter`]): the taps along each
+    /// axis (odd; 0: off; the pipeline constant `FILTER_TAPS` holds the same value) and their
+    /// weights.
+    pub filter_taps: u32,
+    pub pad: [u32; 2],
+    pub filter_weights: filter::Weights,
 }
-const _: () = assert!(std::mem::size_of::<ResolveParams>() == 208);
+const _: () = assert!(std::mem::size_of::<ResolveParams>() == 272);
 
 /// How the resolve draws, beyond the splat's own settings (mode, background, depth cue). The
 /// default is the paper look: flat colours, one pixel per key, the bytes `nlifs render` has
@@ -361,6 +366,8 @@ impl ResolveArgs {
     pub fn params(&self, width: u32, height: u32, encode_srgb: bool) -> ResolveParams {
         let closest = self.mode == SplatMode::Closest;
         let tone = ToneUniforms::of(&self.tone);
+        let (filter_taps, filter_weights) =
+            if closest { (0, [[0.0; 4]; 4]) } else { filter::uniforms(self.tone.filter) };
         ResolveParams {
             background: [self.background[0], self.background[1], self.background[2], self.depth_cue],
             width,
@@ -390,7 +397,9 @@ impl ResolveArgs {
             shadow_inv_depth_world: 0.0,
             normal_radius_px: self.normal_radius_px.clamp(1, NORMAL_RADIUS_PX),
             count_scale: if self.mode == SplatMode::Density { self.count_scale() } else { 0.0 },
-            pad: [0; 3],
+            filter_taps,
+            pad: [0; 2],
+            filter_weights,
         }
         .with_shadow(self, closest)
     }
@@ -547,6 +556,19 @@ fn fragment(p: &ResolveParams, inputs: &ResolveInputs<'_>, x: u32, y: u32, light
                 }
                 c = cue(p, base, t);
             }
+        } else if p.filter_taps > 0 {
+            let sample = |x: u32, y: u32| {
+                let slot = 4 * (y * p.width + x) as usize;
+                let count = accum[slot + 3];
+                (count > 0).then(|| {
+                    let n = count as f32 * COLOR_SCALE;
+                    let avg = [accum[slot] as f32 / n, accum[slot + 1] as f32 / n, accum[slot + 2] as f32 / n];
+                    (avg, density_of(p, inputs, count))
+                })
+            };
+            if let Some((avg, a0)) = filter::gather(p, x, y, sample) {
+                c = toned(&tone_uniforms(p), avg, a0, background(p), p.mode != MODE_AVERAGE).0;
+            }
         } else {
             let count = accum[slot + 3];
             if count > 0 {
@@ -632,6 +654,7 @@ pub fn resolve_image(framebuffer: &Framebuffer, camera: &OrbitCamera, style: &Re
 }
 
 pub mod density_estimation;
+pub mod filter;
 
 #[cfg(test)]
 mod tests;

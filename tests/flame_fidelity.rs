@@ -7,7 +7,7 @@
 //! within twice flam3's own difference between two of its seeds (`isaac_seed`), plus 3: the
 //! two renderers draw different random numbers, so flam3's seed-to-seed noise is the scale.
 //!
-//! Fourteen of them are also imported as scenes and drawn by the scene renderer ([`IMPORTED`]),
+//! Nineteen of them are also imported as scenes and drawn by the scene renderer ([`IMPORTED`]),
 //! with the same metric.
 //!
 //! Without `flam3-render` the test says so loudly and passes, unless `CI` or
@@ -349,13 +349,14 @@ fn difference(a: &image::RgbaImage, b: &image::RgbaImage, background: [u8; 3]) -
     if n == 0 { 0.0 } else { sum as f64 / n as f64 }
 }
 
-/// Flames whose features the import keeps (no wide filter) and whose attractor is large enough
-/// for flam3's spatial filter not to matter (the "xaos" flame's pieces are thin: imported, it
-/// lights 159 pixels where flam3's filter lights 331, so its unfiltered twin is here), also imported as
-/// scenes (`nlifs import flame`) and rendered by the scene renderer: the conjugation into
-/// nlifs's view (a rotated camera; waves and popcorn keep their xform's coefs), the absolute
-/// density with flam3's brightness and gamma, density estimation, opacity, the final xform,
-/// xaos and the palette.
+/// Flames whose features the import keeps (flam3's Gaussian spatial filter at one sample a
+/// pixel; no supersampling), also imported as scenes (`nlifs import flame`) and rendered by the
+/// scene renderer: the conjugation into nlifs's view (a rotated camera; waves and popcorn keep
+/// their xform's coefs), the absolute density with flam3's brightness and gamma, density
+/// estimation, opacity, the final xform, xaos, the palette and the spatial filter (the "xaos"
+/// flame's pieces are thin: without the filter its import lit 159 pixels where flam3 lights 331
+/// and differed by 7.97; "xaos-sharp" is its twin with a filter too narrow to spread a point;
+/// bipolar, exponential, rings and separation differed by 6.7–11.5 unfiltered).
 const IMPORTED: &[&str] = &[
     "camera",
     "color-speed",
@@ -365,11 +366,16 @@ const IMPORTED: &[&str] = &[
     "mix-sinusoidal-swirl",
     "opacity",
     "palette-hex",
+    "var-bipolar",
+    "var-exponential",
     "var-julian",
     "var-popcorn",
+    "var-rings",
+    "var-separation",
     "var-spherical",
     "var-swirl",
     "var-waves",
+    "xaos",
     "xaos-sharp",
 ];
 

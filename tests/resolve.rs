@@ -201,6 +201,15 @@ impl Gpu {
 ///    ULP: ρ ≤ 2^-14 of c relative, generously; the vibrancy term t^g − c · α cancels, which
 ///    adds ≤ 2^-18 absolute (terms ≤ 4, 2^-20 each). E as in 7.
 ///
+/// Filtered pixels (average and density modes with flam3's spatial filter, of non-negative
+/// weights):
+/// 10. Each of the ≤ N² terms (N ≤ 15 taps a side) is a0 · (w_y · w_x) times the colour: item
+///    2's relative error of a0 and the colour, and ≤ 3 u of its own products; the running sums
+///    of non-negative terms round by ≤ u of themselves at each of the ≤ N² additions (a fused
+///    multiply-add only lessens that). So the sums are off by ≤ 2^-16 + (N² + 3) u ≤ 2^-15
+///    relative, and the colour (their quotient, 2.5 ULP more) and the density by ≤ 2^-13.9:
+///    ρ ≤ 2^-13 of c relative, generously, before the tone map's item 8. E as in 7.
+///
 /// Shadows (closest mode with a shadow map):
 /// 9. Each PCF tap compares the receiver's depth in the map with a texel's: where the two are
 ///    closer than the receiver's float error, GPU and CPU may decide the tap differently. The
@@ -243,7 +252,11 @@ impl Tolerance {
         let lit = p.mode == 0 && (p.shading > 0.0 || p.occlusion > 0.0);
         let toned =
             p.mode != 0 && (p.brightness != 1.0 || p.inv_gamma != 1.0 || p.vibrancy != 1.0 || p.highlight_power >= 0.0);
-        let (relative, absolute) = if lit || toned { (2f32.powi(-14), 2f32.powi(-18)) } else { (2f32.powi(-16), 0.0) };
+        let (mut relative, absolute) =
+            if lit || toned { (2f32.powi(-14), 2f32.powi(-18)) } else { (2f32.powi(-16), 0.0) };
+        if p.mode != 0 && p.filter_taps > 0 {
+            relative += 2f32.powi(-13);
+        }
         Self { levels: 255.0 * (1.055 / 2.4 * relative + 12.92 * absolute + 1.055 * 2e-6) }
     }
 }
@@ -414,6 +427,39 @@ fn resolve_matches_cpu() {
     }
 }
 
+/// flam3's spatial filter (`FILTER_TAPS` > 0: `filtered` in `shaders/resolve.wgsl` against
+/// `filter::gather`) on plant2's average and density accumulations: Gaussians of 3, 5 and 7
+/// taps, a bell, and one under a tone. Tolerance: item 10 of [`Tolerance`] (and 8).
+#[test]
+fn spatial_filter_matches_cpu() {
+    use nlifs::flame::FilterShape;
+    use nlifs::scene::spec::PixelFilter;
+    let Some(ctx) = gpu() else { return };
+    let mut gpu = Gpu { resolve: GpuResolve::new(&ctx.device), ctx, draws: 0 };
+    let filter = |radius_px, shape| Some(PixelFilter { radius_px, shape });
+    let tones = [
+        Tone { filter: filter(0.5, FilterShape::Gaussian), ..Tone::NEUTRAL },
+        Tone { filter: filter(1.0, FilterShape::Gaussian), ..Tone::NEUTRAL },
+        Tone { filter: filter(2.0, FilterShape::Gaussian), density_scale: DensityScale::Absolute, ..Tone::NEUTRAL },
+        Tone { filter: filter(1.0, FilterShape::Bell), ..Tone::NEUTRAL },
+        Tone {
+            exposure: 1.0,
+            gamma: 2.2,
+            highlight_power: 1.0,
+            filter: filter(0.8, FilterShape::Gaussian),
+            ..Tone::NEUTRAL
+        },
+    ];
+    for mode in [SplatMode::Average, SplatMode::Density] {
+        let acc = plant2(mode);
+        for tone in tones {
+            let args = ResolveArgs { tone, ..acc.args };
+            assert!(args.params(acc.width, acc.height, true).filter_taps >= 3, "{tone:?}: the filter is off");
+            compare(&mut gpu, &acc, &args);
+        }
+    }
+}
+
 /// Every combination of flam3's tone settings on the average and density accumulations:
 /// exposure 0 and 1.5 stops; gamma 1, and 2.2 with a wide linear threshold (0.05); vibrancy 0
 /// and 1; highlight power off (−1), 0 (hue kept) and 2 (towards white); density relative and
@@ -430,8 +476,15 @@ fn every_tone_setting_matches_cpu() {
                 for vibrancy in [0.0, 1.0] {
                     for highlight_power in [-1.0, 0.0, 2.0] {
                         for density_scale in DensityScale::ALL {
-                            let tone =
-                                Tone { exposure, gamma, gamma_threshold, vibrancy, highlight_power, density_scale };
+                            let tone = Tone {
+                                exposure,
+                                gamma,
+                                gamma_threshold,
+                                vibrancy,
+                                highlight_power,
+                                density_scale,
+                                filter: None,
+                            };
                             compare(&mut gpu, &acc, &ResolveArgs { tone, ..acc.args });
                         }
                     }
@@ -476,6 +529,15 @@ fn density_estimation_resolve_matches_cpu() {
         Tone::NEUTRAL,
         Tone { exposure: 1.0, gamma: 2.2, vibrancy: 0.5, highlight_power: 2.0, ..Tone::NEUTRAL },
         Tone { exposure: 2.0, gamma: 1.8, density_scale: DensityScale::Absolute, ..Tone::NEUTRAL },
+        // flam3's spatial filter over the estimate (`filtered_estimate`).
+        Tone {
+            exposure: 1.0,
+            filter: Some(nlifs::scene::spec::PixelFilter {
+                radius_px: 1.0,
+                shape: nlifs::flame::FilterShape::Gaussian,
+            }),
+            ..Tone::NEUTRAL
+        },
     ];
     for tone in tones {
         let args = ResolveArgs { tone, ..acc.args };

@@ -1,5 +1,5 @@
 //! The viewer's imaging (`src/viewer/imaging.rs`): the live view takes the scene's tone, density
-//! scale and density estimation at the current time, keyed values included; the render panel's
+//! scale, spatial filter and density estimation at the current time, keyed values included; the render panel's
 //! edits are scene edits that keep the accumulation, one undo step per drag, saved with the
 //! scene and read back by `render` as the same style. Plain state: commands in, scene out, no
 //! GPU.
@@ -9,9 +9,12 @@ mod common;
 use nlifs::live::{Imaging, LiveSettings};
 use nlifs::resolve::{ResolveStyle, Tone};
 use nlifs::scene::Scene;
-use nlifs::scene::spec::{DensityEstimation, DensityScale, SplatMode};
+use nlifs::scene::spec::{DensityEstimation, DensityScale, PixelFilter, SplatMode};
 use nlifs::viewer::command::Command;
 use nlifs::viewer::state::ViewerState;
+
+/// flam3's spatial filter, as the render panel's slider sets it.
+const FILTER: PixelFilter = PixelFilter { radius_px: 0.8, shape: nlifs::flame::FilterShape::Gaussian };
 
 fn density_state() -> ViewerState {
     let path = common::scene_path("plant2");
@@ -41,6 +44,7 @@ fn a_tone_drag_is_one_scene_edit_that_keeps_the_accumulation_and_saves() {
             gamma: 2.2,
             highlight_power: 1.0,
             density_scale: DensityScale::Absolute,
+            filter: Some(FILTER),
             ..Tone::NEUTRAL
         };
         let c = s.apply([Command::SetImaging(Imaging { tone, density_estimation: Some(de) })]);
@@ -53,6 +57,7 @@ fn a_tone_drag_is_one_scene_edit_that_keeps_the_accumulation_and_saves() {
     assert_eq!(s.scene.render.gamma, 2.2);
     assert_eq!(s.scene.render.density_estimation, Some(de));
     assert_eq!(s.scene.render.density_scale, DensityScale::Absolute);
+    assert_eq!(s.scene.render.filter, Some(FILTER));
     assert_eq!(s.imaging(), render_imaging(&s.scene, s.t_secs), "the view shows what render draws");
     let edited = s.scene.clone();
     // One undo step restores the scene and the view's imaging exactly.

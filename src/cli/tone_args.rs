@@ -1,13 +1,14 @@
 //! The tone overrides `nlifs render` and `nlifs record` share: `--exposure`, `--gamma`,
-//! `--gamma-threshold`, `--vibrancy`, `--highlight-power` and `--density-scale` over the
+//! `--gamma-threshold`, `--vibrancy`, `--highlight-power`, `--density-scale` and `--filter` over the
 //! scene's `[render]` values (flam3's tone controls of the average and density modes,
 //! `nlifs::resolve::Tone`), the numbers checked against the scene format's range
 //! (`TONE_FIELDS`).
 
 use clap::Args;
 
+use nlifs::flame::FilterShape;
 use nlifs::scene::Scene;
-use nlifs::scene::spec::{DensityScale, RenderSettings, TONE_FIELDS};
+use nlifs::scene::spec::{DensityScale, PixelFilter, RenderSettings, TONE_FIELDS};
 
 #[derive(Args, Clone, Debug, Default)]
 pub struct ToneArgs {
@@ -31,7 +32,17 @@ pub struct ToneArgs {
     /// pixel's points per point drawn and square unit; converges as points grow).
     #[arg(long, value_name = "SCALE", value_parser = density_scale)]
     density_scale: Option<DensityScale>,
+    /// flam3's spatial filter, average and density modes: each pixel takes a share of its
+    /// neighbours' light, RADIUS in pixels (0.5: flam3's default, 3×3 pixels; 0: off), SHAPE
+    /// one of flam3's (gaussian, the default, hermite, box, triangle, bell, bspline, mitchell,
+    /// blackman, catrom, hanning, hamming, lanczos3, lanczos2, quadratic).
+    #[arg(long, value_name = "RADIUS[,SHAPE]", value_parser = filter)]
+    filter: Option<FilterFlag>,
 }
+
+/// A parsed `--filter`: the filter, None for off.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FilterFlag(Option<PixelFilter>);
 
 impl ToneArgs {
     fn values(&self) -> [Option<f32>; 5] {
@@ -47,6 +58,9 @@ impl ToneArgs {
         }
         if let Some(scale) = self.density_scale {
             settings.density_scale = scale;
+        }
+        if let Some(FilterFlag(filter)) = self.filter {
+            settings.filter = filter;
         }
     }
 
@@ -79,4 +93,16 @@ fn in_range(s: &str, field: usize) -> Result<f32, String> {
 /// A density scale by its scene-file name.
 fn density_scale(s: &str) -> Result<DensityScale, String> {
     DensityScale::parse(s.trim()).ok_or_else(|| format!("`{s}` is not a density scale; use relative or absolute"))
+}
+
+/// `--filter RADIUS[,SHAPE]`, checked as the scene's `filter` and `filter_shape` are.
+fn filter(s: &str) -> Result<FilterFlag, String> {
+    let (radius, shape) = s.split_once(',').map_or((s, None), |(r, shape)| (r, Some(shape.trim())));
+    let radius: f64 = radius.trim().parse().map_err(|_| format!("`{radius}` is not a number"))?;
+    let shape = match shape {
+        Some(name) => FilterShape::parse(name)
+            .ok_or_else(|| format!("`{name}` is not a filter shape; use one of {}", FilterShape::NAMES.join(", ")))?,
+        None => FilterShape::Gaussian,
+    };
+    PixelFilter::checked(radius, shape).map(FilterFlag)
 }

@@ -109,6 +109,51 @@ pub enum FilterShape {
     Quadratic,
 }
 
+impl FilterShape {
+    /// Every shape, in the order of [`FilterShape::NAMES`].
+    pub const ALL: [FilterShape; 14] = [
+        FilterShape::Gaussian,
+        FilterShape::Hermite,
+        FilterShape::Box,
+        FilterShape::Triangle,
+        FilterShape::Bell,
+        FilterShape::BSpline,
+        FilterShape::Mitchell,
+        FilterShape::Blackman,
+        FilterShape::Catrom,
+        FilterShape::Hanning,
+        FilterShape::Hamming,
+        FilterShape::Lanczos3,
+        FilterShape::Lanczos2,
+        FilterShape::Quadratic,
+    ];
+    /// flam3's `filter_shape` names (also the scene's `[render] filter_shape`).
+    pub const NAMES: [&'static str; 14] = [
+        "gaussian",
+        "hermite",
+        "box",
+        "triangle",
+        "bell",
+        "bspline",
+        "mitchell",
+        "blackman",
+        "catrom",
+        "hanning",
+        "hamming",
+        "lanczos3",
+        "lanczos2",
+        "quadratic",
+    ];
+
+    pub fn parse(name: &str) -> Option<Self> {
+        Self::NAMES.iter().position(|n| *n == name).map(|i| Self::ALL[i])
+    }
+
+    pub fn name(self) -> &'static str {
+        Self::NAMES[Self::ALL.iter().position(|s| *s == self).expect("every shape is in ALL")]
+    }
+}
+
 /// 256 RGBA entries, each channel in [0, 1].
 pub type Palette = Vec<[f64; 4]>;
 

@@ -153,19 +153,54 @@ fn as_flam3_evaluates(shape: FilterShape) -> FilterShape {
     }
 }
 
+/// The kernel values of flam3's spatial filter of `named` shape and `radius` (output pixels)
+/// over a buffer of `oversample`² samples a pixel, along one axis: `width` values, the parity of
+/// `oversample`, unnormalized (the square filter is their outer product, normalized).
+fn filter_row(named: FilterShape, radius: f64, oversample: usize) -> Vec<f64> {
+    let shape = as_flam3_evaluates(named);
+    let supp = support(shape);
+    let fw = 2.0 * supp * oversample as f64 * radius.max(0.0);
+    let mut width = fw as usize + 1;
+    if (width ^ oversample) & 1 == 1 {
+        width += 1;
+    }
+    let adjust = if fw > 0.0 { supp * width as f64 / fw } else { 1.0 };
+    (0..width).map(|i| kernel(shape, ((2.0 * i as f64 + 1.0) / width as f64 - 1.0) * adjust)).collect()
+}
+
+/// The width of flam3's spatial filter of `shape` and `radius` (pixels) at one sample a pixel:
+/// the side of its square of taps, odd.
+pub fn filter_width(shape: FilterShape, radius: f64) -> usize {
+    let supp = support(as_flam3_evaluates(shape));
+    let fw = 2.0 * supp * radius.max(0.0);
+    // fw as usize + 1, made odd (the rule of `filter_row` for one sample a pixel).
+    (fw as usize + 1) | 1
+}
+
+/// The widest radius (pixels) whose filter of `shape` spans at most `taps` pixels (odd).
+pub fn max_radius(shape: FilterShape, taps: usize) -> f64 {
+    // filter_width ≤ taps ⟺ 2 · support · radius < taps.
+    let mut radius = taps as f64 / (2.0 * support(as_flam3_evaluates(shape)));
+    while radius > 0.0 && filter_width(shape, radius) > taps {
+        radius = radius.next_down();
+    }
+    radius
+}
+
+/// flam3's spatial filter of `shape` and `radius` (pixels) at one sample a pixel as the weights
+/// of one axis, normalized to sum 1: the square filter is their outer product (flam3's
+/// normalization of the product is the same up to rounding). None where the weights sum to 0.
+pub fn filter_weights(shape: FilterShape, radius: f64) -> Option<Vec<f64>> {
+    let row = filter_row(shape, radius, 1);
+    let sum: f64 = row.iter().sum();
+    (sum != 0.0 && sum.is_finite()).then(|| row.iter().map(|v| v / sum).collect())
+}
+
 impl SpatialFilter {
     pub fn new(named: FilterShape, radius: f64, oversample: usize) -> Result<Self, RenderError> {
-        let shape = as_flam3_evaluates(named);
-        let supp = support(shape);
-        let fw = 2.0 * supp * oversample as f64 * radius.max(0.0);
-        let mut width = fw as usize + 1;
-        if (width ^ oversample) & 1 == 1 {
-            width += 1;
-        }
-        let adjust = if fw > 0.0 { supp * width as f64 / fw } else { 1.0 };
-        let at = |i: usize| ((2.0 * i as f64 + 1.0) / width as f64 - 1.0) * adjust;
-        let mut coefs: Vec<f64> =
-            (0..width * width).map(|k| kernel(shape, at(k % width)) * kernel(shape, at(k / width))).collect();
+        let row = filter_row(named, radius, oversample);
+        let width = row.len();
+        let mut coefs: Vec<f64> = (0..width * width).map(|k| row[k % width] * row[k / width]).collect();
         let sum: f64 = coefs.iter().sum();
         if sum == 0.0 || !sum.is_finite() {
             return Err(RenderError::BadFilter(radius));
@@ -280,5 +315,30 @@ impl DensityFilters {
             DE_THRESHOLD as usize + (hits - DE_THRESHOLD).powf(self.curve).floor() as usize
         };
         k.min(self.max_index)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The scene's one-axis weights are flam3's square filter at one sample a pixel: their outer
+    /// product is [`SpatialFilter`]'s, shape by shape.
+    #[test]
+    fn one_axis_weights_multiply_to_the_square_filter() {
+        for shape in FilterShape::ALL {
+            for radius in [0.3, 0.5, 0.8, 1.3, 2.0] {
+                let square = SpatialFilter::new(shape, radius, 1).expect("a filter");
+                let row = filter_weights(shape, radius).expect("weights");
+                assert_eq!(row.len(), square.width, "{shape:?} {radius}");
+                assert_eq!(filter_width(shape, radius), square.width, "{shape:?} {radius}");
+                let widest = max_radius(shape, 15);
+                assert!(filter_width(shape, widest) <= 15 && filter_width(shape, widest * 1.0001) > 15, "{shape:?}");
+                for (k, c) in square.coefs.iter().enumerate() {
+                    let product = row[k % square.width] * row[k / square.width];
+                    assert!((product - c).abs() < 1e-12, "{shape:?} {radius} tap {k}: {product} vs {c}");
+                }
+            }
+        }
     }
 }

@@ -136,28 +136,6 @@ pub fn read_str_with(text: &str, file_name: &str, options: &ReadOptions) -> Resu
     Ok(reader.out)
 }
 
-/// flam3's `filter_shape` names.
-fn filter_shape(name: &str) -> Option<FilterShape> {
-    use FilterShape::*;
-    Some(match name {
-        "gaussian" => Gaussian,
-        "hermite" => Hermite,
-        "box" => Box,
-        "triangle" => Triangle,
-        "bell" => Bell,
-        "bspline" => BSpline,
-        "mitchell" => Mitchell,
-        "blackman" => Blackman,
-        "catrom" => Catrom,
-        "hanning" => Hanning,
-        "hamming" => Hamming,
-        "lanczos3" => Lanczos3,
-        "lanczos2" => Lanczos2,
-        "quadratic" => Quadratic,
-        _ => return None,
-    })
-}
-
 /// `<flame>` attributes flam3 reads that change nothing in a still image (animation, batching,
 /// metadata that flam3 writes).
 const STILL_IGNORED: &[&str] = &[
@@ -321,7 +299,7 @@ impl Reader<'_> {
                         f.supersample = v as u32;
                     }
                 }
-                "filter_shape" => match filter_shape(attr.value()) {
+                "filter_shape" => match FilterShape::parse(attr.value()) {
                     Some(shape) => f.filter_shape = shape,
                     None => ctx.warn(node, format!("unknown filter_shape '{}'; gaussian is used", attr.value())),
                 },

@@ -68,8 +68,8 @@ pub struct GpuDensityEstimation {
     module: wgpu::ShaderModule,
     index_pipeline: wgpu::ComputePipeline,
     estimate_pipeline: wgpu::ComputePipeline,
-    /// The draw pipeline per target format, made on first use.
-    draw_pipelines: Vec<(wgpu::TextureFormat, wgpu::RenderPipeline)>,
+    /// The draw pipeline per target format and spatial filter taps, made on first use.
+    draw_pipelines: Vec<((wgpu::TextureFormat, u32), wgpu::RenderPipeline)>,
     params: wgpu::Buffer,
     resolve_params: wgpu::Buffer,
     tables: Option<Tables>,
@@ -239,12 +239,14 @@ impl GpuDensityEstimation {
         let Some(p) = &self.pixels else { return };
         let params = args.params(p.width, p.height, !format.is_srgb());
         ctx.queue.write_buffer(&self.resolve_params, 0, bytemuck::bytes_of(&params));
-        let index = match self.draw_pipelines.iter().position(|(f, _)| *f == format) {
+        let key = (format, params.filter_taps);
+        let index = match self.draw_pipelines.iter().position(|(k, _)| *k == key) {
             Some(i) => i,
             None => {
-                let constants = [("ENCODE_SRGB", !format.is_srgb() as u32 as f64)];
+                let constants =
+                    [("ENCODE_SRGB", !format.is_srgb() as u32 as f64), ("FILTER_TAPS", params.filter_taps as f64)];
                 let pipeline = fullscreen_pipeline(&ctx.device, &self.module, "resolve_estimated", &constants, format);
-                self.draw_pipelines.push((format, pipeline));
+                self.draw_pipelines.push((key, pipeline));
                 self.draw_pipelines.len() - 1
             }
         };

@@ -20,8 +20,9 @@ fn entry(binding: u32, buffer: &wgpu::Buffer) -> wgpu::BindGroupEntry<'_> {
 const COLORS_BYTES: u64 = 256 * 16;
 
 /// What a draw pipeline is specialized for: target format, splat mode, lighting (shading or
-/// occlusion) on, light read from the light cache, which light terms run.
-type DrawKey = (wgpu::TextureFormat, SplatMode, bool, bool, LightTerms);
+/// occlusion) on, light read from the light cache, which light terms run, the spatial filter's
+/// taps.
+type DrawKey = (wgpu::TextureFormat, SplatMode, bool, bool, LightTerms, u32);
 
 /// Which of the solid look's costly terms a light pipeline runs: the shadow map's lookups and
 /// the ambient occlusion's samples. Pipeline constants, not uniform branches: a SIMD software
@@ -144,7 +145,7 @@ impl GpuResolve {
         if let Some(i) = self.draw_pipelines.iter().position(|(k, _, _)| *k == key) {
             return i;
         }
-        let (format, mode, shaded, cached, terms) = key;
+        let (format, mode, shaded, cached, terms, filter_taps) = key;
         let [shadows, occlusion, normal_radius] = terms.constants();
         let constants = [
             ("RESOLVE_MODE", mode.index() as f64),
@@ -154,6 +155,7 @@ impl GpuResolve {
             shadows,
             occlusion,
             normal_radius,
+            ("FILTER_TAPS", filter_taps as f64),
         ];
         let pipeline = fullscreen_pipeline(device, &self.module, "resolve", &constants, format);
         self.draw_pipelines.push((key, pipeline, None));
@@ -245,7 +247,7 @@ impl GpuResolve {
         {
             self.refresh_light(device, encoder, game, (start.min(game.height), end.min(game.height)), terms);
         }
-        let pipeline_index = self.draw_pipeline(device, (format, args.mode, shaded, cached, terms));
+        let pipeline_index = self.draw_pipeline(device, (format, args.mode, shaded, cached, terms, params.filter_taps));
         if self.bound.as_ref().is_none_or(|b| b.0 != game.generation) {
             let max_layout = self.max_pipeline.get_bind_group_layout(0);
             let max_input = device.create_bind_group(&wgpu::BindGroupDescriptor {

@@ -75,6 +75,7 @@ impl Imaging {
             vibrancy: v[3],
             highlight_power: v[4],
             density_scale: self.tone.density_scale,
+            filter: self.tone.filter,
         };
         Self { tone, ..self }
     }

@@ -206,11 +206,15 @@ impl Estimated {
     /// sRGB-encoded when `p.encode_srgb` is set.
     pub fn fragment(&self, p: &ResolveParams, x: u32, y: u32) -> [f32; 3] {
         let mut c = [p.background[0], p.background[1], p.background[2]];
-        let s = self.sums[(y * self.width + x) as usize];
-        if s[3] > 0.0 {
-            let n = s[3] * COLOR_SCALE;
-            let avg = [s[0] / n, s[1] / n, s[2] / n];
-            let a0 = crate::resolve::log_density(p, s[3], self.max_count.max(1.0));
+        let sample = |x: u32, y: u32| {
+            let s = self.sums[(y * self.width + x) as usize];
+            (s[3] > 0.0).then(|| {
+                let n = s[3] * COLOR_SCALE;
+                ([s[0] / n, s[1] / n, s[2] / n], crate::resolve::log_density(p, s[3], self.max_count.max(1.0)))
+            })
+        };
+        let filtered = if p.filter_taps > 0 { super::filter::gather(p, x, y, sample) } else { sample(x, y) };
+        if let Some((avg, a0)) = filtered {
             // The tone map of the unfiltered resolve (the neutral tone is the line above).
             let tone = crate::resolve::ToneUniforms {
                 brightness: p.brightness,

@@ -27,7 +27,7 @@
 //! The defaults (exposure 0, gamma 1, vibrancy 1, highlight power −1: off) skip every power, so
 //! the image is today's byte for byte: B = 1, α = a0, c = avg, the vibrancy term is exactly 0.
 
-use crate::scene::spec::{DensityScale, RenderSettings};
+use crate::scene::spec::{DensityScale, PixelFilter, RenderSettings};
 
 /// Highlight power below 0: overflowing channels are clipped one by one (flam3's default −1).
 pub const HIGHLIGHT_OFF: f32 = -1.0;
@@ -48,6 +48,8 @@ pub struct Tone {
     pub highlight_power: f32,
     /// Density mode: relative to the densest pixel, or absolute.
     pub density_scale: DensityScale,
+    /// flam3's spatial filter before the tone map (`crate::resolve::filter`); None: off.
+    pub filter: Option<PixelFilter>,
 }
 
 impl Tone {
@@ -59,6 +61,7 @@ impl Tone {
         vibrancy: 1.0,
         highlight_power: HIGHLIGHT_OFF,
         density_scale: DensityScale::Relative,
+        filter: None,
     };
 
     /// The tone a scene's render settings ask for.
@@ -70,6 +73,7 @@ impl Tone {
             vibrancy: settings.vibrancy,
             highlight_power: settings.highlight_power,
             density_scale: settings.density_scale,
+            filter: settings.filter,
         }
     }
 }

@@ -344,6 +344,8 @@ pub(super) struct RenderToml {
     pub(super) estimator_radius: Option<Spanned<f64>>,
     pub(super) estimator_minimum: Option<Spanned<f64>>,
     pub(super) estimator_curve: Option<Spanned<f64>>,
+    pub(super) filter: Option<Spanned<f64>>,
+    pub(super) filter_shape: Option<Spanned<String>>,
     // The key light (`spec::LIGHT_FIELDS`).
     pub(super) shadows: Option<Spanned<f64>>,
     pub(super) light_yaw_deg: Option<Spanned<f64>>,

@@ -25,8 +25,9 @@
 //!   268 / 256) stops (flam3's k1), its gamma divided by 2.2 (nlifs encodes its output to sRGB,
 //!   about a power 1 / 2.2, which flam3 does not), its gamma threshold, vibrancy and highlight
 //!   power; density estimation with flam3's estimator radius, minimum and curve; as many points
-//!   as flam3 draws samples (quality × width × height × 4^zoom). Not drawn: flam3's spatial
-//!   filter and supersampling (a small attractor looks sharper than flam3's).
+//!   as flam3 draws samples (quality × width × height × 4^zoom); flam3's spatial filter (`filter`,
+//!   `filter_shape`) at one sample a pixel. Not drawn: flam3's supersampling (its
+//!   anti-aliasing within a pixel).
 
 use std::path::Path;
 
@@ -34,12 +35,13 @@ use glam::{DVec3, Vec3};
 
 use crate::camera::Projection;
 use crate::color;
+use crate::flame::render_filter::{filter_weights, filter_width};
 use crate::flame::{Coefs, Flame, IDENTITY, PaletteMode, Xform};
 use crate::model::{ProbabilityMode, RectGrid};
 use crate::palette::Palette;
 use crate::scene::spec::{
     CameraSpec, ColorMode, DensityEstimation, DensityScale, FinalXform, FlameDef, FunctionDef, FunctionSpec,
-    MAX_POINTS, RenderSettings, SplatMode, TONE_FIELDS,
+    MAX_POINTS, PixelFilter, RenderSettings, SplatMode, TONE_FIELDS,
 };
 use crate::scene::{LoadError, Scene};
 
@@ -118,6 +120,29 @@ fn conjugated(x: &Xform, m: &[[f64; 3]; 3], m_inv: &[[f64; 3]; 3]) -> FlameDef {
     }
 }
 
+/// flam3's spatial filter of `flame` as the scene's, at one sample a pixel (flam3 spreads it
+/// over its supersampled buffer, the same extent in output pixels); one wider than the
+/// resolve's table is narrowed to the widest that fits, with a warning.
+fn pixel_filter(flame: &Flame, name: &str, warnings: &mut Vec<String>) -> Option<PixelFilter> {
+    if !(flame.filter > 0.0) {
+        return None;
+    }
+    let shape = flame.filter_shape;
+    let mut radius = flame.filter;
+    if filter_width(shape, radius) > PixelFilter::MAX_TAPS {
+        // The widest radius that fits: the width grows in steps of 2 with the radius.
+        while radius > 0.01 && filter_width(shape, radius) > PixelFilter::MAX_TAPS {
+            radius *= 0.99;
+        }
+        warnings.push(format!(
+            "flame `{name}`: its {} filter of radius {} is drawn with radius {radius:.3}, the widest the scene allows",
+            shape.name(),
+            flame.filter
+        ));
+    }
+    filter_weights(shape, radius).is_some().then_some(PixelFilter { radius_px: radius as f32, shape })
+}
+
 /// The scene of `flame`; its palette is named `palette_file` (an image path relative to the
 /// scene file, written when the scene is saved: `Scene::save_over`).
 pub fn scene_of_flame(flame: &Flame, palette_file: &str) -> Result<FlameImport, FlameImportError> {
@@ -142,6 +167,7 @@ pub fn scene_of_flame(flame: &Flame, palette_file: &str) -> Result<FlameImport, 
             "flame `{name}`: palette_mode \"linear\" is drawn as the nearest palette entry, as \"step\" is"
         ));
     }
+    let filter = pixel_filter(flame, &name, &mut warnings);
     let samples: Vec<[f32; 3]> = flame
         .palette
         .iter()
@@ -203,6 +229,7 @@ pub fn scene_of_flame(flame: &Flame, palette_file: &str) -> Result<FlameImport, 
         highlight_power: tone(4, flame.highlight_power),
         density_scale: DensityScale::Absolute,
         density_estimation: estimator,
+        filter,
         color: ColorMode::Palette,
         palette: Some(palette),
         ..RenderSettings::default()

@@ -315,6 +315,12 @@ impl Scene {
                 de.max_radius_px, de.min_radius_px, de.curve
             );
         }
+        if let Some(f) = r.filter {
+            let _ = writeln!(out, "filter = {:?}", f.radius_px);
+            if f.shape != crate::flame::FilterShape::Gaussian {
+                let _ = writeln!(out, "filter_shape = \"{}\"", f.shape.name());
+            }
+        }
         // Depth of field, written only when on or set.
         if r.aperture != 0.0 {
             let _ = writeln!(out, "aperture = {:?}", r.aperture);

@@ -68,6 +68,7 @@ impl ViewerState {
             }
         }
         after.render.density_scale = imaging.tone.density_scale;
+        after.render.filter = imaging.tone.filter;
         after.render.density_estimation = imaging.density_estimation;
         if after != self.scene {
             self.preview(Edit::ReplaceScene { before: Box::new(self.scene.clone()), after: Box::new(after) });

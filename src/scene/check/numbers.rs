@@ -6,8 +6,11 @@ use std::ops::Range;
 
 use toml::Spanned;
 
+use crate::flame::FilterShape;
 use crate::scene::file::RenderToml;
-use crate::scene::spec::{DensityEstimation, GRID_EXTENT_RANGE, MAX_ANGLE_DEG, MAX_COORDINATE, MAX_GRID_OFFSET_RATIO};
+use crate::scene::spec::{
+    DensityEstimation, GRID_EXTENT_RANGE, MAX_ANGLE_DEG, MAX_COORDINATE, MAX_GRID_OFFSET_RATIO, PixelFilter,
+};
 
 use super::{Checker, Res, words};
 
@@ -122,5 +125,29 @@ impl Checker<'_> {
             None => DensityEstimation::DEFAULT_CURVE as f64,
         };
         Ok(Some(DensityEstimation { max_radius_px: radius as f32, min_radius_px: min as f32, curve: curve as f32 }))
+    }
+
+    /// flam3's spatial filter: `filter` (the radius in pixels, 0 or absent: off) at most as wide
+    /// as [`PixelFilter::MAX_TAPS`] pixels, `filter_shape` one of flam3's names (default
+    /// gaussian), only with a radius.
+    pub(super) fn filter(&self, r: &RenderToml) -> Res<Option<PixelFilter>> {
+        let shape = match &r.filter_shape {
+            Some(name) => FilterShape::parse(name.get_ref()).ok_or_else(|| {
+                self.err(
+                    name.span(),
+                    "render.filter_shape",
+                    format!("`{}` is not a filter shape; use one of {}", name.get_ref(), FilterShape::NAMES.join(", ")),
+                )
+            })?,
+            None => FilterShape::Gaussian,
+        };
+        let Some(v) = &r.filter else {
+            if let Some(name) = &r.filter_shape {
+                return Err(self.err(name.span(), "render.filter_shape", "needs `filter` above 0 (the filter is off)"));
+            }
+            return Ok(None);
+        };
+        let radius = self.finite(v, "render.filter")?;
+        PixelFilter::checked(radius, shape).map_err(|why| self.err(v.span(), "render.filter", why))
     }
 }

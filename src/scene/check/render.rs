@@ -86,6 +86,7 @@ impl Checker<'_> {
             })?;
         }
         out.density_estimation = self.density_estimation(r)?;
+        out.filter = self.filter(r)?;
         // The key light.
         let [shadows, yaw, pitch] = r.light();
         let [(_, lo, hi), yaw_field, pitch_field] = crate::scene::spec::LIGHT_FIELDS;

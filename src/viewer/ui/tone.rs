@@ -2,7 +2,9 @@
 //! density mode, the density scale and density estimation. They read the live view's values (the scene's at the
 //! current time) and send `Command::SetImaging` (`imaging.rs` turns it into a scene edit).
 
-use crate::scene::spec::{DensityEstimation, DensityScale, SplatMode, TONE_FIELDS};
+use crate::flame::FilterShape;
+use crate::flame::render_filter::max_radius;
+use crate::scene::spec::{DensityEstimation, DensityScale, PixelFilter, SplatMode, TONE_FIELDS};
 
 use super::super::command::Command;
 use super::super::imaging::DEFAULT_DENSITY_ESTIMATION;
@@ -60,6 +62,20 @@ pub fn imaging_ui(ui: &mut egui::Ui, state: &ViewerState, commands: &mut Vec<Com
             changed |= ui.add(slider(&mut de.min_radius_px, 0.0..=radius).text("estimator minimum (px)")).changed();
             changed |= ui.add(slider(&mut de.curve, 0.01..=10.0).logarithmic(true).text("estimator curve")).changed();
         }
+    }
+    // flam3's spatial filter, of the scene's shape (gaussian where it has none).
+    let shape = imaging.tone.filter.map_or(FilterShape::Gaussian, |f| f.shape);
+    let mut radius = imaging.tone.filter.map_or(0.0, |f| f.radius_px);
+    let widest = (0.9999 * max_radius(shape, PixelFilter::MAX_TAPS)) as f32;
+    let response =
+        ui.add(slider(&mut radius, 0.0..=widest).text(format!("{} filter (px, 0 off)", shape.name()))).on_hover_text(
+            "flam3's spatial filter: each pixel takes a share of its neighbours' light (flam3's default 0.5)",
+        );
+    if response.changed()
+        && let Ok(filter) = PixelFilter::checked(f64::from(radius), shape)
+    {
+        imaging.tone.filter = filter;
+        changed = true;
     }
     if changed && imaging != before {
         commands.push(Command::SetImaging(imaging));
