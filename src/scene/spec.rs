@@ -407,45 +407,9 @@ impl DensityEstimation {
     pub const MAX_RADIUS_PX: f32 = 32.0;
 }
 
-/// flam3's spatial filter (`[render] filter`, `filter_shape`): before the tone map each pixel
-/// takes the weighted sum of the linear densities and colours of the pixels around it, with the
-/// weights flam3 gives the shape at this radius (`crate::flame::render_filter::filter_weights`).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct PixelFilter {
-    /// flam3's `filter`: the radius in pixels (a Gaussian of radius 0.5 spans 3 × 3 pixels).
-    pub radius_px: f32,
-    pub shape: crate::flame::FilterShape,
-}
-
-impl PixelFilter {
-    /// The widest filter, in pixels along each axis (the resolve's table of weights).
-    pub const MAX_TAPS: usize = 15;
-
-    /// The filter of `shape` and radius `radius_px` (0: off, None), or why there is none: a
-    /// radius outside 0..=100, a filter wider than [`Self::MAX_TAPS`] pixels, or weights that
-    /// sum to 0.
-    pub fn checked(radius_px: f64, shape: crate::flame::FilterShape) -> Result<Option<Self>, String> {
-        use crate::flame::render_filter::{filter_weights, filter_width};
-        if !(0.0..=100.0).contains(&radius_px) {
-            return Err(format!("the radius {radius_px} is not in 0..=100"));
-        }
-        if radius_px == 0.0 {
-            return Ok(None);
-        }
-        let taps = filter_width(shape, radius_px);
-        if taps > Self::MAX_TAPS {
-            return Err(format!(
-                "a {} filter of radius {radius_px} spans {taps} pixels; at most {} (a smaller radius)",
-                shape.name(),
-                Self::MAX_TAPS
-            ));
-        }
-        if filter_weights(shape, radius_px).is_none() {
-            return Err(format!("a {} filter of radius {radius_px} has weights that sum to 0", shape.name()));
-        }
-        Ok(Some(Self { radius_px: radius_px as f32, shape }))
-    }
-}
+/// flam3's spatial filter of `[render] filter`, `filter_shape` (its home is the flame module's
+/// filters).
+pub use crate::flame::render_filter::PixelFilter;
 
 impl Default for RenderSettings {
     fn default() -> Self {
