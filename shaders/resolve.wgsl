@@ -144,14 +144,7 @@ const SHADOW_SLOPE_MAX: f32 = 4.0;
 // The key light's shadow map of `chaos_game.wgsl`: one closest key per texel.
 @group(0) @binding(5) var<storage, read> shadow_map: array<u32>;
 
-// The spatial filter's source: per pixel its `sampled` value (average colour and linear
-// density), which the `filter_source` pass writes before the resolve when FILTER_TAPS > 0 (then
-// the accumulation's size), so that `filtered` reads each tap's value instead of computing it
-// again for every pixel the tap reaches.
-@group(0) @binding(6) var<storage, read> filter_values: array<vec4<f32>>;
-
 @group(1) @binding(0) var<storage, read_write> stats_out: array<atomic<u32>>;
-@group(1) @binding(1) var<storage, read_write> filter_values_out: array<vec4<f32>>;
 
 var<workgroup> group_max: atomic<u32>;
 
@@ -533,17 +526,8 @@ fn filter_result(sum: vec4<f32>) -> vec4<f32> {
     return vec4<f32>(0.0);
 }
 
-// Writes `sampled` of every pixel into the filter's values.
-@compute @workgroup_size(256)
-fn filter_source(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
-    let pixel = id.x + id.y * groups.x * 256u;
-    if pixel < params.width * params.height {
-        filter_values_out[pixel] = sampled(i32(pixel % params.width), i32(pixel / params.width));
-    }
-}
-
-// flam3's spatial filter at pixel (x, y), each tap's value read from the filter's values: the
-// twin of `filter::gather` in src/resolve/filter.rs, term by term.
+// flam3's spatial filter at pixel (x, y): the twin of `filter::gather` in src/resolve/filter.rs,
+// term by term.
 fn filtered(x: i32, y: i32) -> vec4<f32> {
     let half = FILTER_TAPS / 2;
     var sum = vec4<f32>(0.0);
@@ -558,7 +542,7 @@ fn filtered(x: i32, y: i32) -> vec4<f32> {
             if sx < 0 || sx >= i32(params.width) {
                 continue;
             }
-            sum = filter_term(sum, filter_values[u32(sy * i32(params.width) + sx)], wy * filter_weight(i));
+            sum = filter_term(sum, sampled(sx, sy), wy * filter_weight(i));
         }
     }
     return filter_result(sum);

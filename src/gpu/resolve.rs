@@ -45,9 +45,8 @@ impl LightTerms {
         ]
     }
 }
-/// A bind group with the generations of the chaos game's buffers, of the light cache and of the
-/// spatial filter's values it binds.
-type Bound = Option<([u64; 3], wgpu::BindGroup)>;
+/// A bind group with the generation of the chaos game's buffers and of the light cache it binds.
+type Bound = Option<((u64, u64), wgpu::BindGroup)>;
 
 /// Which rows of the light cache a draw refreshes before it reads the light from the cache
 /// (see [`GpuResolve::draw`]).
@@ -67,23 +66,6 @@ struct LightCache {
     view: wgpu::TextureView,
 }
 
-/// The spatial filter's source (`filter_values` in the shader): per pixel its average colour
-/// and linear density, 16 bytes a pixel of the accumulation while the filter is on (16 bytes
-/// otherwise: the resolve binds it whatever its pipeline).
-struct FilterValues {
-    bytes: u64,
-    generation: u64,
-    buffer: wgpu::Buffer,
-}
-
-/// The pass that fills [`FilterValues`]: its pipeline for one splat mode and its two bind
-/// groups with the generations they bind.
-struct FilterPass {
-    mode: SplatMode,
-    pipeline: wgpu::ComputePipeline,
-    bound: Option<([u64; 3], wgpu::BindGroup, wgpu::BindGroup)>,
-}
-
 pub struct GpuResolve {
     module: wgpu::ShaderModule,
     max_pipeline: wgpu::ComputePipeline,
@@ -96,10 +78,6 @@ pub struct GpuResolve {
     /// Generation of the chaos game's buffers and the max-count pass's two bind groups.
     bound: Option<(u64, wgpu::BindGroup, wgpu::BindGroup)>,
     light: Option<LightCache>,
-    /// The spatial filter's values and the pass that fills them.
-    filter_values: Option<FilterValues>,
-    filter_pass: Option<FilterPass>,
-    /// Generations of the light cache and of the filter's values.
     light_generations: u64,
     /// The light pass's pipeline, its bind group (with the chaos game's generation) and
     /// the terms it runs.
@@ -138,8 +116,6 @@ impl GpuResolve {
             stats,
             bound: None,
             light: None,
-            filter_values: None,
-            filter_pass: None,
             light_generations: 0,
             light_pipeline: None,
         }
@@ -163,70 +139,6 @@ impl GpuResolve {
             self.light = Some(LightCache { width, height, generation: self.light_generations, view });
         }
         self.light.as_ref().expect("made above")
-    }
-
-    /// The spatial filter's values of `bytes` (re-created on a size change); their generation.
-    fn filter_values(&mut self, device: &wgpu::Device, bytes: u64) -> u64 {
-        if self.filter_values.as_ref().is_none_or(|v| v.bytes != bytes) {
-            let buffer = device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("resolve_filter_values"),
-                size: bytes,
-                usage: wgpu::BufferUsages::STORAGE,
-                mapped_at_creation: false,
-            });
-            self.light_generations += 1;
-            self.filter_values = Some(FilterValues { bytes, generation: self.light_generations, buffer });
-        }
-        self.filter_values.as_ref().expect("made above").generation
-    }
-
-    /// Records the pass that writes each pixel's average colour and linear density into the
-    /// filter's values (after the max count's pass in density mode), for the resolve's
-    /// `filtered` to gather.
-    fn fill_filter_values(
-        &mut self,
-        device: &wgpu::Device,
-        encoder: &mut wgpu::CommandEncoder,
-        game: &GpuChaosGame,
-        mode: SplatMode,
-    ) {
-        let Some(values) = &self.filter_values else { return };
-        if self.filter_pass.as_ref().is_none_or(|f| f.mode != mode) {
-            let constants = [("RESOLVE_MODE", mode.index() as f64)];
-            let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                label: Some("filter_source"),
-                layout: None,
-                module: &self.module,
-                entry_point: Some("filter_source"),
-                compilation_options: wgpu::PipelineCompilationOptions { constants: &constants, ..Default::default() },
-                cache: None,
-            });
-            self.filter_pass = Some(FilterPass { mode, pipeline, bound: None });
-        }
-        let Some(pass) = &mut self.filter_pass else { return };
-        let generations = [game.generation, 0, values.generation];
-        if pass.bound.as_ref().is_none_or(|b| b.0 != generations) {
-            let input = device.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("filter_source_in"),
-                layout: &pass.pipeline.get_bind_group_layout(0),
-                entries: &[entry(0, &self.params), entry(1, &game.accum), entry(3, &self.stats)],
-            });
-            let output = device.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("filter_source_out"),
-                layout: &pass.pipeline.get_bind_group_layout(1),
-                entries: &[entry(1, &values.buffer)],
-            });
-            pass.bound = Some((generations, input, output));
-        }
-        let Some((_, input, output)) = &pass.bound else { return };
-        let mut compute = encoder
-            .begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("filter_source"), timestamp_writes: None });
-        compute.set_pipeline(&pass.pipeline);
-        compute.set_bind_group(0, input, &[]);
-        compute.set_bind_group(1, output, &[]);
-        let groups = (game.width as u64 * game.height as u64).div_ceil(256);
-        let x = groups.min(4096) as u32;
-        compute.dispatch_workgroups(x, groups.div_ceil(x as u64) as u32, 1);
     }
 
     fn draw_pipeline(&mut self, device: &wgpu::Device, key: DrawKey) -> usize {
@@ -276,13 +188,13 @@ impl GpuResolve {
             self.light_pipeline = Some((pipeline, None, terms));
         }
         let Some((pipeline, bound, _)) = &mut self.light_pipeline else { return };
-        if bound.as_ref().is_none_or(|b| b.0[0] != game.generation) {
+        if bound.as_ref().is_none_or(|b| b.0.0 != game.generation) {
             let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some("resolve_light"),
                 layout: &pipeline.get_bind_group_layout(0),
                 entries: &[entry(0, &self.params), entry(1, &game.accum), entry(5, &game.shadow)],
             });
-            *bound = Some(([game.generation, 0, 0], group));
+            *bound = Some(((game.generation, 0), group));
         }
         let (Some(light), Some((_, group))) = (&self.light, bound.as_ref()) else { return };
         let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
@@ -330,9 +242,6 @@ impl GpuResolve {
         let terms =
             LightTerms { shadows, occlusion: params.occlusion > 0.0, normal_radius_px: params.normal_radius_px };
         let light_generation = self.light_cache(device, game.width, game.height).generation;
-        let filtered = params.filter_taps > 0 && args.mode != SplatMode::Closest;
-        let filter_bytes = if filtered { 16 * u64::from(game.width) * u64::from(game.height) } else { 16 };
-        let filter_generation = self.filter_values(device, filter_bytes);
         if let LightRows::Refresh { start, end } = light
             && cached
         {
@@ -354,9 +263,8 @@ impl GpuResolve {
             self.bound = Some((game.generation, max_input, max_output));
         }
         let light_view = &self.light.as_ref().expect("made above").view;
-        let filter_values = &self.filter_values.as_ref().expect("made above").buffer;
         let (_, pipeline, draw_bound) = &mut self.draw_pipelines[pipeline_index];
-        let generations = [game.generation, light_generation, filter_generation];
+        let generations = (game.generation, light_generation);
         if draw_bound.as_ref().is_none_or(|b| b.0 != generations) {
             let draw = device.create_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some("resolve"),
@@ -375,11 +283,11 @@ impl GpuResolve {
                     entry(3, &self.stats),
                     wgpu::BindGroupEntry { binding: 4, resource: wgpu::BindingResource::TextureView(light_view) },
                     entry(5, &game.shadow),
-                    entry(6, filter_values),
                 ],
             });
             *draw_bound = Some((generations, draw));
         }
+        let (_, pipeline, Some((_, draw))) = &self.draw_pipelines[pipeline_index] else { return };
         let Some((_, max_input, max_output)) = &self.bound else { return };
         if args.mode == SplatMode::Density {
             encoder.clear_buffer(&self.stats, 0, None);
@@ -392,10 +300,6 @@ impl GpuResolve {
             let x = groups.min(4096) as u32;
             pass.dispatch_workgroups(x, groups.div_ceil(x as u64) as u32, 1);
         }
-        if filtered {
-            self.fill_filter_values(device, encoder, game, args.mode);
-        }
-        let (_, pipeline, Some((_, draw))) = &self.draw_pipelines[pipeline_index] else { return };
         let mut pass = resolve_pass(encoder, "resolve", target, args.origin_px, [game.width, game.height]);
         pass.set_pipeline(pipeline);
         pass.set_bind_group(0, draw, &[]);
