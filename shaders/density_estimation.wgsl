@@ -178,7 +178,8 @@ fn sampled_estimate(x: i32, y: i32) -> vec4<f32> {
 }
 
 // `filtered` of resolve.wgsl over the estimate: the twin of `Estimated::fragment`'s call of
-// `filter::gather`.
+// `filter::gather`. The same loop as `filtered`'s, repeated: WGSL cannot pass it the sample
+// function, and resolve.wgsl, compiled on its own too, cannot name `sampled_estimate`.
 fn filtered_estimate(x: i32, y: i32) -> vec4<f32> {
     let half = FILTER_TAPS / 2;
     var sum = vec4<f32>(0.0);

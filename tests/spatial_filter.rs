@@ -5,7 +5,7 @@
 
 mod common;
 
-use common::{run_nlifs, scene_path, temp_dir};
+use common::{lit_pixels, render_sparse_density, temp_dir};
 use nlifs::flame::FilterShape;
 use nlifs::scene::Scene;
 use nlifs::scene::spec::PixelFilter;
@@ -53,28 +53,15 @@ fn fields_read_and_write_back() {
 #[test]
 fn cli_flag_off_on_and_refusals() {
     let dir = temp_dir("spatial-filter");
-    let scene = scene_path("julia");
-    let scene = scene.to_str().unwrap();
     let path = |name: &str| dir.join(name).to_str().unwrap().to_string();
-    let common = ["render", scene, "--mode", "density", "--width", "160", "--height", "120", "--points", "20000"];
-    let run = |extra: &[&str], out: &str| {
-        let mut args: Vec<&str> = common.to_vec();
-        args.extend_from_slice(extra);
-        args.extend_from_slice(&["-o", out]);
-        run_nlifs(&args)
-    };
+    let run = |extra: &[&str], out: &str| render_sparse_density("julia", extra, out);
     let (plain, off, on) = (path("plain.png"), path("off.png"), path("on.png"));
     assert!(run(&[], &plain).status.success());
     assert!(run(&["--filter", "0"], &off).status.success());
     let out = run(&["--filter", "1"], &on);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     assert_eq!(std::fs::read(&plain).unwrap(), std::fs::read(&off).unwrap());
-    let lit = |p: &str| {
-        let img = image::open(p).unwrap().to_rgb8();
-        let bg = *img.get_pixel(0, 0);
-        img.pixels().filter(|px| **px != bg).count()
-    };
-    let (lit_plain, lit_on) = (lit(&plain), lit(&on));
+    let (lit_plain, lit_on) = (lit_pixels(&plain), lit_pixels(&on));
     assert!(lit_on > 2 * lit_plain, "filtered {lit_on} vs plain {lit_plain}");
     for (flag, why) in
         [("-1", "not in 0..=100"), ("x", "is not a number"), ("1,round", "is not a filter shape"), ("9", "at most 15")]

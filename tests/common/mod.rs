@@ -52,6 +52,34 @@ pub fn run_nlifs(args: &[&str]) -> Output {
     nlifs_command().args(args).output().expect("start the nlifs binary")
 }
 
+/// `nlifs render` of the shipped scene `scene` in density mode at 160×120 with 20,000 points (a
+/// sparse picture), with `extra` arguments, into `out`.
+pub fn render_sparse_density(scene: &str, extra: &[&str], out: &str) -> Output {
+    let path = scene_path(scene);
+    let mut args = vec![
+        "render",
+        path.to_str().unwrap(),
+        "--mode",
+        "density",
+        "--width",
+        "160",
+        "--height",
+        "120",
+        "--points",
+        "20000",
+    ];
+    args.extend_from_slice(extra);
+    args.extend_from_slice(&["-o", out]);
+    run_nlifs(&args)
+}
+
+/// The pixels of the image at `path` that differ from its pixel (0, 0) (the background).
+pub fn lit_pixels(path: &str) -> usize {
+    let img = image::open(path).unwrap().to_rgb8();
+    let bg = *img.get_pixel(0, 0);
+    img.pixels().filter(|px| **px != bg).count()
+}
+
 /// A fresh, empty folder `nlifs-<name>-<pid>` in the system's temporary directory (whatever an
 /// earlier run left there is removed first).
 pub fn temp_dir(name: &str) -> PathBuf {
