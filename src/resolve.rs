@@ -523,7 +523,6 @@ fn fragment(p: &ResolveParams, inputs: &ResolveInputs<'_>, x: u32, y: u32, light
     let mut c = [p.background[0], p.background[1], p.background[2]];
     if x < p.width && y < p.height {
         let pixel = (y * p.width + x) as usize;
-        let slot = 4 * pixel;
         if p.mode == MODE_CLOSEST {
             let mut key = accum[pixel];
             let mut at = (x as i32, y as i32);
@@ -556,7 +555,8 @@ fn fragment(p: &ResolveParams, inputs: &ResolveInputs<'_>, x: u32, y: u32, light
                 }
                 c = cue(p, base, t);
             }
-        } else if p.filter_taps > 0 {
+        } else {
+            // A pixel's average colour and linear density (None: no points).
             let sample = |x: u32, y: u32| {
                 let slot = 4 * (y * p.width + x) as usize;
                 let count = accum[slot + 3];
@@ -566,16 +566,9 @@ fn fragment(p: &ResolveParams, inputs: &ResolveInputs<'_>, x: u32, y: u32, light
                     (avg, density_of(p, inputs, count))
                 })
             };
-            if let Some((avg, a0)) = filter::gather(p, x, y, sample) {
+            let drawn = if p.filter_taps > 0 { filter::gather(p, x, y, sample) } else { sample(x, y) };
+            if let Some((avg, a0)) = drawn {
                 c = toned(&tone_uniforms(p), avg, a0, background(p), p.mode != MODE_AVERAGE).0;
-            }
-        } else {
-            let count = accum[slot + 3];
-            if count > 0 {
-                let n = count as f32 * COLOR_SCALE;
-                let avg = [accum[slot] as f32 / n, accum[slot + 1] as f32 / n, accum[slot + 2] as f32 / n];
-                c = toned(&tone_uniforms(p), avg, density_of(p, inputs, count), background(p), p.mode != MODE_AVERAGE)
-                    .0;
             }
         }
     }
