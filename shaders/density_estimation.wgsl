@@ -19,8 +19,9 @@
 //
 // Passes: `kernel_index` (each pixel's kernel step from its count), `estimate` (the gather,
 // and the largest estimated count as bits: for non-negative floats the u32 order of the bits
-// is the float order, so atomicMax finds it), then the full-screen `resolve_estimated`, the
-// density branch of `resolve` with float sums and counts (`Estimated::fragment` on the CPU).
+// is the float order, so atomicMax finds it), with a spatial filter `filter_estimate` (once per
+// estimate), then the full-screen `resolve_estimated`, the density branch of `resolve` with
+// float sums and counts (`Estimated::fragment` on the CPU).
 
 // Mirrors `DensityEstimationParams` in `src/gpu/density_estimation.rs`: keep in sync.
 struct DensityEstimationParams {
@@ -52,6 +53,10 @@ const TILE: u32 = 8u;
 @group(1) @binding(16) var<storage, read> estimated_max_in: array<u32>;
 // Per tile (row by row, ⌈width / TILE⌉ per row): 1 + the largest reach of its sources, 0 none.
 @group(1) @binding(17) var<storage, read_write> tile_reach: array<atomic<u32>>;
+// The spatial filter over the estimate (FILTER_TAPS > 0): each pixel's filtered average colour
+// and linear density, written once per estimate by `filter_estimate`, read by every draw.
+@group(1) @binding(18) var<storage, read_write> filtered_out: array<vec4<f32>>;
+@group(1) @binding(19) var<storage, read> filtered_in: array<vec4<f32>>;
 
 // `kernel_index` in the CPU twin: the smallest step whose first count is ≤ `count`.
 fn kernel_step(count: u32) -> u32 {
@@ -200,28 +205,51 @@ fn filtered_estimate(x: i32, y: i32) -> vec4<f32> {
     return filter_result(sum);
 }
 
-@fragment
-fn resolve_estimated(in: VertexOutput) -> @location(0) vec4<f32> {
-    let x = u32(in.position.x) - params.origin_x;
-    let y = u32(in.position.y) - params.origin_y;
+// Writes each pixel's `filtered_estimate` (the estimate and the parameters do not change between
+// two estimates, so the draws in between read it instead of gathering the taps again).
+@compute @workgroup_size(8, 8)
+fn filter_estimate(@builtin(global_invocation_id) id: vec3<u32>) {
+    if id.x >= params.width || id.y >= params.height {
+        return;
+    }
+    filtered_out[id.y * params.width + id.x] = filtered_estimate(i32(id.x), i32(id.y));
+}
+
+// The output pixel of fragment position `position` in the accumulation (outside it where a
+// coordinate is ≥ the size: the subtraction wraps).
+fn estimate_pixel(position: vec4<f32>) -> vec2<u32> {
+    return vec2<u32>(u32(position.x) - params.origin_x, u32(position.y) - params.origin_y);
+}
+
+// The drawn colour of a pixel whose average colour and linear density are `s` (w 0: the
+// background), sRGB-encoded where the target is not an sRGB format.
+fn estimate_color(s: vec4<f32>) -> vec4<f32> {
     var c = params.background.rgb;
-    if x < params.width && y < params.height {
-        if FILTER_TAPS > 0 {
-            let f = filtered_estimate(i32(x), i32(y));
-            if f.w > 0.0 {
-                c = toned(f.rgb, f.w, true);
-            }
-        } else {
-            let s = estimated_in[y * params.width + x];
-            if s.w > 0.0 {
-                let avg = s.rgb / (s.w * COLOR_SCALE);
-                let max_count = max(bitcast<f32>(estimated_max_in[0]), 1.0);
-                c = toned(avg, log_density(s.w, max_count), true);
-            }
-        }
+    if s.w > 0.0 {
+        c = toned(s.rgb, s.w, true);
     }
     if ENCODE_SRGB {
         c = vec3<f32>(linear_to_srgb(c.x), linear_to_srgb(c.y), linear_to_srgb(c.z));
     }
     return vec4<f32>(c, 1.0);
+}
+
+// The estimate without a spatial filter.
+@fragment
+fn resolve_estimated(in: VertexOutput) -> @location(0) vec4<f32> {
+    let p = estimate_pixel(in.position);
+    if p.x >= params.width || p.y >= params.height {
+        return estimate_color(vec4<f32>(0.0));
+    }
+    return estimate_color(sampled_estimate(i32(p.x), i32(p.y)));
+}
+
+// The estimate with the spatial filter, as `filter_estimate` wrote it.
+@fragment
+fn resolve_filtered_estimate(in: VertexOutput) -> @location(0) vec4<f32> {
+    let p = estimate_pixel(in.position);
+    if p.x >= params.width || p.y >= params.height {
+        return estimate_color(vec4<f32>(0.0));
+    }
+    return estimate_color(filtered_in[p.y * params.width + p.x]);
 }

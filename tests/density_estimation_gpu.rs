@@ -292,3 +292,76 @@ fn density_mode_stops_at_the_renders_points_per_pixel() {
     let mut live = plant2_view(&ctx, settings, width, height);
     assert_eq!(frames_to_stop(&mut live), 1);
 }
+
+/// Between two density estimates the live view draws the last one as it was made: on the
+/// absolute scale of the points it was made of (the current count would dim it frame by frame
+/// until the next estimate, which brightened it again), and with the spatial filter the pass
+/// made with it (`GpuDensityEstimation::draw` filters once per estimate). So a draw that keeps
+/// the estimate shows the bytes of the draw that made it, and the next estimate's draw shows
+/// the new estimate. Both routes, filter on and off, the absolute and the relative scale.
+#[test]
+fn a_kept_estimate_is_drawn_as_it_was_made() {
+    use nlifs::flame::FilterShape;
+    use nlifs::gpu::progressive::{EstimateDue, ProgressiveSettings};
+    use nlifs::live::ChaosBackend;
+    use nlifs::scene::spec::{DensityScale, PixelFilter, SplatMode};
+    let Some(ctx) = gpu() else { return };
+    let (width, height) = (96u32, 64u32);
+    let filter = Some(PixelFilter { radius_px: 1.0, shape: FilterShape::Gaussian });
+    let cases = [ChaosBackend::Cpu, ChaosBackend::Gpu].into_iter().flat_map(|backend| {
+        [None, filter].into_iter().flat_map(move |filter| {
+            [DensityScale::Absolute, DensityScale::Relative].map(|scale| (backend, filter, scale))
+        })
+    });
+    for (backend, filter, density_scale) in cases {
+        let settings = LiveSettings {
+            draw: ProgressiveSettings {
+                point_count: 1 << 12,
+                mode: SplatMode::Density,
+                max_splats: u64::MAX,
+                tone: Tone { density_scale, gamma: 2.2, filter, ..Tone::NEUTRAL },
+                density_estimation: Some(DensityEstimation { max_radius_px: 5.0, min_radius_px: 0.0, curve: 0.4 }),
+                ..ProgressiveSettings::default()
+            },
+            chaos_backend: backend,
+            render_density: None,
+        };
+        let mut live = plant2_view(&ctx, settings, width, height);
+        let draw = |live: &mut LiveView| {
+            nlifs::gpu::readback::draw_offscreen(&ctx, width, height, |encoder, target, format| {
+                live.draw(&ctx, encoder, target, format, [0, 0])
+            })
+            .unwrap()
+        };
+        for _ in 0..12 {
+            advance(&ctx, &mut live);
+        }
+        assert!(matches!(live.estimate_due(), EstimateDue::Make(_)), "{backend:?}: no estimate due");
+        let made = draw(&mut live);
+        let lit = made.pixels().filter(|p| p.0 != made.get_pixel(0, 0).0).count();
+        assert!(lit > 500, "{backend:?}, filter {filter:?}: only {lit} pixels lit");
+        for frame in 0..3 {
+            advance(&ctx, &mut live);
+            assert_eq!(live.estimate_due(), EstimateDue::Keep, "{backend:?}: frame {frame}");
+            let kept = draw(&mut live);
+            let differing = made.pixels().zip(kept.pixels()).filter(|(a, b)| a != b).count();
+            assert_eq!(differing, 0, "{backend:?}, filter {filter:?}: frame {frame} after the estimate");
+        }
+        // The next estimate is drawn, not the filter's pass of the last one: as a snapshot
+        // (a fresh estimate on the GPU) shows it, within a level as above.
+        while !matches!(live.estimate_due(), EstimateDue::Make(_)) {
+            advance(&ctx, &mut live);
+        }
+        let next = draw(&mut live);
+        let snapshot = live.snapshot(&ctx).unwrap();
+        let mut differing = 0;
+        for (a, b) in next.pixels().zip(snapshot.pixels()) {
+            for c in 0..3 {
+                assert!(a.0[c].abs_diff(b.0[c]) <= 1, "{backend:?}, filter {filter:?}: {a:?} vs snapshot {b:?}");
+                differing += (a.0[c] != b.0[c]) as u32;
+            }
+        }
+        assert!(differing * 100 < 3 * width * height, "{differing} channels differ by one level");
+        assert!(next.pixels().zip(made.pixels()).any(|(a, b)| a != b), "{backend:?}: the picture did not change");
+    }
+}

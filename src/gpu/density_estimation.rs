@@ -5,7 +5,9 @@
 //! draws that buffer with the resolve's density branch and tone map ([`GpuDensityEstimation::draw`]) or reads it back
 //! as the CPU twin's [`Estimated`] ([`GpuDensityEstimation::read`], `render --backend gpu` and
 //! the tests). The kernel tables are the CPU twin's ([`KernelTables`]), uploaded when the
-//! setting changes.
+//! setting changes. With a spatial filter, a third pass filters the estimate once into a buffer
+//! the draws read, until the estimate or what the filtered values depend on changes: the
+//! taps' gather costs more than the rest of a draw on a software rasterizer.
 
 use crate::resolve::density_estimation::{Estimated, KernelTables};
 use crate::resolve::{ResolveArgs, ResolveParams};
@@ -62,14 +64,44 @@ struct Pixels {
     estimated: wgpu::Buffer,
     estimated_max: wgpu::Buffer,
     tile_reach: wgpu::Buffer,
+    /// The spatial filter's average colour and linear density per pixel.
+    filtered: wgpu::Buffer,
+}
+
+/// What the filtered buffer was made of: the estimate's generation and the parameters its
+/// values depend on (the size, the absolute scale, the filter).
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct FilteredOf {
+    estimate: u64,
+    size: [u32; 2],
+    count_scale: f32,
+    taps: u32,
+    weights: crate::resolve::filter::Weights,
+}
+
+impl FilteredOf {
+    fn new(estimate: u64, p: &ResolveParams) -> Self {
+        Self {
+            estimate,
+            size: [p.width, p.height],
+            count_scale: p.count_scale,
+            taps: p.filter_taps,
+            weights: p.filter_weights,
+        }
+    }
 }
 
 pub struct GpuDensityEstimation {
     module: wgpu::ShaderModule,
     index_pipeline: wgpu::ComputePipeline,
     estimate_pipeline: wgpu::ComputePipeline,
-    /// The draw pipeline per target format and spatial filter taps, made on first use.
-    draw_pipelines: Vec<((wgpu::TextureFormat, u32), wgpu::RenderPipeline)>,
+    /// The draw pipeline per target format, with the spatial filter or without, made on first use.
+    draw_pipelines: Vec<((wgpu::TextureFormat, bool), wgpu::RenderPipeline)>,
+    /// The spatial filter's pass per taps, made on first use.
+    filter_pipelines: Vec<(u32, wgpu::ComputePipeline)>,
+    /// Estimates made or uploaded so far (the filtered buffer's is [`FilteredOf::estimate`]).
+    estimates: u64,
+    filtered_of: Option<FilteredOf>,
     params: wgpu::Buffer,
     resolve_params: wgpu::Buffer,
     tables: Option<Tables>,
@@ -106,6 +138,9 @@ impl GpuDensityEstimation {
             index_pipeline,
             estimate_pipeline,
             draw_pipelines: Vec::new(),
+            filter_pipelines: Vec::new(),
+            estimates: 0,
+            filtered_of: None,
             tables: None,
             pixels: None,
         }
@@ -193,6 +228,7 @@ impl GpuDensityEstimation {
         pass.set_bind_group(0, &estimate_accum, &[]);
         pass.set_bind_group(GROUP, &estimate_own, &[]);
         pass.dispatch_workgroups(width.div_ceil(8), height.div_ceil(8), 1);
+        self.estimates += 1;
     }
 
     /// Makes the per-pixel buffers for a `width`×`height` accumulation (kept while the size is).
@@ -211,7 +247,9 @@ impl GpuDensityEstimation {
                     4 * width.div_ceil(TILE) as u64 * height.div_ceil(TILE) as u64,
                     wgpu::BufferUsages::empty(),
                 ),
+                filtered: storage(device, "de_filtered", 16 * pixels, wgpu::BufferUsages::empty()),
             });
+            self.filtered_of = None;
         }
     }
 
@@ -223,11 +261,14 @@ impl GpuDensityEstimation {
         let Some(p) = &self.pixels else { return };
         ctx.queue.write_buffer(&p.estimated, 0, bytemuck::cast_slice(&e.sums));
         ctx.queue.write_buffer(&p.estimated_max, 0, bytemuck::bytes_of(&[e.max_count.to_bits(), 0, 0, 0]));
+        self.estimates += 1;
     }
 
     /// Records the resolve of the last estimate (density mode, with `args`' background and
     /// tone) onto `target` of `format`, the accumulation's pixel (0, 0) at `args.origin_px`, the
     /// rest of the target cleared to black: what `GpuResolve::draw` does with the raw counts.
+    /// With a spatial filter, the filter's pass first where the estimate or what the filtered
+    /// values depend on changed since it last ran.
     pub fn draw(
         &mut self,
         ctx: &GpuContext,
@@ -239,13 +280,18 @@ impl GpuDensityEstimation {
         let Some(p) = &self.pixels else { return };
         let params = args.params(p.width, p.height, !format.is_srgb());
         ctx.queue.write_buffer(&self.resolve_params, 0, bytemuck::bytes_of(&params));
-        let key = (format, params.filter_taps);
+        let filter = params.filter_taps > 0;
+        if filter && self.filtered_of != Some(FilteredOf::new(self.estimates, &params)) {
+            self.encode_filter(ctx, encoder, &params);
+        }
+        let Some(p) = &self.pixels else { return };
+        let key = (format, filter);
         let index = match self.draw_pipelines.iter().position(|(k, _)| *k == key) {
             Some(i) => i,
             None => {
-                let constants =
-                    [("ENCODE_SRGB", !format.is_srgb() as u32 as f64), ("FILTER_TAPS", params.filter_taps as f64)];
-                let pipeline = fullscreen_pipeline(&ctx.device, &self.module, "resolve_estimated", &constants, format);
+                let constants = [("ENCODE_SRGB", !format.is_srgb() as u32 as f64)];
+                let entry = if filter { "resolve_filtered_estimate" } else { "resolve_estimated" };
+                let pipeline = fullscreen_pipeline(&ctx.device, &self.module, entry, &constants, format);
                 self.draw_pipelines.push((key, pipeline));
                 self.draw_pipelines.len() - 1
             }
@@ -259,13 +305,63 @@ impl GpuDensityEstimation {
             })
         };
         let params_group = group(0, &[entry(0, &self.resolve_params)]);
-        let own = group(GROUP, &[entry(15, &p.estimated), entry(16, &p.estimated_max)]);
+        let own = if filter {
+            group(GROUP, &[entry(19, &p.filtered)])
+        } else {
+            group(GROUP, &[entry(15, &p.estimated), entry(16, &p.estimated_max)])
+        };
         let mut pass =
             super::resolve::resolve_pass(encoder, "resolve_estimated", target, args.origin_px, [p.width, p.height]);
         pass.set_pipeline(pipeline);
         pass.set_bind_group(0, &params_group, &[]);
         pass.set_bind_group(GROUP, &own, &[]);
         pass.draw(0..3, 0..1);
+    }
+
+    /// Records the spatial filter's pass over the last estimate with `params` (written to the
+    /// resolve's parameters buffer) into the filtered buffer.
+    fn encode_filter(&mut self, ctx: &GpuContext, encoder: &mut wgpu::CommandEncoder, params: &ResolveParams) {
+        let Some(p) = &self.pixels else { return };
+        let taps = params.filter_taps;
+        let index = match self.filter_pipelines.iter().position(|(t, _)| *t == taps) {
+            Some(i) => i,
+            None => {
+                let constants = [("FILTER_TAPS", f64::from(taps))];
+                let pipeline = ctx.device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                    label: Some("filter_estimate"),
+                    layout: None,
+                    module: &self.module,
+                    entry_point: Some("filter_estimate"),
+                    compilation_options: wgpu::PipelineCompilationOptions {
+                        constants: &constants,
+                        ..Default::default()
+                    },
+                    cache: None,
+                });
+                self.filter_pipelines.push((taps, pipeline));
+                self.filter_pipelines.len() - 1
+            }
+        };
+        let pipeline = &self.filter_pipelines[index].1;
+        let group = |index: u32, entries: &[wgpu::BindGroupEntry]| {
+            ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("filter_estimate"),
+                layout: &pipeline.get_bind_group_layout(index),
+                entries,
+            })
+        };
+        let params_group = group(0, &[entry(0, &self.resolve_params)]);
+        let own = group(GROUP, &[entry(15, &p.estimated), entry(16, &p.estimated_max), entry(18, &p.filtered)]);
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("filter_estimate"),
+            timestamp_writes: None,
+        });
+        pass.set_pipeline(pipeline);
+        pass.set_bind_group(0, &params_group, &[]);
+        pass.set_bind_group(GROUP, &own, &[]);
+        pass.dispatch_workgroups(p.width.div_ceil(8), p.height.div_ceil(8), 1);
+        drop(pass);
+        self.filtered_of = Some(FilteredOf::new(self.estimates, params));
     }
 
     /// Reads the last estimate back as the CPU twin's [`Estimated`] (waits for the GPU).

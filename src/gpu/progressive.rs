@@ -17,8 +17,10 @@
 //! until the accumulation has rested [`ESTIMATE_FIRST_FRAMES`] frames after a clear (while the camera
 //! moves, the raw counts are drawn), runs again whenever the frames since the clear have
 //! doubled, at most [`ESTIMATE_EVERY_FRAMES`] apart, and once more when accumulation stops;
-//! draws in between show the last estimate (snapshots estimate afresh). A point source on the
-//! CPU may make the estimate itself, with the CPU twin, and hand it over
+//! draws in between show the last estimate as it was made (on the absolute scale of the points
+//! it was made of; snapshots estimate afresh). A spatial filter (`Tone::filter`) goes with the
+//! estimate: filtered once per estimate, and left out of the raw counts drawn before the first.
+//! A point source on the CPU may make the estimate itself, with the CPU twin, and hand it over
 //! ([`Progressive::upload_estimate`] when [`Progressive::estimate_due`] asks for one).
 
 use glam::DVec3;
@@ -177,9 +179,18 @@ pub struct Progressive {
     light_args: Option<ResolveArgs>,
     /// Clears of the accumulation so far (an estimate belongs to one accumulation).
     clears: u64,
-    /// What the last density estimate was made of: the clear count, the frames since that
-    /// clear and the setting.
-    estimated: Option<(u64, u32, DensityEstimation)>,
+    /// What the last density estimate was made of.
+    estimated: Option<MadeEstimate>,
+}
+
+/// What a density estimate was made of: the accumulation (its clear count), the frames and
+/// points splatted since that clear, and the setting.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct MadeEstimate {
+    clears: u64,
+    frames: u32,
+    splats: u64,
+    de: DensityEstimation,
 }
 
 /// Frames after a clear whose draws refresh the whole light cache (a cloud filling in changes
@@ -491,6 +502,7 @@ impl Progressive {
         format: wgpu::TextureFormat,
         origin_px: [u32; 2],
     ) {
+        let due = self.estimate_due();
         let s = &self.settings;
         let (near, far) = self.view.map_or((0.0, 1.0), |v| (v.near, v.far));
         let ((pixel_size, perspective), pixel_area) = match &self.camera {
@@ -509,27 +521,35 @@ impl Progressive {
             pixel_size,
             perspective,
             origin_px,
-            tone: s.tone,
+            // While the estimate waits for the accumulation to rest (a moving camera), the raw
+            // counts are drawn without the spatial filter too: both read every pixel's
+            // neighbourhood, the filter once per estimate (`GpuDensityEstimation::draw`).
+            tone: if due == EstimateDue::Young { Tone { filter: None, ..s.tone } } else { s.tone },
             shadows: s.shadows,
             key_light: crate::resolve::shadow::key_light(s.light_yaw_deg, s.light_pitch_deg),
             shadow: self.view.and_then(|v| v.shadow),
             normal_radius_px: s.normal_radius_px,
             pixel_area,
             // Density mode only: the other modes' arguments (the light cache's) stay the same
-            // from frame to frame.
-            points_drawn: if s.mode == SplatMode::Density { self.splats_since_clear } else { 0 },
+            // from frame to frame. An estimate kept from an earlier frame is drawn on the scale
+            // of the points it was made of (the current count would dim it until the next).
+            points_drawn: match (s.mode, due, self.estimated) {
+                (SplatMode::Density, EstimateDue::Keep, Some(made)) => made.splats,
+                (SplatMode::Density, ..) => self.splats_since_clear,
+                _ => 0,
+            },
         };
-        let due = self.estimate_due();
         let estimated = matches!(due, EstimateDue::Keep | EstimateDue::Make(_));
         // Light rows only where the estimate is not drawn (their bands count towards the rest).
         let light = if estimated { LightRows::Inline } else { self.light_rows(&args) };
         let size = self.size();
+        let made = if let EstimateDue::Make(de) = due { Some(self.made_estimate(de)) } else { None };
         match &mut self.engine {
             Engine::Gpu { game, estimation, .. } if estimated => {
                 let estimation = estimation.get_or_insert_with(|| GpuDensityEstimation::new(&ctx.device));
                 if let EstimateDue::Make(de) = due {
                     estimation.encode(ctx, encoder, &game.accum, size.0, size.1, &de);
-                    self.estimated = Some((self.clears, self.frames_since_clear, de));
+                    self.estimated = made;
                 }
                 estimation.draw(ctx, encoder, &args, target, format);
             }
@@ -546,7 +566,7 @@ impl Progressive {
                             &de,
                         ));
                     }
-                    self.estimated = Some((self.clears, self.frames_since_clear, de));
+                    self.estimated = made;
                 }
                 picture.draw(ctx, encoder, &args, size, estimated, light, target, format);
             }
@@ -563,7 +583,9 @@ impl Progressive {
         let frames = self.frames_since_clear;
         let snapshot = self.light_bands == 0;
         match self.estimated {
-            Some((clears, at, made_with)) if clears == self.clears && made_with == de => {
+            Some(MadeEstimate { clears, frames: at, de: made_with, .. })
+                if clears == self.clears && made_with == de =>
+            {
                 let next = at.saturating_add(at.clamp(1, ESTIMATE_EVERY_FRAMES));
                 if frames >= next || (frames != at && self.converged()) || snapshot {
                     EstimateDue::Make(de)
@@ -576,6 +598,11 @@ impl Progressive {
         }
     }
 
+    /// An estimate made with `de` from the accumulation as it is now.
+    fn made_estimate(&self, de: DensityEstimation) -> MadeEstimate {
+        MadeEstimate { clears: self.clears, frames: self.frames_since_clear, splats: self.splats_since_clear, de }
+    }
+
     /// Takes `e`, made with `de` on the CPU from the accumulation as it is now (the live view's
     /// CPU route), as the estimate the next draws show.
     pub fn upload_estimate(&mut self, ctx: &GpuContext, e: Estimated, de: &DensityEstimation) {
@@ -585,7 +612,7 @@ impl Progressive {
             }
             Engine::Picture(picture) => picture.set_estimate(e),
         }
-        self.estimated = Some((self.clears, self.frames_since_clear, *de));
+        self.estimated = Some(self.made_estimate(*de));
     }
 
     /// Which rows of the light cache this draw refreshes (see [`Self::light_bands`]).

@@ -197,6 +197,11 @@ impl LiveView {
         self.gpu.splats_since_clear
     }
 
+    /// What the next draw does about density estimation.
+    pub fn estimate_due(&self) -> EstimateDue {
+        self.gpu.estimate_due()
+    }
+
     /// Uploads a new IFS with its attractor `bounds`. `restart`: a different scene (the points
     /// restart in the domain and skip the full transient); otherwise an edit (the points are
     /// kept and skip `settle_steps`).
