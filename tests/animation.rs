@@ -349,7 +349,7 @@ fn small_settings(scene: &Scene, motion_blur_samples: u32) -> RecordSettings {
     }
 }
 
-fn temp_dir(name: &str) -> std::path::PathBuf {
+fn temp_dir(name: &str) -> common::TempDir {
     common::temp_dir(&format!("anim-{name}"))
 }
 

@@ -29,7 +29,7 @@ fn fixture_library(dir: &Path) -> PathBuf {
 
 /// A folder of its own for each call: the tests run in parallel and `common::temp_dir` empties
 /// a folder of the same name.
-fn fresh_dir(tag: &str) -> PathBuf {
+fn fresh_dir(tag: &str) -> common::TempDir {
     static CALLS: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
     let n = CALLS.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
     common::temp_dir(&format!("{tag}-{n}"))

@@ -16,7 +16,7 @@ const SCENE: &str = "version = 1\n[grid]\nx = [0, 1]\ny = [0, 1]\nz = [0, 1]\n\
 [[function]]\nkind = \"builder\"\nsteps = [{ op = \"scale\", by = 0.5 }]\n";
 
 struct Case {
-    dir: PathBuf,
+    dir: common::TempDir,
 }
 
 impl Case {

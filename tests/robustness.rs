@@ -3,17 +3,16 @@
 //! read or debris. One test (or a few) per family of problems found by fuzzing nlifs; the
 //! property tests over the scene format and the command line live in `robustness_props.rs`.
 
-use std::path::{Path, PathBuf};
+mod common;
+
+use std::path::Path;
 use std::process::{Command, Output};
 
 use nlifs::scene::{LoadError, Scene, SceneError};
 
-/// A scratch folder of this test binary, emptied first.
-fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("nlifs-robustness-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
+/// A scratch folder of this test binary, emptied first, removed when the test passes.
+fn scratch(name: &str) -> common::TempDir {
+    common::temp_dir(&format!("robustness-{name}"))
 }
 
 fn nlifs(args: &[&str]) -> Output {

@@ -202,7 +202,7 @@ proptest! {
 
     #[test]
     fn cli_numbers_exit_0_or_2(time in number(), points in number(), stop in number(), width in number()) {
-        let dir = std::env::temp_dir().join(format!("nlifs-props-{}", std::process::id()));
+        let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("nlifs-props-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         let scene = dir.join("s.toml");
         std::fs::write(&scene, "version = 1\n[grid]\nx = [0, 1]\ny = [0, 1]\n\

@@ -32,13 +32,14 @@ fn shipped_scenes() -> Vec<String> {
     names
 }
 
-/// A copy of `scenes/<name>.toml` in a fresh folder, and its text.
-fn copy_of(name: &str, test: &str) -> (PathBuf, String) {
+/// A copy of `scenes/<name>.toml` in a fresh folder (kept while the returned guard lives), and
+/// its text.
+fn copy_of(name: &str, test: &str) -> (common::TempDir, PathBuf, String) {
     let dir = common::temp_dir(&format!("scene-save-{test}-{name}"));
     let path = dir.join(format!("{name}.toml"));
     std::fs::copy(common::scene_path(name), &path).unwrap();
     let text = std::fs::read_to_string(&path).unwrap();
-    (path, text)
+    (dir, path, text)
 }
 
 /// The viewer on `path`, as the event loop opens a file.
@@ -94,7 +95,7 @@ fn without(text: &str, from: usize, to: usize) -> String {
 fn every_shipped_scene_saved_after_one_edit_differs_in_the_edited_line_only() {
     for name in shipped_scenes() {
         // Switching the first function off: one line added to its table.
-        let (path, original) = copy_of(&name, "enabled");
+        let (_dir, path, original) = copy_of(&name, "enabled");
         let mut s = open(&path);
         let enabled = s.scene.functions[0].enabled;
         s.apply([Command::SetFunctionEnabled { function: 0, enabled: !enabled }]);
@@ -111,7 +112,7 @@ fn every_shipped_scene_saved_after_one_edit_differs_in_the_edited_line_only() {
         }
 
         // A new colour for the first function: its colour line changes, or one is added.
-        let (path, original) = copy_of(&name, "color");
+        let (_dir, path, original) = copy_of(&name, "color");
         let mut s = open(&path);
         let color = [0x12, 0x34, 0x56].map(nlifs::color::srgb8_to_linear);
         s.apply([Command::SetFunctionColor { function: 0, color }]);
@@ -135,7 +136,7 @@ fn every_shipped_scene_saved_after_one_edit_differs_in_the_edited_line_only() {
 
 #[test]
 fn an_added_function_is_one_new_table_after_the_others_and_the_rest_stays_byte_identical() {
-    let (path, original) = copy_of("plant1", "add");
+    let (_dir, path, original) = copy_of("plant1", "add");
     let mut s = open(&path);
     s.apply([Command::AddFunction]);
     assert_eq!(s.scene.functions.len(), 6);
@@ -155,7 +156,7 @@ fn an_added_function_is_one_new_table_after_the_others_and_the_rest_stays_byte_i
 
 #[test]
 fn a_deleted_function_takes_only_its_table() {
-    let (path, original) = copy_of("plant1", "delete");
+    let (_dir, path, original) = copy_of("plant1", "delete");
     let mut s = open(&path);
     s.apply([Command::DeleteFunction(1)]);
     let saved = save(&mut s, &path);
@@ -166,7 +167,7 @@ fn a_deleted_function_takes_only_its_table() {
     // On a timeline, the keys' entries for the function go too. Its functions have no colour
     // lines (each takes the palette colour of its place): the two that move up keep theirs,
     // written out, and nothing else is added.
-    let (path, original) = copy_of("twist-anim", "delete");
+    let (_dir, path, original) = copy_of("twist-anim", "delete");
     let mut s = open(&path);
     let colors: Vec<String> = s.scene.functions[2..]
         .iter()
@@ -189,7 +190,7 @@ fn digit_counts(line: &str) -> Vec<usize> {
 
 #[test]
 fn a_dragged_point_is_written_with_the_fewest_digits_and_its_line_only_changes() {
-    let (path, original) = copy_of("plant1", "drag");
+    let (_dir, path, original) = copy_of("plant1", "drag");
     let mut s = open(&path);
     s.apply([Command::SetGridOverlay(true), Command::BeginPointDrag { function: 3, point: 2 }]);
     s.apply([Command::DragPoint { delta_px: [-37.0, 23.0] }, Command::EndGesture]);
@@ -209,7 +210,7 @@ fn a_dragged_point_is_written_with_the_fewest_digits_and_its_line_only_changes()
     }
 
     // Along one axis: the other two coordinates keep their spelling.
-    let (path, original) = copy_of("plant1", "drag-axis");
+    let (_dir, path, original) = copy_of("plant1", "drag-axis");
     let mut s = open(&path);
     s.apply([Command::SetGridOverlay(true), Command::SetAxisLock(Some(1))]);
     s.apply([Command::BeginPointDrag { function: 3, point: 2 }, Command::DragPoint { delta_px: [5.0, -31.0] }]);
@@ -224,7 +225,7 @@ fn a_dragged_point_is_written_with_the_fewest_digits_and_its_line_only_changes()
 #[test]
 fn a_key_edited_on_a_timeline_changes_its_line_only() {
     // A builder step edited at the key at 2 s: that key's step line.
-    let (path, original) = copy_of("twist-anim", "key-step");
+    let (_dir, path, original) = copy_of("twist-anim", "key-step");
     let mut s = open(&path);
     s.apply([Command::SetTime(2.0)]);
     let FunctionDef::Builder { builder, .. } = s.scene.function_def_at(0, 2.0) else { panic!() };
@@ -238,7 +239,7 @@ fn a_key_edited_on_a_timeline_changes_its_line_only() {
     assert!(saved.find("degrees = 95.5").unwrap() > saved.find("t_secs = 2.0").unwrap(), "in the key at 2 s");
 
     // A key moved in time: its time line.
-    let (path, original) = copy_of("twist-anim", "key-time");
+    let (_dir, path, original) = copy_of("twist-anim", "key-time");
     let mut s = open(&path);
     s.apply([Command::MoveKey { key: 1, t_secs: 1.25 }, Command::EndGesture]);
     let saved = save(&mut s, &path);

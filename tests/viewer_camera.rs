@@ -36,11 +36,11 @@ fn a_left_drag_pans_in_a_2d_scene_and_orbits_in_3d() {
 }
 
 /// The scene's copy in a fresh folder (the test saves over it).
-fn scratch(name: &str, scene: &str) -> std::path::PathBuf {
+fn scratch(name: &str, scene: &str) -> (common::TempDir, std::path::PathBuf) {
     let dir = common::temp_dir(&format!("viewer-camera-{name}"));
     let path = dir.join(format!("{scene}.toml"));
     std::fs::copy(common::scene_path(scene), &path).unwrap();
-    path
+    (dir, path)
 }
 
 fn close(a: nlifs::camera::OrbitCamera, b: nlifs::camera::OrbitCamera) -> bool {
@@ -53,7 +53,7 @@ fn close(a: nlifs::camera::OrbitCamera, b: nlifs::camera::OrbitCamera) -> bool {
 
 #[test]
 fn save_view_puts_the_view_in_the_scene_file_as_one_undo_step() {
-    let path = scratch("save-view", "plant1");
+    let (_dir, path) = scratch("save-view", "plant1");
     let mut s = ViewerState::new(Scene::load(&path).unwrap(), Some(path.clone()), LiveSettings::default());
     s.apply([Command::SetViewRect { origin_px: [310.0, 0.0], size_px: [970.0, 720.0] }]);
     let before = s.scene.camera.clone();

@@ -18,7 +18,7 @@ use nlifs::viewer::state::{PendingOpen, ViewerState};
 
 /// A fresh folder with copies of paper scenes and a config folder of its own.
 struct Scratch {
-    dir: PathBuf,
+    dir: common::TempDir,
     config: PathBuf,
 }
 

@@ -68,7 +68,8 @@ fn a_tone_drag_is_one_scene_edit_that_keeps_the_accumulation_and_saves() {
     s.apply([Command::Redo]);
     assert_eq!(s.scene, edited);
     // Saved, the file gives render the same tone and filter.
-    let path = common::temp_dir("viewer-imaging").join("toned.toml");
+    let dir = common::temp_dir("viewer-imaging");
+    let path = dir.join("toned.toml");
     s.apply([Command::SaveScene(path.clone())]);
     assert!(s.error.is_none(), "{:?}", s.error);
     let loaded = Scene::load(&path).unwrap();

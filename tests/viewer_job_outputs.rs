@@ -168,8 +168,8 @@ fn show_folder_finds_the_opener_on_path_and_is_a_job_request() {
     assert_eq!(find_on_path("open", Some(&path)), None);
 
     let mut s = ViewerState::new(ViewerState::default_scene(), None, LiveSettings::default());
-    let changes = s.apply([Command::ShowFolder(dir.clone())]);
-    assert_eq!(changes.jobs, vec![JobRequest::ShowFolder(dir.clone())]);
+    let changes = s.apply([Command::ShowFolder(dir.to_path_buf())]);
+    assert_eq!(changes.jobs, vec![JobRequest::ShowFolder(dir.to_path_buf())]);
     let _ = std::fs::remove_dir_all(&dir);
 }
 

@@ -202,7 +202,8 @@ fn viewer_command() -> Command {
     match std::env::var_os("NLIFS_SOAK_BIN") {
         Some(bin) => {
             let mut command = Command::new(bin);
-            command.env("NLIFS_CONFIG_DIR", std::env::temp_dir().join(format!("nlifs-config-{}", std::process::id())));
+            command
+                .env("NLIFS_CONFIG_DIR", common::scratch_root().join(format!("nlifs-config-{}", std::process::id())));
             command
         }
         None => common::nlifs_command(),
@@ -224,7 +225,8 @@ fn soak(backend: &str) {
     };
     let (phases, warm_up_secs) = schedule(total_secs);
     let tck = clock_ticks_per_sec();
-    let dir = common::temp_dir(&format!("soak-{backend}"));
+    // Kept after the test: the samples and the viewer's log are what it measured.
+    let dir = common::temp_dir(&format!("soak-{backend}")).keep();
     let (display, runtime, _xvfb) = start_xvfb(&dir);
 
     let mut child = viewer_command()

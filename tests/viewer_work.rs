@@ -15,11 +15,12 @@ use nlifs::viewer::recovery;
 use nlifs::viewer::state::ViewerState;
 
 /// A copy of a paper scene in a fresh folder (tests write next to it), with a recovery folder.
-fn scratch(name: &str, scene: &str) -> (PathBuf, PathBuf) {
+fn scratch(name: &str, scene: &str) -> (common::TempDir, PathBuf, PathBuf) {
     let dir = common::temp_dir(&format!("viewer-work-{name}"));
     let path = dir.join(format!("{scene}.toml"));
     std::fs::copy(common::scene_path(scene), &path).unwrap();
-    (path, dir.join("state"))
+    let state = dir.join("state");
+    (dir, path, state)
 }
 
 fn open(path: &Path, recovery_dir: &Path) -> ViewerState {
@@ -36,7 +37,7 @@ fn edit(s: &mut ViewerState) {
 
 #[test]
 fn the_title_marks_unsaved_edits_and_saving_clears_it() {
-    let (path, rec) = scratch("title", "plant1");
+    let (_dir, path, rec) = scratch("title", "plant1");
     let mut s = open(&path, &rec);
     assert!(!s.modified());
     let name = s.scene.name.clone();
@@ -57,7 +58,7 @@ fn the_title_marks_unsaved_edits_and_saving_clears_it() {
 
 #[test]
 fn escape_never_quits_and_cancels_a_point_drag() {
-    let (path, rec) = scratch("escape", "plant1");
+    let (_dir, path, rec) = scratch("escape", "plant1");
     let mut s = open(&path, &rec);
     edit(&mut s);
     // With unsaved edits and nothing open, Esc does nothing at all.
@@ -86,7 +87,7 @@ fn escape_never_quits_and_cancels_a_point_drag() {
 
 #[test]
 fn closing_with_unsaved_edits_asks_save_discard_or_cancel() {
-    let (path, rec) = scratch("close", "plant1");
+    let (_dir, path, rec) = scratch("close", "plant1");
     // Without edits: closes at once.
     let mut s = open(&path, &rec);
     s.apply([Command::RequestClose]);
@@ -129,7 +130,7 @@ fn closing_with_unsaved_edits_asks_save_discard_or_cancel() {
 
 #[test]
 fn unsaved_edits_survive_a_kill_through_the_recovery_file() {
-    let (path, rec) = scratch("recovery", "plant2");
+    let (_dir, path, rec) = scratch("recovery", "plant2");
     let mut s = open(&path, &rec);
     let file = s.recovery_file.clone().expect("a recovery file for the scene");
     assert!(file.starts_with(&rec));
@@ -175,7 +176,7 @@ fn unsaved_edits_survive_a_kill_through_the_recovery_file() {
 
 #[test]
 fn a_file_changed_on_disk_does_not_overwrite_unsaved_edits() {
-    let (path, rec) = scratch("reload", "plant1");
+    let (_dir, path, rec) = scratch("reload", "plant1");
     let mut s = open(&path, &rec);
     edit(&mut s);
     let edited = s.scene.clone();
@@ -222,7 +223,7 @@ fn view_of_a_missing_scene_exits_2_with_the_located_error() {
 
 #[test]
 fn opening_another_scene_over_unsaved_edits_asks_first() {
-    let (path, rec) = scratch("open-over", "plant1");
+    let (_dir, path, rec) = scratch("open-over", "plant1");
     let other = common::scene_path("plant2");
     let mut s = open(&path, &rec);
     edit(&mut s);

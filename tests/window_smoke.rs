@@ -14,7 +14,7 @@
 
 mod common;
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
@@ -103,7 +103,7 @@ fn viewer_keeps_unsaved_work_and_gives_the_camera_only_unused_input() {
     if !nlifs::gpu::adapter_available() {
         return common::skip("window test: no GPU adapter");
     }
-    let dir: PathBuf = common::temp_dir("window-work");
+    let dir = common::temp_dir("window-work");
     let (display, runtime, _xvfb) = start_xvfb(&dir);
     let scene = dir.join("plant2.toml");
     std::fs::copy(common::scene_path("plant2"), &scene).unwrap();
@@ -267,7 +267,7 @@ fn check_viewer(chaos_backend: Option<&str>) {
         return common::skip("window test: no GPU adapter");
     }
     let label = chaos_backend.unwrap_or("auto");
-    let dir: PathBuf = common::temp_dir(&format!("window-smoke-{label}"));
+    let dir = common::temp_dir(&format!("window-smoke-{label}"));
     let (display, runtime, _xvfb) = start_xvfb(&dir);
 
     let scene = common::scene_path("plant2");
@@ -361,7 +361,7 @@ fn viewer_screenshot_carries_the_scene_and_reopens() {
     if !nlifs::gpu::adapter_available() {
         return common::skip("window test: no GPU adapter");
     }
-    let dir: PathBuf = common::temp_dir("window-screenshot");
+    let dir = common::temp_dir("window-screenshot");
     let (display, runtime, _xvfb) = start_xvfb(&dir);
     let run = |scene: &Path, png: &Path| {
         let status = common::nlifs_command()

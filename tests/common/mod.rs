@@ -43,7 +43,7 @@ pub fn load_scene(name: &str) -> Scene {
 /// temporary directory, so that no test writes into the user's (a test may set its own).
 pub fn nlifs_command() -> Command {
     let mut command = Command::new(env!("CARGO_BIN_EXE_nlifs"));
-    command.env("NLIFS_CONFIG_DIR", std::env::temp_dir().join(format!("nlifs-config-{}", std::process::id())));
+    command.env("NLIFS_CONFIG_DIR", scratch_root().join(format!("nlifs-config-{}", std::process::id())));
     command
 }
 
@@ -80,13 +80,63 @@ pub fn lit_pixels(path: &str) -> usize {
     img.pixels().filter(|px| **px != bg).count()
 }
 
-/// A fresh, empty folder `nlifs-<name>-<pid>` in the system's temporary directory (whatever an
-/// earlier run left there is removed first).
-pub fn temp_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("nlifs-{name}-{}", std::process::id()));
+/// A test's scratch folder ([`temp_dir`]): removed when it goes out of scope, unless the test
+/// is failing (then it is kept, for a look at what the test wrote).
+#[derive(Debug)]
+pub struct TempDir(PathBuf);
+
+impl TempDir {
+    /// Keeps the folder after the test (what it wrote is the test's product, e.g. the soak
+    /// test's samples).
+    pub fn keep(self) -> PathBuf {
+        let path = self.0.clone();
+        std::mem::forget(self);
+        path
+    }
+}
+
+impl std::ops::Deref for TempDir {
+    type Target = Path;
+    fn deref(&self) -> &Path {
+        &self.0
+    }
+}
+
+impl AsRef<Path> for TempDir {
+    fn as_ref(&self) -> &Path {
+        &self.0
+    }
+}
+
+impl AsRef<std::ffi::OsStr> for TempDir {
+    fn as_ref(&self) -> &std::ffi::OsStr {
+        self.0.as_os_str()
+    }
+}
+
+impl Drop for TempDir {
+    fn drop(&mut self) {
+        if std::thread::panicking() {
+            eprintln!("kept {} (the test failed)", self.0.display());
+        } else {
+            let _ = std::fs::remove_dir_all(&self.0);
+        }
+    }
+}
+
+/// The folder where the tests write: cargo's scratch folder for integration tests (inside the
+/// target folder, so `cargo clean` removes whatever a failed or killed test left).
+pub fn scratch_root() -> &'static Path {
+    Path::new(env!("CARGO_TARGET_TMPDIR"))
+}
+
+/// A fresh, empty folder `nlifs-<name>-<pid>` in [`scratch_root`] (whatever an earlier run left
+/// there is removed first), removed again when the returned guard is dropped.
+pub fn temp_dir(name: &str) -> TempDir {
+    let dir = scratch_root().join(format!("nlifs-{name}-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
-    dir
+    TempDir(dir)
 }
 
 /// Whether `NLIFS_REQUIRE_GPU=1`: a missing adapter or tool fails the test instead of skipping it.
@@ -315,10 +365,10 @@ fn file_stem_of(what: &str) -> String {
     what.chars().map(|c| if c.is_ascii_alphanumeric() || c == '-' || c == '_' { c } else { '_' }).collect()
 }
 
-/// Where failing image tests write what they saw: `nlifs-test-failures/` in the system's
-/// temporary directory, kept after the run.
+/// Where failing image tests write what they saw: `nlifs-test-failures/` in
+/// [`scratch_root`], kept after the run.
 pub fn failure_path(file_name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join("nlifs-test-failures");
+    let dir = scratch_root().join("nlifs-test-failures");
     std::fs::create_dir_all(&dir).unwrap();
     dir.join(file_name)
 }
