@@ -298,7 +298,9 @@ fn density_mode_stops_at_the_renders_points_per_pixel() {
 /// until the next estimate, which brightened it again), and with the spatial filter the pass
 /// made with it (`GpuDensityEstimation::draw` filters once per estimate). So a draw that keeps
 /// the estimate shows the bytes of the draw that made it, and the next estimate's draw shows
-/// the new estimate. Both routes, filter on and off, the absolute and the relative scale.
+/// the new estimate (the toned picture is drawn once per estimate and copied: an sRGB target,
+/// as a window's, gets the same bytes while the estimate is kept). Both routes, filter on and
+/// off, the absolute and the relative scale.
 #[test]
 fn a_kept_estimate_is_drawn_as_it_was_made() {
     use nlifs::flame::FilterShape;
@@ -363,5 +365,22 @@ fn a_kept_estimate_is_drawn_as_it_was_made() {
         }
         assert!(differing * 100 < 3 * width * height, "{differing} channels differ by one level");
         assert!(next.pixels().zip(made.pixels()).any(|(a, b)| a != b), "{backend:?}: the picture did not change");
+        // An sRGB target (a window's surface) gets the picture that the texture, sRGB too,
+        // encoded: within a level of the shader's encoding for a plain target, the same bytes
+        // while the estimate is kept.
+        let srgb = |live: &mut LiveView| {
+            let format = wgpu::TextureFormat::Rgba8UnormSrgb;
+            nlifs::gpu::readback::draw_offscreen_as(&ctx, width, height, format, |encoder, target, format| {
+                live.draw(&ctx, encoder, target, format, [0, 0])
+            })
+            .unwrap()
+        };
+        let made_srgb = srgb(&mut live);
+        for (a, b) in snapshot.pixels().zip(made_srgb.pixels()) {
+            assert!((0..3).all(|c| a.0[c].abs_diff(b.0[c]) <= 1), "{backend:?}: plain {a:?}, sRGB {b:?}");
+        }
+        advance(&ctx, &mut live);
+        assert_eq!(live.estimate_due(), EstimateDue::Keep, "{backend:?}");
+        assert!(srgb(&mut live) == made_srgb, "{backend:?}, filter {filter:?}: a kept estimate on an sRGB target");
     }
 }

@@ -7,12 +7,16 @@
 //! the tests). The kernel tables are the CPU twin's ([`KernelTables`]), uploaded when the
 //! setting changes. With a spatial filter, a third pass filters the estimate once into a buffer
 //! the draws read, until the estimate or what the filtered values depend on changes: the
-//! taps' gather costs more than the rest of a draw on a software rasterizer.
+//! taps' gather costs more than the rest of a draw on a software rasterizer. The toned picture
+//! itself is drawn once per estimate and resolve parameters into a texture, which each draw
+//! copies into the target ([`PictureDraw`]): in the live view most draws show an estimate made
+//! frames before, and on a software rasterizer the resolve costs several times the copy.
 
 use crate::resolve::density_estimation::{Estimated, KernelTables};
 use crate::resolve::{ResolveArgs, ResolveParams};
 use crate::scene::spec::DensityEstimation;
 
+use super::picture::{PictureDraw, PictureTexture};
 use super::resolve::fullscreen_pipeline;
 use super::{GpuContext, GpuError};
 
@@ -102,6 +106,11 @@ pub struct GpuDensityEstimation {
     /// Estimates made or uploaded so far (the filtered buffer's is [`FilteredOf::estimate`]).
     estimates: u64,
     filtered_of: Option<FilteredOf>,
+    /// The toned picture of the last estimate, what it was drawn with (the estimate, the
+    /// resolve's parameters at the origin), and its drawing into targets.
+    picture: Option<PictureTexture>,
+    picture_of: Option<(u64, ResolveParams)>,
+    picture_draw: PictureDraw,
     params: wgpu::Buffer,
     resolve_params: wgpu::Buffer,
     tables: Option<Tables>,
@@ -141,6 +150,9 @@ impl GpuDensityEstimation {
             filter_pipelines: Vec::new(),
             estimates: 0,
             filtered_of: None,
+            picture: None,
+            picture_of: None,
+            picture_draw: PictureDraw::new(device),
             tables: None,
             pixels: None,
         }
@@ -267,8 +279,9 @@ impl GpuDensityEstimation {
     /// Records the resolve of the last estimate (density mode, with `args`' background and
     /// tone) onto `target` of `format`, the accumulation's pixel (0, 0) at `args.origin_px`, the
     /// rest of the target cleared to black: what `GpuResolve::draw` does with the raw counts.
-    /// With a spatial filter, the filter's pass first where the estimate or what the filtered
-    /// values depend on changed since it last ran.
+    /// The toned picture is resolved into its texture where the estimate or the parameters
+    /// changed since it last was (with a spatial filter, after the filter's pass where the
+    /// estimate or what the filtered values depend on changed), then copied into the target.
     pub fn draw(
         &mut self,
         ctx: &GpuContext,
@@ -278,20 +291,40 @@ impl GpuDensityEstimation {
         format: wgpu::TextureFormat,
     ) {
         let Some(p) = &self.pixels else { return };
-        let params = args.params(p.width, p.height, !format.is_srgb());
-        ctx.queue.write_buffer(&self.resolve_params, 0, bytemuck::bytes_of(&params));
-        let filter = params.filter_taps > 0;
-        if filter && self.filtered_of != Some(FilteredOf::new(self.estimates, &params)) {
-            self.encode_filter(ctx, encoder, &params);
+        let size_px = [p.width, p.height];
+        // The picture holds what the resolve writes into a target of the same kind: sRGB bytes
+        // encoded by the shader for a plain target, by the texture for an sRGB one.
+        let srgb = format.is_srgb();
+        let params = ResolveArgs { origin_px: [0, 0], ..*args }.params(p.width, p.height, !srgb);
+        if self.picture.as_ref().is_none_or(|t| t.size_px != size_px || t.srgb != srgb) {
+            let usage = wgpu::TextureUsages::RENDER_ATTACHMENT;
+            self.picture = Some(self.picture_draw.texture(&ctx.device, size_px, srgb, usage));
+            self.picture_of = None;
         }
-        let Some(p) = &self.pixels else { return };
-        let key = (format, filter);
+        if self.picture_of != Some((self.estimates, params)) {
+            self.encode_picture(ctx, encoder, &params);
+            self.picture_of = Some((self.estimates, params));
+        }
+        if let Some(picture) = &self.picture {
+            self.picture_draw.draw(ctx, encoder, picture, target, format, args.origin_px);
+        }
+    }
+
+    /// Records the resolve of the last estimate with `params` into the picture.
+    fn encode_picture(&mut self, ctx: &GpuContext, encoder: &mut wgpu::CommandEncoder, params: &ResolveParams) {
+        ctx.queue.write_buffer(&self.resolve_params, 0, bytemuck::bytes_of(params));
+        let filter = params.filter_taps > 0;
+        if filter && self.filtered_of != Some(FilteredOf::new(self.estimates, params)) {
+            self.encode_filter(ctx, encoder, params);
+        }
+        let (Some(p), Some(picture)) = (&self.pixels, &self.picture) else { return };
+        let key = (picture.format(), filter);
         let index = match self.draw_pipelines.iter().position(|(k, _)| *k == key) {
             Some(i) => i,
             None => {
-                let constants = [("ENCODE_SRGB", !format.is_srgb() as u32 as f64)];
+                let constants = [("ENCODE_SRGB", params.encode_srgb as f64)];
                 let entry = if filter { "resolve_filtered_estimate" } else { "resolve_estimated" };
-                let pipeline = fullscreen_pipeline(&ctx.device, &self.module, entry, &constants, format);
+                let pipeline = fullscreen_pipeline(&ctx.device, &self.module, entry, &constants, picture.format());
                 self.draw_pipelines.push((key, pipeline));
                 self.draw_pipelines.len() - 1
             }
@@ -311,7 +344,7 @@ impl GpuDensityEstimation {
             group(GROUP, &[entry(15, &p.estimated), entry(16, &p.estimated_max)])
         };
         let mut pass =
-            super::resolve::resolve_pass(encoder, "resolve_estimated", target, args.origin_px, [p.width, p.height]);
+            super::resolve::resolve_pass(encoder, "resolve_estimated", &picture.view, [0, 0], picture.size_px);
         pass.set_pipeline(pipeline);
         pass.set_bind_group(0, &params_group, &[]);
         pass.set_bind_group(GROUP, &own, &[]);

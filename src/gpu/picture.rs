@@ -6,6 +6,9 @@
 //! [`super::progressive::Progressive`] keeps its bookkeeping (clears, convergence, estimates,
 //! rest) the same over both drawings; this one resolves again only when its inputs or the
 //! resolve's arguments changed.
+//!
+//! [`PictureDraw`], the drawing of such a picture, also draws the density estimate's picture
+//! that the GPU resolves once per estimate (`super::density_estimation`).
 
 use rayon::prelude::*;
 
@@ -27,14 +30,128 @@ pub struct Placement {
     pub pad: [u32; 2],
 }
 
-/// The picture's texture, of the accumulation's size.
-struct Texture {
-    texture: wgpu::Texture,
-    size_px: [u32; 2],
+/// A picture's texture, of the accumulation's size ([`PictureDraw::texture`]).
+pub struct PictureTexture {
+    pub texture: wgpu::Texture,
+    pub view: wgpu::TextureView,
+    pub size_px: [u32; 2],
     /// The texture is sRGB (as the target is: it decodes what the target encodes again) or
     /// plain (WebGL2 has no views of another format).
-    srgb: bool,
+    pub srgb: bool,
     bind_group: wgpu::BindGroup,
+}
+
+impl PictureTexture {
+    /// The texture's format: 8-bit RGBA, sRGB or plain.
+    pub fn format(&self) -> wgpu::TextureFormat {
+        picture_format(self.srgb)
+    }
+}
+
+fn picture_format(srgb: bool) -> wgpu::TextureFormat {
+    if srgb { wgpu::TextureFormat::Rgba8UnormSrgb } else { wgpu::TextureFormat::Rgba8Unorm }
+}
+
+/// Draws a picture of the accumulation's size into the accumulation's rectangle of a target
+/// (`shaders/picture.wgsl`, a texel a pixel), the rest of the target cleared to black, as the
+/// resolve draws.
+pub struct PictureDraw {
+    module: wgpu::ShaderModule,
+    layout: wgpu::BindGroupLayout,
+    pipelines: Vec<(wgpu::TextureFormat, wgpu::RenderPipeline)>,
+    placement: wgpu::Buffer,
+}
+
+impl PictureDraw {
+    pub fn new(device: &wgpu::Device) -> Self {
+        Self {
+            module: super::shaders::module(device, "picture"),
+            layout: bind_group_layout(device),
+            pipelines: Vec::new(),
+            placement: device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("picture_placement"),
+                size: std::mem::size_of::<Placement>() as u64,
+                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            }),
+        }
+    }
+
+    /// A texture for a picture of `size_px`, sRGB for a target that is, with `usage` beside
+    /// TEXTURE_BINDING (COPY_DST for a picture uploaded, RENDER_ATTACHMENT for one drawn).
+    pub fn texture(
+        &self,
+        device: &wgpu::Device,
+        size_px: [u32; 2],
+        srgb: bool,
+        usage: wgpu::TextureUsages,
+    ) -> PictureTexture {
+        let texture = device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("picture"),
+            size: wgpu::Extent3d { width: size_px[0], height: size_px[1], depth_or_array_layers: 1 },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: picture_format(srgb),
+            usage: wgpu::TextureUsages::TEXTURE_BINDING | usage,
+            view_formats: &[],
+        });
+        let view = texture.create_view(&Default::default());
+        let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("picture"),
+            layout: &self.layout,
+            entries: &[
+                wgpu::BindGroupEntry { binding: 0, resource: wgpu::BindingResource::TextureView(&view) },
+                wgpu::BindGroupEntry { binding: 1, resource: self.placement.as_entire_binding() },
+            ],
+        });
+        PictureTexture { texture, view, size_px, srgb, bind_group }
+    }
+
+    /// Records the draw of `picture` onto `target` of `format`, its pixel (0, 0) at
+    /// `origin_px` (one draw per encoder: the placement is written before the submission).
+    pub fn draw(
+        &mut self,
+        ctx: &GpuContext,
+        encoder: &mut wgpu::CommandEncoder,
+        picture: &PictureTexture,
+        target: &wgpu::TextureView,
+        format: wgpu::TextureFormat,
+        origin_px: [u32; 2],
+    ) {
+        let placement = Placement { origin: origin_px, pad: [0; 2] };
+        ctx.queue.write_buffer(&self.placement, 0, bytemuck::bytes_of(&placement));
+        let pipeline = self.pipeline(&ctx.device, format);
+        let mut pass = super::resolve::resolve_pass(encoder, "picture", target, origin_px, picture.size_px);
+        pass.set_pipeline(pipeline);
+        pass.set_bind_group(0, &picture.bind_group, &[]);
+        pass.draw(0..3, 0..1);
+    }
+
+    /// The pipeline drawing onto `format` targets.
+    fn pipeline(&mut self, device: &wgpu::Device, format: wgpu::TextureFormat) -> &wgpu::RenderPipeline {
+        let index = match self.pipelines.iter().position(|(f, _)| *f == format) {
+            Some(i) => i,
+            None => {
+                let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                    label: Some("picture"),
+                    bind_group_layouts: &[Some(&self.layout)],
+                    immediate_size: 0,
+                });
+                let pipeline = super::resolve::fullscreen_pipeline_in(
+                    device,
+                    Some(&layout),
+                    &self.module,
+                    "picture_fragment",
+                    &[],
+                    format,
+                );
+                self.pipelines.push((format, pipeline));
+                self.pipelines.len() - 1
+            }
+        };
+        &self.pipelines[index].1
+    }
 }
 
 pub struct CpuPicture {
@@ -57,11 +174,8 @@ pub struct CpuPicture {
     /// The solid look's light of every pixel, refreshed in bands as the GPU's light cache is
     /// ([`LightRows::Refresh`]).
     light: Option<LightCache>,
-    module: wgpu::ShaderModule,
-    layout: wgpu::BindGroupLayout,
-    pipelines: Vec<(wgpu::TextureFormat, wgpu::RenderPipeline)>,
-    placement: wgpu::Buffer,
-    texture: Option<Texture>,
+    drawing: PictureDraw,
+    texture: Option<PictureTexture>,
 }
 
 impl CpuPicture {
@@ -76,15 +190,7 @@ impl CpuPicture {
             rgba: Vec::new(),
             srgb8: crate::color::Srgb8Table::new(),
             light: None,
-            module: super::shaders::module(device, "picture"),
-            layout: bind_group_layout(device),
-            pipelines: Vec::new(),
-            placement: device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("picture_placement"),
-                size: std::mem::size_of::<Placement>() as u64,
-                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-                mapped_at_creation: false,
-            }),
+            drawing: PictureDraw::new(device),
             texture: None,
         }
     }
@@ -153,17 +259,9 @@ impl CpuPicture {
             self.shown = Some((params, estimated));
             self.upload(ctx, [width, height], format.is_srgb());
         }
-        let placement = Placement { origin: args.origin_px, pad: [0; 2] };
-        ctx.queue.write_buffer(&self.placement, 0, bytemuck::bytes_of(&placement));
-        self.pipeline(&ctx.device, format);
-        let (Some(texture), Some((_, pipeline))) = (&self.texture, self.pipelines.iter().find(|(f, _)| *f == format))
-        else {
-            return;
-        };
-        let mut pass = super::resolve::resolve_pass(encoder, "picture", target, args.origin_px, texture.size_px);
-        pass.set_pipeline(pipeline);
-        pass.set_bind_group(0, &texture.bind_group, &[]);
-        pass.draw(0..3, 0..1);
+        if let Some(texture) = &self.texture {
+            self.drawing.draw(ctx, encoder, texture, target, format, args.origin_px);
+        }
     }
 
     /// Resolves into `self.rgba` with `p` (linear colours, of the accumulation's size) on the
@@ -235,22 +333,8 @@ impl CpuPicture {
 
     /// Writes the picture into the texture, made anew when the size or the target's kind changed.
     fn upload(&mut self, ctx: &GpuContext, size_px: [u32; 2], srgb: bool) {
-        let device = &ctx.device;
         if self.texture.as_ref().is_none_or(|t| t.size_px != size_px || t.srgb != srgb) {
-            // WebGL2 has no views of another format: the texture itself is sRGB or plain.
-            let format = if srgb { wgpu::TextureFormat::Rgba8UnormSrgb } else { wgpu::TextureFormat::Rgba8Unorm };
-            let usage = wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST;
-            let texture = super::readback::offscreen_texture(ctx, "picture", size_px[0], size_px[1], format, usage);
-            let view = texture.create_view(&Default::default());
-            let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("picture"),
-                layout: &self.layout,
-                entries: &[
-                    wgpu::BindGroupEntry { binding: 0, resource: wgpu::BindingResource::TextureView(&view) },
-                    wgpu::BindGroupEntry { binding: 1, resource: self.placement.as_entire_binding() },
-                ],
-            });
-            self.texture = Some(Texture { texture, size_px, srgb, bind_group });
+            self.texture = Some(self.drawing.texture(&ctx.device, size_px, srgb, wgpu::TextureUsages::COPY_DST));
         }
         let Some(t) = &self.texture else { return };
         ctx.queue.write_texture(
@@ -259,31 +343,6 @@ impl CpuPicture {
             wgpu::TexelCopyBufferLayout { offset: 0, bytes_per_row: Some(4 * size_px[0]), rows_per_image: None },
             wgpu::Extent3d { width: size_px[0], height: size_px[1], depth_or_array_layers: 1 },
         );
-    }
-
-    /// The pipeline drawing onto `format` targets.
-    fn pipeline(&mut self, device: &wgpu::Device, format: wgpu::TextureFormat) -> &wgpu::RenderPipeline {
-        let index = match self.pipelines.iter().position(|(f, _)| *f == format) {
-            Some(i) => i,
-            None => {
-                let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-                    label: Some("picture"),
-                    bind_group_layouts: &[Some(&self.layout)],
-                    immediate_size: 0,
-                });
-                let pipeline = super::resolve::fullscreen_pipeline_in(
-                    device,
-                    Some(&layout),
-                    &self.module,
-                    "picture_fragment",
-                    &[],
-                    format,
-                );
-                self.pipelines.push((format, pipeline));
-                self.pipelines.len() - 1
-            }
-        };
-        &self.pipelines[index].1
     }
 }
 

@@ -104,7 +104,19 @@ pub fn draw_offscreen(
     height: u32,
     draw: impl FnOnce(&mut wgpu::CommandEncoder, &wgpu::TextureView, wgpu::TextureFormat),
 ) -> Result<image::RgbImage, GpuError> {
-    let copy = draw_offscreen_start(ctx, width, height, draw);
+    draw_offscreen_as(ctx, width, height, wgpu::TextureFormat::Rgba8Unorm, draw)
+}
+
+/// [`draw_offscreen`] onto a texture of `format`, an RGBA8 format (`Rgba8UnormSrgb`: as a
+/// window's sRGB surface; the image holds the bytes the format stores).
+pub fn draw_offscreen_as(
+    ctx: &GpuContext,
+    width: u32,
+    height: u32,
+    format: wgpu::TextureFormat,
+    draw: impl FnOnce(&mut wgpu::CommandEncoder, &wgpu::TextureView, wgpu::TextureFormat),
+) -> Result<image::RgbImage, GpuError> {
+    let copy = copy_of_drawing(ctx, width, height, format, draw);
     let bytes = map_and_read(ctx, &copy.staging)?;
     Ok(copy.image_of(&bytes))
 }
@@ -127,7 +139,16 @@ pub fn draw_offscreen_start(
     height: u32,
     draw: impl FnOnce(&mut wgpu::CommandEncoder, &wgpu::TextureView, wgpu::TextureFormat),
 ) -> OffscreenCopy {
-    let format = wgpu::TextureFormat::Rgba8Unorm;
+    copy_of_drawing(ctx, width, height, wgpu::TextureFormat::Rgba8Unorm, draw)
+}
+
+fn copy_of_drawing(
+    ctx: &GpuContext,
+    width: u32,
+    height: u32,
+    format: wgpu::TextureFormat,
+    draw: impl FnOnce(&mut wgpu::CommandEncoder, &wgpu::TextureView, wgpu::TextureFormat),
+) -> OffscreenCopy {
     let texture = offscreen_texture(ctx, "snapshot", width, height, format, wgpu::TextureUsages::COPY_SRC);
     let view = texture.create_view(&Default::default());
     let bytes_per_row = (4 * width).next_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT);
