@@ -297,8 +297,7 @@ impl GpuDensityEstimation {
         let srgb = format.is_srgb();
         let params = ResolveArgs { origin_px: [0, 0], ..*args }.params(p.width, p.height, !srgb);
         if self.picture.as_ref().is_none_or(|t| t.size_px != size_px || t.srgb != srgb) {
-            let usage = wgpu::TextureUsages::RENDER_ATTACHMENT;
-            self.picture = Some(self.picture_draw.texture(&ctx.device, size_px, srgb, usage));
+            self.picture = Some(self.picture_draw.texture(ctx, size_px, srgb, wgpu::TextureUsages::empty()));
             self.picture_of = None;
         }
         if self.picture_of != Some((self.estimates, params)) {

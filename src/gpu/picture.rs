@@ -78,26 +78,19 @@ impl PictureDraw {
     }
 
     /// A texture for a picture of `size_px`, sRGB for a target that is, with `usage` beside
-    /// TEXTURE_BINDING (COPY_DST for a picture uploaded, RENDER_ATTACHMENT for one drawn).
+    /// TEXTURE_BINDING and RENDER_ATTACHMENT (COPY_DST for a picture uploaded).
     pub fn texture(
         &self,
-        device: &wgpu::Device,
+        ctx: &GpuContext,
         size_px: [u32; 2],
         srgb: bool,
         usage: wgpu::TextureUsages,
     ) -> PictureTexture {
-        let texture = device.create_texture(&wgpu::TextureDescriptor {
-            label: Some("picture"),
-            size: wgpu::Extent3d { width: size_px[0], height: size_px[1], depth_or_array_layers: 1 },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format: picture_format(srgb),
-            usage: wgpu::TextureUsages::TEXTURE_BINDING | usage,
-            view_formats: &[],
-        });
+        let format = picture_format(srgb);
+        let usage = wgpu::TextureUsages::TEXTURE_BINDING | usage;
+        let texture = super::readback::offscreen_texture(ctx, "picture", size_px[0], size_px[1], format, usage);
         let view = texture.create_view(&Default::default());
-        let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+        let bind_group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("picture"),
             layout: &self.layout,
             entries: &[
@@ -334,7 +327,7 @@ impl CpuPicture {
     /// Writes the picture into the texture, made anew when the size or the target's kind changed.
     fn upload(&mut self, ctx: &GpuContext, size_px: [u32; 2], srgb: bool) {
         if self.texture.as_ref().is_none_or(|t| t.size_px != size_px || t.srgb != srgb) {
-            self.texture = Some(self.drawing.texture(&ctx.device, size_px, srgb, wgpu::TextureUsages::COPY_DST));
+            self.texture = Some(self.drawing.texture(ctx, size_px, srgb, wgpu::TextureUsages::COPY_DST));
         }
         let Some(t) = &self.texture else { return };
         ctx.queue.write_texture(
