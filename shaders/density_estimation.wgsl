@@ -20,8 +20,9 @@
 // Passes: `kernel_index` (each pixel's kernel step from its count), `estimate` (the gather,
 // and the largest estimated count as bits: for non-negative floats the u32 order of the bits
 // is the float order, so atomicMax finds it), with a spatial filter `filter_estimate` (once per
-// estimate), then the full-screen `resolve_estimated`, the density branch of `resolve` with
-// float sums and counts (`Estimated::fragment` on the CPU).
+// estimate), then the full-screen `resolve_estimated` (`resolve_filtered_estimate` with the
+// filter), the density branch of `resolve` with float sums and counts (`Estimated::fragment` on
+// the CPU), into a picture that `shaders/picture.wgsl` copies into each frame's target.
 
 // Mirrors `DensityEstimationParams` in `src/gpu/density_estimation.rs`: keep in sync.
 struct DensityEstimationParams {

@@ -296,8 +296,7 @@ impl GpuDensityEstimation {
         // encoded by the shader for a plain target, by the texture for an sRGB one.
         let srgb = format.is_srgb();
         let params = ResolveArgs { origin_px: [0, 0], ..*args }.params(p.width, p.height, !srgb);
-        if self.picture.as_ref().is_none_or(|t| t.size_px != size_px || t.srgb != srgb) {
-            self.picture = Some(self.picture_draw.texture(ctx, size_px, srgb, wgpu::TextureUsages::empty()));
+        if self.picture_draw.fit(ctx, &mut self.picture, size_px, srgb, wgpu::TextureUsages::empty()) {
             self.picture_of = None;
         }
         if self.picture_of != Some((self.estimates, params)) {

@@ -79,13 +79,7 @@ impl PictureDraw {
 
     /// A texture for a picture of `size_px`, sRGB for a target that is, with `usage` beside
     /// TEXTURE_BINDING and RENDER_ATTACHMENT (COPY_DST for a picture uploaded).
-    pub fn texture(
-        &self,
-        ctx: &GpuContext,
-        size_px: [u32; 2],
-        srgb: bool,
-        usage: wgpu::TextureUsages,
-    ) -> PictureTexture {
+    fn texture(&self, ctx: &GpuContext, size_px: [u32; 2], srgb: bool, usage: wgpu::TextureUsages) -> PictureTexture {
         let format = picture_format(srgb);
         let usage = wgpu::TextureUsages::TEXTURE_BINDING | usage;
         let texture = super::readback::offscreen_texture(ctx, "picture", size_px[0], size_px[1], format, usage);
@@ -99,6 +93,23 @@ impl PictureDraw {
             ],
         });
         PictureTexture { texture, view, size_px, srgb, bind_group }
+    }
+
+    /// Makes `texture` anew (as [`Self::texture`]) where there is none or it is not of
+    /// `size_px` and the sRGB-ness `srgb`; true when it did (its picture is to be made again).
+    pub fn fit(
+        &self,
+        ctx: &GpuContext,
+        texture: &mut Option<PictureTexture>,
+        size_px: [u32; 2],
+        srgb: bool,
+        usage: wgpu::TextureUsages,
+    ) -> bool {
+        let anew = texture.as_ref().is_none_or(|t| t.size_px != size_px || t.srgb != srgb);
+        if anew {
+            *texture = Some(self.texture(ctx, size_px, srgb, usage));
+        }
+        anew
     }
 
     /// Records the draw of `picture` onto `target` of `format`, its pixel (0, 0) at
@@ -326,9 +337,7 @@ impl CpuPicture {
 
     /// Writes the picture into the texture, made anew when the size or the target's kind changed.
     fn upload(&mut self, ctx: &GpuContext, size_px: [u32; 2], srgb: bool) {
-        if self.texture.as_ref().is_none_or(|t| t.size_px != size_px || t.srgb != srgb) {
-            self.texture = Some(self.drawing.texture(ctx, size_px, srgb, wgpu::TextureUsages::COPY_DST));
-        }
+        self.drawing.fit(ctx, &mut self.texture, size_px, srgb, wgpu::TextureUsages::COPY_DST);
         let Some(t) = &self.texture else { return };
         ctx.queue.write_texture(
             t.texture.as_image_copy(),
