@@ -189,6 +189,26 @@ fn unknown_variations_are_one_warning_per_xform() {
 }
 
 #[test]
+fn other_programs_xform_attributes_are_not_called_variations() {
+    // Apophysis 7X names its xforms and writes `var_color`; neither is a variation.
+    let body = r#"<xform weight="1" name="iterator_1" linear="1" var_color="1" coefs="1 0 0 1 0 0"/>
+<finalxform name="final" var_color="0" spherical="1" coefs="1 0 0 1 0 0"/>"#;
+    let file = read(&flame(r#"name="apo""#, body));
+    assert!(file.warnings.iter().all(|w| !w.contains("unknown variations")), "{:?}", file.warnings);
+    assert!(file.warnings.iter().all(|w| !w.contains("name")), "a label is not worth a warning: {:?}", file.warnings);
+    // One warning for the flame, at its first xform that has one.
+    let not_read: Vec<&String> = file.warnings.iter().filter(|w| w.contains("var_color")).collect();
+    assert_eq!(not_read.len(), 1, "{:?}", file.warnings);
+    assert_eq!(
+        not_read[0],
+        "t.flame:2: flame #0 'apo': xform attributes of other programs flam3 does not read, ignored: var_color"
+    );
+    let f = &file.flames[0];
+    assert_eq!(f.xforms[0].variations.len(), 1);
+    assert_eq!(f.final_xform.as_ref().expect("final").variations[0].variation.name(), "spherical");
+}
+
+#[test]
 fn variation_parameters_take_their_defaults() {
     // Whatever the table holds: every variation with parameters, named in one xform with one
     // of its parameters given; the others must come out as the table's defaults.

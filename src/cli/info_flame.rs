@@ -50,14 +50,18 @@ pub fn info(path: &Path, as_json: bool) -> anyhow::Result<()> {
     let shown = path.display().to_string();
     let n = file.flames.len();
     println!("{}: {n} flame{}", printable(&shown, false), if n == 1 { "" } else { "s" });
+    // The name column as wide as the longest name, up to NAME_WIDTH_MAX characters.
+    const NAME_WIDTH_MAX: usize = 40;
+    let names: Vec<String> =
+        file.flames.iter().map(|f| shortened(&printable(&f.name, false), NAME_WIDTH_MAX)).collect();
+    let width = names.iter().map(|n| n.chars().count()).max().unwrap_or(0).max("name".len());
     println!(
-        "{:>5} {:<24} {:>11} {:>6} {:>5}  {:<24} variations",
+        "{:>5} {:<width$} {:>11} {:>6} {:>5}  {:<24} variations",
         "index", "name", "size", "xforms", "final", "palette"
     );
-    for (index, (f, src)) in file.flames.iter().zip(&file.sources).enumerate() {
+    for (index, ((f, src), name)) in file.flames.iter().zip(&file.sources).zip(&names).enumerate() {
         println!(
-            "{index:>5} {:<24} {:>11} {:>6} {:>5}  {:<24} {}",
-            printable(&f.name, false),
+            "{index:>5} {name:<width$} {:>11} {:>6} {:>5}  {:<24} {}",
             format!("{}×{}", f.size[0], f.size[1]),
             f.xforms.len(),
             if f.final_xform.is_some() { "yes" } else { "no" },
@@ -69,4 +73,14 @@ pub fn info(path: &Path, as_json: bool) -> anyhow::Result<()> {
         println!("warning: {}", printable(w, false));
     }
     Ok(())
+}
+
+/// `text` cut to at most `max` characters, the cut marked with an ellipsis.
+fn shortened(text: &str, max: usize) -> String {
+    if text.chars().count() <= max {
+        return text.to_string();
+    }
+    let mut cut: String = text.chars().take(max - 1).collect();
+    cut.push('…');
+    cut
 }

@@ -336,6 +336,8 @@ impl Reader<'_> {
         let mut final_xform: Option<Xform> = None;
         let mut palette_issues = PaletteIssues::default();
         let mut motion_warned = false;
+        // Other programs' xform attributes, named in one warning at the first xform with one.
+        let mut xform_attributes_not_read: Option<(roxmltree::Node, Vec<&str>)> = None;
         for child in node.children().filter(|n| n.is_element()) {
             match child.tag_name().name() {
                 "color" => {
@@ -366,7 +368,12 @@ impl Reader<'_> {
                     let array_len = std_xforms.len() + usize::from(final_xform.is_some());
                     let label =
                         if is_final { "final xform".to_string() } else { format!("xform {}", std_xforms.len()) };
-                    let XformRead { xform, chaos } = xml_xform::xform(ctx, child, is_final, array_len, &label)?;
+                    let XformRead { xform, chaos, not_read } =
+                        xml_xform::xform(ctx, child, is_final, array_len, &label)?;
+                    if !not_read.is_empty() {
+                        let (_, names) = xform_attributes_not_read.get_or_insert((child, Vec::new()));
+                        names.extend(not_read.into_iter().filter(|n| !names.contains(n)).collect::<Vec<_>>());
+                    }
                     if child.children().any(|n| n.has_tag_name("motion")) && !motion_warned {
                         motion_warned = true;
                         ctx.warn(child, "<motion> elements (animation) are ignored");
@@ -381,6 +388,12 @@ impl Reader<'_> {
                 "edit" => {}
                 other => ctx.warn(child, format!("element <{other}> ignored")),
             }
+        }
+        if let Some((at, names)) = xform_attributes_not_read {
+            ctx.warn(
+                at,
+                format!("xform attributes of other programs flam3 does not read, ignored: {}", names.join(", ")),
+            );
         }
         if std_xforms.is_empty() {
             let what = if final_xform.is_some() { "has only a final xform" } else { "has no <xform>" };

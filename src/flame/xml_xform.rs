@@ -22,10 +22,33 @@ pub const MAX_SYMMETRY_KIND: i64 = 4096;
 /// `<xform>` attributes flam3 reads that change nothing in a still image.
 const STILL_IGNORED: &[&str] = &["animate", "motion_frequency", "motion_function"];
 
+/// An xform's label (Apophysis 7X, JWildfire and Fractorium name their xforms): shown nowhere,
+/// changes nothing.
+const LABEL: &str = "name";
+
+/// `<xform>` attributes other programs write that are not variations and that flam3 does not
+/// read (Apophysis 7X's variation colour, JWildfire's material and colour modifiers): left out
+/// and named as such, not as unknown variations: once for the whole flame (`XformRead::not_read`).
+const OTHER_PROGRAMS: &[&str] = &[
+    "var_color",
+    "material",
+    "material_speed",
+    "mod_gamma",
+    "mod_gamma_speed",
+    "mod_contrast",
+    "mod_contrast_speed",
+    "mod_saturation",
+    "mod_saturation_speed",
+    "mod_hue",
+    "mod_hue_speed",
+];
+
 /// An xform read, with its xaos row as given (`None`: no `chaos` attribute).
 pub(super) struct XformRead {
     pub xform: Xform,
     pub chaos: Option<Vec<f64>>,
+    /// Its attributes of other programs ([`OTHER_PROGRAMS`]), for the flame's one warning.
+    pub not_read: Vec<&'static str>,
 }
 
 /// One `<xform>` or `<finalxform>`. `array_len` is the number of xforms flam3 holds before
@@ -60,6 +83,7 @@ fn xform_in(ctx: &mut Ctx, node: roxmltree::Node, is_final: bool, array_len: usi
     let mut weights = vec![0.0; VARIATIONS.len()];
     let mut given: HashMap<(u8, usize), f64> = HashMap::new();
     let mut unknown: Vec<String> = Vec::new();
+    let mut not_read: Vec<&'static str> = Vec::new();
     let mut chaos = None;
     let mut weight_given = false;
     // `var1` and `var` number flam3's own variations only.
@@ -137,7 +161,8 @@ fn xform_in(ctx: &mut Ctx, node: roxmltree::Node, is_final: bool, array_len: usi
                     }
                 }
             }
-            _ if STILL_IGNORED.contains(&name) => {}
+            _ if STILL_IGNORED.contains(&name) || name == LABEL => {}
+            _ if let Some(known) = OTHER_PROGRAMS.iter().find(|&&known| known == name) => not_read.push(known),
             _ => {
                 if let Some(v) = Variation::by_name(name) {
                     weights[v.0 as usize] = attr_number(ctx, &attr)?;
@@ -175,7 +200,7 @@ fn xform_in(ctx: &mut Ctx, node: roxmltree::Node, is_final: bool, array_len: usi
     if !unknown.is_empty() {
         ctx.warn(node, format!("unknown variations or parameters, left out: {}", unknown.join(", ")));
     }
-    Ok(XformRead { xform: x, chaos })
+    Ok(XformRead { xform: x, chaos, not_read })
 }
 
 /// flam3's `round6`: to the nearest millionth.
