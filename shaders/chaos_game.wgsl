@@ -90,9 +90,15 @@ override SHADOWED: bool = false;
 // Depth of field on (aperture > 0): false compiles the pinhole splat.
 override LENS: bool = false;
 // Colour by the colour coordinate (`[render] color = "palette"`): the points carry c ← (c + c_i)
-// / 2 and splat the palette entry round(c · 255), the colour table being the palette; false
+// / 2 and splat the palette entry ⌊256 c⌋ (255 for c = 1; `palette_entry`), the colour table
+// being the palette; false
 // compiles to function colour.
 override PALETTE: bool = false;
+// The palette entry of colour coordinate c in [0, 1]: the twin of `palette::index_of`.
+fn palette_entry(c: f32) -> u32 {
+    return min(u32(i32(c * 256.0)), 255u);
+}
+
 // The colour coordinate at a (re)start, `C_START` in src/chaos_game/color_coord.rs.
 const C_START: f32 = 0.5;
 // Some function is a flame (`kind = "flame"`, src/chaos_game/flame.rs): the functions whose
@@ -420,7 +426,7 @@ fn chaos_game(@builtin(global_invocation_id) id: vec3<u32>) {
             drawn_c = header.k1.z * header.k1.w + (1.0 - header.k1.z) * c;
         }
         if s >= params.skip_steps && shown {
-            splat(drawn, select(fi, u32(drawn_c * COLOR_SCALE + 0.5), PALETTE));
+            splat(drawn, select(fi, palette_entry(drawn_c), PALETTE));
             if SHADOWED {
                 splat_shadow(drawn);
             }

@@ -229,10 +229,7 @@ fn estimate_color(s: vec4<f32>) -> vec4<f32> {
     if s.w > 0.0 {
         c = toned(s.rgb, s.w, true);
     }
-    if ENCODE_SRGB {
-        c = vec3<f32>(linear_to_srgb(c.x), linear_to_srgb(c.y), linear_to_srgb(c.z));
-    }
-    return vec4<f32>(c, 1.0);
+    return vec4<f32>(output_color(c), 1.0);
 }
 
 // The estimate without a spatial filter.

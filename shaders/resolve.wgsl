@@ -64,8 +64,10 @@ struct ResolveParams {
     // axis (the pipeline constant FILTER_TAPS holds the same value) and their weights, four to
     // a vector.
     filter_taps: u32,
+    // 1: the colours and background are sRGB-encoded values (the scene's `blend_space =
+    // "srgb"`), which `output_color` takes as they are or decodes; 0: linear.
+    blend_srgb: u32,
     pad0: u32,
-    pad1: u32,
     filter_weights: array<vec4<f32>, 4>,
 }
 
@@ -170,6 +172,29 @@ fn linear_to_srgb(v: f32) -> f32 {
         return x * 12.92;
     }
     return 1.055 * pow(x, 1.0 / 2.4) - 0.055;
+}
+
+fn srgb_to_linear(v: f32) -> f32 {
+    if v <= 0.04045 {
+        return v / 12.92;
+    }
+    return pow((v + 0.055) / 1.055, 2.4);
+}
+
+// A resolved colour (in the blend space) as the target takes it: sRGB-encoded where the
+// target is not an sRGB format, else linear. The twin of `output_color` in src/resolve.rs.
+fn output_color(c: vec3<f32>) -> vec3<f32> {
+    if params.blend_srgb != 0u {
+        let s = clamp(c, vec3<f32>(0.0), vec3<f32>(1.0));
+        if ENCODE_SRGB {
+            return s;
+        }
+        return vec3<f32>(srgb_to_linear(s.x), srgb_to_linear(s.y), srgb_to_linear(s.z));
+    }
+    if ENCODE_SRGB {
+        return vec3<f32>(linear_to_srgb(c.x), linear_to_srgb(c.y), linear_to_srgb(c.z));
+    }
+    return c;
 }
 
 fn cue(color: vec3<f32>, t: f32) -> vec3<f32> {
@@ -600,8 +625,5 @@ fn resolve(in: VertexOutput) -> @location(0) vec4<f32> {
             }
         }
     }
-    if ENCODE_SRGB {
-        c = vec3<f32>(linear_to_srgb(c.x), linear_to_srgb(c.y), linear_to_srgb(c.z));
-    }
-    return vec4<f32>(c, 1.0);
+    return vec4<f32>(output_color(c), 1.0);
 }

@@ -16,13 +16,14 @@ use crate::color;
 /// Entries of every palette.
 pub const SAMPLES: usize = 256;
 
-/// The palette's entry for colour coordinate `c` in [0, 1]: round(c · 255) (c outside [0, 1]
-/// gives some entry; callers keep it inside). The one
-/// quantization of the colour coordinate (the CPU kernels' and the shader's).
+/// The palette's entry for colour coordinate `c` in [0, 1]: ⌊256 c⌋, 255 for c = 1 (flam3's
+/// step rule: every entry covers 1/256 of the coordinate; c outside [0, 1] gives some entry,
+/// callers keep it inside). The one quantization of the colour coordinate (the CPU kernels'
+/// and the shader's `palette_entry`).
 #[inline(always)]
 pub fn index_of(c: f32) -> u8 {
     // Through i32: for c in [0, 1] the same as a direct cast, without its saturation code.
-    (c * 255.0 + 0.5) as i32 as u8
+    ((c * 256.0) as i32).min(255) as u8
 }
 
 /// The built-in palettes: name and colour stops (sRGB bytes), spread evenly over [0, 1].

@@ -42,7 +42,7 @@ use rayon::prelude::*;
 
 use crate::camera::{OrbitCamera, Projection};
 use crate::color::linear_to_srgb;
-use crate::scene::spec::{DensityScale, Look, RenderSettings, SplatMode};
+use crate::scene::spec::{BlendSpace, DensityScale, Look, RenderSettings, SplatMode};
 use crate::splat::{Framebuffer, ShadowView, SplatView};
 
 mod light_rows;
@@ -182,7 +182,11 @@ pub struct ResolveParams {
     /// axis (odd; 0: off; the pipeline constant `FILTER_TAPS` holds the same value) and their
     /// weights.
     pub filter_taps: u32,
-    pub pad: [u32; 2],
+    /// 1: the colours and background are sRGB-encoded values ([`Tone::blend`] `Srgb`), which
+    /// the output takes as they are (unorm target) or decoded (sRGB target, linear outputs); 0:
+    /// linear.
+    pub blend_srgb: u32,
+    pub pad: u32,
     pub filter_weights: filter::Weights,
 }
 const _: () = assert!(std::mem::size_of::<ResolveParams>() == 272);
@@ -398,7 +402,8 @@ impl ResolveArgs {
             normal_radius_px: self.normal_radius_px.clamp(1, NORMAL_RADIUS_PX),
             count_scale: if self.mode == SplatMode::Density { self.count_scale() } else { 0.0 },
             filter_taps,
-            pad: [0; 2],
+            blend_srgb: (self.tone.blend.in_mode(self.mode) == BlendSpace::Srgb) as u32,
+            pad: 0,
             filter_weights,
         }
         .with_shadow(self, closest)
@@ -442,6 +447,17 @@ pub fn max_count(accum: &[u32], pixels: usize) -> u32 {
 /// The shader's `linear_to_srgb` (the same function as the scene's).
 fn encode(c: [f32; 3]) -> [f32; 3] {
     c.map(linear_to_srgb)
+}
+
+/// A resolved colour (in the blend space, [`ResolveParams::blend_srgb`]) as the target takes
+/// it: sRGB-encoded where `p.encode_srgb` is set, else linear. The shader's `output_color`.
+pub(crate) fn output_color(p: &ResolveParams, c: [f32; 3]) -> [f32; 3] {
+    match (p.blend_srgb != 0, p.encode_srgb != 0) {
+        (false, true) => encode(c),
+        (false, false) => c,
+        (true, true) => c.map(|v| v.clamp(0.0, 1.0)),
+        (true, false) => crate::color::srgb_to_linear(c.map(|v| v.clamp(0.0, 1.0))),
+    }
 }
 
 fn cue(p: &ResolveParams, color: [f32; 3], t: f32) -> [f32; 3] {
@@ -572,7 +588,7 @@ fn fragment(p: &ResolveParams, inputs: &ResolveInputs<'_>, x: u32, y: u32, light
             }
         }
     }
-    if p.encode_srgb != 0 { encode(c) } else { c }
+    output_color(p, c)
 }
 
 /// The linear density of a pixel with `count` points: 1 in average mode, else

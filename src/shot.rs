@@ -32,8 +32,19 @@ pub enum ShotError {
 /// `compiled` (of `scene`'s functions) coloured as `settings.color` says: unchanged for
 /// function colour; for palette colour each compiled function gets its scene function's
 /// `palette_index` (default i / (n − 1) over all the scene's functions, so that disabling one
-/// keeps the others' colours) and the colour table becomes the palette.
+/// keeps the others' colours) and the colour table becomes the palette. The table is in the
+/// space the colours are mixed in ([`RenderSettings::blend`]).
 pub fn with_color_mode(compiled: CompiledIfs, scene: &Scene, settings: &RenderSettings) -> CompiledIfs {
+    let mut compiled = colored(compiled, scene, settings);
+    let blend = settings.blend();
+    for c in &mut compiled.colors {
+        *c = blend.of_linear(*c);
+    }
+    compiled
+}
+
+/// `compiled`'s colour table (linear) as `settings.color` says.
+fn colored(compiled: CompiledIfs, scene: &Scene, settings: &RenderSettings) -> CompiledIfs {
     if settings.color != ColorMode::Palette {
         return compiled;
     }
@@ -127,7 +138,7 @@ impl Shot {
             bounds,
             settings.mode,
             settings.depth_cue,
-            settings.background,
+            settings.blend().of_linear(settings.background),
         )
         .with_lens(lens_of(&camera, settings)?);
         let style = ResolveStyle::of(settings, scene.domain.dimension());

@@ -44,7 +44,7 @@ fn collect(scene: &Scene, points: u64) -> (Shot, CollectSink) {
 }
 
 /// All c_i equal to a: c → a (exactly: (a + a) / 2 = a, and the start's weight halves every
-/// step of the ≥ 24-step transient), so every point carries index round(255 a) and every
+/// step of the ≥ 24-step transient), so every point carries index ⌊256 a⌋ and every
 /// covered pixel of a flat closest-mode render is that palette entry, byte for byte.
 #[test]
 fn equal_coordinates_give_one_colour() {
@@ -83,16 +83,16 @@ fn equal_coordinates_give_one_colour() {
 
 /// The binary-digit IFS with c₀ = 0, c₁ = 1: c ← (c + b) / 2 is the recurrence of x, so after
 /// the transient a point's colour coordinate is its x (both forget their start as 2^-steps,
-/// below 2^-24 here; f32 rounding adds at most a few 2^-24). The index is round(255 x) except
-/// within 10^-3 of a rounding boundary: |index − 255 x| ≤ 0.5 + 10^-3.
+/// below 2^-24 here; f32 rounding adds at most a few 2^-24). The index is ⌊256 x⌋ (255 at
+/// x = 1) except within 10^-3 of an entry's boundary: 256 x − 1 − 10^-3 ≤ index ≤ 256 x + 10^-3.
 #[test]
 fn colour_coordinate_is_the_binary_address() {
     let scene = binary_scene(["palette_index = 0", "palette_index = 1"], "");
     let (_, sink) = collect(&scene, 400_000);
     let mut seen = [false; 256];
     for (p, &i) in sink.points.iter().zip(&sink.functions) {
-        let d = (i as f64 - 255.0 * p.x as f64).abs();
-        assert!(d <= 0.5 + 1e-3, "point {p} has index {i}, 255 x = {}", 255.0 * p.x);
+        let d = i as f64 - 256.0 * p.x as f64;
+        assert!((-1.0 - 1e-3..=1e-3).contains(&d), "point {p} has index {i}, 256 x = {}", 256.0 * p.x);
         seen[i as usize] = true;
     }
     // The uniform measure on [0, 1] reaches every index.
@@ -110,10 +110,11 @@ fn default_coordinates_are_spread_evenly() {
 
 /// The GPU carries the CPU's colour coordinate: on the binary IFS with a grey ramp palette
 /// (entry i = i / 255) in average mode, a pixel's mean colour is the mean c of its points, and
-/// c is x, so on both devices it lies within the pixel's x range (1 / pixels per unit x),
-/// widened by the index rounding (½ / 255) and the splat's rounding of colour × 255 (½ / 255).
-/// The two means therefore differ by at most that range plus 2 / 255 (no statistics: a wrong
-/// coordinate on the GPU, e.g. the function index, misses by far more).
+/// c is x, so on both devices the mean colour lies within [(256 x₀ − 1) / 255, 256 x₁ / 255]
+/// for the pixel's x range [x₀, x₁] (entry ⌊256 c⌋ = i is colour i / 255), widened by the
+/// splat's rounding of colour × 255 (½ / 255). The two means therefore differ by at most
+/// 256 / 255 of that range plus 2 / 255 (no statistics: a wrong coordinate on the GPU, e.g.
+/// the function index, misses by far more).
 #[test]
 fn gpu_carries_the_colour_coordinate() {
     let Some(ctx) = common::gpu() else { return };
@@ -131,7 +132,7 @@ fn gpu_carries_the_colour_coordinate() {
     }
     let x_of = |x: f32| shot.view.pixel_from_world.project_point3(Vec3::new(x, 0.0, 0.0)).x;
     let pixel_range = 1.0 / (x_of(1.0) - x_of(0.0)) as f64;
-    let tolerance = pixel_range + 2.0 / 255.0;
+    let tolerance = pixel_range * 256.0 / 255.0 + 2.0 / 255.0;
     let (mut compared, mut worst) = (0, 0.0f64);
     for (i, (g, c)) in gpu.framebuffer.accum.iter().zip(&cpu.accum).enumerate() {
         if g[3] == 0 || c[3] == 0 {

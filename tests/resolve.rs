@@ -18,7 +18,7 @@ use nlifs::resolve::{
     resolve_fragment_perturbed,
 };
 use nlifs::scene::Scene;
-use nlifs::scene::spec::{DensityScale, SplatMode};
+use nlifs::scene::spec::{BlendSpace, DensityScale, SplatMode};
 use nlifs::splat::{Framebuffer, SplatView};
 
 use common::gpu;
@@ -463,8 +463,9 @@ fn spatial_filter_matches_cpu() {
 /// Every combination of flam3's tone settings on the average and density accumulations:
 /// exposure 0 and 1.5 stops; gamma 1, and 2.2 with a wide linear threshold (0.05); vibrancy 0
 /// and 1; highlight power off (−1), 0 (hue kept) and 2 (towards white); density relative and
-/// absolute (density mode). Tolerance: item 8 of [`Tolerance`] (the exponents are ≤ 2, within
-/// its |y| ≤ 3).
+/// absolute (density mode); mixed and toned in linear light and in sRGB values (`blend_space`;
+/// the sRGB result goes to the target without the encode, so within the same tolerance).
+/// Tolerance: item 8 of [`Tolerance`] (the exponents are ≤ 2, within its |y| ≤ 3).
 #[test]
 fn every_tone_setting_matches_cpu() {
     let Some(ctx) = gpu() else { return };
@@ -475,7 +476,9 @@ fn every_tone_setting_matches_cpu() {
             for (gamma, gamma_threshold) in [(1.0, Tone::NEUTRAL.gamma_threshold), (2.2, 0.05)] {
                 for vibrancy in [0.0, 1.0] {
                     for highlight_power in [-1.0, 0.0, 2.0] {
-                        for density_scale in DensityScale::ALL {
+                        for (density_scale, blend) in
+                            DensityScale::ALL.into_iter().flat_map(|d| BlendSpace::ALL.map(|b| (d, b)))
+                        {
                             let tone = Tone {
                                 exposure,
                                 gamma,
@@ -484,6 +487,7 @@ fn every_tone_setting_matches_cpu() {
                                 highlight_power,
                                 density_scale,
                                 filter: None,
+                                blend,
                             };
                             compare(&mut gpu, &acc, &ResolveArgs { tone, ..acc.args });
                         }
@@ -492,6 +496,44 @@ fn every_tone_setting_matches_cpu() {
             }
         }
     }
+}
+
+/// Colours mixed in sRGB values (`blend_space = "srgb"`, imported flames) reach an sRGB target
+/// (the viewer's surface) decoded, so that the target's encode gives back the values: its
+/// bytes are the unorm target's within a level (the decode and encode round trip in f32 and
+/// the target's rounding), and the CPU twin's linear output, encoded, is those bytes too.
+#[test]
+fn srgb_blend_reaches_an_srgb_target_unchanged() {
+    let Some(ctx) = gpu() else { return };
+    let mut gpu = Gpu { resolve: GpuResolve::new(&ctx.device), ctx, draws: 0 };
+    let acc = plant2(SplatMode::Density);
+    let tone = Tone { exposure: 1.0, gamma: 4.0, vibrancy: 0.3, blend: BlendSpace::Srgb, ..Tone::NEUTRAL };
+    let args = ResolveArgs { tone, ..acc.args };
+    let unorm = gpu.image(&acc, &args, LightRows::Inline);
+    let mut game = GpuChaosGame::new(&gpu.ctx.device, 1, acc.width, acc.height);
+    gpu.ctx.queue.write_buffer(&game.accum, 0, bytemuck::cast_slice(&acc.words));
+    game.generation = 1_000_000;
+    let format = wgpu::TextureFormat::Rgba8UnormSrgb;
+    let srgb =
+        nlifs::gpu::readback::draw_offscreen_as(&gpu.ctx, acc.width, acc.height, format, |encoder, target, f| {
+            gpu.resolve.draw(&gpu.ctx, encoder, &game, &args, target, f, LightRows::Inline)
+        })
+        .unwrap();
+    let linear = args.params(acc.width, acc.height, false);
+    let max = max_count(&acc.words, (acc.width * acc.height) as usize);
+    let inputs = ResolveInputs { accum: &acc.words, colors: &acc.colors, max_count: max, shadow: &acc.shadow };
+    let (mut lit, mut worst) = (0, 0u8);
+    let corner = unorm.get_pixel(0, 0).0;
+    for (x, y, px) in srgb.enumerate_pixels() {
+        let plain = unorm.get_pixel(x, y).0;
+        let cpu = resolve_fragment(&linear, &inputs, x, y).map(nlifs::color::linear_to_srgb8);
+        for c in 0..3 {
+            worst = worst.max(px.0[c].abs_diff(plain[c])).max(cpu[c].abs_diff(plain[c]));
+        }
+        lit += usize::from(plain != corner);
+    }
+    assert!(lit > 1000, "too few lit pixels ({lit}) to say anything");
+    assert!(worst <= 1, "an sRGB target or the linear output is {worst} levels from the unorm target's bytes");
 }
 
 /// The viewer's density-estimated resolve (`resolve_estimated` in
@@ -529,6 +571,15 @@ fn density_estimation_resolve_matches_cpu() {
         Tone::NEUTRAL,
         Tone { exposure: 1.0, gamma: 2.2, vibrancy: 0.5, highlight_power: 2.0, ..Tone::NEUTRAL },
         Tone { exposure: 2.0, gamma: 1.8, density_scale: DensityScale::Absolute, ..Tone::NEUTRAL },
+        // Mixed and toned in sRGB values, as an imported flame.
+        Tone {
+            exposure: 1.0,
+            gamma: 4.0,
+            vibrancy: 0.3,
+            density_scale: DensityScale::Absolute,
+            blend: BlendSpace::Srgb,
+            ..Tone::NEUTRAL
+        },
         // flam3's spatial filter over the estimate (`filtered_estimate`).
         Tone {
             exposure: 1.0,

@@ -125,6 +125,14 @@ impl Default for ProgressiveSettings {
     }
 }
 
+impl ProgressiveSettings {
+    /// The background as the splat and the resolve hold it: in the space the colours are mixed
+    /// in ([`crate::scene::spec::BlendSpace::in_mode`]).
+    pub fn splat_background(&self) -> [f32; 3] {
+        self.tone.blend.in_mode(self.mode).of_linear(self.background)
+    }
+}
+
 /// A frame that a point source outside the GPU fills: the view to splat with, whether the
 /// accumulation starts empty, and the frame's index (its random streams).
 #[derive(Clone, Copy, Debug)]
@@ -304,7 +312,8 @@ impl Progressive {
     fn update_view(&mut self) {
         let Some(camera) = &self.camera else { return };
         let s = &self.settings;
-        let view = SplatView::new(camera, self.width, self.height, self.bounds, s.mode, s.depth_cue, s.background);
+        let view =
+            SplatView::new(camera, self.width, self.height, self.bounds, s.mode, s.depth_cue, s.splat_background());
         let casts = s.mode == SplatMode::Closest && s.shadows > 0.0 && s.shading > 0.0;
         let to_light = crate::resolve::shadow::key_light(s.light_yaw_deg, s.light_pitch_deg);
         let view = super::shadow::live_shadow(view, casts, glam::Vec3::from_array(to_light), camera, self.bounds);
@@ -511,7 +520,7 @@ impl Progressive {
         };
         let args = ResolveArgs {
             mode: s.mode,
-            background: s.background,
+            background: s.splat_background(),
             depth_cue: s.depth_cue,
             shading: s.shading,
             occlusion: s.occlusion,

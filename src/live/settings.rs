@@ -74,8 +74,7 @@ impl Imaging {
             gamma_threshold: v[2],
             vibrancy: v[3],
             highlight_power: v[4],
-            density_scale: self.tone.density_scale,
-            filter: self.tone.filter,
+            ..self.tone
         };
         Self { tone, ..self }
     }

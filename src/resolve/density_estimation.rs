@@ -203,7 +203,7 @@ impl Estimated {
     /// The density-mode colour of pixel (x, y) with `p` ([`crate::resolve::ResolveArgs::params`]):
     /// the average colour laid over the background with the log density
     /// ([`crate::resolve::log_density`]) through the tone map, as [`crate::resolve::resolve_fragment`] does with integer counts;
-    /// sRGB-encoded when `p.encode_srgb` is set.
+    /// as the target takes it ([`crate::resolve::output_color`]).
     pub fn fragment(&self, p: &ResolveParams, x: u32, y: u32) -> [f32; 3] {
         let mut c = [p.background[0], p.background[1], p.background[2]];
         let sample = |x: u32, y: u32| {
@@ -225,7 +225,7 @@ impl Estimated {
             };
             c = crate::resolve::toned(&tone, avg, a0, c, true).0;
         }
-        if p.encode_srgb != 0 { c.map(crate::color::linear_to_srgb) } else { c }
+        crate::resolve::output_color(p, c)
     }
 }
 

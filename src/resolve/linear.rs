@@ -47,7 +47,10 @@ pub fn resolve_linear(framebuffer: &Framebuffer, camera: &OrbitCamera, style: &R
             }
         },
     );
-    LinearImage { width: view.width, height: view.height, rgb, alpha, background: view.background }
+    // The view's background is in the blend space; the image's is linear, as its colours.
+    let background =
+        if params.blend_srgb != 0 { crate::color::srgb_to_linear(view.background) } else { view.background };
+    LinearImage { width: view.width, height: view.height, rgb, alpha, background }
 }
 
 /// The coverage of pixel (x, y) that [`resolve_fragment`] draws over the background.

@@ -27,7 +27,7 @@
 //! The defaults (exposure 0, gamma 1, vibrancy 1, highlight power −1: off) skip every power, so
 //! the image is today's byte for byte: B = 1, α = a0, c = avg, the vibrancy term is exactly 0.
 
-use crate::scene::spec::{DensityScale, PixelFilter, RenderSettings};
+use crate::scene::spec::{BlendSpace, DensityScale, PixelFilter, RenderSettings};
 
 /// Highlight power below 0: overflowing channels are clipped one by one (flam3's default −1).
 pub const HIGHLIGHT_OFF: f32 = -1.0;
@@ -50,6 +50,9 @@ pub struct Tone {
     pub density_scale: DensityScale,
     /// flam3's spatial filter before the tone map (`crate::resolve::filter`); None: off.
     pub filter: Option<PixelFilter>,
+    /// The space the colours are mixed and toned in: the accumulated colours and the
+    /// background are in it, and the resolve converts its result to the output's encoding.
+    pub blend: BlendSpace,
 }
 
 impl Tone {
@@ -62,6 +65,7 @@ impl Tone {
         highlight_power: HIGHLIGHT_OFF,
         density_scale: DensityScale::Relative,
         filter: None,
+        blend: BlendSpace::Linear,
     };
 
     /// The tone a scene's render settings ask for.
@@ -74,6 +78,7 @@ impl Tone {
             highlight_power: settings.highlight_power,
             density_scale: settings.density_scale,
             filter: settings.filter,
+            blend: settings.blend_space,
         }
     }
 }

@@ -20,11 +20,11 @@
 //! - **Camera.** Parallel projection seen from +z, the target at M(center), the visible height
 //!   size_y / (scale · 2^zoom); the image size is the flame's.
 //! - **Look.** Density mode on the absolute scale (flam3's log density: log(1 + points per
-//!   point drawn and square unit)) coloured by the palette (entries as sRGB bytes, linear for
-//!   the resolve), the flame's background, and flam3's tone: the exposure log₂(brightness ·
-//!   268 / 256) stops (flam3's k1), its gamma divided by 2.2 (nlifs encodes its output to sRGB,
-//!   about a power 1 / 2.2, which flam3 does not), its gamma threshold, vibrancy and highlight
-//!   power; density estimation with flam3's estimator radius, minimum and curve; as many points
+//!   point drawn and square unit)) coloured by the palette, the flame's background, and flam3's
+//!   tone: the exposure log₂(brightness · 268 / 256) stops (flam3's k1), its gamma, gamma
+//!   threshold, vibrancy and highlight power, all in the sRGB blend space (`blend_space =
+//!   "srgb"`): the palette's colours are mixed and toned as flam3 mixes their bytes, so a
+//!   flame's gamma, vibrancy below 1 and colour mixtures come out as flam3's; density estimation with flam3's estimator radius, minimum and curve; as many points
 //!   as flam3 draws samples (quality × width × height × 4^zoom); flam3's spatial filter (`filter`,
 //!   `filter_shape`) at one sample a pixel. Not drawn: flam3's supersampling (its
 //!   anti-aliasing within a pixel).
@@ -40,8 +40,8 @@ use crate::flame::{Coefs, Flame, IDENTITY, PaletteMode, Xform};
 use crate::model::{ProbabilityMode, RectGrid};
 use crate::palette::Palette;
 use crate::scene::spec::{
-    CameraSpec, ColorMode, DensityEstimation, DensityScale, FinalXform, FlameDef, FunctionDef, FunctionSpec,
-    MAX_POINTS, PixelFilter, RenderSettings, SplatMode, TONE_FIELDS,
+    BlendSpace, CameraSpec, ColorMode, DensityEstimation, DensityScale, FinalXform, FlameDef, FunctionDef,
+    FunctionSpec, MAX_POINTS, PixelFilter, RenderSettings, SplatMode, TONE_FIELDS,
 };
 use crate::scene::{LoadError, Scene};
 
@@ -62,9 +62,6 @@ pub enum FlameImportError {
 
 /// The vertical field of view of an imported camera (any works in parallel projection).
 const FOV_Y_DEG: f64 = 30.0;
-
-/// flam3's gamma is divided by this (see the module note).
-const GAMMA_DIVISOR: f64 = 2.2;
 
 /// flam3's brightness is multiplied by this (its k1's 268 / 256).
 const BRIGHTNESS_FACTOR: f64 = 268.0 / 256.0;
@@ -223,11 +220,12 @@ pub fn scene_of_flame(flame: &Flame, palette_file: &str) -> Result<FlameImport, 
         background: bg,
         depth_cue: 0.0,
         exposure: tone(0, (flame.brightness.max(1e-3) * BRIGHTNESS_FACTOR).log2()),
-        gamma: tone(1, flame.gamma / GAMMA_DIVISOR),
+        gamma: tone(1, flame.gamma),
         gamma_threshold: tone(2, flame.gamma_threshold),
         vibrancy: tone(3, flame.vibrancy),
         highlight_power: tone(4, flame.highlight_power),
         density_scale: DensityScale::Absolute,
+        blend_space: BlendSpace::Srgb,
         density_estimation: estimator,
         filter,
         color: ColorMode::Palette,

@@ -118,6 +118,61 @@ impl DensityScale {
     }
 }
 
+/// Where the average and density modes mix the points' colours and tone the mixture
+/// (`[render] blend_space`): the colours of the points, the background and the tone map's
+/// arithmetic all live in this space, and the picture is converted to the output's at the end.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum BlendSpace {
+    /// Linear light (physically, what light adds up to): nlifs's own look.
+    #[default]
+    Linear,
+    /// sRGB-encoded values, as flam3 and the flame programs mix their palette's bytes: a
+    /// flame's gamma, vibrancy and colour mixtures come out as in those programs (imported
+    /// flames use it).
+    Srgb,
+}
+
+impl BlendSpace {
+    pub const ALL: [BlendSpace; 2] = [BlendSpace::Linear, BlendSpace::Srgb];
+
+    pub fn parse(s: &str) -> Option<Self> {
+        match s {
+            "linear" => Some(BlendSpace::Linear),
+            "srgb" => Some(BlendSpace::Srgb),
+            _ => None,
+        }
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            BlendSpace::Linear => "linear",
+            BlendSpace::Srgb => "srgb",
+        }
+    }
+
+    /// The space a splat in `mode` mixes in: this one in the average and density modes; closest
+    /// mode draws its colours as they are, in linear light.
+    pub fn in_mode(self, mode: SplatMode) -> Self {
+        if mode == SplatMode::Closest { BlendSpace::Linear } else { self }
+    }
+
+    /// A linear colour (a function's, a palette entry, the background) as this space holds it.
+    pub fn of_linear(self, c: [f32; 3]) -> [f32; 3] {
+        match self {
+            BlendSpace::Linear => c,
+            BlendSpace::Srgb => c.map(color::linear_to_srgb),
+        }
+    }
+
+    /// A colour held in this space as linear light.
+    pub fn to_linear(self, c: [f32; 3]) -> [f32; 3] {
+        match self {
+            BlendSpace::Linear => c,
+            BlendSpace::Srgb => color::srgb_to_linear(c),
+        }
+    }
+}
+
 /// How a function is defined in the scene.
 #[derive(Clone, Debug, PartialEq)]
 pub enum FunctionDef {
@@ -300,6 +355,8 @@ pub struct RenderSettings {
     pub highlight_power: f32,
     /// Density mode: relative to the densest pixel, or flam3's absolute density.
     pub density_scale: DensityScale,
+    /// Average and density modes: the space the colours are mixed and toned in.
+    pub blend_space: BlendSpace,
     /// flam3's adaptive density estimation (density mode; `src/resolve/density_estimation.rs`);
     /// None: off.
     pub density_estimation: Option<DensityEstimation>,
@@ -336,6 +393,11 @@ pub const LIGHT_FIELDS: [(&str, f64, f64); 3] =
     [("shadows", 0.0, 1.0), ("light_yaw_deg", -180.0, 180.0), ("light_pitch_deg", -90.0, 90.0)];
 
 impl RenderSettings {
+    /// The space colours are mixed and toned in ([`BlendSpace::in_mode`]).
+    pub fn blend(&self) -> BlendSpace {
+        self.blend_space.in_mode(self.mode)
+    }
+
     /// The key light's direction in the order of the last two [`LIGHT_FIELDS`], to set.
     pub fn light_mut(&mut self) -> [&mut f32; 2] {
         [&mut self.light_yaw_deg, &mut self.light_pitch_deg]
@@ -430,6 +492,7 @@ impl Default for RenderSettings {
             vibrancy: 1.0,
             highlight_power: -1.0,
             density_scale: DensityScale::Relative,
+            blend_space: BlendSpace::Linear,
             density_estimation: None,
             filter: None,
             shadows: None,

@@ -14,7 +14,7 @@ use crate::model::builder::Step;
 use crate::scene::Scene;
 use crate::scene::file::FORMAT_VERSION;
 use crate::scene::spec::{
-    CameraSpec, ColorMode, DensityScale, FlameDef, FunctionDef, LIGHT_FIELDS, RenderSettings, TONE_FIELDS,
+    BlendSpace, CameraSpec, ColorMode, DensityScale, FlameDef, FunctionDef, LIGHT_FIELDS, RenderSettings, TONE_FIELDS,
 };
 use crate::scene::timeline::RenderKey;
 
@@ -307,6 +307,9 @@ impl Scene {
         }
         if r.density_scale != DensityScale::Relative {
             let _ = writeln!(out, "density_scale = \"{}\"", r.density_scale.name());
+        }
+        if r.blend_space != BlendSpace::Linear {
+            let _ = writeln!(out, "blend_space = \"{}\"", r.blend_space.name());
         }
         if let Some(de) = r.density_estimation {
             let _ = writeln!(

@@ -467,7 +467,7 @@ impl ViewerState {
             self.bounds,
             self.live.draw.mode,
             self.live.draw.depth_cue,
-            self.live.draw.background,
+            self.live.draw.splat_background(),
         )
     }
 

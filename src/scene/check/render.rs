@@ -5,7 +5,7 @@
 use toml::Spanned;
 
 use crate::scene::file::RenderToml;
-use crate::scene::spec::{DensityScale, Look, MAX_POINTS, RenderSettings, SplatMode, TONE_FIELDS};
+use crate::scene::spec::{BlendSpace, DensityScale, Look, MAX_POINTS, RenderSettings, SplatMode, TONE_FIELDS};
 
 use super::{Checker, Res};
 
@@ -82,6 +82,15 @@ impl Checker<'_> {
                     d.span(),
                     "render.density_scale",
                     format!("`{}` is not a density scale; use \"relative\" or \"absolute\"", d.get_ref()),
+                )
+            })?;
+        }
+        if let Some(b) = &r.blend_space {
+            out.blend_space = BlendSpace::parse(b.get_ref()).ok_or_else(|| {
+                self.err(
+                    b.span(),
+                    "render.blend_space",
+                    format!("`{}` is not a blend space; use \"linear\" or \"srgb\"", b.get_ref()),
                 )
             })?;
         }
