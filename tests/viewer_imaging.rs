@@ -106,3 +106,45 @@ fn keyed_tone_follows_time_and_is_edited_in_the_key_at_the_playhead() {
     s.apply([Command::SetImaging(Imaging { tone, density_estimation: None }), Command::EndGesture]);
     assert_eq!(s.scene, before);
 }
+
+/// The blend space (`blend_space`, the tone panel's "blend"): the live view's colour table is
+/// in the blend space of its mode, so choosing sRGB recolours the points (a scene edit that
+/// clears the accumulation, saved, undone like any), and so does switching the view into or out
+/// of closest mode while the scene blends in sRGB.
+#[test]
+fn the_blend_space_recolours_the_live_view() {
+    use nlifs::scene::spec::{BlendSpace, ColorMode};
+    let mut s = density_state();
+    s.apply([Command::SetColorMode(ColorMode::Palette)]);
+    let linear = s.compiled.as_ref().expect("compiled").colors.clone();
+    let encoded: Vec<[f32; 3]> = linear.iter().map(|&c| BlendSpace::Srgb.of_linear(c)).collect();
+    assert_ne!(linear, encoded);
+
+    let tone = Tone { blend: BlendSpace::Srgb, ..s.live.draw.tone };
+    let c = s.apply([Command::SetImaging(Imaging { tone, ..s.imaging() }), Command::EndGesture]);
+    assert!(c.scene_edited && c.live_settings, "{c:?}");
+    assert_eq!(s.scene.render.blend_space, BlendSpace::Srgb);
+    assert_eq!(s.live.draw.tone.blend, BlendSpace::Srgb);
+    assert_eq!(s.compiled.as_ref().unwrap().colors, encoded, "the colour table in sRGB values");
+    assert!(Scene::to_toml(&s.scene).contains("blend_space = \"srgb\""));
+
+    // Closest mode draws colours as they are: the table goes back to linear, and returns.
+    let closest = LiveSettings {
+        draw: nlifs::gpu::progressive::ProgressiveSettings { mode: SplatMode::Closest, ..s.live.draw },
+        ..s.live
+    };
+    let c = s.apply([Command::SetLiveSettings(closest)]);
+    assert!(c.scene_edited, "{c:?}");
+    assert_eq!(s.compiled.as_ref().unwrap().colors, linear);
+    let density = LiveSettings {
+        draw: nlifs::gpu::progressive::ProgressiveSettings { mode: SplatMode::Density, ..s.live.draw },
+        ..s.live
+    };
+    s.apply([Command::SetLiveSettings(density)]);
+    assert_eq!(s.compiled.as_ref().unwrap().colors, encoded);
+
+    s.apply([Command::Undo]);
+    assert_eq!(s.scene.render.blend_space, BlendSpace::Linear);
+    assert_eq!(s.live.draw.tone.blend, BlendSpace::Linear);
+    assert_eq!(s.compiled.as_ref().unwrap().colors, linear);
+}

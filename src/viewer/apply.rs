@@ -83,8 +83,16 @@ impl ViewerState {
                 Command::SetFlame { function, value } => edited |= self.set_flame(function, value),
                 Command::SetFinalXform(value) => edited |= self.set_final_xform(value),
                 Command::SetLiveSettings(live) => {
+                    // The colour table is in the blend space of the live view's mode
+                    // (`recompile`): with the sRGB blend, closest mode and the others differ.
+                    let blend = |l: &crate::live::LiveSettings| l.draw.tone.blend.in_mode(l.draw.mode);
+                    let recolor = blend(&live) != blend(&self.live);
                     self.live = live;
                     changes.live_settings = true;
+                    if recolor {
+                        self.recompile();
+                        changes.scene_edited = true;
+                    }
                 }
                 Command::SetProjection(projection) => {
                     self.camera.projection = projection;
@@ -392,7 +400,11 @@ impl ViewerState {
                 Command::RemoveBuilderStep { function, step } => edited |= self.remove_builder_step(function, step),
                 Command::MoveBuilderStep { function, from, to } => edited |= self.move_builder_step(function, from, to),
                 Command::MoveKey { key, t_secs } => edited |= self.move_key(key, t_secs),
-                Command::SetImaging(imaging) => self.set_imaging(imaging),
+                Command::SetImaging(imaging) => {
+                    // Another blend space recolours the points: recompiled, accumulation cleared.
+                    edited |= imaging.tone.blend != self.live.draw.tone.blend;
+                    self.set_imaging(imaging);
+                }
                 Command::Save
                 | Command::ShowFileDialog(_)
                 | Command::FileDialogDone { .. }
@@ -438,10 +450,15 @@ impl ViewerState {
     /// Takes the live settings and the camera of the scene just loaded.
     pub(super) fn show_opened(&mut self, changes: &mut Changes) {
         let s = &self.scene.render;
+        // `load` compiled the colours in the blend space of the mode the view had.
+        let recolor = s.blend_space.in_mode(s.mode) != s.blend_space.in_mode(self.live.draw.mode);
         self.live.draw.seed = s.seed;
         self.live.draw.mode = s.mode;
         self.live.draw.depth_cue = s.depth_cue;
         self.live.draw.background = s.background;
+        if recolor {
+            self.recompile();
+        }
         self.take_scene_look();
         self.camera = self.framed_camera();
         self.camera_moved = false;

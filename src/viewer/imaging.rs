@@ -68,6 +68,7 @@ impl ViewerState {
             }
         }
         after.render.density_scale = imaging.tone.density_scale;
+        after.render.blend_space = imaging.tone.blend;
         after.render.filter = imaging.tone.filter;
         after.render.density_estimation = imaging.density_estimation;
         if after != self.scene {

@@ -399,9 +399,14 @@ impl ViewerState {
 
     /// Recompiles the IFS at the current time (after an edit).
     /// The tables and bounds come from the one shot setup that `render` and `record` use
-    /// ([`Shot::prepare`]), with the live view's seed; the camera stays the viewer's.
+    /// ([`Shot::prepare`]), with the live view's seed and mode (the colours are in the mode's
+    /// blend space); the camera stays the viewer's.
     pub(super) fn recompile(&mut self) {
-        let settings = RenderSettings { seed: self.live.draw.seed, ..self.scene.render_at(self.t_secs) };
+        let settings = RenderSettings {
+            seed: self.live.draw.seed,
+            mode: self.live.draw.mode,
+            ..self.scene.render_at(self.t_secs)
+        };
         match Shot::prepare(&self.scene, self.t_secs, &settings, Framing::Given(self.camera), None) {
             Ok(shot) => {
                 self.report = Some(shot.ifs.report());

@@ -4,7 +4,7 @@
 
 use crate::flame::FilterShape;
 use crate::flame::render_filter::max_radius;
-use crate::scene::spec::{DensityEstimation, DensityScale, PixelFilter, SplatMode, TONE_FIELDS};
+use crate::scene::spec::{BlendSpace, DensityEstimation, DensityScale, PixelFilter, SplatMode, TONE_FIELDS};
 
 use super::super::command::Command;
 use super::super::imaging::DEFAULT_DENSITY_ESTIMATION;
@@ -34,6 +34,15 @@ pub fn imaging_ui(ui: &mut egui::Ui, state: &ViewerState, commands: &mut Vec<Com
         changed |= response.changed();
     }
     let mut imaging = before.with_tone_fields(fields);
+    ui.horizontal(|ui| {
+        ui.label("blend");
+        for (space, hint) in [
+            (BlendSpace::Linear, "colours mixed and toned in linear light"),
+            (BlendSpace::Srgb, "colours mixed and toned as sRGB values, as flam3 mixes its palette's bytes"),
+        ] {
+            changed |= ui.radio_value(&mut imaging.tone.blend, space, space.name()).on_hover_text(hint).changed();
+        }
+    });
     if mode == SplatMode::Density {
         ui.horizontal(|ui| {
             ui.label("density");
