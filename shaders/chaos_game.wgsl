@@ -94,9 +94,37 @@ override LENS: bool = false;
 // being the palette; false
 // compiles to function colour.
 override PALETTE: bool = false;
+// flam3's linear palette interpolation, dithered by the drawn point (`palette_entry_linear`);
+// false: the step (`palette_entry`).
+override PALETTE_LINEAR: bool = false;
 // The palette entry of colour coordinate c in [0, 1]: the twin of `palette::index_of`.
 fn palette_entry(c: f32) -> u32 {
     return min(u32(i32(c * 256.0)), 255u);
+}
+
+// flam3's linear palette entry of colour coordinate c, dithered: the twin of
+// `palette::index_linear`.
+fn palette_entry_linear(c: f32, dither: u32) -> u32 {
+    let t = c * 256.0;
+    let i = i32(t);
+    if i >= 255 {
+        return 255u;
+    }
+    let lower = max(i, 0);
+    let f = t - f32(lower);
+    return u32(lower) + select(0u, 1u, f32(dither >> 8u) < f * 16777216.0);
+}
+
+// The dither of a point at (x, y) with coordinate c: the twin of `palette::dither_of`.
+fn dither_of(x: f32, y: f32, c: f32) -> u32 {
+    let yb = bitcast<u32>(y);
+    let cb = bitcast<u32>(c);
+    var h = bitcast<u32>(x) ^ ((yb << 11u) | (yb >> 21u)) ^ ((cb << 22u) | (cb >> 10u));
+    h ^= h >> 16u;
+    h *= 0x7feb352du;
+    h ^= h >> 15u;
+    h *= 0x846ca68bu;
+    return h ^ (h >> 16u);
 }
 
 // The colour coordinate at a (re)start, `C_START` in src/chaos_game/color_coord.rs.
@@ -426,7 +454,11 @@ fn chaos_game(@builtin(global_invocation_id) id: vec3<u32>) {
             drawn_c = header.k1.z * header.k1.w + (1.0 - header.k1.z) * c;
         }
         if s >= params.skip_steps && shown {
-            splat(drawn, select(fi, palette_entry(drawn_c), PALETTE));
+            var entry = palette_entry(drawn_c);
+            if PALETTE_LINEAR {
+                entry = palette_entry_linear(drawn_c, dither_of(drawn.x, drawn.y, drawn_c));
+            }
+            splat(drawn, select(fi, entry, PALETTE));
             if SHADOWED {
                 splat_shadow(drawn);
             }

@@ -134,6 +134,9 @@ pub struct CompiledIfs {
     // Palette colour (`chaos_game/color_coord.rs`):
     /// Each compiled function's colour coordinate c_i in [0, 1]; None: function colour.
     pub color_coords: Option<Vec<f32>>,
+    /// The palette entries interpolated as flam3's `palette_mode = "linear"` (dithered,
+    /// `palette::index_linear`); false: the nearest step (`palette::index_of`).
+    pub palette_linear: bool,
     /// Each compiled function's colour speed, when a flame function has one other than ½.
     pub color_speeds: Option<Vec<f32>>,
     /// The flame functions' xforms (`chaos_game/flame.rs`); None: the IFS has none.
@@ -194,6 +197,7 @@ impl CompiledIfs {
             #[cfg(target_arch = "x86_64")]
             simd,
             color_coords: None,
+            palette_linear: false,
             color_speeds,
             flames,
         })

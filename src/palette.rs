@@ -26,6 +26,38 @@ pub fn index_of(c: f32) -> u8 {
     ((c * 256.0) as i32).min(255) as u8
 }
 
+/// The palette's entry for colour coordinate `c` in [0, 1] with flam3's linear interpolation
+/// (`palette_mode = "linear"`), as a dither: flam3 draws (1 − f) · entry i + f · entry i + 1
+/// for 256 c = i + f (entry 255 from c = 255/256 on); a point here carries entry i + 1 when
+/// `dither` (uniform over the u32s) falls below f · 2^32, entry i otherwise, so that a pixel's
+/// mean colour is flam3's interpolated colour. The shader's `palette_entry_linear`.
+#[inline(always)]
+pub fn index_linear(c: f32, dither: u32) -> u8 {
+    let t = c * 256.0;
+    let i = t as i32;
+    if i >= 255 {
+        return 255;
+    }
+    let i = i.max(0);
+    let f = t - i as f32;
+    // f in [0, 1) to 24 bits (exact in f32), against the dither's top 24 bits.
+    (i + i32::from(((dither >> 8) as f32) < f * 16_777_216.0)) as u8
+}
+
+/// A dither value for a point at (x, y) with colour coordinate `c`: a hash of their bits (the
+/// points of an orbit wander chaotically, so it is as good as uniform and independent of the
+/// coordinate's fraction), the same on every thread count. The shader's `dither_of`.
+#[inline(always)]
+pub fn dither_of(x: f32, y: f32, c: f32) -> u32 {
+    let mut h = x.to_bits() ^ y.to_bits().rotate_left(11) ^ c.to_bits().rotate_left(22);
+    // The lowbias32 finalizer (Wellons): every input bit reaches every output bit.
+    h ^= h >> 16;
+    h = h.wrapping_mul(0x7feb_352d);
+    h ^= h >> 15;
+    h = h.wrapping_mul(0x846c_a68b);
+    h ^ (h >> 16)
+}
+
 /// The built-in palettes: name and colour stops (sRGB bytes), spread evenly over [0, 1].
 pub const BUILTIN: &[(&str, &[[u8; 3]])] = &[
     ("ember", &[[0x12, 0x06, 0x10], [0x7a, 0x10, 0x1c], [0xd8, 0x4a, 0x12], [0xf6, 0xa8, 0x2e], [0xfb, 0xee, 0xb4]]),
@@ -169,6 +201,34 @@ pub fn default_index(i: usize, n: usize) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The dithered entry averages to flam3's interpolation: over many points the share of
+    /// entry i + 1 is the fraction f of 256 c (within 4 standard deviations), entry i + 1 never
+    /// when f = 0, and entry 255 from c = 255/256 on.
+    #[test]
+    fn linear_entries_average_to_the_interpolation() {
+        let n = 200_000u32;
+        for c in [0.1f32, 0.30078125 + 0.25 / 256.0, 0.5 + 0.9 / 256.0, 254.5 / 256.0] {
+            let t = c * 256.0;
+            let (i, f) = (t.floor(), t - t.floor());
+            let mut upper = 0u32;
+            for k in 0..n {
+                // Points of a wandering orbit: positions that differ from point to point.
+                let (x, y) = ((k as f32 * 0.618_034).fract(), (k as f32 * 0.414_213_57).fract() - 0.5);
+                let e = index_linear(c, dither_of(x, y, c));
+                assert!(e as f32 == i || e as f32 == i + 1.0, "c {c}: entry {e}");
+                upper += u32::from(e as f32 == i + 1.0);
+            }
+            let share = upper as f64 / n as f64;
+            let sd = (f64::from(f) * (1.0 - f64::from(f)) / n as f64).sqrt();
+            assert!((share - f64::from(f)).abs() <= 4.0 * sd + 1e-9, "c {c}: share {share} against {f}");
+        }
+        assert_eq!(index_linear(0.25, 0), 64);
+        assert_eq!(index_linear(0.25, u32::MAX), 64, "f = 0 never takes the next entry");
+        assert_eq!(index_linear(1.0, 0), 255);
+        assert_eq!(index_linear(255.0 / 256.0, u32::MAX), 255);
+        assert_eq!(index_linear(0.0, 0), 0);
+    }
 
     #[test]
     fn builtins_hit_their_end_stops_and_have_256_entries() {

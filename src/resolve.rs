@@ -402,7 +402,7 @@ impl ResolveArgs {
             normal_radius_px: self.normal_radius_px.clamp(1, NORMAL_RADIUS_PX),
             count_scale: if self.mode == SplatMode::Density { self.count_scale() } else { 0.0 },
             filter_taps,
-            blend_srgb: (self.tone.blend.in_mode(self.mode) == BlendSpace::Srgb) as u32,
+            blend_srgb: (self.mode.blend_space(self.tone.blend) == BlendSpace::Srgb) as u32,
             pad: 0,
             filter_weights,
         }

@@ -62,7 +62,9 @@ fn colored(compiled: CompiledIfs, scene: &Scene, settings: &RenderSettings) -> C
             &fallback
         }
     };
-    compiled.with_palette(coords, palette)
+    let mut compiled = compiled.with_palette(coords, palette);
+    compiled.palette_linear = settings.palette_mode == crate::flame::PaletteMode::Linear;
+    compiled
 }
 
 /// The seed of the short runs that give a shot its bounds and its framing sample: fixed, not the

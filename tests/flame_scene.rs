@@ -15,9 +15,11 @@ use nlifs::scene::flame_import::{load_flame, scene_of_flame};
 use nlifs::scene::spec::FunctionDef;
 use nlifs::shot::{Framing, Shot};
 
-/// Two flames: one with a post-affine, julian's parameters, waves (which reads its xform's
+/// Three flames: one with a post-affine, julian's parameters, waves (which reads its xform's
 /// coefs), an opacity, xaos, a final xform, a rotated camera and an off-centre view; one with
-/// xaos and a final xform of opacity ½ (which the import leaves out, with a warning).
+/// xaos and a final xform of opacity ½ (which the import leaves out, with a warning); one with
+/// flam3's linear palette and an xform of a variation flam3 lacks (JWildfire's `hemisphere`),
+/// which maps every point to the origin: its scene says `linear = 0`, so that it reopens.
 const FILE: &str = r#"<flames>
 <flame name="spiral" size="64 48" center="0.2 -0.1" scale="18" rotate="30" quality="40" brightness="4" gamma="4">
   <xform weight="0.5" color="0" linear="1" coefs="0.5 0.2 -0.2 0.5 -0.5 0.1" color_speed="0.3" chaos="0 1 1"/>
@@ -30,6 +32,11 @@ const FILE: &str = r#"<flames>
   <xform weight="1" color="0" swirl="1" coefs="0.6 0.1 -0.1 0.6 0 0" chaos="1 0"/>
   <xform weight="1" color="1" linear="1" coefs="0.5 0 0 0.5 0.3 0.3"/>
   <finalxform color="0.5" spherical="1" coefs="1 0 0 1 0 0" opacity="0.5"/>
+  <color index="0" rgb="0 255 0"/><color index="255" rgb="255 255 0"/>
+</flame>
+<flame name="origin" size="40 30" scale="12" quality="10" palette_mode="linear">
+  <xform weight="1" color="0" linear="1" coefs="0.5 0 0 0.5 0.5 0"/>
+  <xform weight="0.5" color="1" hemisphere="1" coefs="1 0 0 1 0 0" post="1 0 0 1 0 -0.25"/>
   <color index="0" rgb="0 255 0"/><color index="255" rgb="255 255 0"/>
 </flame>
 </flames>

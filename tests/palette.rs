@@ -148,6 +148,58 @@ fn gpu_carries_the_colour_coordinate() {
     assert!(compared > 100, "only {compared} pixels covered by both");
 }
 
+/// flam3's linear palette mode (`palette_mode = "linear"`): with every c_i equal to a, 256 a =
+/// 100.25, a palette of black even and white odd entries, the points carry entry 100 or 101,
+/// a quarter of them 101 (the dither: within 4 standard deviations of the binomial, on the
+/// CPU's points and in the GPU's average-mode sums alike), so that a pixel's mean colour is
+/// flam3's interpolation ¾ · entry 100 + ¼ · entry 101; step mode carries entry 100 only. The
+/// mode is read, checked and written back.
+#[test]
+fn linear_palette_mode_interpolates_the_entries() {
+    let a = 100.25 / 256.0;
+    let coords = [format!("palette_index = {a}"), format!("palette_index = {a}")];
+    let zebra = Palette {
+        source: "zebra".into(),
+        samples: (0..256).map(|i| [if i % 2 == 1 { 1.0 } else { 0.0 }; 3]).collect(),
+    };
+    let scene_of = |mode: &str| {
+        let mut scene =
+            binary_scene([&coords[0], &coords[1]], &format!("mode = \"average\"\npalette_mode = \"{mode}\""));
+        scene.render.palette = Some(zebra.clone());
+        scene
+    };
+    let n = 400_000u64;
+    let sd = (0.25f64 * 0.75 / n as f64).sqrt();
+    let (_, step) = collect(&scene_of("step"), n);
+    assert!(step.functions.iter().all(|&i| i == 100), "step mode: entries other than 100");
+    let linear = scene_of("linear");
+    assert_eq!(linear.render.palette_mode, nlifs::flame::PaletteMode::Linear);
+    assert!(Scene::to_toml(&linear).contains("palette_mode = \"linear\""));
+    let (_, sink) = collect(&linear, n);
+    assert!(sink.functions.iter().all(|&i| i == 100 || i == 101), "entries other than 100 and 101");
+    let share = sink.functions.iter().filter(|&&i| i == 101).count() as f64 / sink.functions.len() as f64;
+    assert!((share - 0.25).abs() <= 4.0 * sd, "CPU: {share} of the points carry entry 101, not a quarter");
+
+    let err = Scene::parse(
+        "version = 1\n[grid]\nx = [0, 1]\ny = [0, 1]\n[[function]]\nkind = \"affine\"\nmatrix = [[0.5, 0], [0, 0.5]]\noffset = [0, 0]\n[render]\npalette_mode = \"smooth\"\n",
+        "s.toml",
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(err.contains("s.toml:10:16") && err.contains("render.palette_mode") && err.contains("\"linear\""), "{err}");
+
+    let Some(ctx) = common::gpu() else { return };
+    let settings = nlifs::scene::spec::RenderSettings { points: 1 << 20, seed: 9, ..linear.render.clone() };
+    let shot = Shot::prepare(&linear, 0.0, &settings, Framing::Fit, None).unwrap();
+    let gpu = nlifs::gpu::render::render_gpu(&ctx, &shot).unwrap();
+    let (red, count) =
+        gpu.framebuffer.accum.iter().fold((0u64, 0u64), |(r, n), a| (r + u64::from(a[0]), n + u64::from(a[3])));
+    assert!(count > 500_000, "only {count} points splatted");
+    let share = red as f64 / 255.0 / count as f64;
+    let sd = (0.25f64 * 0.75 / count as f64).sqrt();
+    assert!((share - 0.25).abs() <= 4.0 * sd + 1.0 / 255.0, "GPU: mean red {share}, not a quarter");
+}
+
 /// Palette errors name the field, its line and column, and the known palettes or the file.
 #[test]
 fn palette_errors_are_located() {

@@ -55,7 +55,11 @@ pub(super) struct ColorCoordSink<'a, S: PointSink> {
     c: &'a mut [f32; ORBITS_PER_CHUNK],
     skip: usize,
     inner: &'a mut S,
+    /// The drawn coordinate of each point of a batch, then its palette entry.
+    drawn: Vec<f32>,
     indices: Vec<u8>,
+    /// flam3's linear palette mode (`palette::index_linear`), else the step.
+    linear: bool,
 }
 
 impl<'a, S: PointSink> ColorCoordSink<'a, S> {
@@ -69,8 +73,15 @@ impl<'a, S: PointSink> ColorCoordSink<'a, S> {
     ) -> Self {
         let coords = Box::new(std::array::from_fn(|i| coords.get(i).copied().unwrap_or(0.0)));
         let speeds = speeds.map(|s| Box::new(std::array::from_fn(|i| s.get(i).copied().unwrap_or(0.5))));
+        let drawn = vec![0.0; ORBITS_PER_CHUNK * STEPS_PER_BATCH];
         let indices = vec![0; ORBITS_PER_CHUNK * STEPS_PER_BATCH];
-        Self { coords, speeds, final_color, c, skip, inner, indices }
+        Self { coords, speeds, final_color, c, skip, inner, drawn, indices, linear: false }
+    }
+
+    /// This sink drawing flam3's linear palette interpolation (`linear`), dithered by each
+    /// point's position ([`palette::dither_of`]).
+    pub(super) fn interpolated(self, linear: bool) -> Self {
+        Self { linear, ..self }
     }
 }
 
@@ -83,34 +94,46 @@ impl<S: PointSink> PointSink for ColorCoordSink<'_, S> {
         self.skip -= dropped;
         if self.indices.len() < batch.len() {
             self.indices.resize(batch.len(), 0);
+            self.drawn.resize(batch.len(), 0.0);
         }
         // On copies, so that the compiler sees that c, the table and the output do not alias.
         let (mut c, coords) = (*self.c, &*self.coords);
+        let drawn = &mut self.drawn[..batch.len()];
         match (self.speeds.as_deref(), self.final_color) {
             (speeds, Some((c_f, s_f))) => {
                 let speeds = speeds.unwrap_or(&HALF_SPEEDS);
-                for (fs, out) in batch.functions.chunks_exact(K).zip(self.indices.chunks_exact_mut(K)) {
+                for (fs, out) in batch.functions.chunks_exact(K).zip(drawn.chunks_exact_mut(K)) {
                     for ((c, &f), out) in c.iter_mut().zip(fs).zip(out) {
                         *c = step_color_speed(*c, coords[f as usize], speeds[f as usize]);
-                        *out = palette::index_of(step_color_speed(*c, c_f, s_f));
+                        *out = step_color_speed(*c, c_f, s_f);
                     }
                 }
             }
             (None, None) => {
-                for (fs, out) in batch.functions.chunks_exact(K).zip(self.indices.chunks_exact_mut(K)) {
+                for (fs, out) in batch.functions.chunks_exact(K).zip(drawn.chunks_exact_mut(K)) {
                     for ((c, &f), out) in c.iter_mut().zip(fs).zip(out) {
                         *c = step_color(*c, coords[f as usize]);
-                        *out = palette::index_of(*c);
+                        *out = *c;
                     }
                 }
             }
             (Some(speeds), None) => {
-                for (fs, out) in batch.functions.chunks_exact(K).zip(self.indices.chunks_exact_mut(K)) {
+                for (fs, out) in batch.functions.chunks_exact(K).zip(drawn.chunks_exact_mut(K)) {
                     for ((c, &f), out) in c.iter_mut().zip(fs).zip(out) {
                         *c = step_color_speed(*c, coords[f as usize], speeds[f as usize]);
-                        *out = palette::index_of(*c);
+                        *out = *c;
                     }
                 }
+            }
+        }
+        let indices = &mut self.indices[..batch.len()];
+        if self.linear {
+            for (((out, &c), &x), &y) in indices.iter_mut().zip(&*drawn).zip(batch.x).zip(batch.y) {
+                *out = palette::index_linear(c, palette::dither_of(x, y, c));
+            }
+        } else {
+            for (out, &c) in indices.iter_mut().zip(&*drawn) {
+                *out = palette::index_of(c);
             }
         }
         *self.c = c;

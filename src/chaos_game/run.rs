@@ -66,7 +66,8 @@ fn run_chains(
         Some(coords) => {
             let final_color = ifs.flames.as_ref().and_then(|t| t.final_color());
             let speeds = ifs.color_speeds.as_deref();
-            let mut colored = ColorCoordSink::new(coords, speeds, final_color, colors, skip as usize, sink);
+            let mut colored = ColorCoordSink::new(coords, speeds, final_color, colors, skip as usize, sink)
+                .interpolated(ifs.palette_linear);
             run_kernel(ifs, path, Orbits { transient: 0, steps: skip as usize + steps, ..orbits }, &mut colored);
         }
     }

@@ -84,9 +84,28 @@ impl Xform {
 /// How the colour coordinate picks a palette entry (`palette_mode`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum PaletteMode {
+    /// The entry ⌊256 c⌋.
     #[default]
     Step,
+    /// Between the two entries around 256 c, linearly.
     Linear,
+}
+
+impl PaletteMode {
+    pub fn parse(s: &str) -> Option<Self> {
+        match s {
+            "step" => Some(PaletteMode::Step),
+            "linear" => Some(PaletteMode::Linear),
+            _ => None,
+        }
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            PaletteMode::Step => "step",
+            PaletteMode::Linear => "linear",
+        }
+    }
 }
 
 /// The spatial filter's shape (`filter_shape`); flam3's default is gaussian.

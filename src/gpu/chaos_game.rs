@@ -88,6 +88,8 @@ pub struct IfsShape {
     // Palette colour (`src/chaos_game/color_coord.rs`):
     /// The points carry a colour coordinate (the shader's `PALETTE`).
     pub palette: bool,
+    /// Their palette entries are flam3's linear interpolation, dithered (`PALETTE_LINEAR`).
+    pub palette_linear: bool,
     // Flame functions (`src/chaos_game/flame.rs`):
     /// Some function is a flame (the shader's `HAS_FLAMES`).
     pub flames: bool,
@@ -109,6 +111,7 @@ impl IfsShape {
             single_selection_cell: ifs.selection.cells == [1, 1, 1] && !ifs.selection.xaos,
             xaos: ifs.selection.xaos,
             palette: ifs.color_coords.is_some(),
+            palette_linear: ifs.color_coords.is_some() && ifs.palette_linear,
             flames: ifs.has_flames(),
             color_speeds: ifs.color_speeds.is_some(),
             final_xform: ifs.has_final_xform(),
@@ -117,7 +120,7 @@ impl IfsShape {
     }
 
     /// The shader's pipeline constants for this shape.
-    fn constants(&self) -> [(&'static str, f64); 14] {
+    fn constants(&self) -> [(&'static str, f64); 15] {
         let [x, y, z] = self.shared_cells.unwrap_or([0; 3]);
         [
             ("SHARED_CELLS_X", x as f64),
@@ -127,6 +130,7 @@ impl IfsShape {
             ("SINGLE_SELECTION_CELL", self.single_selection_cell as u32 as f64),
             ("XAOS", self.xaos as u32 as f64),
             ("PALETTE", self.palette as u32 as f64),
+            ("PALETTE_LINEAR", self.palette_linear as u32 as f64),
             ("HAS_FLAMES", self.flames as u32 as f64),
             ("COLOR_SPEEDS", self.color_speeds as u32 as f64),
             ("HAS_FINAL", self.final_xform as u32 as f64),
@@ -462,8 +466,8 @@ impl GpuChaosGame {
         let uniform_tables = !self.force_storage_tables && fit_uniforms(&tables);
         self.has_julia = ifs.functions.iter().any(|f| f.coord_offset[3] == crate::chaos_game::KIND_JULIA);
         self.shape = if self.force_generic {
-            let IfsShape { xaos, palette, flames, color_speeds, final_xform, flame_variations, .. } = IfsShape::of(ifs);
-            IfsShape { xaos, palette, flames, color_speeds, final_xform, flame_variations, ..IfsShape::default() }
+            // The generic tables: no shared cells, any function count, the selection's cells read.
+            IfsShape { shared_cells: None, function_count: 0, single_selection_cell: false, ..IfsShape::of(ifs) }
         } else {
             IfsShape::of(ifs)
         };
@@ -667,6 +671,7 @@ mod tests {
                 single_selection_cell: true,
                 xaos: false,
                 palette: false,
+                palette_linear: false,
                 flames: false,
                 color_speeds: false,
                 final_xform: false,

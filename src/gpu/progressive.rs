@@ -127,9 +127,9 @@ impl Default for ProgressiveSettings {
 
 impl ProgressiveSettings {
     /// The background as the splat and the resolve hold it: in the space the colours are mixed
-    /// in ([`crate::scene::spec::BlendSpace::in_mode`]).
+    /// in ([`SplatMode::blend_space`]).
     pub fn splat_background(&self) -> [f32; 3] {
-        self.tone.blend.in_mode(self.mode).of_linear(self.background)
+        self.mode.blend_space(self.tone.blend).of_linear(self.background)
     }
 }
 

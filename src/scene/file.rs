@@ -342,6 +342,7 @@ pub(super) struct RenderToml {
     pub(super) highlight_power: Option<Spanned<f64>>,
     pub(super) density_scale: Option<Spanned<String>>,
     pub(super) blend_space: Option<Spanned<String>>,
+    pub(super) palette_mode: Option<Spanned<String>>,
     pub(super) estimator_radius: Option<Spanned<f64>>,
     pub(super) estimator_minimum: Option<Spanned<f64>>,
     pub(super) estimator_curve: Option<Spanned<f64>>,

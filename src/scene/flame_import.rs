@@ -15,8 +15,9 @@
 //!   `xaos`. The domain is flam3's start square [−1, 1]².
 //! - **The final xform** is the scene's `[final]`, conjugated as the xforms are, its `color`
 //!   the final's `palette_index`.
-//! - **Left out, with a warning:** the final xform's opacity (it maps every point) and flam3's linear palette interpolation (nlifs
-//!   takes the nearest palette entry).
+//! - **Left out, with a warning:** the final xform's opacity (it maps every point).
+//! - **The palette** is the scene's, with flam3's `palette_mode` (`step`: the entry ⌊256 c⌋;
+//!   `linear`: the two entries around it, interpolated by a dither per point).
 //! - **Camera.** Parallel projection seen from +z, the target at M(center), the visible height
 //!   size_y / (scale · 2^zoom); the image size is the flame's.
 //! - **Look.** Density mode on the absolute scale (flam3's log density: log(1 + points per
@@ -36,7 +37,7 @@ use glam::{DVec3, Vec3};
 use crate::camera::Projection;
 use crate::color;
 use crate::flame::render_filter::{filter_weights, filter_width};
-use crate::flame::{Coefs, Flame, IDENTITY, PaletteMode, Xform};
+use crate::flame::{Coefs, Flame, IDENTITY, Xform};
 use crate::model::{ProbabilityMode, RectGrid};
 use crate::palette::Palette;
 use crate::scene::spec::{
@@ -49,7 +50,7 @@ use crate::scene::{LoadError, Scene};
 #[derive(Clone, Debug)]
 pub struct FlameImport {
     pub scene: Scene,
-    /// One line each (the final xform's opacity, palette interpolation).
+    /// One line each (the final xform's opacity, a filter narrowed to fit).
     pub warnings: Vec<String>,
 }
 
@@ -105,6 +106,12 @@ fn conjugated(x: &Xform, m: &[[f64; 3]; 3], m_inv: &[[f64; 3]; 3]) -> FlameDef {
     let post = coefs(&compose(m, &matrix(&x.post.unwrap_or(IDENTITY))));
     let mut variations = x.variations.clone();
     variations.sort_by_key(|t| t.variation.0);
+    if variations.is_empty() {
+        // An xform of no variation flam3 knows maps every point to the origin (before its
+        // post-affine); a scene says so with `linear = 0`, as it lists at least one.
+        let linear = crate::flame::Variation::by_name("linear").expect("linear is a variation");
+        variations.push(crate::flame::VariationTerm { variation: linear, weight: 0.0, params: Vec::new() });
+    }
     let reads_coefs = variations.iter().any(|t| t.weight != 0.0 && t.variation.reads_xform_coefs());
     let variation_coefs = (reads_coefs && pre != x.coefs).then_some(x.coefs);
     FlameDef {
@@ -159,11 +166,6 @@ pub fn scene_of_flame(flame: &Flame, palette_file: &str) -> Result<FlameImport, 
         let row: Vec<f64> = x.chaos.iter().take(n).map(|&c| if c >= 0.0 { c } else { 0.0 }).collect();
         if row.iter().all(|&c| (c - 1.0).abs() <= 1e-10) { Vec::new() } else { row }
     };
-    if flame.palette_mode == PaletteMode::Linear {
-        warnings.push(format!(
-            "flame `{name}`: palette_mode \"linear\" is drawn as the nearest palette entry, as \"step\" is"
-        ));
-    }
     let filter = pixel_filter(flame, &name, &mut warnings);
     let samples: Vec<[f32; 3]> = flame
         .palette
@@ -230,6 +232,7 @@ pub fn scene_of_flame(flame: &Flame, palette_file: &str) -> Result<FlameImport, 
         filter,
         color: ColorMode::Palette,
         palette: Some(palette),
+        palette_mode: flame.palette_mode,
         ..RenderSettings::default()
     };
     let scene = Scene {

@@ -19,6 +19,7 @@ use crate::model::{Function, GridMap, Ifs, Map, ProbabilityMode, RectGrid};
 use crate::scene::spec::{CameraSpec, FunctionDef, FunctionSpec, RenderSettings};
 use crate::scene::timeline::Timeline;
 
+pub mod blend;
 mod check;
 pub mod file;
 pub mod flame_import;

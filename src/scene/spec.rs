@@ -9,10 +9,11 @@ use glam::DVec3;
 
 use crate::camera::Projection;
 use crate::color;
-use crate::flame::{Coefs, VariationTerm, Xform};
+use crate::flame::{Coefs, PaletteMode, VariationTerm, Xform};
 use crate::model::builder::{Builder, Step};
 use crate::model::{AffineMap, JuliaMap};
 use crate::palette::Palette;
+pub use crate::scene::blend::BlendSpace;
 
 /// The most points one render draws, in the scene (`render.points`, `key.render.points`) and on
 /// the command line (`render --points`, `record --points-per-frame`), so that both refuse the
@@ -57,6 +58,12 @@ pub enum SplatMode {
 
 impl SplatMode {
     pub const ALL: [SplatMode; 3] = [SplatMode::Closest, SplatMode::Average, SplatMode::Density];
+
+    /// The space this mode mixes colours in for a scene's `blend_space`: that one in the
+    /// average and density modes; closest mode draws its colours as they are, in linear light.
+    pub fn blend_space(self, blend: BlendSpace) -> BlendSpace {
+        if self == SplatMode::Closest { BlendSpace::Linear } else { blend }
+    }
 
     pub fn parse(s: &str) -> Option<Self> {
         match s {
@@ -114,61 +121,6 @@ impl DensityScale {
         match self {
             DensityScale::Relative => "relative",
             DensityScale::Absolute => "absolute",
-        }
-    }
-}
-
-/// Where the average and density modes mix the points' colours and tone the mixture
-/// (`[render] blend_space`): the colours of the points, the background and the tone map's
-/// arithmetic all live in this space, and the picture is converted to the output's at the end.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
-pub enum BlendSpace {
-    /// Linear light (physically, what light adds up to): nlifs's own look.
-    #[default]
-    Linear,
-    /// sRGB-encoded values, as flam3 and the flame programs mix their palette's bytes: a
-    /// flame's gamma, vibrancy and colour mixtures come out as in those programs (imported
-    /// flames use it).
-    Srgb,
-}
-
-impl BlendSpace {
-    pub const ALL: [BlendSpace; 2] = [BlendSpace::Linear, BlendSpace::Srgb];
-
-    pub fn parse(s: &str) -> Option<Self> {
-        match s {
-            "linear" => Some(BlendSpace::Linear),
-            "srgb" => Some(BlendSpace::Srgb),
-            _ => None,
-        }
-    }
-
-    pub fn name(self) -> &'static str {
-        match self {
-            BlendSpace::Linear => "linear",
-            BlendSpace::Srgb => "srgb",
-        }
-    }
-
-    /// The space a splat in `mode` mixes in: this one in the average and density modes; closest
-    /// mode draws its colours as they are, in linear light.
-    pub fn in_mode(self, mode: SplatMode) -> Self {
-        if mode == SplatMode::Closest { BlendSpace::Linear } else { self }
-    }
-
-    /// A linear colour (a function's, a palette entry, the background) as this space holds it.
-    pub fn of_linear(self, c: [f32; 3]) -> [f32; 3] {
-        match self {
-            BlendSpace::Linear => c,
-            BlendSpace::Srgb => c.map(color::linear_to_srgb),
-        }
-    }
-
-    /// A colour held in this space as linear light.
-    pub fn to_linear(self, c: [f32; 3]) -> [f32; 3] {
-        match self {
-            BlendSpace::Linear => c,
-            BlendSpace::Srgb => color::srgb_to_linear(c),
         }
     }
 }
@@ -379,6 +331,9 @@ pub struct RenderSettings {
     pub color: ColorMode,
     /// The palette of `color = "palette"`; None: `palette::DEFAULT`.
     pub palette: Option<Palette>,
+    /// How a colour coordinate picks the palette's colour: its entry, or flam3's linear
+    /// interpolation of the two around it.
+    pub palette_mode: PaletteMode,
 }
 
 /// The key light's default direction relative to the camera (the solid look's
@@ -393,9 +348,9 @@ pub const LIGHT_FIELDS: [(&str, f64, f64); 3] =
     [("shadows", 0.0, 1.0), ("light_yaw_deg", -180.0, 180.0), ("light_pitch_deg", -90.0, 90.0)];
 
 impl RenderSettings {
-    /// The space colours are mixed and toned in ([`BlendSpace::in_mode`]).
+    /// The space colours are mixed and toned in ([`SplatMode::blend_space`]).
     pub fn blend(&self) -> BlendSpace {
-        self.blend_space.in_mode(self.mode)
+        self.mode.blend_space(self.blend_space)
     }
 
     /// The key light's direction in the order of the last two [`LIGHT_FIELDS`], to set.
@@ -502,6 +457,7 @@ impl Default for RenderSettings {
             focus_distance: None,
             color: ColorMode::Function,
             palette: None,
+            palette_mode: PaletteMode::Step,
         }
     }
 }

@@ -308,6 +308,9 @@ impl Scene {
         if r.density_scale != DensityScale::Relative {
             let _ = writeln!(out, "density_scale = \"{}\"", r.density_scale.name());
         }
+        if r.palette_mode != crate::flame::PaletteMode::Step {
+            let _ = writeln!(out, "palette_mode = \"{}\"", r.palette_mode.name());
+        }
         if r.blend_space != BlendSpace::Linear {
             let _ = writeln!(out, "blend_space = \"{}\"", r.blend_space.name());
         }

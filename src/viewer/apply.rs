@@ -85,7 +85,7 @@ impl ViewerState {
                 Command::SetLiveSettings(live) => {
                     // The colour table is in the blend space of the live view's mode
                     // (`recompile`): with the sRGB blend, closest mode and the others differ.
-                    let blend = |l: &crate::live::LiveSettings| l.draw.tone.blend.in_mode(l.draw.mode);
+                    let blend = |l: &crate::live::LiveSettings| l.draw.mode.blend_space(l.draw.tone.blend);
                     let recolor = blend(&live) != blend(&self.live);
                     self.live = live;
                     changes.live_settings = true;
@@ -451,7 +451,7 @@ impl ViewerState {
     pub(super) fn show_opened(&mut self, changes: &mut Changes) {
         let s = &self.scene.render;
         // `load` compiled the colours in the blend space of the mode the view had.
-        let recolor = s.blend_space.in_mode(s.mode) != s.blend_space.in_mode(self.live.draw.mode);
+        let recolor = s.mode.blend_space(s.blend_space) != self.live.draw.mode.blend_space(s.blend_space);
         self.live.draw.seed = s.seed;
         self.live.draw.mode = s.mode;
         self.live.draw.depth_cue = s.depth_cue;

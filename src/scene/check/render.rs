@@ -94,6 +94,15 @@ impl Checker<'_> {
                 )
             })?;
         }
+        if let Some(m) = &r.palette_mode {
+            out.palette_mode = crate::flame::PaletteMode::parse(m.get_ref()).ok_or_else(|| {
+                self.err(
+                    m.span(),
+                    "render.palette_mode",
+                    format!("`{}` is not a palette mode; use \"step\" or \"linear\"", m.get_ref()),
+                )
+            })?;
+        }
         out.density_estimation = self.density_estimation(r)?;
         out.filter = self.filter(r)?;
         // The key light.
