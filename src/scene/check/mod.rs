@@ -74,6 +74,20 @@ impl Checker<'_> {
         }
     }
 
+    /// A field that names one of a few words: its value by `parse`, or a located error that
+    /// says it is not `what` and lists the `words`.
+    fn named<T>(
+        &self,
+        v: &toml::Spanned<String>,
+        field: &str,
+        parse: impl Fn(&str) -> Option<T>,
+        what: &str,
+        words: &str,
+    ) -> Res<T> {
+        parse(v.get_ref())
+            .ok_or_else(|| self.err(v.span(), field, format!("`{}` is not {what}; use {words}", v.get_ref())))
+    }
+
     fn vec3(&self, v: &Spanned<Vec<f64>>, field: &str, dim: usize) -> Res<DVec3> {
         let xs = v.get_ref();
         if xs.len() != dim {

@@ -15,14 +15,9 @@ use super::{Checker, Res};
 impl Checker<'_> {
     /// Sets `out.color` and `out.palette` from `r`.
     pub(super) fn color_fields(&self, r: &RenderToml, out: &mut RenderSettings) -> Res<()> {
-        if let Some(m) = &r.color {
-            out.color = ColorMode::parse(m.get_ref()).ok_or_else(|| {
-                self.err(
-                    m.span(),
-                    "render.color",
-                    format!("`{}` is not a colour mode; use \"function\" or \"palette\"", m.get_ref()),
-                )
-            })?;
+        if let Some(v) = &r.color {
+            out.color =
+                self.named(v, "render.color", ColorMode::parse, "a colour mode", "\"function\" or \"palette\"")?;
         }
         if let Some(p) = &r.palette {
             // Relative to the scene file's directory (the working directory for text without one).

@@ -31,14 +31,9 @@ impl Checker<'_> {
         if let Some(v) = &r.seed {
             out.seed = int(v, "render.seed", 0, u32::MAX as i64)? as u32;
         }
-        if let Some(m) = &r.mode {
-            out.mode = SplatMode::parse(m.get_ref()).ok_or_else(|| {
-                self.err(
-                    m.span(),
-                    "render.mode",
-                    format!("`{}` is not a mode; use \"closest\", \"average\" or \"density\"", m.get_ref()),
-                )
-            })?;
+        if let Some(v) = &r.mode {
+            out.mode =
+                self.named(v, "render.mode", SplatMode::parse, "a mode", "\"closest\", \"average\" or \"density\"")?;
         }
         if let Some(b) = &r.background {
             out.background = self.color(b, "render.background")?;
@@ -76,32 +71,27 @@ impl Checker<'_> {
                 *slot = self.in_range(v, &format!("render.{name}"), lo, hi)? as f32;
             }
         }
-        if let Some(d) = &r.density_scale {
-            out.density_scale = DensityScale::parse(d.get_ref()).ok_or_else(|| {
-                self.err(
-                    d.span(),
-                    "render.density_scale",
-                    format!("`{}` is not a density scale; use \"relative\" or \"absolute\"", d.get_ref()),
-                )
-            })?;
+        if let Some(v) = &r.density_scale {
+            out.density_scale = self.named(
+                v,
+                "render.density_scale",
+                DensityScale::parse,
+                "a density scale",
+                "\"relative\" or \"absolute\"",
+            )?;
         }
-        if let Some(b) = &r.blend_space {
-            out.blend_space = BlendSpace::parse(b.get_ref()).ok_or_else(|| {
-                self.err(
-                    b.span(),
-                    "render.blend_space",
-                    format!("`{}` is not a blend space; use \"linear\" or \"srgb\"", b.get_ref()),
-                )
-            })?;
+        if let Some(v) = &r.blend_space {
+            out.blend_space =
+                self.named(v, "render.blend_space", BlendSpace::parse, "a blend space", "\"linear\" or \"srgb\"")?;
         }
-        if let Some(m) = &r.palette_mode {
-            out.palette_mode = crate::flame::PaletteMode::parse(m.get_ref()).ok_or_else(|| {
-                self.err(
-                    m.span(),
-                    "render.palette_mode",
-                    format!("`{}` is not a palette mode; use \"step\" or \"linear\"", m.get_ref()),
-                )
-            })?;
+        if let Some(v) = &r.palette_mode {
+            out.palette_mode = self.named(
+                v,
+                "render.palette_mode",
+                crate::flame::PaletteMode::parse,
+                "a palette mode",
+                "\"step\" or \"linear\"",
+            )?;
         }
         out.density_estimation = self.density_estimation(r)?;
         out.filter = self.filter(r)?;
