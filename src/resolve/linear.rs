@@ -48,8 +48,7 @@ pub fn resolve_linear(framebuffer: &Framebuffer, camera: &OrbitCamera, style: &R
         },
     );
     // The view's background is in the blend space; the image's is linear, as its colours.
-    let background =
-        if params.blend_srgb != 0 { crate::color::srgb_to_linear(view.background) } else { view.background };
+    let background = view.mode.blend_space(style.tone.blend).to_linear(view.background);
     LinearImage { width: view.width, height: view.height, rgb, alpha, background }
 }
 
