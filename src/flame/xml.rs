@@ -303,10 +303,9 @@ impl Reader<'_> {
                     Some(shape) => f.filter_shape = shape,
                     None => ctx.warn(node, format!("unknown filter_shape '{}'; gaussian is used", attr.value())),
                 },
-                "palette_mode" => match attr.value() {
-                    "step" => f.palette_mode = PaletteMode::Step,
-                    "linear" => f.palette_mode = PaletteMode::Linear,
-                    other => ctx.warn(node, format!("unknown palette_mode '{other}'; step is used")),
+                "palette_mode" => match PaletteMode::parse(attr.value()) {
+                    Some(mode) => f.palette_mode = mode,
+                    None => ctx.warn(node, format!("unknown palette_mode '{}'; step is used", attr.value())),
                 },
                 "soloxform" => solo_xform = Some(attr_number(ctx, &attr)? as i64),
                 name if STILL_IGNORED.contains(&name) => {}
