@@ -18,9 +18,13 @@
 //! s_f·c_f + (1 − s_f)·c, while the orbit goes on from the point before it with c.
 //!
 //! An IFS with a flame function runs on the general path (the lane and vector kernels take only
-//! multilinear and affine maps); its other functions are mapped there as always. The kernel
-//! table holds, for a flame function, its pre-affine as one affine cell, so that the tables stay
-//! well formed for every consumer.
+//! multilinear and affine maps), a step of all a chunk's orbits at a time
+//! ([`CompiledIfs::map_flame_row`]): the orbits are grouped by the function they drew and a flame
+//! function maps its group as one batch (`CompiledXform::apply_batch`, the direct renderer's
+//! vector path), each orbit drawing its numbers in the order [`CompiledIfs::map_with_rng`]
+//! draws them, so the points are the same bits; its other functions are mapped as always. The
+//! kernel table holds, for a flame function, its pre-affine as one affine cell, so that the
+//! tables stay well formed for every consumer.
 //!
 //! The GPU twin is the flame branch of `shaders/chaos_game.wgsl` with the xforms of
 //! `shaders/variations.wgsl`: the same selection, the xform in f32 from the table
@@ -28,12 +32,15 @@
 //! speeds, and the same random draws in the same order (`flame_random` truncates each f64 draw
 //! to 24 bits). `tests/gpu_flames.rs` checks the two step by step and as densities.
 
-use glam::Vec3;
+use glam::{Vec3, Vec3A};
 
-use super::CompiledIfs;
+use super::{CompiledIfs, ORBITS_PER_CHUNK};
 use crate::flame::Xform;
-use crate::flame::variations::{CompiledXform, FLAME_OP_NONE, FlameOp};
+use crate::flame::variations::{BatchScratch, CompiledXform, FLAME_OP_NONE, FlameOp};
 use crate::rng::Pcg32;
+use crate::simd::SimdLevel;
+
+const K: usize = ORBITS_PER_CHUNK;
 
 /// flam3's limit of a coordinate in the plane (`badvalue`).
 const BAD_VALUE: f64 = 1e10;
@@ -79,15 +86,48 @@ impl FlameTable {
     }
 }
 
+/// The work space of [`CompiledIfs::map_flame_row`], kept between steps.
+pub(super) struct FlameRow {
+    /// The lanes grouped by function (a counting sort of the step's functions).
+    order: [u8; K],
+    /// Function f's lanes are `order[starts[f]..starts[f + 1]]`.
+    starts: Vec<u8>,
+    /// Whether lane k's step draws a point (not a flame function's re-seed or a point its
+    /// opacity hides), which the final xform then maps.
+    drawn: [bool; K],
+    /// The group being mapped, in f64.
+    x: [f64; K],
+    y: [f64; K],
+    scratch: Box<BatchScratch>,
+}
+
+impl FlameRow {
+    pub(super) fn new(ifs: &CompiledIfs) -> Self {
+        Self {
+            order: [0; K],
+            starts: vec![0; ifs.functions.len() + 1],
+            drawn: [true; K],
+            x: [0.0; K],
+            y: [0.0; K],
+            scratch: Box::default(),
+        }
+    }
+}
+
 /// The final xform's image of a drawn point `p` (z unchanged); a point it sends out of the
 /// plane is drawn at a random point of [−1, 1]² instead (flam3's rule for the final xform).
 #[inline(always)]
 fn apply_final(f: &CompiledXform, p: Vec3, rng: &mut Pcg32) -> Vec3 {
-    let q = f.apply([p.x as f64, p.y as f64], rng);
+    final_point(f.apply([p.x as f64, p.y as f64], rng), p.z, rng)
+}
+
+/// The point drawn for the final xform's image `q` of a point at depth `z`.
+#[inline(always)]
+fn final_point(q: [f64; 2], z: f32, rng: &mut Pcg32) -> Vec3 {
     if is_bad(q) {
-        return Vec3::new((rng.next_f64() * 2.0 - 1.0) as f32, (rng.next_f64() * 2.0 - 1.0) as f32, p.z);
+        return Vec3::new((rng.next_f64() * 2.0 - 1.0) as f32, (rng.next_f64() * 2.0 - 1.0) as f32, z);
     }
-    Vec3::new(q[0] as f32, q[1] as f32, p.z)
+    Vec3::new(q[0] as f32, q[1] as f32, z)
 }
 
 /// A draw in [0, 1) of 24 bits, as the GPU's `flame_random` reads one f64 draw (the same two
@@ -145,6 +185,160 @@ impl CompiledIfs {
         match &table.final_xform {
             Some((_, f)) => (next, apply_final(f, shown, rng)),
             None => (next, shown),
+        }
+    }
+
+    /// [`Self::map_flame_row`] compiled for AVX-512 or AVX2 where `level` says the CPU has it
+    /// (no FMA: the same bits); one copy of each, whatever the caller.
+    #[inline(never)]
+    pub(super) fn map_flame_row_on(
+        &self,
+        level: SimdLevel,
+        fis: &[u8; K],
+        rngs: &mut [Pcg32; K],
+        pos: &mut [Vec3A; K],
+        shown: &mut [Vec3A; K],
+        w: &mut FlameRow,
+    ) {
+        #[cfg(target_arch = "x86_64")]
+        match level {
+            #[expect(unsafe_code, reason = "an AVX-512 function, entered after the CPU check")]
+            // SAFETY: the CPU runs AVX-512F (`level` is `SimdLevel::detect`'s).
+            SimdLevel::Avx512 => unsafe { return self.map_flame_row_avx512(fis, rngs, pos, shown, w) },
+            #[expect(unsafe_code, reason = "an AVX2 function, entered after the CPU check")]
+            // SAFETY: the CPU runs AVX2 (`level` is `SimdLevel::detect`'s).
+            SimdLevel::Avx2 => unsafe { return self.map_flame_row_avx2(fis, rngs, pos, shown, w) },
+            SimdLevel::Scalar => {}
+        }
+        #[cfg(not(target_arch = "x86_64"))]
+        let _ = level;
+        self.map_flame_row(fis, rngs, pos, shown, w)
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,avx512f")]
+    fn map_flame_row_avx512(
+        &self,
+        fis: &[u8; K],
+        rngs: &mut [Pcg32; K],
+        pos: &mut [Vec3A; K],
+        shown: &mut [Vec3A; K],
+        w: &mut FlameRow,
+    ) {
+        self.map_flame_row(fis, rngs, pos, shown, w)
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    fn map_flame_row_avx2(
+        &self,
+        fis: &[u8; K],
+        rngs: &mut [Pcg32; K],
+        pos: &mut [Vec3A; K],
+        shown: &mut [Vec3A; K],
+        w: &mut FlameRow,
+    ) {
+        self.map_flame_row(fis, rngs, pos, shown, w)
+    }
+
+    /// One step of every orbit of a chunk, lane k by compiled function `fis[k]`: its next point
+    /// into `pos[k]` and the point to draw into `shown[k]`, the points and draws of
+    /// [`Self::map_with_rng`] lane by lane. The lanes of a flame function are mapped as one
+    /// batch where its variations batch (`CompiledXform::batches`), as are the final xform's
+    /// drawn points; every lane draws its numbers in `map_with_rng`'s order.
+    #[inline(always)]
+    pub(super) fn map_flame_row(
+        &self,
+        fis: &[u8; K],
+        rngs: &mut [Pcg32; K],
+        pos: &mut [Vec3A; K],
+        shown: &mut [Vec3A; K],
+        w: &mut FlameRow,
+    ) {
+        let Some(table) = &self.flames else {
+            for k in 0..K {
+                let q = self.map_fast(fis[k] as usize, pos[k].into());
+                (pos[k], shown[k]) = (q.into(), q.into());
+            }
+            return;
+        };
+        // The counting sort: starts[f + 1] counts f's lanes, then holds where they end.
+        let n = table.compiled.len();
+        let starts = &mut w.starts[..=n];
+        starts.fill(0);
+        for &f in fis {
+            starts[f as usize + 1] += 1;
+        }
+        for f in 0..n {
+            starts[f + 1] += starts[f];
+        }
+        for (k, &f) in fis.iter().enumerate() {
+            let slot = &mut starts[f as usize];
+            w.order[*slot as usize] = k as u8;
+            *slot += 1;
+        }
+        // starts[f] now holds where f's lanes end, the start of f + 1's.
+        let mut first = 0;
+        for (fi, compiled) in table.compiled.iter().enumerate() {
+            let end = w.starts[fi] as usize;
+            let group = &w.order[first..end];
+            first = end;
+            if group.is_empty() {
+                continue;
+            }
+            let Some(x) = compiled else {
+                for &k in group {
+                    let q = self.map_fast(fi, pos[k as usize].into());
+                    (pos[k as usize], shown[k as usize]) = (q.into(), q.into());
+                    w.drawn[k as usize] = true;
+                }
+                continue;
+            };
+            let m = group.len();
+            for (j, &k) in group.iter().enumerate() {
+                (w.x[j], w.y[j]) = (f64::from(pos[k as usize].x), f64::from(pos[k as usize].y));
+            }
+            if x.batches() {
+                x.apply_batch(&mut w.x[..m], &mut w.y[..m], group, rngs, &mut w.scratch);
+            } else {
+                x.apply_each(&mut w.x[..m], &mut w.y[..m], group, rngs);
+            }
+            let weight = x.plotted_weight() as f32;
+            for (j, &k) in group.iter().enumerate() {
+                let (k, q) = (k as usize, [w.x[j], w.y[j]]);
+                let (rng, z) = (&mut rngs[k], pos[k].z);
+                if is_bad(q) {
+                    pos[k] = Vec3A::new((rng.next_f64() * 2.0 - 1.0) as f32, (rng.next_f64() * 2.0 - 1.0) as f32, z);
+                    (shown[k], w.drawn[k]) = (Vec3A::NAN, false);
+                    continue;
+                }
+                let q = Vec3A::new(q[0] as f32, q[1] as f32, z);
+                pos[k] = q;
+                w.drawn[k] = weight >= 1.0 || random_24_bits(rng) < weight;
+                shown[k] = if w.drawn[k] { q } else { Vec3A::NAN };
+            }
+        }
+        if let Some((_, f)) = &table.final_xform {
+            // The drawn points as one batch; a NaN point (a grid function's) on its own, so that
+            // the batch is not redone with the exact functions for its sake.
+            let mut m = 0;
+            for k in (0..K).filter(|&k| w.drawn[k]) {
+                if shown[k].is_nan() {
+                    shown[k] = apply_final(f, shown[k].into(), &mut rngs[k]).into();
+                } else {
+                    (w.order[m], w.x[m], w.y[m]) = (k as u8, f64::from(shown[k].x), f64::from(shown[k].y));
+                    m += 1;
+                }
+            }
+            if f.batches() {
+                f.apply_batch(&mut w.x[..m], &mut w.y[..m], &w.order[..m], rngs, &mut w.scratch);
+            } else {
+                f.apply_each(&mut w.x[..m], &mut w.y[..m], &w.order[..m], rngs);
+            }
+            for j in 0..m {
+                let (k, q) = (w.order[j] as usize, [w.x[j], w.y[j]]);
+                shown[k] = final_point(q, shown[k].z, &mut rngs[k]).into();
+            }
         }
     }
 

@@ -6,6 +6,7 @@ use glam::{DVec3, Vec3, Vec3A};
 use rayon::prelude::*;
 
 use super::color_coord::{C_START, ColorCoordSink};
+use super::flame::FlameRow;
 use super::lanes::LaneKernel;
 use super::plan::ChunkPlan;
 use super::sink::{CollectSink, PointBatch, PointSink};
@@ -51,7 +52,7 @@ pub(super) fn run_chunk_on(
 /// Advances the chains `skip` steps not emitted, then `steps` into `sink`, on `path`; with
 /// colour coordinates (palette colour) the skipped steps run through the colour sink, which
 /// carries c through them and drops their points (`chaos_game/color_coord.rs`).
-fn run_chains(
+pub(super) fn run_chains(
     ifs: &CompiledIfs,
     path: Path,
     chains: &mut ChunkChains,
@@ -97,17 +98,23 @@ fn run_kernel(ifs: &CompiledIfs, path: Path, orbits: Orbits<'_>, sink: &mut impl
     }
     #[cfg(all(test, target_arch = "x86_64"))]
     assert!(!matches!(path, Path::Simd(_)), "no vector kernel for this IFS");
-    let _ = path;
-    run_orbits(ifs, orbits, sink);
+    run_orbits(ifs, path, orbits, sink);
 }
 
 /// The portable kernels on `orbits`: the lane kernel where the IFS has one, else the general
 /// loop (per-cell selection for adaptive probabilities, per previous function with xaos;
-/// flame functions with the orbit's generator, `chaos_game/flame.rs`).
-fn run_orbits(ifs: &CompiledIfs, orbits: Orbits<'_>, sink: &mut impl PointSink) {
+/// flame functions with the orbit's generator, `chaos_game/flame.rs`, a step of all the
+/// orbits at a time except on the test's portable path).
+fn run_orbits(
+    ifs: &CompiledIfs,
+    #[cfg_attr(not(test), expect(unused_variables, reason = "only the tests' portable path reads it"))] path: Path,
+    orbits: Orbits<'_>,
+    sink: &mut impl PointSink,
+) {
     match &ifs.lanes {
         Some(lanes) => run_lanes(lanes, orbits, sink),
-        None if ifs.has_flames() => {
+        #[cfg(test)]
+        None if ifs.has_flames() && path == Path::Portable => {
             let sel = &ifs.selection;
             orbits.run_shown(sink, |rng, p, row| {
                 let fi = sel.select(sel.row_of(p.into(), *row), rng.next_u32());
@@ -116,6 +123,7 @@ fn run_orbits(ifs: &CompiledIfs, orbits: Orbits<'_>, sink: &mut impl PointSink) 
                 (next.into(), shown.into(), fi)
             })
         }
+        None if ifs.has_flames() => flame_rows(ifs, orbits, sink),
         None => {
             let sel = &ifs.selection;
             orbits.run(sink, |rng, p, row| {
@@ -123,6 +131,61 @@ fn run_orbits(ifs: &CompiledIfs, orbits: Orbits<'_>, sink: &mut impl PointSink) 
                 sel.step_row(row, fi);
                 (ifs.map_fast(fi, p.into()).into(), fi)
             })
+        }
+    }
+}
+
+/// The orbits of an IFS with flame functions, a step of all of them at a time: every lane
+/// selects its function, then the lanes are mapped ([`CompiledIfs::map_flame_row_on`], compiled
+/// for the CPU's vector level).
+#[inline(always)]
+fn flame_rows(ifs: &CompiledIfs, orbits: Orbits<'_>, sink: &mut impl PointSink) {
+    orbits.run_rows(sink, &mut FlameStep { ifs, work: FlameRow::new(ifs), level: crate::simd::SimdLevel::detect() })
+}
+
+/// [`flame_rows`]'s step, with the work space of its batches.
+struct FlameStep<'a> {
+    ifs: &'a CompiledIfs,
+    work: FlameRow,
+    level: crate::simd::SimdLevel,
+}
+
+impl RowStep for FlameStep<'_> {
+    #[inline(always)]
+    fn step(&mut self, lanes: Lanes<'_>, shown: &mut [Vec3A; ORBITS_PER_CHUNK], fs: &mut [u8; ORBITS_PER_CHUNK]) {
+        let sel = &self.ifs.selection;
+        let each = lanes.rngs.iter_mut().zip(lanes.pos.iter()).zip(lanes.rows.iter_mut()).zip(fs.iter_mut());
+        for (((rng, p), row), f) in each {
+            let fi = sel.select(sel.row_of((*p).into(), *row), rng.next_u32());
+            sel.step_row(row, fi);
+            *f = fi as u8;
+        }
+        self.ifs.map_flame_row_on(self.level, fs, lanes.rngs, lanes.pos, shown, &mut self.work);
+    }
+}
+
+/// One step of all the lanes of a chunk ([`Orbits::run_rows`]): each lane's next point left in
+/// `lanes.pos`, the point it emits in `shown` and its function in `fs`.
+pub(super) trait RowStep {
+    fn step(&mut self, lanes: Lanes<'_>, shown: &mut [Vec3A; ORBITS_PER_CHUNK], fs: &mut [u8; ORBITS_PER_CHUNK]);
+}
+
+/// The state of a chunk's lanes that a [`RowStep`] advances.
+pub(super) struct Lanes<'a> {
+    pub rngs: &'a mut [Pcg32; ORBITS_PER_CHUNK],
+    pub pos: &'a mut [Vec3A; ORBITS_PER_CHUNK],
+    pub rows: &'a mut [u16; ORBITS_PER_CHUNK],
+}
+
+/// A step of each lane by itself, by a closure of the lane.
+struct EachLane<F>(F);
+
+impl<F: Fn(&mut Pcg32, Vec3A, &mut u16) -> (Vec3A, Vec3A, usize)> RowStep for EachLane<F> {
+    #[inline(always)]
+    fn step(&mut self, lanes: Lanes<'_>, shown: &mut [Vec3A; ORBITS_PER_CHUNK], fs: &mut [u8; ORBITS_PER_CHUNK]) {
+        for k in 0..ORBITS_PER_CHUNK {
+            let (q, s, fi) = (self.0)(&mut lanes.rngs[k], lanes.pos[k], &mut lanes.rows[k]);
+            (lanes.pos[k], shown[k], fs[k]) = (q, s, fi as u8);
         }
     }
 }
@@ -155,30 +218,34 @@ impl Orbits<'_> {
         sink: &mut impl PointSink,
         step: impl Fn(&mut Pcg32, Vec3A, &mut u16) -> (Vec3A, Vec3A, usize),
     ) {
+        self.run_rows(sink, &mut EachLane(step))
+    }
+
+    /// The orbits advanced a step of all the lanes at a time by `step`: the transient steps
+    /// not emitted, then the steps into `sink`, [`STEPS_PER_BATCH`] rows a batch.
+    #[inline(always)]
+    pub(super) fn run_rows(self, sink: &mut impl PointSink, step: &mut impl RowStep) {
         const K: usize = ORBITS_PER_CHUNK;
-        for _ in 0..self.transient {
-            for ((rng, p), row) in self.rngs.iter_mut().zip(self.pos.iter_mut()).zip(self.rows.iter_mut()) {
-                *p = step(rng, *p, row).0;
-            }
+        let Self { rngs, pos, rows, transient, steps } = self;
+        let mut shown = [Vec3A::ZERO; K];
+        let mut fs = [0u8; K];
+        for _ in 0..transient {
+            step.step(Lanes { rngs, pos, rows }, &mut shown, &mut fs);
         }
         let mut out_x = vec![0f32; K * STEPS_PER_BATCH];
         let mut out_y = vec![0f32; K * STEPS_PER_BATCH];
         let mut out_z = vec![0f32; K * STEPS_PER_BATCH];
         let mut out_fn = vec![0u8; K * STEPS_PER_BATCH];
         let mut done = 0;
-        while done < self.steps {
-            let batch = STEPS_PER_BATCH.min(self.steps - done);
+        while done < steps {
+            let batch = STEPS_PER_BATCH.min(steps - done);
             for s in 0..batch {
+                step.step(Lanes { rngs, pos, rows }, &mut shown, &mut fs);
                 let row = s * K..s * K + K;
-                let (xs, ys, zs, fs) =
-                    (&mut out_x[row.clone()], &mut out_y[row.clone()], &mut out_z[row.clone()], &mut out_fn[row]);
-                let lanes = self.rngs.iter_mut().zip(self.pos.iter_mut()).zip(self.rows.iter_mut());
-                for (k, ((rng, p), row)) in lanes.enumerate() {
-                    let (q, shown, fi) = step(rng, *p, row);
-                    *p = q;
-                    (xs[k], ys[k], zs[k]) = (shown.x, shown.y, shown.z);
-                    fs[k] = fi as u8;
+                for (k, p) in shown.iter().enumerate() {
+                    (out_x[row.start + k], out_y[row.start + k], out_z[row.start + k]) = (p.x, p.y, p.z);
                 }
+                out_fn[row].copy_from_slice(&fs);
             }
             let n = batch * K;
             sink.consume(PointBatch { x: &out_x[..n], y: &out_y[..n], z: &out_z[..n], functions: &out_fn[..n] });

@@ -345,3 +345,94 @@ fn chunks_are_independent_of_threads() {
     run_chunk(&c, 7, 0, 3, 100, &mut b);
     assert_eq!(a.points, b.points);
 }
+
+/// Flame functions beside a grid function, with what each branch of the flame path meets:
+/// xforms that batch (spherical points sent out of the plane now and then, julia's random bit,
+/// waves whose sin leaves its vector core's range so that the batch is redone with libm), one
+/// mapped point by point (exponential), pre_blur, a post-affine, an opacity below 1, xaos, and
+/// a final xform that batches (`final_batches`) or not.
+fn flame_ifs(final_batches: bool) -> Ifs {
+    use crate::flame::{Variation, VariationTerm, Xform};
+    use crate::model::FlameMap;
+    let term = |name: &str, weight: f64| {
+        let variation = Variation::by_name(name).expect("variation");
+        VariationTerm { variation, weight, params: variation.default_params() }
+    };
+    let xform = |color: f64, coefs: [f64; 6], variations: Vec<VariationTerm>| Xform {
+        weight: 1.0,
+        color,
+        color_speed: 0.4,
+        opacity: 1.0,
+        coefs,
+        post: None,
+        variation_coefs: None,
+        variations,
+        chaos: Vec::new(),
+    };
+    let mut xforms = [
+        xform(0.0, [0.5, 0.0, 0.0, 0.5, -0.5, -0.3], vec![term("linear", 0.6), term("spherical", 0.4)]),
+        xform(1.0, [0.5, 0.2, -0.2, 0.5, 0.5, 0.3], vec![term("linear", 0.7), term("exponential", 0.1)]),
+        xform(
+            0.5,
+            [0.4, 0.0, 0.1, 0.4, 0.0, 0.0],
+            vec![term("julia", 0.3), term("sinusoidal", 0.2), term("waves", 0.1), term("pre_blur", 0.1)],
+        ),
+    ];
+    xforms[1].opacity = 0.6;
+    xforms[1].post = Some([0.9, 0.1, -0.1, 0.9, 0.05, 0.0]);
+    let flame = |x: &Xform, xaos: Vec<f64>| Function {
+        name: "flame".into(),
+        map: Map::Flame(FlameMap { xform: x.clone() }),
+        color: [1.0; 3],
+        weight: Some(1.0),
+        enabled: true,
+        xaos,
+    };
+    let mut functions: Vec<Function> =
+        vec![flame(&xforms[0], vec![1.0, 2.0, 0.0, 1.0]), flame(&xforms[1], Vec::new()), flame(&xforms[2], Vec::new())];
+    let mut grid = warped_ifs().functions.swap_remove(3);
+    grid.weight = Some(0.5);
+    functions.push(grid);
+    let final_terms =
+        if final_batches { vec![term("linear", 0.9), term("swirl", 0.1)] } else { vec![term("rings", 0.5)] };
+    let final_xform = xform(0.8, [0.9, 0.1, -0.1, 0.9, 0.0, 0.1], final_terms);
+    Ifs {
+        domain: RectGrid { axes: [vec![-1.0, 1.0], vec![-1.0, 1.0], vec![0.0, 0.0]] },
+        functions,
+        probability_mode: ProbabilityMode::Explicit,
+        final_xform: Some(final_xform),
+    }
+}
+
+/// The flame path steps all of a chunk's orbits at a time, each flame function's orbits as
+/// one batch (`CompiledIfs::map_flame_row`): its points, their colour coordinates and the
+/// orbits' generators are those of `map_with_rng` orbit by orbit (the portable path), bit for
+/// bit, with and without a final xform that batches.
+#[test]
+fn flame_rows_give_the_points_of_one_orbit_at_a_time() {
+    for final_batches in [true, false] {
+        let c = CompiledIfs::new(&flame_ifs(final_batches)).unwrap();
+        assert!(c.has_flames() && c.has_final_xform());
+        let colored =
+            c.clone().with_palette(vec![0.1, 0.9, 0.5, 0.3], &crate::palette::Palette::builtin("ember").unwrap());
+        for ifs in [&c, &colored] {
+            let (mut want, mut got) = (CollectSink::default(), CollectSink::default());
+            let mut want_chains = ChunkChains::start(ifs, 5, 1, 3);
+            let mut got_chains = want_chains.clone();
+            super::run::run_chains(ifs, Path::Portable, &mut want_chains, ifs.transient, 300, &mut want);
+            super::run::run_chains(ifs, Path::Fastest, &mut got_chains, ifs.transient, 300, &mut got);
+            let bits = |v: &[Vec3]| v.iter().map(|p| p.to_array().map(f32::to_bits)).collect::<Vec<_>>();
+            let (got_bits, want_bits) = (bits(&got.points), bits(&want.points));
+            let first = got_bits.iter().zip(&want_bits).position(|(a, b)| a != b);
+            assert_eq!(
+                first,
+                None,
+                "final batches: {final_batches}: {:?}",
+                first.map(|i| (i, got.points[i], want.points[i]))
+            );
+            assert_eq!(got.functions, want.functions);
+            assert_eq!(got_chains.rngs, want_chains.rngs);
+            assert!(want.points.iter().any(|p| p.is_nan()), "some steps re-seed or are not drawn");
+        }
+    }
+}
