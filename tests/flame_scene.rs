@@ -12,7 +12,7 @@ use common::{run_nlifs, temp_dir};
 use nlifs::flame::read_str;
 use nlifs::scene::Scene;
 use nlifs::scene::flame_import::{load_flame, scene_of_flame};
-use nlifs::scene::spec::FunctionDef;
+use nlifs::scene::spec::{FlameDef, FunctionDef};
 use nlifs::shot::{Framing, Shot};
 
 /// Three flames: one with a post-affine, julian's parameters, waves (which reads its xform's
@@ -448,5 +448,56 @@ fn the_viewer_edits_a_flame_undoably_and_saves_it() {
     assert_eq!(back.functions[1].def, FunctionDef::Flame(def));
     assert_eq!(back.final_xform, Some(fin));
     assert_eq!(without_path(&back), without_path(&s.scene));
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// The viewer's flame panel adds a variation (at weight 0) and removes one, for a function and
+/// for the final xform: each one undo step, saved and reopened; refused, with a message, on a
+/// function that a key of the timeline holds.
+#[test]
+fn the_viewer_adds_and_removes_a_flames_variations() {
+    use nlifs::flame::{Variation, VariationTerm};
+    use nlifs::viewer::command::Command;
+    use nlifs::viewer::state::ViewerState;
+    let dir = temp_dir("flame-scene-variations");
+    let file = write_flames(&dir);
+    let mut s = ViewerState::new(ViewerState::default_scene(), None, nlifs::live::LiveSettings::default());
+    s.apply([Command::OpenScene(file)]);
+    assert!(s.error.is_none(), "{:?}", s.error);
+    let original = s.scene.clone();
+    let FunctionDef::Flame(def) = s.scene.functions[1].def.clone() else { panic!("a flame") };
+    let swirl = Variation::by_name("swirl").expect("swirl");
+    let mut added = def.variations.clone();
+    added.push(VariationTerm { variation: swirl, weight: 0.0, params: swirl.default_params() });
+    s.apply([Command::SetFlameVariations { function: Some(1), variations: added.clone() }]);
+    let FunctionDef::Flame(now) = &s.scene.functions[1].def else { panic!("a flame") };
+    assert_eq!(now.variations, added);
+    assert_eq!(FlameDef { variations: def.variations.clone(), ..now.clone() }, def, "only the variations change");
+    s.apply([Command::Undo]);
+    assert_eq!(s.scene, original, "one undo step");
+    s.apply([Command::Redo]);
+    let removed = added[1..].to_vec();
+    s.apply([Command::SetFlameVariations { function: Some(1), variations: removed.clone() }]);
+    s.apply([Command::SetFlameVariations { function: Some(1), variations: Vec::new() }]);
+    let FunctionDef::Flame(now) = &s.scene.functions[1].def else { panic!("a flame") };
+    assert_eq!(now.variations, removed, "an xform keeps at least one variation");
+    let mut fin = s.scene.final_xform.clone().expect("the spiral's final xform").def.variations;
+    fin.push(VariationTerm { variation: swirl, weight: 0.25, params: swirl.default_params() });
+    s.apply([Command::SetFlameVariations { function: None, variations: fin.clone() }]);
+    assert_eq!(s.scene.final_xform.as_ref().map(|f| &f.def.variations), Some(&fin));
+    let out = dir.join("edited.toml");
+    s.apply([Command::SaveScene(out.clone())]);
+    let back = Scene::load(&out).expect("reopen");
+    assert_eq!(without_path(&back), without_path(&s.scene));
+    // Keyed at the playhead (a drag of its numbers on an animated scene), it keeps its list.
+    s.apply([Command::AddOrUpdateKey]);
+    let FunctionDef::Flame(mut dragged) = s.scene.functions[1].def.clone() else { panic!("a flame") };
+    dragged.coefs[4] += 0.1;
+    s.apply([Command::SetFlame { function: 1, value: dragged }, Command::EndGesture]);
+    assert!(s.scene.is_keyed(1), "the drag keyed the function");
+    let before = s.scene.clone();
+    s.apply([Command::SetFlameVariations { function: Some(1), variations: added }]);
+    assert_eq!(s.scene, before);
+    assert!(s.error.as_deref().is_some_and(|e| e.contains("keyed on the timeline")), "{:?}", s.error);
     std::fs::remove_dir_all(&dir).ok();
 }

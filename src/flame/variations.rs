@@ -254,6 +254,12 @@ impl Variation {
     pub const LINEAR: Variation = Variation(0);
     pub const PRE_BLUR: Variation = Variation(67);
 
+    /// Every variation, in flam3's order (its number in `variations.c`), then the two of other
+    /// programs.
+    pub fn all() -> impl Iterator<Item = Self> {
+        (0..VARIATIONS.len()).map(|i| Variation(i as u8))
+    }
+
     pub fn by_name(name: &str) -> Option<Self> {
         VARIATIONS.iter().position(|v| v.name == name).map(|i| Variation(i as u8))
     }

@@ -180,7 +180,12 @@ impl Scene {
         out
     }
 
-    /// Whether a function is a flame (`kind = "flame"`), which only the CPU chaos game runs.
+    /// Whether a key of the timeline holds function `function`'s definition.
+    pub fn is_keyed(&self, function: usize) -> bool {
+        self.timeline.as_ref().is_some_and(|tl| tl.keys.iter().any(|k| k.function(function).is_some()))
+    }
+
+    /// Whether a function is a flame (`kind = "flame"`).
     pub fn has_flames(&self) -> bool {
         self.functions.iter().any(|f| matches!(f.def, FunctionDef::Flame(_)))
     }

@@ -82,6 +82,9 @@ impl ViewerState {
                 }
                 Command::SetFlame { function, value } => edited |= self.set_flame(function, value),
                 Command::SetFinalXform(value) => edited |= self.set_final_xform(value),
+                Command::SetFlameVariations { function, variations } => {
+                    edited |= self.set_flame_variations(function, variations)
+                }
                 Command::SetLiveSettings(live) => {
                     // The colour table is in the blend space of the live view's mode
                     // (`recompile`): with the sRGB blend, closest mode and the others differ.

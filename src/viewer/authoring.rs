@@ -170,6 +170,43 @@ impl ViewerState {
         self.preview_scene(after)
     }
 
+    /// Sets the variations of flame function `function` (None: the final xform's), one added
+    /// or removed: one undo step. Refused, with a message, where a key of the timeline holds the
+    /// function (the key holds the numbers of the other list), and for an empty list.
+    pub(super) fn set_flame_variations(
+        &mut self,
+        function: Option<usize>,
+        variations: Vec<crate::flame::VariationTerm>,
+    ) -> bool {
+        use crate::scene::spec::FunctionDef;
+        if variations.is_empty() {
+            return false;
+        }
+        if let Some(i) = function.filter(|&i| self.scene.is_keyed(i)) {
+            let name = self.scene.functions.get(i).map_or("", |f| f.name.as_str());
+            self.error = Some(format!(
+                "`{name}` is keyed on the timeline: remove its keys before adding or removing a variation"
+            ));
+            return false;
+        }
+        let mut after = self.scene.clone();
+        let def = match function {
+            Some(i) => match after.functions.get_mut(i).map(|f| &mut f.def) {
+                Some(FunctionDef::Flame(def)) => def,
+                _ => return false,
+            },
+            None => match &mut after.final_xform {
+                Some(f) => &mut f.def,
+                None => return false,
+            },
+        };
+        if def.variations == variations {
+            return false;
+        }
+        def.variations = variations;
+        self.apply_edit(Edit::ReplaceScene { before: Box::new(self.scene.clone()), after: Box::new(after) })
+    }
+
     /// Turns function `function` on or off (one undo step).
     pub(super) fn set_function_enabled(&mut self, function: usize, enabled: bool) -> bool {
         let Some(f) = self.scene.functions.get(function) else { return false };

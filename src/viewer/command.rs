@@ -53,6 +53,12 @@ pub enum Command {
     },
     /// The final xform's numbers (same variations, same post-affine or none).
     SetFinalXform(crate::scene::spec::FinalXform),
+    /// A flame function's variations (`function`; None: the final xform's) with one added or
+    /// removed: one undo step, refused on a function that a key of the timeline holds.
+    SetFlameVariations {
+        function: Option<usize>,
+        variations: Vec<crate::flame::VariationTerm>,
+    },
     SetLiveSettings(LiveSettings),
     SetProjection(Projection),
     Orbit {

@@ -1,12 +1,16 @@
 //! The side panel's "Flame functions" section: each `kind = "flame"` function's numbers at the
 //! playhead (flam3's pre-affine coefs a b c d e f, the post-affine where it has one, each
 //! variation's weight and parameters by flam3's names, the colour speed, the opacity), and the
-//! final xform's, edited by dragging. Like every `*_ui` function it only reads the state and
-//! emits [`Command::SetFlame`] (or [`Command::SetFinalXform`]); a drag is one undo step, keyed
-//! at the playhead on an animated scene (`authoring.rs`; the final xform is not keyed).
+//! final xform's, edited by dragging; a variation removed by its × or added from the list
+//! below them. Like every `*_ui` function it only reads the state and emits
+//! [`Command::SetFlame`] (or [`Command::SetFinalXform`]; [`Command::SetFlameVariations`] for a
+//! variation added or removed); a drag is one undo step, keyed at the playhead on an animated
+//! scene (`authoring.rs`; the final xform is not keyed). A function that a key holds keeps its
+//! variations (the keys hold the numbers of its list).
 
 use egui::RichText;
 
+use crate::flame::{Variation, VariationTerm};
 use crate::scene::spec::{FlameDef, FunctionDef};
 
 use super::super::command::Command;
@@ -37,7 +41,11 @@ pub fn flame_ui(ui: &mut egui::Ui, state: &ViewerState, commands: &mut Vec<Comma
         for (function, name, def) in flames {
             ui.label(RichText::new(name).strong());
             let mut value = def.clone();
-            let mut changed = xform_ui(ui, function, &mut value);
+            let keyed = state.scene.is_keyed(function);
+            let (mut changed, variations) = xform_ui(ui, function, &mut value, !keyed);
+            if let Some(variations) = variations {
+                commands.push(Command::SetFlameVariations { function: Some(function), variations });
+            }
             ui.horizontal(|ui| {
                 ui.label("opacity").on_hover_text(
                     "flam3's opacity: each point of this function is drawn with chance 10^(log₂ opacity)",
@@ -53,7 +61,10 @@ pub fn flame_ui(ui: &mut egui::Ui, state: &ViewerState, commands: &mut Vec<Comma
             ui.label(RichText::new("final xform").strong())
                 .on_hover_text("flam3's final xform: maps every point drawn, not the orbit (not keyed)");
             let mut value = f.clone();
-            let mut changed = xform_ui(ui, usize::MAX, &mut value.def);
+            let (mut changed, variations) = xform_ui(ui, usize::MAX, &mut value.def, true);
+            if let Some(variations) = variations {
+                commands.push(Command::SetFlameVariations { function: None, variations });
+            }
             ui.horizontal(|ui| {
                 ui.label("colour index").on_hover_text("its colour coordinate c_f (flam3's color)");
                 changed |= ui.add(slider(&mut value.palette_index, 0.0..=1.0)).changed();
@@ -66,15 +77,27 @@ pub fn flame_ui(ui: &mut egui::Ui, state: &ViewerState, commands: &mut Vec<Comma
 }
 
 /// One xform's coefs, post-affine, variations and colour speed; `id` tells its widgets apart.
-fn xform_ui(ui: &mut egui::Ui, id: usize, value: &mut FlameDef) -> bool {
+/// Returns whether a number changed, and the xform's variations with one removed or added
+/// (where `restructure` allows it).
+fn xform_ui(
+    ui: &mut egui::Ui,
+    id: usize,
+    value: &mut FlameDef,
+    restructure: bool,
+) -> (bool, Option<Vec<VariationTerm>>) {
     let mut changed = coefs_ui(ui, ("pre", id), "coefs", &mut value.coefs);
     if let Some(post) = &mut value.post {
         changed |= coefs_ui(ui, ("post", id), "post", post);
     }
-    egui::Grid::new(("flame_variations", id)).num_columns(2).spacing([6.0, 2.0]).show(ui, |ui| {
-        for t in &mut value.variations {
+    let mut removed = None;
+    let removable = restructure && value.variations.len() > 1;
+    egui::Grid::new(("flame_variations", id)).num_columns(3).spacing([6.0, 2.0]).show(ui, |ui| {
+        for (i, t) in value.variations.iter_mut().enumerate() {
             ui.label(t.variation.name()).on_hover_text("this variation's weight in the sum");
             changed |= number(ui, &mut t.weight, 0.005);
+            if removable && ui.small_button("×").on_hover_text("remove this variation").clicked() {
+                removed = Some(i);
+            }
             ui.end_row();
             for ((param, _), v) in t.variation.info().params.iter().zip(t.params.iter_mut()) {
                 ui.small(format!("  {param}"));
@@ -83,11 +106,37 @@ fn xform_ui(ui: &mut egui::Ui, id: usize, value: &mut FlameDef) -> bool {
             }
         }
     });
+    let mut variations = removed.map(|i| {
+        let mut v = value.variations.clone();
+        v.remove(i);
+        v
+    });
+    let add = ui.add_enabled_ui(restructure, |ui| {
+        let mut added = None;
+        egui::ComboBox::from_id_salt(("add_variation", id)).selected_text("add variation").height(320.0).show_ui(
+            ui,
+            |ui| {
+                for v in Variation::all().filter(|v| value.variations.iter().all(|t| t.variation != *v)) {
+                    if ui.selectable_label(false, v.name()).clicked() {
+                        added = Some(v);
+                    }
+                }
+            },
+        );
+        added
+    });
+    add.response.on_disabled_hover_text("keyed on the timeline: remove its keys to add or remove a variation");
+    if let Some(v) = add.inner {
+        let mut list = value.variations.clone();
+        // Added at weight 0, so that the picture changes only as its weight is dragged up.
+        list.push(VariationTerm { variation: v, weight: 0.0, params: v.default_params() });
+        variations = Some(list);
+    }
     ui.horizontal(|ui| {
         ui.label("colour speed").on_hover_text("s in c' = s·c_i + (1 − s)·c (flam3's color_speed)");
         changed |= ui.add(slider(&mut value.color_speed, 0.0..=1.0)).changed();
     });
-    changed
+    (changed, variations)
 }
 
 /// Six coefficients in two rows (a c e, then b d f: x' and y').
