@@ -134,7 +134,8 @@ pub enum BenchCommand {
     /// CPU render accumulation on all threads: per-thread framebuffers against one shared
     /// framebuffer, points/s per splat mode, side by side.
     Render(super::bench_render::BenchRenderArgs),
-    /// A flame file's flames rendered once by `nlifs render` (one thread, then all) and by
+    /// A flame file's flames rendered once by `nlifs render` (one thread, then all), imported as
+    /// scenes and rendered on one thread (the route of `view` and `record`), and by
     /// `flam3-render` (one thread), the same samples: CPU seconds of each whole process,
     /// samples per CPU second, nlifs / flam3.
     Flame {

@@ -152,8 +152,36 @@ pub fn bench(file: &Path, out: &Path) -> anyhow::Result<()> {
         }
         Ok((cpu, wall))
     };
+    // The route of `nlifs view` and `nlifs record` of a flame: the flame imported as a scene
+    // (not timed) and rendered by nlifs's own chaos game, on one thread.
+    let imported = || -> anyhow::Result<(f64, f64)> {
+        let (mut cpu, mut wall) = (0.0, 0.0);
+        for k in 0..read.flames.len() {
+            let scene = out.join(format!("scene-{k}.toml"));
+            let import = Command::new(&exe)
+                .args(["import", "flame"])
+                .arg(file)
+                .args(["--index", &k.to_string(), "-o"])
+                .arg(&scene)
+                .stdout(Stdio::null())
+                .stderr(Stdio::null())
+                .status()
+                .context("cannot run nlifs import")?;
+            if !import.success() {
+                anyhow::bail!("nlifs import flame failed ({import})");
+            }
+            let png = out.join(format!("scene-{k}.png"));
+            let render = &mut Command::new(&exe);
+            render.env("RAYON_NUM_THREADS", "1").arg("render").arg(&scene).arg("-o").arg(&png);
+            let (c, w) = child_cpu(render, "nlifs render SCENE.toml")?;
+            cpu += c;
+            wall += w;
+        }
+        Ok((cpu, wall))
+    };
     let (one_cpu, one_wall) = ours(1)?;
     let (all_cpu, all_wall) = ours(all_threads)?;
+    let (scene_cpu, scene_wall) = imported()?;
     println!(
         "{}: {} flame(s), {samples} samples; CPU seconds of the whole processes, one run each",
         file.display(),
@@ -165,6 +193,7 @@ pub fn bench(file: &Path, out: &Path) -> anyhow::Result<()> {
     };
     row("nlifs (1 thread)", one_cpu, one_wall);
     row(&format!("nlifs ({all_threads} threads)"), all_cpu, all_wall);
+    row("nlifs, imported (1 thread)", scene_cpu, scene_wall);
     let theirs = child_cpu(
         Command::new("flam3-render")
             .env("nthreads", "1")
@@ -180,9 +209,10 @@ pub fn bench(file: &Path, out: &Path) -> anyhow::Result<()> {
             row("flam3-render (1 thread)", cpu, wall);
             let ratio = |ours: f64| cpu / ours.max(1e-9);
             println!(
-                "  nlifs / flam3, samples per CPU second: {:.2}× (1 thread each), {:.2}× (nlifs on {all_threads} threads)",
+                "  nlifs / flam3, samples per CPU second: {:.2}× (1 thread each), {:.2}× (nlifs on {all_threads} threads), {:.2}× (imported, 1 thread)",
                 ratio(one_cpu),
-                ratio(all_cpu)
+                ratio(all_cpu),
+                ratio(scene_cpu)
             );
         }
         Err(e) => println!("  flam3-render: not measured ({e:#})"),
