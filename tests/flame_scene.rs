@@ -98,6 +98,11 @@ fn the_import_warns_of_what_it_leaves_out() {
     assert_eq!(spiral.scene.functions[0].xaos, [0.0, 1.0, 1.0]);
     assert!(spiral.scene.functions[1].xaos.is_empty(), "a row of 1s is no row");
     assert_eq!(finals.scene.functions[0].xaos, [1.0, 0.0]);
+    // Supersampling is named, not drawn.
+    let mut supersampled = file.flames[0].clone();
+    supersampled.supersample = 2;
+    let text = scene_of_flame(&supersampled, "p.png").expect("import").warnings.join("\n");
+    assert!(text.contains("its supersampling (2) is not drawn"), "{text}");
 }
 
 /// Sierpiński's triangle as three linear flame functions of opacity 1, ½ and 0: each point of

@@ -15,7 +15,8 @@
 //!   `xaos`. The domain is flam3's start square [−1, 1]².
 //! - **The final xform** is the scene's `[final]`, conjugated as the xforms are, its `color`
 //!   the final's `palette_index`.
-//! - **Left out, with a warning:** the final xform's opacity (it maps every point).
+//! - **Left out, with a warning:** the final xform's opacity (it maps every point), and
+//!   supersampling above 1 (see Look).
 //! - **The palette** is the scene's, with flam3's `palette_mode` (`step`: the entry ⌊256 c⌋;
 //!   `linear`: the two entries around it, interpolated by a dither per point).
 //! - **Camera.** Parallel projection seen from +z, the target at M(center), the visible height
@@ -50,7 +51,7 @@ use crate::scene::{LoadError, Scene};
 #[derive(Clone, Debug)]
 pub struct FlameImport {
     pub scene: Scene,
-    /// One line each (the final xform's opacity, a filter narrowed to fit).
+    /// One line each (the final xform's opacity, supersampling, a filter narrowed to fit).
     pub warnings: Vec<String>,
 }
 
@@ -158,6 +159,12 @@ pub fn scene_of_flame(flame: &Flame, palette_file: &str) -> Result<FlameImport, 
     if flame.final_xform.as_ref().is_some_and(|f| f.opacity < 1.0) {
         warnings.push(format!(
             "flame `{name}`: its final xform's opacity is left out (the final xform maps every point drawn)"
+        ));
+    }
+    if flame.supersample > 1 {
+        warnings.push(format!(
+            "flame `{name}`: its supersampling ({}) is not drawn (the anti-aliasing inside a pixel); `nlifs render` of the flame file draws it",
+            flame.supersample
         ));
     }
     let n = flame.xforms.len();
