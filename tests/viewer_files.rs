@@ -185,6 +185,8 @@ fn a_dropped_png_that_nlifs_wrote_opens_its_scene_and_another_png_is_an_error() 
     // the recent files remember.
     assert_ne!(s.scene_path.as_deref(), Some(png.as_path()));
     assert_eq!(s.files.recent.paths[0], canonical(&png));
+    // (That copy is in the temporary folder: removed at the end, not left there by the test.)
+    let copy = s.scene_path.clone().filter(|p| p.starts_with(std::env::temp_dir()));
     // The same image as bytes (the browser's way): its scene opens, to be saved as TOML.
     let changes =
         s.apply([Command::OpenBytes { name: "sierpinski-shot.png".into(), bytes: std::fs::read(&png).unwrap() }]);
@@ -202,6 +204,9 @@ fn a_dropped_png_that_nlifs_wrote_opens_its_scene_and_another_png_is_an_error() 
     assert_eq!(s.scene, kept);
     let error = s.files.view_error.clone().unwrap();
     assert!(error.contains("plain.png") && error.contains("no embedded scene"), "{error}");
+    if let Some(copy) = copy {
+        std::fs::remove_file(copy).ok();
+    }
 }
 
 #[test]

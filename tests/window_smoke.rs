@@ -372,6 +372,8 @@ fn viewer_screenshot_carries_the_scene_and_reopens() {
             .env("DISPLAY", &display)
             .env("XDG_RUNTIME_DIR", &runtime)
             .env("XDG_STATE_HOME", dir.join("state"))
+            // A PNG's scene is copied into the temporary folder: the test's own.
+            .env("TMPDIR", dir.as_os_str())
             .env("LIBGL_ALWAYS_SOFTWARE", "1")
             .stdout(Stdio::null())
             .status()

@@ -5,6 +5,12 @@
 set -eu
 cd "$(dirname "$0")/.."
 export CHROMEDRIVER="${CHROMEDRIVER:-/usr/bin/chromedriver}"
+# Chromium and chromedriver leave profile and scratch folders in the temporary folder: give
+# them one of their own, removed afterwards.
+scratch="$(mktemp -d)"
+trap 'rm -rf "$scratch"' EXIT
+trap 'exit 130' INT TERM
+export TMPDIR="$scratch"
 # SwiftShader is slow: a test may take minutes.
 export WASM_BINDGEN_TEST_TIMEOUT="${WASM_BINDGEN_TEST_TIMEOUT:-600}"
 export CARGO_TARGET_WASM32_UNKNOWN_UNKNOWN_RUNNER="$PWD/web/test-runner.sh"
