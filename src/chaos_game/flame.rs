@@ -121,11 +121,18 @@ fn apply_final(f: &CompiledXform, p: Vec3, rng: &mut Pcg32) -> Vec3 {
     final_point(f.apply([p.x as f64, p.y as f64], rng), p.z, rng)
 }
 
+/// flam3's re-seed: a random point of [−1, 1]² (x drawn first), at depth `z`.
+#[inline(always)]
+fn reseeded(z: f32, rng: &mut Pcg32) -> Vec3 {
+    let x = (rng.next_f64() * 2.0 - 1.0) as f32;
+    Vec3::new(x, (rng.next_f64() * 2.0 - 1.0) as f32, z)
+}
+
 /// The point drawn for the final xform's image `q` of a point at depth `z`.
 #[inline(always)]
 fn final_point(q: [f64; 2], z: f32, rng: &mut Pcg32) -> Vec3 {
     if is_bad(q) {
-        return Vec3::new((rng.next_f64() * 2.0 - 1.0) as f32, (rng.next_f64() * 2.0 - 1.0) as f32, z);
+        return reseeded(z, rng);
     }
     Vec3::new(q[0] as f32, q[1] as f32, z)
 }
@@ -167,7 +174,7 @@ impl CompiledIfs {
             Some(x) => {
                 let q = x.apply([p.x as f64, p.y as f64], rng);
                 if is_bad(q) {
-                    let next = Vec3::new((rng.next_f64() * 2.0 - 1.0) as f32, (rng.next_f64() * 2.0 - 1.0) as f32, p.z);
+                    let next = reseeded(p.z, rng);
                     return (next, Vec3::NAN);
                 }
                 let q = Vec3::new(q[0] as f32, q[1] as f32, p.z);
@@ -308,7 +315,7 @@ impl CompiledIfs {
                 let (k, q) = (k as usize, [w.x[j], w.y[j]]);
                 let (rng, z) = (&mut rngs[k], pos[k].z);
                 if is_bad(q) {
-                    pos[k] = Vec3A::new((rng.next_f64() * 2.0 - 1.0) as f32, (rng.next_f64() * 2.0 - 1.0) as f32, z);
+                    pos[k] = reseeded(z, rng).into();
                     (shown[k], w.drawn[k]) = (Vec3A::NAN, false);
                     continue;
                 }
