@@ -384,3 +384,95 @@ fn a_kept_estimate_is_drawn_as_it_was_made() {
         assert!(srgb(&mut live) == made_srgb, "{backend:?}, filter {filter:?}: a kept estimate on an sRGB target");
     }
 }
+
+/// flam3's spatial filter in density mode without density estimation: the live view filters on
+/// the estimate's schedule, over the estimate that spreads nothing ([`DensityEstimation::NONE`]),
+/// instead of gathering the taps in every draw. Its picture is the resolve's that filters the
+/// raw counts (`filtered` in `shaders/resolve.wgsl`) drawn from the same accumulation: the same
+/// sums, the same loop, so within a level in under 1 % of the channels (the two passes may fuse
+/// differently); the draws while the estimate is kept are the same bytes. Both routes.
+#[test]
+fn a_filter_without_density_estimation_is_drawn_once_per_estimate() {
+    use nlifs::flame::FilterShape;
+    use nlifs::gpu::chaos_game::GpuChaosGame;
+    use nlifs::gpu::progressive::{EstimateDue, ProgressiveSettings};
+    use nlifs::gpu::resolve::{GpuResolve, LightRows};
+    use nlifs::live::ChaosBackend;
+    use nlifs::resolve::ResolveArgs;
+    use nlifs::scene::spec::{PixelFilter, SplatMode};
+    let Some(ctx) = gpu() else { return };
+    let (width, height) = (96u32, 64u32);
+    for backend in [ChaosBackend::Cpu, ChaosBackend::Gpu] {
+        let tone = Tone {
+            gamma: 2.2,
+            filter: Some(PixelFilter { radius_px: 1.0, shape: FilterShape::Gaussian }),
+            ..Tone::NEUTRAL
+        };
+        let draw_settings = ProgressiveSettings {
+            point_count: 1 << 12,
+            mode: SplatMode::Density,
+            max_splats: u64::MAX,
+            tone,
+            density_estimation: None,
+            ..ProgressiveSettings::default()
+        };
+        let settings = LiveSettings { draw: draw_settings, chaos_backend: backend, render_density: None };
+        let mut live = plant2_view(&ctx, settings, width, height);
+        let draw = |live: &mut LiveView| {
+            nlifs::gpu::readback::draw_offscreen(&ctx, width, height, |encoder, target, format| {
+                live.draw(&ctx, encoder, target, format, [0, 0])
+            })
+            .unwrap()
+        };
+        for _ in 0..12 {
+            advance(&ctx, &mut live);
+        }
+        assert_eq!(live.estimate_due(), EstimateDue::Make(DensityEstimation::NONE), "{backend:?}");
+        let made = draw(&mut live);
+        let lit = made.pixels().filter(|p| p.0 != made.get_pixel(0, 0).0).count();
+        assert!(lit > 500, "{backend:?}: only {lit} pixels lit");
+        // The resolve's own filter over the same accumulation.
+        let accum = live.read_accum(&ctx).unwrap();
+        let mut game = GpuChaosGame::new(&ctx.device, 1, width, height);
+        ctx.queue.write_buffer(&game.accum, 0, bytemuck::cast_slice(&accum));
+        game.generation = 1;
+        let args = ResolveArgs {
+            mode: SplatMode::Density,
+            background: draw_settings.splat_background(),
+            depth_cue: 0.0,
+            shading: 0.0,
+            occlusion: 0.0,
+            point_radius_px: 1,
+            near: 0.0,
+            far: 1.0,
+            pixel_size: 1.0,
+            perspective: false,
+            origin_px: [0, 0],
+            tone,
+            shadows: 0.0,
+            key_light: [0.0, 0.0, 1.0],
+            shadow: None,
+            normal_radius_px: 1,
+            pixel_area: 1.0,
+            points_drawn: 0,
+        };
+        let mut resolve = GpuResolve::new(&ctx.device);
+        let inline = nlifs::gpu::readback::draw_offscreen(&ctx, width, height, |encoder, target, format| {
+            resolve.draw(&ctx, encoder, &game, &args, target, format, LightRows::Inline)
+        })
+        .unwrap();
+        let mut differing = 0;
+        for (a, b) in made.pixels().zip(inline.pixels()) {
+            for c in 0..3 {
+                assert!(a.0[c].abs_diff(b.0[c]) <= 1, "{backend:?}: {a:?} vs the resolve's filter {b:?}");
+                differing += (a.0[c] != b.0[c]) as u32;
+            }
+        }
+        assert!(differing * 100 < 3 * width * height, "{backend:?}: {differing} channels differ by one level");
+        for frame in 0..3 {
+            advance(&ctx, &mut live);
+            assert_eq!(live.estimate_due(), EstimateDue::Keep, "{backend:?}: frame {frame}");
+            assert!(draw(&mut live) == made, "{backend:?}: frame {frame} after the estimate");
+        }
+    }
+}

@@ -422,6 +422,9 @@ impl DensityEstimation {
     pub const DEFAULT_CURVE: f32 = 0.4;
     /// Largest `estimator_radius` (the kernel is (2r + 1)² taps).
     pub const MAX_RADIUS_PX: f32 = 32.0;
+    /// The estimate that spreads nothing: a kernel of one tap at every count, the sums as they
+    /// are (the live view's schedule for a spatial filter without density estimation).
+    pub const NONE: Self = Self { max_radius_px: 0.0, min_radius_px: 0.0, curve: Self::DEFAULT_CURVE };
 }
 
 /// flam3's spatial filter of `[render] filter`, `filter_shape` (its home is the flame module's
