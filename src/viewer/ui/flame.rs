@@ -113,16 +113,16 @@ fn xform_ui(
     });
     let add = ui.add_enabled_ui(restructure, |ui| {
         let mut added = None;
-        egui::ComboBox::from_id_salt(("add_variation", id)).selected_text("add variation").height(320.0).show_ui(
-            ui,
-            |ui| {
-                for v in Variation::all().filter(|v| value.variations.iter().all(|t| t.variation != *v)) {
-                    if ui.selectable_label(false, v.name()).clicked() {
-                        added = Some(v);
-                    }
-                }
-            },
-        );
+        let list = egui::ComboBox::from_id_salt(("add_variation", id))
+            .selected_text("add variation")
+            .height(320.0)
+            // A click on the search field keeps the list open; a pick closes it.
+            .close_behavior(egui::PopupCloseBehavior::CloseOnClickOutside)
+            .show_ui(ui, |ui| added = variation_list_ui(ui, id, &value.variations));
+        if list.inner.is_none() {
+            // Closed: the next opening starts with an empty search.
+            ui.data_mut(|d| d.remove::<String>(variation_search_id(id)));
+        }
         added
     });
     add.response.on_disabled_hover_text("keyed on the timeline: remove its keys to add or remove a variation");
@@ -137,6 +137,46 @@ fn xform_ui(
         changed |= ui.add(slider(&mut value.color_speed, 0.0..=1.0)).changed();
     });
     (changed, variations)
+}
+
+/// The list of the variations an xform does not use, under a search field (flam3 has 99: the
+/// field has the keyboard as the list opens, and a name typed there narrows the list to the
+/// names that contain it; Enter takes the first). The typed text is the list's own, in egui's
+/// memory while it is open. Returns the variation picked.
+fn variation_list_ui(ui: &mut egui::Ui, id: usize, used: &[VariationTerm]) -> Option<Variation> {
+    let search_id = variation_search_id(id);
+    let mut search: String = ui.data_mut(|d| d.get_temp(search_id)).unwrap_or_default();
+    let field = ui.add(egui::TextEdit::singleline(&mut search).hint_text("search").desired_width(150.0));
+    if !field.has_focus() && search.is_empty() {
+        field.request_focus();
+    }
+    let needle = search.trim().to_lowercase();
+    let mut shown =
+        Variation::all().filter(|v| used.iter().all(|t| t.variation != *v) && v.name().contains(needle.as_str()));
+    let mut picked = None;
+    if field.lost_focus() && ui.input(|i| i.key_pressed(egui::Key::Enter)) {
+        picked = shown.next();
+    }
+    let mut any = picked.is_some();
+    for v in shown {
+        any = true;
+        if ui.selectable_label(false, v.name()).clicked() {
+            picked = Some(v);
+        }
+    }
+    if !any {
+        ui.weak("no variation of that name");
+    }
+    if picked.is_some() {
+        ui.close();
+    }
+    ui.data_mut(|d| d.insert_temp(search_id, search));
+    picked
+}
+
+/// Where the text typed over xform `id`'s variation list is kept.
+fn variation_search_id(id: usize) -> egui::Id {
+    egui::Id::unique(("variation_search", id))
 }
 
 /// Six coefficients in two rows (a c e, then b d f: x' and y').
