@@ -134,6 +134,35 @@ fn advance(ctx: &GpuContext, live: &mut LiveView) -> u64 {
     splats
 }
 
+/// A live view of plant 2 in density mode on `backend` (4,096 points, `tone`, `de`), that
+/// accumulates without end.
+fn density_view(
+    ctx: &GpuContext,
+    backend: nlifs::live::ChaosBackend,
+    tone: Tone,
+    de: Option<DensityEstimation>,
+    (width, height): (u32, u32),
+) -> LiveView {
+    use nlifs::gpu::progressive::ProgressiveSettings;
+    let draw = ProgressiveSettings {
+        point_count: 1 << 12,
+        mode: nlifs::scene::spec::SplatMode::Density,
+        max_splats: u64::MAX,
+        tone,
+        density_estimation: de,
+        ..ProgressiveSettings::default()
+    };
+    plant2_view(ctx, LiveSettings { draw, chaos_backend: backend, render_density: None }, width, height)
+}
+
+/// `live` drawn into an offscreen target of `width`×`height` (RGBA8 unorm).
+fn drawn(ctx: &GpuContext, live: &mut LiveView, (width, height): (u32, u32)) -> image::RgbImage {
+    nlifs::gpu::readback::draw_offscreen(ctx, width, height, |encoder, target, format| {
+        live.draw(ctx, encoder, target, format, [0, 0])
+    })
+    .unwrap()
+}
+
 /// The live view's CPU route makes its density estimate on the CPU and uploads it; a snapshot
 /// (which filters afresh on the GPU) of the same accumulation must show the same image. Both
 /// images resolve estimates within [`summation_bound`] of each other with the same shader, so
@@ -304,9 +333,9 @@ fn density_mode_stops_at_the_renders_points_per_pixel() {
 #[test]
 fn a_kept_estimate_is_drawn_as_it_was_made() {
     use nlifs::flame::FilterShape;
-    use nlifs::gpu::progressive::{EstimateDue, ProgressiveSettings};
+    use nlifs::gpu::progressive::EstimateDue;
     use nlifs::live::ChaosBackend;
-    use nlifs::scene::spec::{DensityScale, PixelFilter, SplatMode};
+    use nlifs::scene::spec::{DensityScale, PixelFilter};
     let Some(ctx) = gpu() else { return };
     let (width, height) = (96u32, 64u32);
     let filter = Some(PixelFilter { radius_px: 1.0, shape: FilterShape::Gaussian });
@@ -316,25 +345,10 @@ fn a_kept_estimate_is_drawn_as_it_was_made() {
         })
     });
     for (backend, filter, density_scale) in cases {
-        let settings = LiveSettings {
-            draw: ProgressiveSettings {
-                point_count: 1 << 12,
-                mode: SplatMode::Density,
-                max_splats: u64::MAX,
-                tone: Tone { density_scale, gamma: 2.2, filter, ..Tone::NEUTRAL },
-                density_estimation: Some(DensityEstimation { max_radius_px: 5.0, min_radius_px: 0.0, curve: 0.4 }),
-                ..ProgressiveSettings::default()
-            },
-            chaos_backend: backend,
-            render_density: None,
-        };
-        let mut live = plant2_view(&ctx, settings, width, height);
-        let draw = |live: &mut LiveView| {
-            nlifs::gpu::readback::draw_offscreen(&ctx, width, height, |encoder, target, format| {
-                live.draw(&ctx, encoder, target, format, [0, 0])
-            })
-            .unwrap()
-        };
+        let tone = Tone { density_scale, gamma: 2.2, filter, ..Tone::NEUTRAL };
+        let de = DensityEstimation { max_radius_px: 5.0, min_radius_px: 0.0, curve: 0.4 };
+        let mut live = density_view(&ctx, backend, tone, Some(de), (width, height));
+        let draw = |live: &mut LiveView| drawn(&ctx, live, (width, height));
         for _ in 0..12 {
             advance(&ctx, &mut live);
         }
@@ -395,7 +409,7 @@ fn a_kept_estimate_is_drawn_as_it_was_made() {
 fn a_filter_without_density_estimation_is_drawn_once_per_estimate() {
     use nlifs::flame::FilterShape;
     use nlifs::gpu::chaos_game::GpuChaosGame;
-    use nlifs::gpu::progressive::{EstimateDue, ProgressiveSettings};
+    use nlifs::gpu::progressive::EstimateDue;
     use nlifs::gpu::resolve::{GpuResolve, LightRows};
     use nlifs::live::ChaosBackend;
     use nlifs::resolve::ResolveArgs;
@@ -408,22 +422,8 @@ fn a_filter_without_density_estimation_is_drawn_once_per_estimate() {
             filter: Some(PixelFilter { radius_px: 1.0, shape: FilterShape::Gaussian }),
             ..Tone::NEUTRAL
         };
-        let draw_settings = ProgressiveSettings {
-            point_count: 1 << 12,
-            mode: SplatMode::Density,
-            max_splats: u64::MAX,
-            tone,
-            density_estimation: None,
-            ..ProgressiveSettings::default()
-        };
-        let settings = LiveSettings { draw: draw_settings, chaos_backend: backend, render_density: None };
-        let mut live = plant2_view(&ctx, settings, width, height);
-        let draw = |live: &mut LiveView| {
-            nlifs::gpu::readback::draw_offscreen(&ctx, width, height, |encoder, target, format| {
-                live.draw(&ctx, encoder, target, format, [0, 0])
-            })
-            .unwrap()
-        };
+        let mut live = density_view(&ctx, backend, tone, None, (width, height));
+        let draw = |live: &mut LiveView| drawn(&ctx, live, (width, height));
         for _ in 0..12 {
             advance(&ctx, &mut live);
         }
@@ -438,7 +438,7 @@ fn a_filter_without_density_estimation_is_drawn_once_per_estimate() {
         game.generation = 1;
         let args = ResolveArgs {
             mode: SplatMode::Density,
-            background: draw_settings.splat_background(),
+            background: live.settings().draw.splat_background(),
             depth_cue: 0.0,
             shading: 0.0,
             occlusion: 0.0,
