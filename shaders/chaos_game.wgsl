@@ -136,7 +136,8 @@ override HAS_FLAMES: bool = false;
 // with each function's speed s from its flame-table header, as the CPU's `step_color_speed`.
 override COLOR_SPEEDS: bool = false;
 // A final xform (`CompiledIfs::has_final_xform`): its header follows the functions' in the
-// flame table (index `function_count()`); it maps each drawn point and its colour, not the orbit.
+// flame table (index `function_count()`), then a record of its opacity (`weight`); it maps each
+// drawn point and its colour, not the orbit, with that chance.
 override HAS_FINAL: bool = false;
 // flam3's limit of a coordinate in the plane (`BAD_VALUE` in src/chaos_game/flame.rs).
 const FLAME_BAD_VALUE: f32 = 1e10;
@@ -441,7 +442,7 @@ fn chaos_game(@builtin(global_invocation_id) id: vec3<u32>) {
         // images (`CompiledIfs::map_with_rng`, `ColorCoordSink`).
         var drawn = p;
         var drawn_c = c;
-        if HAS_FINAL && shown {
+        if HAS_FINAL && shown && final_applies(&rng) {
             let q = apply_xform(function_count(), p.xy, &rng);
             if abs(q.x) <= FLAME_BAD_VALUE && abs(q.y) <= FLAME_BAD_VALUE {
                 drawn = vec3<f32>(q, p.z);
@@ -466,6 +467,13 @@ fn chaos_game(@builtin(global_invocation_id) id: vec3<u32>) {
     }
     let w = select(f32(fi), c, PALETTE);
     points[thread] = vec4<f32>(p, select(w, 2.0 * f32(row) + select(0.0, c, PALETTE), XAOS));
+}
+
+// Whether the final xform maps this step's drawn point: always at opacity 1, else a draw
+// (`final_applies` in src/chaos_game/flame.rs).
+fn final_applies(rng: ptr<function, u32>) -> bool {
+    let opacity = flame_op_at(function_count() + 1u).weight;
+    return opacity >= 1.0 || flame_random(rng) < opacity;
 }
 
 // Empties the accumulation buffer: the closest key to u32::MAX, sums to zero.

@@ -17,7 +17,7 @@ use nlifs::shot::{Framing, Shot};
 
 /// Three flames: one with a post-affine, julian's parameters, waves (which reads its xform's
 /// coefs), an opacity, xaos, a final xform, a rotated camera and an off-centre view; one with
-/// xaos and a final xform of opacity ½ (which the import leaves out, with a warning); one with
+/// xaos and a final xform of opacity ½ (the chance that it maps a drawn point); one with
 /// flam3's linear palette and an xform of a variation flam3 lacks (JWildfire's `hemisphere`),
 /// which maps every point to the origin: its scene says `linear = 0`, so that it reopens.
 const FILE: &str = r#"<flames>
@@ -91,10 +91,16 @@ fn the_import_warns_of_what_it_leaves_out() {
     let spiral = scene_of_flame(&file.flames[0], "p.png").expect("import");
     assert!(spiral.warnings.is_empty(), "{:?}", spiral.warnings);
     let finals = scene_of_flame(&file.flames[1], "p.png").expect("import");
-    let text = finals.warnings.join("\n");
-    assert!(text.contains("final xform's opacity is left out") && !text.contains("xaos"), "{text}");
-    // The final xforms and the xaos rows are kept.
+    assert!(finals.warnings.is_empty(), "{:?}", finals.warnings);
+    // The final xforms (with their opacity) and the xaos rows are kept.
     assert!(spiral.scene.final_xform.is_some() && finals.scene.final_xform.is_some());
+    assert_eq!(finals.scene.final_xform.as_ref().map(|f| f.def.opacity), Some(0.5));
+    // A final xform's opacity cannot be told apart from the function index's flag beyond 128
+    // xforms: named, and drawn as 1.
+    let mut many = file.flames[1].clone();
+    many.xforms = (0..130).map(|_| file.flames[1].xforms[1].clone()).collect();
+    let text = scene_of_flame(&many, "p.png").expect("import").warnings.join("\n");
+    assert!(text.contains("final xform's opacity is left out with more than 128 xforms"), "{text}");
     assert_eq!(spiral.scene.functions[0].xaos, [0.0, 1.0, 1.0]);
     assert!(spiral.scene.functions[1].xaos.is_empty(), "a row of 1s is no row");
     assert_eq!(finals.scene.functions[0].xaos, [1.0, 0.0]);
@@ -204,6 +210,37 @@ fn imported_scene_draws_where_the_flame_renderer_draws() {
     );
 }
 
+/// A final xform of opacity ½ (swirl after Sierpiński's triangle: half the drawn points
+/// swirled, half as they are) draws as the flame renderer draws it; the same scene with the
+/// final's opacity 1 draws another picture.
+#[test]
+fn an_imported_final_xforms_opacity_draws_as_the_flame_renderer() {
+    const HALF_FINAL: &str = r#"<flame name="half-final" size="64 48" scale="14" quality="200" brightness="4" gamma="2">
+  <xform weight="1" color="0" linear="1" coefs="0.5 0 0 0.5 -0.5 -0.5"/>
+  <xform weight="1" color="0.5" linear="1" coefs="0.5 0 0 0.5 0.5 -0.5"/>
+  <xform weight="1" color="1" linear="1" coefs="0.5 0 0 0.5 0 0.5"/>
+  <finalxform color="0.5" color_speed="0" swirl="1" coefs="1 0 0 1 0 0" opacity="0.5"/>
+  <color index="0" rgb="255 40 0"/><color index="255" rgb="0 60 255"/>
+</flame>"#;
+    let flame = read_str(HALF_FINAL, "half.flame").expect("a flame").flames.remove(0);
+    let reference = nlifs::flame::render::render(&flame, 3, &|_| {}).expect("flame render");
+    let (w, h) = (reference.width as usize, reference.height as usize);
+    let cells = (8, 6);
+    let theirs = coarse_luminance(&reference.rgba, 4, w, h, cells);
+    let scene = scene_of_flame(&flame, "p.png").expect("import").scene;
+    let distance = |scene: &Scene| {
+        let shot = Shot::prepare(scene, 0.0, &scene.render, Framing::Scene, None).expect("shot");
+        let rendered = nlifs::render::render_cpu(&shot, &|_, _| {});
+        l1(&coarse_luminance(rendered.image.as_raw(), 3, w, h, cells), &theirs)
+    };
+    let d = distance(&scene);
+    let mut opaque = scene.clone();
+    opaque.final_xform.as_mut().expect("a final xform").def.opacity = 1.0;
+    let d_opaque = distance(&opaque);
+    eprintln!("L1 of the coarse luminance: {d:.3}; with the final's opacity 1: {d_opaque:.3}");
+    assert!(d < 0.25 && d < 0.5 * d_opaque, "L1 of the coarse luminance: {d:.3} (opacity 1: {d_opaque:.3})");
+}
+
 #[test]
 fn imported_points_fill_flam3s_view() {
     // The attractor's bounds of the imported scene are the flame's, mapped into nlifs's plane:
@@ -289,16 +326,21 @@ fn bad_flame_tables_give_located_errors() {
     );
     let e = error_of(&keyed);
     assert!(e.contains("key[0].function[0].variations.swirl") && e.contains("does not use `swirl`"), "{e}");
-    // The final xform: a flame's fields and its colour coordinate, no selection weight.
+    // The final xform: a flame's fields, its colour coordinate and its opacity, no selection
+    // weight.
     let with_final = |table: &str| {
         format!("{}\n[final]\n{table}", scene_with("coefs = [1, 0, 0, 1, 0, 0]\nvariations = { linear = 1 }\n"))
     };
-    let cases: [(&str, &[&str]); 3] = [
+    let cases: [(&str, &[&str]); 4] = [
         ("coefs = [1, 0, 0, 1, 0, 0]\nvariations = { linear = 1 }\nprobability = 1\n", &["bad.toml:", "probability"]),
         ("variations = { linear = 1 }\n", &["bad.toml:", "final.coefs", "needs `coefs`"]),
         (
             "coefs = [1, 0, 0, 1, 0, 0]\nvariations = { linear = 1 }\npalette_index = 2\n",
             &["bad.toml:14:", "final.palette_index", "0..1"],
+        ),
+        (
+            "coefs = [1, 0, 0, 1, 0, 0]\nvariations = { linear = 1 }\nopacity = 1.5\n",
+            &["bad.toml:14:", "final.opacity", "0..1"],
         ),
     ];
     for (table, words) in cases {
@@ -310,7 +352,12 @@ fn bad_flame_tables_give_located_errors() {
     let scene = Scene::parse(&with_final("coefs = [1, 0, 0, 1, 0.5, 0]\nvariations = { spherical = 1 }\n"), "f.toml")
         .expect("a scene with a final xform");
     let f = scene.final_xform.as_ref().expect("the final xform");
-    assert_eq!((f.palette_index, f.def.color_speed, f.def.coefs[4]), (0.0, 0.5, 0.5));
+    assert_eq!((f.palette_index, f.def.color_speed, f.def.coefs[4], f.def.opacity), (0.0, 0.5, 0.5, 1.0));
+    assert_eq!(without_path(&Scene::parse(&scene.to_toml(), "again.toml").expect("again")), without_path(&scene));
+    let scene =
+        Scene::parse(&with_final("coefs = [1, 0, 0, 1, 0, 0]\nvariations = { linear = 1 }\nopacity = 0.4\n"), "o.toml")
+            .expect("a final xform with an opacity");
+    assert_eq!(scene.final_xform.as_ref().map(|f| f.def.opacity), Some(0.4));
     assert_eq!(without_path(&Scene::parse(&scene.to_toml(), "again.toml").expect("again")), without_path(&scene));
 }
 
@@ -359,13 +406,13 @@ fn import_command_writes_the_scene_and_its_palette() {
     let o = run_nlifs(&["import", "flame", file.to_str().unwrap(), "--name", "finals", "-o", out.to_str().unwrap()]);
     let err = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(0), "{err}");
-    assert_eq!(err.matches("final xform's opacity is left out").count(), 1, "warned once: {err}");
+    assert!(!err.contains("opacity"), "the final xform's opacity is kept: {err}");
     assert!(!err.contains("xaos"), "xaos is kept: {err}");
     assert!(dir.join("spiral.palette.png").exists());
     let scene = Scene::load(&out).expect("scene");
     assert_eq!(scene.name, "finals");
     assert_eq!(scene.functions.len(), 2);
-    assert!(scene.final_xform.is_some(), "the final xform is the scene's");
+    assert_eq!(scene.final_xform.as_ref().map(|f| f.def.opacity), Some(0.5), "the final xform is the scene's");
     assert_eq!(scene.functions[0].xaos, [1.0, 0.0], "the xaos row is the function's");
     let bad = run_nlifs(&["import", "flame", file.to_str().unwrap(), "-o", dir.join("x.png").to_str().unwrap()]);
     assert_eq!(bad.status.code(), Some(2));

@@ -224,10 +224,18 @@ fn opacity_draws_as_on_the_cpu() {
 /// Sierpiński's triangle of three flame functions with a final xform (swirl and linear, colour
 /// coordinate 1 at speed 0.9, palette colour): the GPU draws the final xform's images where the
 /// CPU draws them (densities within the bound) in its colour (the mean colour of every point
-/// drawn within 1 % of the CPU's; the final's colour step moves it by far more).
+/// drawn within 1 % of the CPU's; the final's colour step moves it by far more). At opacity 1
+/// and ½ (the final xform maps half the points; the others are drawn as they are, in the
+/// orbit's colour).
 #[test]
 fn a_final_xform_draws_as_on_the_cpu() {
     let Some(ctx) = gpu() else { return };
+    for opacity in [1.0, 0.5] {
+        a_final_xform_of_opacity_draws_as_on_the_cpu(&ctx, opacity);
+    }
+}
+
+fn a_final_xform_of_opacity_draws_as_on_the_cpu(ctx: &nlifs::gpu::GpuContext, opacity: f64) {
     let scene_text = |final_speed: f64| {
         let mut text = String::from("version = 1\n[grid]\nx = [-1.0, 1.0]\ny = [-1.0, 1.0]\n");
         for (vx, vy) in [(-1.0, -1.0), (1.0, -1.0), (0.0, 1.0)] {
@@ -240,7 +248,7 @@ fn a_final_xform_draws_as_on_the_cpu() {
         }
         text + &format!(
             "[final]\npalette_index = 1\ncolor_speed = {final_speed}\ncoefs = [0.9, 0.2, -0.2, 0.9, 0.1, 0]\n\
-             variations = {{ swirl = 0.5, linear = 0.5 }}\n"
+             variations = {{ swirl = 0.5, linear = 0.5 }}\nopacity = {opacity}\n"
         )
     };
     let palette = nlifs::palette::Palette::builtin("ember").expect("a built-in palette");
@@ -256,9 +264,10 @@ fn a_final_xform_draws_as_on_the_cpu() {
     let bounds = chaos_game::attractor_bounds(&compiled, 1);
     let view = SplatView::new(&scene.camera_for(bounds), width, height, bounds, SplatMode::Density, 0.0, [0.0; 3]);
     let mut game = GpuChaosGame::new(&ctx.device, orbits, width, height);
-    let accum = gpu_accum(&ctx, &mut game, &compiled, &view, k);
+    let accum = gpu_accum(ctx, &mut game, &compiled, &view, k);
     let counts: Vec<u32> = accum.iter().map(|a| a[3]).collect();
-    let found = assert_gpu_density_matches_cpu("final xform", "GPU", &counts, &compiled, view, (orbits, k), (12, 9));
+    let name = format!("final xform of opacity {opacity}");
+    let found = assert_gpu_density_matches_cpu(&name, "GPU", &counts, &compiled, view, (orbits, k), (12, 9));
     assert!(found.gpu_samples > 0.99 * (orbits * k) as f64, "every step drawn: {}", found.gpu_samples);
     let mean_color = |accum: &[[u32; 4]]| {
         let n: f64 = accum.iter().map(|a| a[3] as f64).sum();
@@ -272,7 +281,9 @@ fn a_final_xform_draws_as_on_the_cpu() {
         mean_color(&fb.accum)
     };
     let (gpu, cpu, cpu_without_step) = (mean_color(&accum), cpu_mean(&compiled), cpu_mean(&compile(0.0).1));
-    eprintln!("mean colour sums: GPU {gpu:?}, CPU {cpu:?}, CPU without the final's colour step {cpu_without_step:?}");
+    eprintln!(
+        "opacity {opacity}: mean colour sums: GPU {gpu:?}, CPU {cpu:?}, CPU without the final's colour step {cpu_without_step:?}"
+    );
     for c in 0..3 {
         assert!((gpu[c] - cpu[c]).abs() <= 0.01 * cpu[c].max(1.0), "channel {c}: GPU {gpu:?}, CPU {cpu:?}");
     }

@@ -15,11 +15,14 @@
 //!
 //! A flame function (`chaos_game/flame.rs`) has its own colour speed s and the step is flam3's
 //! c' = s·c_i + (1 − s)·c ([`step_color_speed`]). With a final xform the point is drawn with
-//! s_f·c_f + (1 − s_f)·c, the final xform's step, while the orbit keeps c.
+//! s_f·c_f + (1 − s_f)·c, the final xform's step, while the orbit keeps c; a point that the
+//! final xform left as it was (its opacity) comes with [`FINAL_LEFT_OUT`] in its function index
+//! and is drawn with c.
 //!
 //! The GPU twin is the palette branch of `shaders/chaos_game.wgsl` (the same update in f32,
 //! the same quantization; the colour speeds from the flame table's headers).
 
+use super::flame::FINAL_LEFT_OUT;
 use super::sink::{PointBatch, PointSink};
 use super::{ORBITS_PER_CHUNK, STEPS_PER_BATCH};
 use crate::palette;
@@ -52,6 +55,9 @@ pub(super) struct ColorCoordSink<'a, S: PointSink> {
     speeds: Option<Box<[f32; 256]>>,
     /// The final xform's colour coordinate and speed: the drawn coordinate is its step of c.
     final_color: Option<(f32, f32)>,
+    /// What of a function index is the function's: all but [`FINAL_LEFT_OUT`] where the IFS
+    /// has few enough functions for the flag, else all.
+    function_bits: u8,
     c: &'a mut [f32; ORBITS_PER_CHUNK],
     skip: usize,
     inner: &'a mut S,
@@ -71,11 +77,12 @@ impl<'a, S: PointSink> ColorCoordSink<'a, S> {
         skip: usize,
         inner: &'a mut S,
     ) -> Self {
+        let function_bits = if coords.len() <= FINAL_LEFT_OUT as usize { !FINAL_LEFT_OUT } else { u8::MAX };
         let coords = Box::new(std::array::from_fn(|i| coords.get(i).copied().unwrap_or(0.0)));
         let speeds = speeds.map(|s| Box::new(std::array::from_fn(|i| s.get(i).copied().unwrap_or(0.5))));
         let drawn = vec![0.0; ORBITS_PER_CHUNK * STEPS_PER_BATCH];
         let indices = vec![0; ORBITS_PER_CHUNK * STEPS_PER_BATCH];
-        Self { coords, speeds, final_color, c, skip, inner, drawn, indices, linear: false }
+        Self { coords, speeds, final_color, function_bits, c, skip, inner, drawn, indices, linear: false }
     }
 
     /// This sink drawing flam3's linear palette interpolation (`linear`), dithered by each
@@ -102,10 +109,12 @@ impl<S: PointSink> PointSink for ColorCoordSink<'_, S> {
         match (self.speeds.as_deref(), self.final_color) {
             (speeds, Some((c_f, s_f))) => {
                 let speeds = speeds.unwrap_or(&HALF_SPEEDS);
+                let bits = self.function_bits;
                 for (fs, out) in batch.functions.chunks_exact(K).zip(drawn.chunks_exact_mut(K)) {
                     for ((c, &f), out) in c.iter_mut().zip(fs).zip(out) {
-                        *c = step_color_speed(*c, coords[f as usize], speeds[f as usize]);
-                        *out = step_color_speed(*c, c_f, s_f);
+                        let i = (f & bits) as usize;
+                        *c = step_color_speed(*c, coords[i], speeds[i]);
+                        *out = if f & !bits == 0 { step_color_speed(*c, c_f, s_f) } else { *c };
                     }
                 }
             }

@@ -15,7 +15,10 @@
 //! A final xform (flam3's `<finalxform>`, the scene's `[final]`) maps the point that is drawn,
 //! not the orbit: each step's drawn point is its image (a point it sends out of the plane is
 //! drawn at a random point of [−1, 1]², as flam3 does), drawn with the colour coordinate
-//! s_f·c_f + (1 − s_f)·c, while the orbit goes on from the point before it with c.
+//! s_f·c_f + (1 − s_f)·c, while the orbit goes on from the point before it with c. With an
+//! opacity o_f below 1 the final xform maps a drawn point with chance o_f (one more draw before
+//! its own, flam3's raw opacity); a point it leaves is drawn as it is, with c. The colour sink
+//! learns which from [`FINAL_LEFT_OUT`] in the point's function index.
 //!
 //! An IFS with a flame function runs on the general path (the lane and vector kernels take only
 //! multilinear and affine maps), a step of all a chunk's orbits at a time
@@ -45,6 +48,14 @@ const K: usize = ORBITS_PER_CHUNK;
 /// flam3's limit of a coordinate in the plane (`badvalue`).
 const BAD_VALUE: f64 = 1e10;
 
+/// The bit of an emitted point's function index that says the final xform left the point as it
+/// was (its opacity's draw), so that the colour sink draws the orbit's colour coordinate and not
+/// the final's step (`chaos_game/color_coord.rs`). Set only where the colour is the palette's
+/// (otherwise the index is the function's colour, which the final xform does not change), and
+/// an IFS of more than [`FINAL_LEFT_OUT`] functions draws its final xform always (the bit would
+/// be a function's).
+pub(super) const FINAL_LEFT_OUT: u8 = 0x80;
+
 /// The compiled IFS's flame functions, by compiled function index (None: not a flame), and its
 /// final xform.
 #[derive(Clone, Debug)]
@@ -52,6 +63,8 @@ pub struct FlameTable {
     xforms: Vec<Option<Xform>>,
     compiled: Vec<Option<CompiledXform>>,
     final_xform: Option<(Xform, CompiledXform)>,
+    /// The final xform's chance of mapping a drawn point (1: every point; see [`FINAL_LEFT_OUT`]).
+    final_opacity: f32,
 }
 
 impl PartialEq for FlameTable {
@@ -71,7 +84,16 @@ impl FlameTable {
         }
         let compiled = xforms.iter().map(|x| x.as_ref().map(CompiledXform::new)).collect();
         let final_xform = final_xform.map(|x| (x.clone(), CompiledXform::new(x)));
-        Some(Self { xforms, compiled, final_xform })
+        let final_opacity = match &final_xform {
+            Some((x, _)) if xforms.len() <= FINAL_LEFT_OUT as usize => x.opacity.clamp(0.0, 1.0) as f32,
+            _ => 1.0,
+        };
+        Some(Self { xforms, compiled, final_xform, final_opacity })
+    }
+
+    /// The final xform's chance of mapping a drawn point (1 where it has none).
+    pub fn final_opacity(&self) -> f32 {
+        self.final_opacity
     }
 
     /// The final xform's colour coordinate c_f (clamped to [0, 1]) and colour speed s_f: the
@@ -144,6 +166,13 @@ fn random_24_bits(rng: &mut Pcg32) -> f32 {
     (rng.next_f64() * 16_777_216.0).floor() as f32 * (1.0 / 16_777_216.0)
 }
 
+/// Whether the final xform of opacity `opacity` maps this drawn point: always at 1, else a draw
+/// (the GPU's `final_applies`).
+#[inline(always)]
+fn final_applies(opacity: f32, rng: &mut Pcg32) -> bool {
+    opacity >= 1.0 || random_24_bits(rng) < opacity
+}
+
 #[inline(always)]
 fn is_bad(v: [f64; 2]) -> bool {
     !(v[0].abs() <= BAD_VALUE && v[1].abs() <= BAD_VALUE)
@@ -163,24 +192,32 @@ impl CompiledIfs {
     /// modes get on average. Any other function as [`Self::map_fast`], both points the same.
     ///
     /// With a final xform the point to draw is, where it is drawn at all, its image
-    /// (`apply_final`).
+    /// (`apply_final`), or with an opacity below 1 and its draw against, the point itself.
     #[inline(always)]
     pub fn map_with_rng(&self, fi: usize, p: Vec3, rng: &mut Pcg32) -> (Vec3, Vec3) {
+        let (next, shown, _) = self.map_with_rng_final(fi, p, rng);
+        (next, shown)
+    }
+
+    /// [`Self::map_with_rng`], and whether the final xform left the drawn point as it was (its
+    /// opacity's draw; false where there is no final xform or the point is not drawn).
+    #[inline(always)]
+    pub(super) fn map_with_rng_final(&self, fi: usize, p: Vec3, rng: &mut Pcg32) -> (Vec3, Vec3, bool) {
         let Some(table) = &self.flames else {
             let q = self.map_fast(fi, p);
-            return (q, q);
+            return (q, q, false);
         };
         let (next, shown) = match &table.compiled[fi] {
             Some(x) => {
                 let q = x.apply([p.x as f64, p.y as f64], rng);
                 if is_bad(q) {
                     let next = reseeded(p.z, rng);
-                    return (next, Vec3::NAN);
+                    return (next, Vec3::NAN, false);
                 }
                 let q = Vec3::new(q[0] as f32, q[1] as f32, p.z);
                 let weight = x.plotted_weight() as f32;
                 if weight < 1.0 && !(random_24_bits(rng) < weight) {
-                    return (q, Vec3::NAN);
+                    return (q, Vec3::NAN, false);
                 }
                 (q, q)
             }
@@ -190,8 +227,9 @@ impl CompiledIfs {
             }
         };
         match &table.final_xform {
-            Some((_, f)) => (next, apply_final(f, shown, rng)),
-            None => (next, shown),
+            Some((_, f)) if final_applies(table.final_opacity, rng) => (next, apply_final(f, shown, rng), false),
+            Some(_) => (next, shown, true),
+            None => (next, shown, false),
         }
     }
 
@@ -201,7 +239,7 @@ impl CompiledIfs {
     pub(super) fn map_flame_row_on(
         &self,
         level: SimdLevel,
-        fis: &[u8; K],
+        fis: &mut [u8; K],
         rngs: &mut [Pcg32; K],
         pos: &mut [Vec3A; K],
         shown: &mut [Vec3A; K],
@@ -226,7 +264,7 @@ impl CompiledIfs {
     #[target_feature(enable = "avx2,avx512f")]
     fn map_flame_row_avx512(
         &self,
-        fis: &[u8; K],
+        fis: &mut [u8; K],
         rngs: &mut [Pcg32; K],
         pos: &mut [Vec3A; K],
         shown: &mut [Vec3A; K],
@@ -239,7 +277,7 @@ impl CompiledIfs {
     #[target_feature(enable = "avx2")]
     fn map_flame_row_avx2(
         &self,
-        fis: &[u8; K],
+        fis: &mut [u8; K],
         rngs: &mut [Pcg32; K],
         pos: &mut [Vec3A; K],
         shown: &mut [Vec3A; K],
@@ -252,11 +290,13 @@ impl CompiledIfs {
     /// into `pos[k]` and the point to draw into `shown[k]`, the points and draws of
     /// [`Self::map_with_rng`] lane by lane. The lanes of a flame function are mapped as one
     /// batch where its variations batch (`CompiledXform::batches`), as are the final xform's
-    /// drawn points; every lane draws its numbers in `map_with_rng`'s order.
+    /// drawn points; every lane draws its numbers in `map_with_rng`'s order. A lane whose drawn
+    /// point the final xform left (its opacity) gets [`FINAL_LEFT_OUT`] in `fis[k]` where the
+    /// colour is the palette's.
     #[inline(always)]
     pub(super) fn map_flame_row(
         &self,
-        fis: &[u8; K],
+        fis: &mut [u8; K],
         rngs: &mut [Pcg32; K],
         pos: &mut [Vec3A; K],
         shown: &mut [Vec3A; K],
@@ -273,7 +313,7 @@ impl CompiledIfs {
         let n = table.compiled.len();
         let starts = &mut w.starts[..=n];
         starts.fill(0);
-        for &f in fis {
+        for &f in fis.iter() {
             starts[f as usize + 1] += 1;
         }
         for f in 0..n {
@@ -327,10 +367,14 @@ impl CompiledIfs {
         }
         if let Some((_, f)) = &table.final_xform {
             // The drawn points as one batch; a NaN point (a grid function's) on its own, so that
-            // the batch is not redone with the exact functions for its sake.
+            // the batch is not redone with the exact functions for its sake. First each drawn
+            // point's opacity draw; a point the final xform leaves is flagged for the colour.
+            let flag = if self.color_coords.is_some() { FINAL_LEFT_OUT } else { 0 };
             let mut m = 0;
             for k in (0..K).filter(|&k| w.drawn[k]) {
-                if shown[k].is_nan() {
+                if !final_applies(table.final_opacity, &mut rngs[k]) {
+                    fis[k] |= flag;
+                } else if shown[k].is_nan() {
                     shown[k] = apply_final(f, shown[k].into(), &mut rngs[k]).into();
                 } else {
                     (w.order[m], w.x[m], w.y[m]) = (k as u8, f64::from(shown[k].x), f64::from(shown[k].y));
@@ -352,7 +396,8 @@ impl CompiledIfs {
     /// The GPU's flame table (`shaders/variations.wgsl`): one header per compiled function
     /// (its xform's for a flame function, else [`FLAME_OP_NONE`] with colour speed ½), the
     /// final xform's header where there is one (its colour coordinate c_f in place of the
-    /// plotted weight, `k1.w`), then the terms and post-affines ([`CompiledXform::gpu_ops`]).
+    /// plotted weight, `k1.w`) and a [`FLAME_OP_NONE`] record of its opacity (`weight`), then
+    /// the terms and post-affines ([`CompiledXform::gpu_ops`]).
     pub fn flame_ops(&self) -> Vec<FlameOp> {
         let n = self.functions.len();
         let none =
@@ -360,7 +405,7 @@ impl CompiledIfs {
         let mut headers = vec![none; n];
         let mut records = Vec::new();
         if let Some(table) = &self.flames {
-            let first = n + usize::from(table.final_xform.is_some());
+            let first = n + 2 * usize::from(table.final_xform.is_some());
             for (header, x) in headers.iter_mut().zip(&table.compiled) {
                 if let Some(x) = x {
                     let (h, ops) = x.gpu_ops((first + records.len()) as u32);
@@ -372,6 +417,7 @@ impl CompiledIfs {
                 let (mut h, ops) = f.gpu_ops((first + records.len()) as u32);
                 h.k[1][3] = c_f;
                 headers.push(h);
+                headers.push(FlameOp { weight: table.final_opacity, ..none });
                 records.extend(ops);
             }
         }

@@ -119,8 +119,9 @@ fn run_orbits(
             orbits.run_shown(sink, |rng, p, row| {
                 let fi = sel.select(sel.row_of(p.into(), *row), rng.next_u32());
                 sel.step_row(row, fi);
-                let (next, shown) = ifs.map_with_rng(fi, p.into(), rng);
-                (next.into(), shown.into(), fi)
+                let (next, shown, left) = ifs.map_with_rng_final(fi, p.into(), rng);
+                let flag = if left && ifs.color_coords.is_some() { super::flame::FINAL_LEFT_OUT as usize } else { 0 };
+                (next.into(), shown.into(), fi | flag)
             })
         }
         None if ifs.has_flames() => flame_rows(ifs, orbits, sink),

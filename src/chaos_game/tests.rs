@@ -350,8 +350,8 @@ fn chunks_are_independent_of_threads() {
 /// xforms that batch (spherical points sent out of the plane now and then, julia's random bit,
 /// waves whose sin leaves its vector core's range so that the batch is redone with libm), one
 /// mapped point by point (exponential), pre_blur, a post-affine, an opacity below 1, xaos, and
-/// a final xform that batches (`final_batches`) or not.
-fn flame_ifs(final_batches: bool) -> Ifs {
+/// a final xform that batches (`final_batches`) or not, of opacity `final_opacity`.
+fn flame_ifs(final_batches: bool, final_opacity: f64) -> Ifs {
     use crate::flame::{Variation, VariationTerm, Xform};
     use crate::model::FlameMap;
     let term = |name: &str, weight: f64| {
@@ -395,7 +395,7 @@ fn flame_ifs(final_batches: bool) -> Ifs {
     functions.push(grid);
     let final_terms =
         if final_batches { vec![term("linear", 0.9), term("swirl", 0.1)] } else { vec![term("rings", 0.5)] };
-    let final_xform = xform(0.8, [0.9, 0.1, -0.1, 0.9, 0.0, 0.1], final_terms);
+    let final_xform = Xform { opacity: final_opacity, ..xform(0.8, [0.9, 0.1, -0.1, 0.9, 0.0, 0.1], final_terms) };
     Ifs {
         domain: RectGrid { axes: [vec![-1.0, 1.0], vec![-1.0, 1.0], vec![0.0, 0.0]] },
         functions,
@@ -407,11 +407,11 @@ fn flame_ifs(final_batches: bool) -> Ifs {
 /// The flame path steps all of a chunk's orbits at a time, each flame function's orbits as
 /// one batch (`CompiledIfs::map_flame_row`): its points, their colour coordinates and the
 /// orbits' generators are those of `map_with_rng` orbit by orbit (the portable path), bit for
-/// bit, with and without a final xform that batches.
+/// bit, with and without a final xform that batches, of opacity 1 and below.
 #[test]
 fn flame_rows_give_the_points_of_one_orbit_at_a_time() {
-    for final_batches in [true, false] {
-        let c = CompiledIfs::new(&flame_ifs(final_batches)).unwrap();
+    for (final_batches, final_opacity) in [(true, 1.0), (false, 1.0), (true, 0.7), (false, 0.4)] {
+        let c = CompiledIfs::new(&flame_ifs(final_batches, final_opacity)).unwrap();
         assert!(c.has_flames() && c.has_final_xform());
         let colored =
             c.clone().with_palette(vec![0.1, 0.9, 0.5, 0.3], &crate::palette::Palette::builtin("ember").unwrap());
@@ -427,12 +427,52 @@ fn flame_rows_give_the_points_of_one_orbit_at_a_time() {
             assert_eq!(
                 first,
                 None,
-                "final batches: {final_batches}: {:?}",
+                "final batches: {final_batches}, opacity {final_opacity}: {:?}",
                 first.map(|i| (i, got.points[i], want.points[i]))
             );
             assert_eq!(got.functions, want.functions);
             assert_eq!(got_chains.rngs, want_chains.rngs);
             assert!(want.points.iter().any(|p| p.is_nan()), "some steps re-seed or are not drawn");
+        }
+    }
+}
+
+/// A final xform of opacity o maps a drawn point with chance o (flam3's final opacity) and
+/// leaves the others as they are, drawn with the orbit's colour coordinate: here it moves its
+/// points 100 to the right and colours them with palette entry 255 (c_f 1 at speed 1), which no
+/// orbit's coordinate (the functions' are at most 0.9) reaches. Both paths; opacity 0 and 1
+/// move none and all.
+#[test]
+fn a_final_xform_maps_a_drawn_point_with_the_chance_of_its_opacity() {
+    use crate::flame::{Variation, VariationTerm};
+    for opacity in [0.0, 0.3, 1.0] {
+        let mut ifs = flame_ifs(true, 1.0);
+        let linear = Variation::by_name("linear").expect("linear");
+        let translation = crate::flame::Xform {
+            color: 1.0,
+            color_speed: 1.0,
+            opacity,
+            coefs: [1.0, 0.0, 0.0, 1.0, 100.0, 0.0],
+            variations: vec![VariationTerm { variation: linear, weight: 1.0, params: Vec::new() }],
+            ..ifs.final_xform.clone().unwrap()
+        };
+        ifs.final_xform = Some(translation);
+        let c = CompiledIfs::new(&ifs).unwrap();
+        let colored = c.with_palette(vec![0.1, 0.9, 0.5, 0.3], &crate::palette::Palette::builtin("ember").unwrap());
+        for path in [Path::Portable, Path::Fastest] {
+            let mut sink = CollectSink::default();
+            let mut chains = ChunkChains::start(&colored, 9, 0, 2);
+            super::run::run_chains(&colored, path, &mut chains, colored.transient, 400, &mut sink);
+            let drawn: Vec<(Vec3, u8)> =
+                sink.points.iter().zip(&sink.functions).filter(|(p, _)| !p.is_nan()).map(|(p, &f)| (*p, f)).collect();
+            let moved = drawn.iter().filter(|(p, _)| p.x > 50.0).count();
+            for (p, entry) in &drawn {
+                assert_eq!(p.x > 50.0, *entry == 255, "opacity {opacity}, {path:?}: {p} drawn with entry {entry}");
+            }
+            let share = moved as f64 / drawn.len() as f64;
+            eprintln!("opacity {opacity}, {path:?}: {moved} of {} drawn points mapped ({share:.4})", drawn.len());
+            assert!(drawn.len() > 10_000);
+            assert!((share - opacity).abs() < 0.03, "opacity {opacity}, {path:?}: {share} of the points mapped");
         }
     }
 }

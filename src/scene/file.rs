@@ -51,8 +51,8 @@ macro_rules! flame_fields {
     };
 }
 
-/// `[final]`: a flame definition without selection weight or opacity, and its colour
-/// coordinate.
+/// `[final]`: a flame definition without selection weight, its colour coordinate, and its
+/// opacity (here the chance that it maps a drawn point, flam3's final xform's).
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(super) struct FinalToml {
@@ -63,11 +63,12 @@ pub(super) struct FinalToml {
     pub(super) variations: Option<NamedNumbers>,
     pub(super) params: Option<NamedNumbers>,
     pub(super) color_speed: Option<Spanned<f64>>,
+    pub(super) opacity: Option<Spanned<f64>>,
 }
 
 impl FinalToml {
     pub(super) fn flame(&self) -> FlameFields<'_> {
-        flame_fields!(self, &None)
+        flame_fields!(self, &self.opacity)
     }
 }
 

@@ -14,9 +14,10 @@
 //!   variations and parameters the flame function's own, its xaos row (`chaos`) the function's
 //!   `xaos`. The domain is flam3's start square [−1, 1]².
 //! - **The final xform** is the scene's `[final]`, conjugated as the xforms are, its `color`
-//!   the final's `palette_index`.
-//! - **Left out, with a warning:** the final xform's opacity (it maps every point), and
-//!   supersampling above 1 (see Look).
+//!   the final's `palette_index`, its `opacity` (the chance that it maps a drawn point) the
+//!   final's.
+//! - **Left out, with a warning:** supersampling above 1 (see Look); a final xform's opacity
+//!   below 1 in a flame of more than 128 xforms (drawn as 1: `chaos_game/flame.rs`).
 //! - **The palette** is the scene's, with flam3's `palette_mode` (`step`: the entry ⌊256 c⌋;
 //!   `linear`: the two entries around it, interpolated by a dither per point).
 //! - **Camera.** Parallel projection seen from +z, the target at M(center), the visible height
@@ -51,7 +52,8 @@ use crate::scene::{LoadError, Scene};
 #[derive(Clone, Debug)]
 pub struct FlameImport {
     pub scene: Scene,
-    /// One line each (the final xform's opacity, supersampling, a filter narrowed to fit).
+    /// One line each (supersampling, a filter narrowed to fit, a final xform's opacity that
+    /// cannot be drawn).
     pub warnings: Vec<String>,
 }
 
@@ -156,9 +158,9 @@ pub fn scene_of_flame(flame: &Flame, palette_file: &str) -> Result<FlameImport, 
     }
     let mut warnings = Vec::new();
     let name = if flame.name.is_empty() { "flame".to_string() } else { flame.name.clone() };
-    if flame.final_xform.as_ref().is_some_and(|f| f.opacity < 1.0) {
+    if flame.final_xform.as_ref().is_some_and(|f| f.opacity < 1.0) && flame.xforms.len() > 128 {
         warnings.push(format!(
-            "flame `{name}`: its final xform's opacity is left out (the final xform maps every point drawn)"
+            "flame `{name}`: its final xform's opacity is left out with more than 128 xforms (the final xform maps every point drawn)"
         ));
     }
     if flame.supersample > 1 {
@@ -196,10 +198,10 @@ pub fn scene_of_flame(flame: &Flame, palette_file: &str) -> Result<FlameImport, 
             xaos: xaos(x),
         })
         .collect();
-    let final_xform = flame.final_xform.as_ref().map(|x| FinalXform {
-        def: FlameDef { opacity: FlameDef::DEFAULT_OPACITY, ..conjugated(x, &m, &m_inv) },
-        palette_index: x.color.clamp(0.0, 1.0),
-    });
+    let final_xform = flame
+        .final_xform
+        .as_ref()
+        .map(|x| FinalXform { def: conjugated(x, &m, &m_inv), palette_index: x.color.clamp(0.0, 1.0) });
     let ppu = flame.scale * 2f64.powf(flame.zoom);
     let half_height = f64::from(flame.size[1].max(1)) / (2.0 * ppu);
     let target = apply(&m, flame.center);

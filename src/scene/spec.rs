@@ -190,9 +190,10 @@ impl FlameDef {
     }
 }
 
-/// flam3's final xform as the scene holds it (`[final]`): a flame definition applied to every
-/// drawn point, not to the orbit (`chaos_game/flame.rs`), and its colour coordinate. It has no
-/// selection weight and no opacity (its `def.opacity` is 1).
+/// flam3's final xform as the scene holds it (`[final]`): a flame definition applied to the
+/// drawn points, not to the orbit (`chaos_game/flame.rs`), and its colour coordinate. It has no
+/// selection weight; its `def.opacity` is, as flam3 reads a final xform's, the chance that it
+/// maps a drawn point (1: every point; a point it leaves is drawn as it is).
 #[derive(Clone, Debug, PartialEq)]
 pub struct FinalXform {
     pub def: FlameDef,

@@ -1,7 +1,7 @@
 //! The side panel's "Flame functions" section: each `kind = "flame"` function's numbers at the
 //! playhead (flam3's pre-affine coefs a b c d e f, the post-affine where it has one, each
 //! variation's weight and parameters by flam3's names, the colour speed, the opacity), and the
-//! final xform's, edited by dragging; a variation removed by its × or added from the list
+//! final xform's (with its colour index and opacity), edited by dragging; a variation removed by its × or added from the list
 //! below them. Like every `*_ui` function it only reads the state and emits
 //! [`Command::SetFlame`] (or [`Command::SetFinalXform`]; [`Command::SetFlameVariations`] for a
 //! variation added or removed); a drag is one undo step, keyed at the playhead on an animated
@@ -68,6 +68,12 @@ pub fn flame_ui(ui: &mut egui::Ui, state: &ViewerState, commands: &mut Vec<Comma
             ui.horizontal(|ui| {
                 ui.label("colour index").on_hover_text("its colour coordinate c_f (flam3's color)");
                 changed |= ui.add(slider(&mut value.palette_index, 0.0..=1.0)).changed();
+            });
+            ui.horizontal(|ui| {
+                ui.label("opacity").on_hover_text(
+                    "flam3's final opacity: the chance that the final xform maps a drawn point (the others are drawn as they are)",
+                );
+                changed |= ui.add(slider(&mut value.def.opacity, 0.0..=1.0)).changed();
             });
             if changed && value != *f {
                 commands.push(Command::SetFinalXform(value));
