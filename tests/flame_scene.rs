@@ -472,12 +472,13 @@ fn the_viewer_edits_a_flame_undoably_and_saves_it() {
     other.post = None;
     s.apply([Command::SetFlame { function: 1, value: other }]);
     assert_eq!(s.scene.functions[1].def, FunctionDef::Flame(def.clone()));
-    // The final xform's numbers and colour coordinate: one undo step a drag too.
+    // The final xform's numbers, colour coordinate and opacity: one undo step a drag too.
     let before_final = s.scene.clone();
     let mut fin = s.scene.final_xform.clone().expect("the spiral's final xform");
     fin.def.coefs[0] = 0.7;
     fin.def.variations[0].weight = 0.5;
     fin.palette_index = 0.9;
+    fin.def.opacity = 0.4;
     let mut half = fin.clone();
     half.palette_index = 0.6;
     s.apply([Command::SetFinalXform(half)]);
