@@ -400,8 +400,8 @@ fn a_kept_estimate_is_drawn_as_it_was_made() {
 }
 
 /// flam3's spatial filter in density mode without density estimation: the live view filters on
-/// the estimate's schedule, over the estimate that spreads nothing ([`DensityEstimation::NONE`]),
-/// instead of gathering the taps in every draw. Its picture is the resolve's that filters the
+/// the estimate's schedule, over the estimate that spreads nothing (`SPREADS_NOTHING`), instead
+/// of gathering the taps in every draw. Its picture is the resolve's that filters the
 /// raw counts (`filtered` in `shaders/resolve.wgsl`) drawn from the same accumulation: the same
 /// sums, the same loop, so within a level in under 1 % of the channels (the two passes may fuse
 /// differently); the draws while the estimate is kept are the same bytes. Both routes.
@@ -427,7 +427,11 @@ fn a_filter_without_density_estimation_is_drawn_once_per_estimate() {
         for _ in 0..12 {
             advance(&ctx, &mut live);
         }
-        assert_eq!(live.estimate_due(), EstimateDue::Make(DensityEstimation::NONE), "{backend:?}");
+        assert_eq!(
+            live.estimate_due(),
+            EstimateDue::Make(nlifs::resolve::density_estimation::SPREADS_NOTHING),
+            "{backend:?}"
+        );
         let made = draw(&mut live);
         let lit = made.pixels().filter(|p| p.0 != made.get_pixel(0, 0).0).count();
         assert!(lit > 500, "{backend:?}: only {lit} pixels lit");

@@ -7,7 +7,7 @@
 //! within twice flam3's own difference between two of its seeds (`isaac_seed`), plus 3: the
 //! two renderers draw different random numbers, so flam3's seed-to-seed noise is the scale.
 //!
-//! Nineteen of them are also imported as scenes and drawn by the scene renderer ([`IMPORTED`]),
+//! Twenty of them are also imported as scenes and drawn by the scene renderer ([`IMPORTED`]),
 //! with the same metric.
 //!
 //! Without `flam3-render` the test says so loudly and passes, unless `CI` or
@@ -135,7 +135,14 @@ fn cases() -> Vec<(Flame, PaletteForm)> {
         color_speed: 0.3,
         ..xform(0.0, 0.8, [0.9, 0.2, -0.2, 0.9, 0.1, 0.0], vec![var("swirl", 0.5), var("linear", 0.5)])
     });
+    // The same final xform mapping half the drawn points (flam3's final opacity), in its colour
+    // at a faster colour speed.
+    let mut half = Flame { name: "final-opacity".into(), ..f.clone() };
+    if let Some(x) = &mut half.final_xform {
+        (x.opacity, x.color_speed) = (0.5, 0.8);
+    }
     cases.push(f);
+    cases.push(half);
     let mut f = base("linear-palette", &[("linear", 0.7), ("sinusoidal", 0.3)]);
     f.palette_mode = PaletteMode::Linear;
     cases.push(f);
@@ -353,7 +360,7 @@ fn difference(a: &image::RgbaImage, b: &image::RgbaImage, background: [u8; 3]) -
 /// pixel; no supersampling), also imported as scenes (`nlifs import flame`) and rendered by the
 /// scene renderer: the conjugation into nlifs's view (a rotated camera; waves and popcorn keep
 /// their xform's coefs), the absolute density with flam3's brightness and gamma, density
-/// estimation, opacity, the final xform, xaos, the palette and the spatial filter (the "xaos"
+/// estimation, opacity, the final xform and its opacity, xaos, the palette and the spatial filter (the "xaos"
 /// flame's pieces are thin: without the filter its import lit 159 pixels where flam3 lights 331
 /// and differed by 7.97; "xaos-sharp" is its twin with a filter too narrow to spread a point;
 /// bipolar, exponential, rings and separation differed by 6.7–11.5 unfiltered).
@@ -361,6 +368,7 @@ const IMPORTED: &[&str] = &[
     "camera",
     "color-speed",
     "density-estimation",
+    "final-opacity",
     "final-xform",
     "linear",
     "mix-sinusoidal-swirl",

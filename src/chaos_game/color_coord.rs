@@ -22,10 +22,17 @@
 //! The GPU twin is the palette branch of `shaders/chaos_game.wgsl` (the same update in f32,
 //! the same quantization; the colour speeds from the flame table's headers).
 
-use super::flame::FINAL_LEFT_OUT;
 use super::sink::{PointBatch, PointSink};
 use super::{ORBITS_PER_CHUNK, STEPS_PER_BATCH};
 use crate::palette;
+
+/// The bit of an emitted point's function index that says the final xform left the point as it
+/// was (its opacity's draw; set by `chaos_game/flame.rs`), so that this sink draws the orbit's
+/// colour coordinate and not the final's step. Set only where the colour is the palette's
+/// (otherwise the index is the function's colour, which the final xform does not change); an
+/// IFS of more than [`FINAL_LEFT_OUT`] functions draws its final xform always (the bit would be
+/// a function's).
+pub(super) const FINAL_LEFT_OUT: u8 = 0x80;
 
 /// Colour speed ½ for every function (the step (c + c_i) / 2, bit for bit).
 const HALF_SPEEDS: [f32; 256] = [0.5; 256];

@@ -37,6 +37,7 @@
 
 use glam::{Vec3, Vec3A};
 
+use super::color_coord::FINAL_LEFT_OUT;
 use super::{CompiledIfs, ORBITS_PER_CHUNK};
 use crate::flame::Xform;
 use crate::flame::variations::{BatchScratch, CompiledXform, FLAME_OP_NONE, FlameOp};
@@ -47,14 +48,6 @@ const K: usize = ORBITS_PER_CHUNK;
 
 /// flam3's limit of a coordinate in the plane (`badvalue`).
 const BAD_VALUE: f64 = 1e10;
-
-/// The bit of an emitted point's function index that says the final xform left the point as it
-/// was (its opacity's draw), so that the colour sink draws the orbit's colour coordinate and not
-/// the final's step (`chaos_game/color_coord.rs`). Set only where the colour is the palette's
-/// (otherwise the index is the function's colour, which the final xform does not change), and
-/// an IFS of more than [`FINAL_LEFT_OUT`] functions draws its final xform always (the bit would
-/// be a function's).
-pub(super) const FINAL_LEFT_OUT: u8 = 0x80;
 
 /// The compiled IFS's flame functions, by compiled function index (None: not a flame), and its
 /// final xform.

@@ -19,9 +19,8 @@
 //! doubled, at most [`ESTIMATE_EVERY_FRAMES`] apart, and once more when accumulation stops;
 //! draws in between show the last estimate as it was made (on the absolute scale of the points
 //! it was made of; snapshots estimate afresh). A spatial filter (`Tone::filter`) goes with the
-//! estimate: filtered once per estimate, and left out of the raw counts drawn before the first;
-//! in density mode without density estimation it goes on the same schedule, over an estimate
-//! that spreads nothing ([`DensityEstimation::NONE`]).
+//! estimate: filtered once per estimate (without one, density mode makes the estimate that
+//! spreads nothing, `SPREADS_NOTHING`), and left out of the raw counts drawn before the first.
 //! A point source on the CPU may make the estimate itself, with the CPU twin, and hand it over
 //! ([`Progressive::upload_estimate`] when [`Progressive::estimate_due`] asks for one).
 
@@ -590,10 +589,8 @@ impl Progressive {
         let s = &self.settings;
         let de = match density_estimation::applies(s.density_estimation.as_ref(), s.mode) {
             Some(de) => de,
-            // The spatial filter without density estimation goes on the estimate's schedule too,
-            // over the estimate that spreads nothing: its taps gathered once per estimate instead
-            // of in every draw (the same picture: the sums are the counts as they are).
-            None if s.mode == SplatMode::Density && s.tone.filter.is_some() => DensityEstimation::NONE,
+            // The filter without density estimation, on the estimate's schedule (module notes).
+            None if s.mode == SplatMode::Density && s.tone.filter.is_some() => density_estimation::SPREADS_NOTHING,
             None => return EstimateDue::Off,
         };
         let frames = self.frames_since_clear;

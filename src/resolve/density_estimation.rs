@@ -296,6 +296,11 @@ pub fn parse_flag(text: &str) -> Result<DensityFlag, String> {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct DensityFlag(pub Option<DensityEstimation>);
 
+/// The estimate that spreads nothing (a kernel of one tap at every count: the sums as they are):
+/// the live view filters on the estimate's schedule with it where density estimation is off.
+pub const SPREADS_NOTHING: DensityEstimation =
+    DensityEstimation { max_radius_px: 0.0, min_radius_px: 0.0, curve: DensityEstimation::DEFAULT_CURVE };
+
 /// Whether `de` changes a render of `mode` (density mode only; other modes ignore it).
 pub fn applies(de: Option<&DensityEstimation>, mode: crate::scene::spec::SplatMode) -> Option<DensityEstimation> {
     de.copied().filter(|_| mode == crate::scene::spec::SplatMode::Density)

@@ -190,10 +190,9 @@ impl FlameDef {
     }
 }
 
-/// flam3's final xform as the scene holds it (`[final]`): a flame definition applied to the
-/// drawn points, not to the orbit (`chaos_game/flame.rs`), and its colour coordinate. It has no
-/// selection weight; its `def.opacity` is, as flam3 reads a final xform's, the chance that it
-/// maps a drawn point (1: every point; a point it leaves is drawn as it is).
+/// flam3's final xform as the scene holds it (`[final]`): a flame definition applied to drawn
+/// points, not to the orbit (`chaos_game/flame.rs`), and its colour coordinate; no selection
+/// weight; `def.opacity` is the chance that it maps a drawn point (flam3's final opacity).
 #[derive(Clone, Debug, PartialEq)]
 pub struct FinalXform {
     pub def: FlameDef,
@@ -423,9 +422,6 @@ impl DensityEstimation {
     pub const DEFAULT_CURVE: f32 = 0.4;
     /// Largest `estimator_radius` (the kernel is (2r + 1)² taps).
     pub const MAX_RADIUS_PX: f32 = 32.0;
-    /// The estimate that spreads nothing: a kernel of one tap at every count, the sums as they
-    /// are (the live view's schedule for a spatial filter without density estimation).
-    pub const NONE: Self = Self { max_radius_px: 0.0, min_radius_px: 0.0, curve: Self::DEFAULT_CURVE };
 }
 
 /// flam3's spatial filter of `[render] filter`, `filter_shape` (its home is the flame module's
