@@ -84,11 +84,6 @@ impl FlameTable {
         Some(Self { xforms, compiled, final_xform, final_opacity })
     }
 
-    /// The final xform's chance of mapping a drawn point (1 where it has none).
-    pub fn final_opacity(&self) -> f32 {
-        self.final_opacity
-    }
-
     /// The final xform's colour coordinate c_f (clamped to [0, 1]) and colour speed s_f: the
     /// drawn point's coordinate is s_f·c_f + (1 − s_f)·c.
     pub fn final_color(&self) -> Option<(f32, f32)> {
