@@ -34,6 +34,12 @@ use crate::palette;
 /// a function's).
 pub(super) const FINAL_LEFT_OUT: u8 = 0x80;
 
+/// Whether the function indices of an IFS of `functions` compiled functions leave the bit
+/// [`FINAL_LEFT_OUT`] free (at most 128 functions).
+pub(super) fn final_flag_fits(functions: usize) -> bool {
+    functions <= FINAL_LEFT_OUT as usize
+}
+
 /// Colour speed ½ for every function (the step (c + c_i) / 2, bit for bit).
 const HALF_SPEEDS: [f32; 256] = [0.5; 256];
 
@@ -84,7 +90,7 @@ impl<'a, S: PointSink> ColorCoordSink<'a, S> {
         skip: usize,
         inner: &'a mut S,
     ) -> Self {
-        let function_bits = if coords.len() <= FINAL_LEFT_OUT as usize { !FINAL_LEFT_OUT } else { u8::MAX };
+        let function_bits = if final_flag_fits(coords.len()) { !FINAL_LEFT_OUT } else { u8::MAX };
         let coords = Box::new(std::array::from_fn(|i| coords.get(i).copied().unwrap_or(0.0)));
         let speeds = speeds.map(|s| Box::new(std::array::from_fn(|i| s.get(i).copied().unwrap_or(0.5))));
         let drawn = vec![0.0; ORBITS_PER_CHUNK * STEPS_PER_BATCH];

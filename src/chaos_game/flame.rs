@@ -37,7 +37,7 @@
 
 use glam::{Vec3, Vec3A};
 
-use super::color_coord::FINAL_LEFT_OUT;
+use super::color_coord::{FINAL_LEFT_OUT, final_flag_fits};
 use super::{CompiledIfs, ORBITS_PER_CHUNK};
 use crate::flame::Xform;
 use crate::flame::variations::{BatchScratch, CompiledXform, FLAME_OP_NONE, FlameOp};
@@ -78,7 +78,7 @@ impl FlameTable {
         let compiled = xforms.iter().map(|x| x.as_ref().map(CompiledXform::new)).collect();
         let final_xform = final_xform.map(|x| (x.clone(), CompiledXform::new(x)));
         let final_opacity = match &final_xform {
-            Some((x, _)) if xforms.len() <= FINAL_LEFT_OUT as usize => x.opacity.clamp(0.0, 1.0) as f32,
+            Some((x, _)) if final_flag_fits(xforms.len()) => x.opacity.clamp(0.0, 1.0) as f32,
             _ => 1.0,
         };
         Some(Self { xforms, compiled, final_xform, final_opacity })
@@ -170,6 +170,13 @@ impl CompiledIfs {
     /// Whether a function of this IFS is a flame.
     pub fn has_flames(&self) -> bool {
         self.flames.is_some()
+    }
+
+    /// The bit a drawn point that the final xform left carries in its function index:
+    /// [`FINAL_LEFT_OUT`] where the colour is the palette's, else none.
+    #[inline(always)]
+    pub(super) fn final_left_out_bit(&self) -> u8 {
+        if self.color_coords.is_some() { FINAL_LEFT_OUT } else { 0 }
     }
 
     /// Maps `p` by compiled function `fi` with the orbit's generator `rng`: returns the orbit's
@@ -357,7 +364,7 @@ impl CompiledIfs {
             // The drawn points as one batch; a NaN point (a grid function's) on its own, so that
             // the batch is not redone with the exact functions for its sake. First each drawn
             // point's opacity draw; a point the final xform leaves is flagged for the colour.
-            let flag = if self.color_coords.is_some() { FINAL_LEFT_OUT } else { 0 };
+            let flag = self.final_left_out_bit();
             let mut m = 0;
             for k in (0..K).filter(|&k| w.drawn[k]) {
                 if !final_applies(table.final_opacity, &mut rngs[k]) {

@@ -120,8 +120,7 @@ fn run_orbits(
                 let fi = sel.select(sel.row_of(p.into(), *row), rng.next_u32());
                 sel.step_row(row, fi);
                 let (next, shown, left) = ifs.map_with_rng_final(fi, p.into(), rng);
-                let flag =
-                    if left && ifs.color_coords.is_some() { super::color_coord::FINAL_LEFT_OUT as usize } else { 0 };
+                let flag = if left { ifs.final_left_out_bit() as usize } else { 0 };
                 (next.into(), shown.into(), fi | flag)
             })
         }
