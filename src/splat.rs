@@ -414,12 +414,26 @@ mod tests {
         let functions: Vec<u8> = (0..n).map(|i| if i / 64 % 4 == 3 { 4 } else { (i % 4) as u8 }).collect();
         let (x, y, z): (Vec<f32>, Vec<f32>, Vec<f32>) =
             (p.iter().map(|p| p.x).collect(), p.iter().map(|p| p.y).collect(), p.iter().map(|p| p.z).collect());
-        // Function 4's red is beyond what a signed 32-bit truncation holds once scaled.
-        let mut portable =
-            Framebuffer::new(view, (0..5).map(|i| [if i == 4 { 1e7 } else { 0.2 * i as f32 }, 1.0, 0.5]).collect());
+        // Function 4's red is beyond what a signed 32-bit truncation holds once scaled, its
+        // green beyond an unsigned one, its blue below −1.
+        let mut portable = Framebuffer::new(
+            view,
+            (0..5).map(|i| if i == 4 { [1e7, 1e8, -10.0] } else { [0.2 * i as f32, 1.0, 0.5] }).collect(),
+        );
         let mut fastest = portable.clone();
-        let mut narrow = portable.clone();
         let mut forwarded = portable.clone();
+        // Each x86 kernel in turn, where the CPU runs it: 8-wide, then 16-wide with either way of
+        // adding to the sums.
+        #[cfg(target_arch = "x86_64")]
+        let kernels: Vec<Option<crate::simd::SumUpdates>> = if !x86::supported(&portable.view) {
+            Vec::new()
+        } else if crate::simd::SimdLevel::detect().avx512() {
+            vec![None, Some(crate::simd::SumUpdates::Scatter), Some(crate::simd::SumUpdates::Lanes)]
+        } else {
+            vec![None]
+        };
+        #[cfg(target_arch = "x86_64")]
+        let mut by_kernel = vec![portable.clone(); kernels.len()];
         for start in (0..n).step_by(1000) {
             let end = (start + 1000).min(n);
             let batch = PointBatch {
@@ -434,18 +448,16 @@ mod tests {
             let own = OwnPixels { closest: &mut forwarded.closest, accum: &mut forwarded.accum };
             splat_into(&view, &colors, batch, &mut Forward(own));
             #[cfg(target_arch = "x86_64")]
-            if x86::supported(&narrow.view) {
-                let view = narrow.view;
-                let mut pixels = OwnPixels { closest: &mut narrow.closest, accum: &mut narrow.accum };
-                x86::splat_with(&view, &portable.colors, batch, &mut pixels, false);
+            for (&kernel, fb) in kernels.iter().zip(&mut by_kernel) {
+                let view = fb.view;
+                let mut pixels = OwnPixels { closest: &mut fb.closest, accum: &mut fb.accum };
+                x86::splat_with(&view, &portable.colors, batch, &mut pixels, kernel);
             }
         }
-        // Where the CPU has AVX-512, `fastest` took the 16-wide closest splat and `narrow` the
-        // 8-wide one; both must match.
         #[cfg(target_arch = "x86_64")]
-        if x86::supported(&narrow.view) {
-            assert_eq!(portable.closest, narrow.closest, "{mode:?}");
-            assert_eq!(portable.accum, narrow.accum, "{mode:?}");
+        for (kernel, fb) in kernels.iter().zip(&by_kernel) {
+            assert_eq!(portable.closest, fb.closest, "{mode:?}, {kernel:?}");
+            assert_eq!(portable.accum, fb.accum, "{mode:?}, {kernel:?}");
         }
         assert!(portable.covered_pixels() > 500, "{}", portable.covered_pixels());
         assert_eq!(portable.closest, fastest.closest, "{mode:?}");

@@ -322,7 +322,22 @@ fn cpu(path: &Path, points: u64, repeats: usize) -> anyhow::Result<()> {
         ratio(closest.cpu, r.reference_splat.cpu)
     );
     for (mode, rate) in r.splat.iter().filter(|(m, _)| *m != SplatMode::Closest) {
-        println!("  map + splat {} / map + splat closest: {:.2}x per CPU s", mode.name(), ratio(rate.cpu, closest.cpu));
+        println!(
+            "  map + splat {} / map + splat closest: {:.2}x per CPU s ({:.2}x wall)",
+            mode.name(),
+            ratio(rate.cpu, closest.cpu),
+            ratio(rate.wall, closest.wall)
+        );
+    }
+    let level = nlifs::simd::SimdLevel::detect();
+    let sums = match nlifs::simd::SumUpdates::detect() {
+        nlifs::simd::SumUpdates::Scatter => "gathered and scattered a vector at a time",
+        nlifs::simd::SumUpdates::Lanes => "updated lane by lane, a vector after their prefetch",
+    };
+    if level.avx512() {
+        println!("  vector kernels: AVX-512; the accumulating modes' sums {sums} (NLIFS_SUM_UPDATES=scatter|lanes)");
+    } else {
+        println!("  vector kernels: {level:?}");
     }
     Ok(())
 }

@@ -9,8 +9,10 @@
 //!   no cache line is dirtied for nothing; `min` is order-independent, so the keys are those of a
 //!   `min` per point, byte for byte (`nlifs bench cpu`: map + closest 105 → 261 M points/s);
 //! - the accumulating modes with AVX-512F and AVX-512CD, into sums the target holds
-//!   ([`Pixels::own_sums`]): a vector whose lanes fall on distinct pixels gathers their sums,
-//!   adds and scatters them back ([`splat_accumulate_avx512`]);
+//!   ([`Pixels::own_sums`]): on Intel, a vector whose lanes fall on distinct pixels gathers
+//!   their sums, adds and scatters them back; on AMD each lane's sum is updated with one 16-byte
+//!   load and store, a vector after its line's prefetch ([`splat_accumulate_avx512`],
+//!   [`SumUpdates`]);
 //! - otherwise each lane's pixel is updated by scalar code: closest keys through
 //!   [`Pixels::min_key`], in the accumulating modes the portable splat's own colour arithmetic
 //!   and a saturating add. Making a block of 256 updates first, their lines prefetched, and
@@ -28,7 +30,7 @@ use std::arch::x86_64::*;
 
 use super::{COLOR_SCALE, DEPTH_BITS, EMPTY, Pixels, SplatMode, SplatView, splat_portable};
 use crate::chaos_game::PointBatch;
-use crate::simd::SimdLevel;
+use crate::simd::{SimdLevel, SumUpdates};
 
 const LANES: usize = 8;
 
@@ -43,27 +45,29 @@ pub(super) fn supported(view: &SplatView) -> bool {
 /// Splats `batch` of `view` into `out`, exactly as the portable splat does. Outside lanes of
 /// closest mode send the empty key (a no-op under min) to pixel 0.
 pub(super) fn splat(view: &SplatView, colors: &[[f32; 3]], batch: PointBatch<'_>, out: &mut impl Pixels) {
-    splat_with(view, colors, batch, out, SimdLevel::detect().avx512());
+    splat_with(view, colors, batch, out, SimdLevel::detect().avx512().then(SumUpdates::detect));
 }
 
-/// [`splat`], with the 16-wide AVX-512 splats if `wide` (for tests).
+/// [`splat`], with the 16-wide AVX-512 splats if `wide`, adding to sums as it says (for tests).
 pub(super) fn splat_with(
     view: &SplatView,
     colors: &[[f32; 3]],
     batch: PointBatch<'_>,
     out: &mut impl Pixels,
-    wide: bool,
+    wide: Option<SumUpdates>,
 ) {
-    assert!(supported(view) && (!wide || SimdLevel::detect().avx512()));
+    assert!(supported(view) && (wide.is_none() || SimdLevel::detect().avx512()));
     assert!(batch.x.len() == batch.len() && batch.y.len() == batch.len() && batch.z.len() == batch.len());
     // SAFETY: the CPU has AVX2 (and AVX-512F and CD if wide: `SimdLevel::Avx512`), and the view has width · height > 0
     // pixels (asserted); the batch's slices have equal lengths (asserted).
     unsafe {
         match view.mode {
-            SplatMode::Closest if wide => splat_closest_avx512(view, out, batch),
+            SplatMode::Closest if wide.is_some() => splat_closest_avx512(view, out, batch),
             SplatMode::Closest => splat_closest_avx2(view, out, batch),
-            SplatMode::Average | SplatMode::Density if wide => splat_accumulate_avx512(view, colors, out, batch),
-            SplatMode::Average | SplatMode::Density => splat_accumulate_avx2(view, colors, out, batch),
+            SplatMode::Average | SplatMode::Density => match wide {
+                Some(updates) => splat_accumulate_avx512(view, colors, out, batch, updates),
+                None => splat_accumulate_avx2(view, colors, out, batch),
+            },
         }
     }
 }
@@ -451,16 +455,24 @@ unsafe fn splat_accumulate_avx2(
 /// 16 function colours (more, a palette: [`splat_accumulate_avx2`]): [`project16`], each lane's
 /// colour from a 16-entry table by function (`vpermps`), the colour arithmetic of
 /// [`splat_accumulate_avx2`] in its order, so the same updates. Into sums the target holds
-/// ([`Pixels::own_sums`]), a vector whose lanes all fall on distinct pixels (`vpconflictd`)
-/// gathers its pixels' sums as two 64-bit words each, (r, g) and (b, count), adds with
-/// saturation and scatters them back: sixteen read-modify-writes in flight at once, where the
-/// lane-by-lane updates waited on each other's cache misses (`nlifs bench cpu`, tapering: map +
-/// average 152–157 → 199–210 M points per CPU second; 16-wide with lane-by-lane updates
-/// 177–188; prefetching the lines a few vectors ahead of lane-by-lane updates gained nothing).
-/// A vector with two lanes on one pixel, and every vector into a target without its own sums,
-/// is applied lane by lane through [`Pixels::add`]. (Scattering such a vector's distinct lanes
-/// and then applying the others one by one measured 7–14 % slower, probably as a lane's load
-/// after the scatter to its pixel waits for the scatter's stores.) The sums are saturating sums
+/// ([`Pixels::own_sums`]), as `updates` says:
+/// - [`SumUpdates::Scatter`]: a vector whose lanes all fall on distinct pixels (`vpconflictd`)
+///   gathers its pixels' sums as two 64-bit words each, (r, g) and (b, count), adds with
+///   saturation and scatters them back: sixteen read-modify-writes in flight at once, where the
+///   lane-by-lane updates waited on each other's cache misses (`nlifs bench cpu`, tapering, an
+///   Intel Xeon: map + average 152–157 → 199–210 M points per CPU second; 16-wide with
+///   lane-by-lane updates 177–188). (Scattering such a vector's distinct lanes and then
+///   applying the others one by one measured 7–14 % slower, probably as a lane's load after the
+///   scatter to its pixel waits for the scatter's stores.)
+/// - [`SumUpdates::Lanes`]: the lanes' (r, g, b, 1) transposed into sixteen 16-byte updates
+///   ([`LaneUpdates`]), their lines prefetched, and applied one load, add and store each a
+///   vector later, when the lines are in ([`LaneUpdates::apply`]); lanes on one pixel simply
+///   follow each other, so no conflict test (an AMD EPYC, Zen 4, whose scatters are
+///   microcoded: map + average 166–168 M points a second with `Scatter`, 244–254 with `Lanes`,
+///   closest 275–281 beside them).
+///
+/// A vector with two lanes on one pixel under `Scatter`, and every vector into a target without
+/// its own sums, is applied lane by lane through [`Pixels::add`]. The sums are saturating sums
 /// of non-negative terms, which no order changes.
 #[target_feature(enable = "avx2,avx512f,avx512cd")]
 unsafe fn splat_accumulate_avx512(
@@ -468,6 +480,7 @@ unsafe fn splat_accumulate_avx512(
     function_colors: &[[f32; 3]],
     out: &mut impl Pixels,
     batch: PointBatch<'_>,
+    updates: SumUpdates,
 ) {
     const WIDE: usize = 16;
     if function_colors.is_empty() || function_colors.len() > WIDE {
@@ -485,17 +498,22 @@ unsafe fn splat_accumulate_avx512(
     // The gather's qword index 2 · pixel must fit in an i32.
     let sums: Option<*mut [u32; 4]> =
         out.own_sums().filter(|s| s.len() == pixel_count && pixel_count <= 1 << 30).map(|s| s.as_mut_ptr());
+    // `Lanes`: the updates of the last vectors, waiting for their lines, in a ring (`filled`
+    // of them, the newest before `slot`).
+    let by_lanes = updates == SumUpdates::Lanes && pixel_count <= 1 << 28;
+    let mut lane_updates = [LaneUpdates::NONE; LaneUpdates::RING];
+    let (mut slot, mut filled) = (0, 0);
     let vectors = n / WIDE;
     for g in 0..vectors {
         let o = g * WIDE;
-        let (mut pixels, mut ts, mut adds) = ([0u32; WIDE], [0f32; WIDE], [[0u32; 4]; WIDE]);
         // SAFETY: o + 16 ≤ n, the length of each of the batch's slices; stores into local arrays.
-        // The gathers and scatters touch only inside lanes (the masks), whose pixels are
-        // iy · width + ix with 0 ≤ ix < width and 0 ≤ iy < height, below width · height, the
-        // length of the sums behind `sums` (checked above): words 2 · pixel and 2 · pixel + 1 of
-        // them as u64s, which the [u32; 4] of that pixel holds (alignment 8 is not required by
-        // the gather or scatter).
-        let (lanes, vector) = unsafe {
+        // The updates touch only inside lanes' pixels (and pixel 0), iy · width + ix with
+        // 0 ≤ ix < width and 0 ≤ iy < height, below width · height, the length of the sums
+        // behind `sums` (checked above), which is the target's own and which nothing else
+        // touches while it is borrowed here. The gathers and scatters read and write words
+        // 2 · pixel and 2 · pixel + 1 of them as u64s, which the [u32; 4] of that pixel holds
+        // (alignment 8 is not required by the gather or scatter).
+        unsafe {
             let fi = _mm512_cvtepu8_epi32(_mm_loadu_si128(batch.functions.as_ptr().add(o).cast()));
             let (inside, pixel, t) = project16(
                 &view,
@@ -503,26 +521,32 @@ unsafe fn splat_accumulate_avx512(
                 _mm512_loadu_ps(batch.y.as_ptr().add(o)),
                 _mm512_loadu_ps(batch.z.as_ptr().add(o)),
             );
-            // k = depth_cue · t; per channel (c + (bg − c) · k + 0.5) as u32 as in the AVX2 splat.
+            // k = depth_cue · t; per channel (c + (bg − c) · k + 0.5) as u32 as in the AVX2
+            // splat. `as u32` saturates: the unsigned truncation gives u32::MAX at 2^32 and
+            // beyond, as it does, and its NaN and negatives (below −1 they would be u32::MAX
+            // too) are zeroed.
             let k = _mm512_mul_ps(_mm512_set1_ps(view.depth_cue), t);
-            let mut big: __mmask16 = 0;
-            let mut channel = [_mm512_setzero_si512(); 3];
-            for ch in 0..3 {
+            let channel: [__m512i; 3] = std::array::from_fn(|ch| {
                 let c = _mm512_permutexvar_ps(fi, _mm512_loadu_ps(table[ch].as_ptr()));
                 let v = _mm512_add_ps(
                     _mm512_add_ps(c, _mm512_mul_ps(_mm512_sub_ps(_mm512_set1_ps(bg[ch]), c), k)),
                     _mm512_set1_ps(0.5),
                 );
-                big |= _mm512_cmp_ps_mask::<_CMP_GE_OQ>(v, _mm512_set1_ps(2_147_483_648.0));
-                let nonneg = _mm512_cmp_ps_mask::<_CMP_GE_OQ>(v, _mm512_setzero_ps());
-                channel[ch] = _mm512_maskz_mov_epi32(nonneg, _mm512_cvttps_epi32(v));
-            }
-            let distinct = {
-                let conflicts = _mm512_maskz_conflict_epi32(inside, pixel);
-                _mm512_mask_test_epi32_mask(inside, conflicts, conflicts) == 0
-            };
+                _mm512_maskz_cvttps_epu32(_mm512_cmp_ps_mask::<_CMP_GE_OQ>(v, _mm512_setzero_ps()), v)
+            });
             match sums {
-                Some(base) if big == 0 && distinct => {
+                Some(base) if by_lanes => {
+                    let next = &mut lane_updates[slot];
+                    next.fill(inside, pixel, channel);
+                    next.prefetch(base);
+                    slot = (slot + 1) % LaneUpdates::RING;
+                    if filled == LaneUpdates::AHEAD {
+                        lane_updates[slot].apply(base);
+                    } else {
+                        filled += 1;
+                    }
+                }
+                Some(base) if distinct(inside, pixel) => {
                     let all = _mm512_set1_epi32(-1);
                     let lo: *mut i64 = base.cast();
                     let hi = lo.wrapping_add(1);
@@ -549,50 +573,29 @@ unsafe fn splat_accumulate_avx512(
                         _mm512_mask_i32scatter_epi64::<8>(lo.cast(), lanes, index, rg);
                         _mm512_mask_i32scatter_epi64::<8>(hi.cast(), lanes, index, b1);
                     }
-                    (0, true)
                 }
                 _ => {
+                    // Lane by lane through the target.
+                    let mut updates = LaneUpdates::NONE;
+                    updates.fill(inside, pixel, channel);
+                    let mut pixels = [0u32; WIDE];
                     _mm512_storeu_si512(pixels.as_mut_ptr().cast(), pixel);
-                    _mm512_storeu_ps(ts.as_mut_ptr(), t);
-                    // Transpose to r, g, b, 1 per lane, a 256-bit half at a time as the AVX2
-                    // splat does: lane l of a half in its half l / 4 of row l % 4.
-                    let one = _mm256_set1_epi32(1);
-                    for half in 0..2 {
-                        let pick = |v: __m512i| {
-                            if half == 0 { _mm512_castsi512_si256(v) } else { _mm512_extracti64x4_epi64::<1>(v) }
-                        };
-                        let (r, gr, b) = (pick(channel[0]), pick(channel[1]), pick(channel[2]));
-                        let (rg_lo, rg_hi) = (_mm256_unpacklo_epi32(r, gr), _mm256_unpackhi_epi32(r, gr));
-                        let (b1_lo, b1_hi) = (_mm256_unpacklo_epi32(b, one), _mm256_unpackhi_epi32(b, one));
-                        let rows = [
-                            _mm256_unpacklo_epi64(rg_lo, b1_lo),
-                            _mm256_unpackhi_epi64(rg_lo, b1_lo),
-                            _mm256_unpacklo_epi64(rg_hi, b1_hi),
-                            _mm256_unpackhi_epi64(rg_hi, b1_hi),
-                        ];
-                        let adds = &mut adds[half * 8..half * 8 + 8];
-                        for (j, row) in rows.into_iter().enumerate() {
-                            _mm_storeu_si128(adds[j].as_mut_ptr().cast(), _mm256_castsi256_si128(row));
-                            _mm_storeu_si128(adds[j + 4].as_mut_ptr().cast(), _mm256_extracti128_si256::<1>(row));
-                        }
+                    let mut lanes = u32::from(inside);
+                    while lanes != 0 {
+                        let l = lanes.trailing_zeros() as usize;
+                        lanes &= lanes - 1;
+                        let mut add = [0u32; 4];
+                        _mm_storeu_si128(add.as_mut_ptr().cast(), updates.sums[LaneUpdates::slot_of_lane(l)]);
+                        out.add(pixels[l] as usize, add);
                     }
-                    (inside as u32, big == 0)
                 }
             }
-        };
-        let mut lanes = lanes;
-        while lanes != 0 {
-            let l = lanes.trailing_zeros() as usize;
-            lanes &= lanes - 1;
-            if vector {
-                out.add(pixels[l] as usize, adds[l]);
-            } else {
-                // The portable splat's arithmetic for one point.
-                let c = function_colors[batch.functions[o + l] as usize].map(|x| x * COLOR_SCALE);
-                let k = view.depth_cue * ts[l];
-                let add = [0, 1, 2].map(|ch| (c[ch] + (bg[ch] - c[ch]) * k + 0.5) as u32);
-                out.add(pixels[l] as usize, [add[0], add[1], add[2], 1]);
-            }
+        }
+    }
+    if let Some(base) = sums {
+        for k in (1..=filled).rev() {
+            // SAFETY: as for the updates in the loop.
+            unsafe { lane_updates[(slot + LaneUpdates::RING - k) % LaneUpdates::RING].apply(base) };
         }
     }
     let tail = PointBatch {
@@ -602,4 +605,87 @@ unsafe fn splat_accumulate_avx512(
         functions: &batch.functions[vectors * WIDE..],
     };
     splat_portable(&view, function_colors, tail, out);
+}
+
+/// Whether the lanes in `inside` fall on distinct pixels.
+#[inline(always)]
+unsafe fn distinct(inside: __mmask16, pixel: __m512i) -> bool {
+    // SAFETY: the caller checked the CPU features (AVX-512F and CD); no memory is accessed.
+    unsafe {
+        let conflicts = _mm512_maskz_conflict_epi32(inside, pixel);
+        _mm512_mask_test_epi32_mask(inside, conflicts, conflicts) == 0
+    }
+}
+
+/// One vector's sixteen updates of [`SumUpdates::Lanes`]: sum `j` is lane 4 (j % 4) + j / 4's
+/// (r, g, b, 1), (0, 0, 0, 0) for a lane outside the image, and `offsets[j]` the byte offset
+/// of its pixel's sum, 16 · pixel (0 outside: adding nothing to pixel 0 leaves it as it is;
+/// so the image has at most 2^28 pixels).
+#[derive(Clone, Copy)]
+struct LaneUpdates {
+    offsets: [u32; 16],
+    sums: [__m128i; 16],
+}
+
+impl LaneUpdates {
+    /// Vectors between a vector's prefetch and its updates.
+    const AHEAD: usize = 1;
+    const RING: usize = Self::AHEAD + 1;
+
+    /// Where lane `l`'s sum is.
+    fn slot_of_lane(l: usize) -> usize {
+        4 * (l % 4) + l / 4
+    }
+    // SAFETY: a vector of integers may hold any bits, zeros too.
+    const NONE: Self = LaneUpdates { offsets: [0; 16], sums: [unsafe { std::mem::zeroed() }; 16] };
+
+    /// The updates of a vector's lanes: those in `inside` add their `channel`s and 1 to `pixel`.
+    #[inline(always)]
+    unsafe fn fill(&mut self, inside: __mmask16, pixel: __m512i, channel: [__m512i; 3]) {
+        // SAFETY: the caller checked the CPU features (AVX-512F); stores into `self`.
+        unsafe {
+            let one = _mm512_maskz_set1_epi32(inside, 1);
+            let [r, g, b] = channel.map(|c| _mm512_maskz_mov_epi32(inside, c));
+            let (rg_lo, rg_hi) = (_mm512_unpacklo_epi32(r, g), _mm512_unpackhi_epi32(r, g));
+            let (b1_lo, b1_hi) = (_mm512_unpacklo_epi32(b, one), _mm512_unpackhi_epi32(b, one));
+            // Row m's 128-bit part q is lane 4q + m's sum.
+            let rows = [
+                _mm512_unpacklo_epi64(rg_lo, b1_lo),
+                _mm512_unpackhi_epi64(rg_lo, b1_lo),
+                _mm512_unpacklo_epi64(rg_hi, b1_hi),
+                _mm512_unpackhi_epi64(rg_hi, b1_hi),
+            ];
+            for (m, row) in rows.into_iter().enumerate() {
+                _mm512_storeu_si512(self.sums.as_mut_ptr().add(4 * m).cast(), row);
+            }
+            let order = _mm512_setr_epi32(0, 4, 8, 12, 1, 5, 9, 13, 2, 6, 10, 14, 3, 7, 11, 15);
+            let offset = _mm512_slli_epi32::<4>(_mm512_maskz_mov_epi32(inside, pixel));
+            _mm512_storeu_si512(self.offsets.as_mut_ptr().cast(), _mm512_permutexvar_epi32(order, offset));
+        }
+    }
+
+    /// Asks for the lines of the updates' sums.
+    #[inline(always)]
+    unsafe fn prefetch(&self, sums: *mut [u32; 4]) {
+        for &offset in &self.offsets {
+            // SAFETY: the caller guarantees every pixel is within `sums`; a prefetch reads nothing.
+            unsafe { _mm_prefetch::<_MM_HINT_T0>(sums.byte_add(offset as usize).cast_const().cast()) };
+        }
+    }
+
+    /// Adds the updates to `sums` with saturation (a + min(add, !a) per u32, as
+    /// `OwnPixels::add`), one after another.
+    #[inline(always)]
+    unsafe fn apply(&self, sums: *mut [u32; 4]) {
+        // SAFETY: the caller checked the CPU features and guarantees every pixel is within
+        // `sums`, which it holds exclusively; unaligned 16-byte loads and stores of one pixel.
+        unsafe {
+            let all = _mm_set1_epi32(-1);
+            for (&offset, &add) in self.offsets.iter().zip(&self.sums) {
+                let at: *mut __m128i = sums.byte_add(offset as usize).cast();
+                let a = _mm_loadu_si128(at);
+                _mm_storeu_si128(at, _mm_add_epi32(a, _mm_min_epu32(add, _mm_xor_si128(a, all))));
+            }
+        }
+    }
 }
