@@ -20,10 +20,18 @@ pub enum SimdLevel {
 }
 
 impl SimdLevel {
-    /// This CPU's level, detected on the first call.
+    /// This CPU's level, detected on the first call; `NLIFS_SIMD` = `avx2` or `scalar` caps it
+    /// (to measure the narrower kernels on a wider CPU).
     pub fn detect() -> Self {
         static LEVEL: OnceLock<SimdLevel> = OnceLock::new();
-        *LEVEL.get_or_init(Self::probe)
+        *LEVEL.get_or_init(|| {
+            let cap = match std::env::var("NLIFS_SIMD").as_deref() {
+                Ok("avx2") => Self::Avx2,
+                Ok("scalar") => Self::Scalar,
+                _ => Self::Avx512,
+            };
+            Self::probe().min(cap)
+        })
     }
 
     /// Whether AVX2 code may run at this level.

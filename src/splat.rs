@@ -422,15 +422,26 @@ mod tests {
         );
         let mut fastest = portable.clone();
         let mut forwarded = portable.clone();
-        // Each x86 kernel in turn, where the CPU runs it: 8-wide, then 16-wide with either way of
-        // adding to the sums.
+        // Each x86 kernel the CPU runs, 8-wide and 16-wide, with either way of adding to sums.
         #[cfg(target_arch = "x86_64")]
-        let kernels: Vec<Option<crate::simd::SumUpdates>> = if !x86::supported(&portable.view) {
-            Vec::new()
-        } else if crate::simd::SimdLevel::detect().avx512() {
-            vec![None, Some(crate::simd::SumUpdates::Scatter), Some(crate::simd::SumUpdates::Lanes)]
-        } else {
-            vec![None]
+        let kernels: Vec<(bool, crate::simd::SumUpdates)> = {
+            use crate::simd::{SimdLevel, SumUpdates};
+            let widths: &[bool] = match (x86::supported(&portable.view), SimdLevel::detect().avx512()) {
+                (false, _) => &[],
+                (true, false) => &[false],
+                (true, true) => &[false, true],
+            };
+            // (The 8-wide kernel adds to sums one way only.)
+            widths
+                .iter()
+                .flat_map(|&w| {
+                    if w {
+                        vec![(w, SumUpdates::Scatter), (w, SumUpdates::Lanes)]
+                    } else {
+                        vec![(w, SumUpdates::Lanes)]
+                    }
+                })
+                .collect()
         };
         #[cfg(target_arch = "x86_64")]
         let mut by_kernel = vec![portable.clone(); kernels.len()];
@@ -448,10 +459,10 @@ mod tests {
             let own = OwnPixels { closest: &mut forwarded.closest, accum: &mut forwarded.accum };
             splat_into(&view, &colors, batch, &mut Forward(own));
             #[cfg(target_arch = "x86_64")]
-            for (&kernel, fb) in kernels.iter().zip(&mut by_kernel) {
+            for (&(wide, updates), fb) in kernels.iter().zip(&mut by_kernel) {
                 let view = fb.view;
                 let mut pixels = OwnPixels { closest: &mut fb.closest, accum: &mut fb.accum };
-                x86::splat_with(&view, &portable.colors, batch, &mut pixels, kernel);
+                x86::splat_with(&view, &portable.colors, batch, &mut pixels, wide, updates);
             }
         }
         #[cfg(target_arch = "x86_64")]

@@ -8,15 +8,13 @@
 //!   1920×1080: 0.85 % of the points), so the splat mostly reads, the branch is rarely taken, and
 //!   no cache line is dirtied for nothing; `min` is order-independent, so the keys are those of a
 //!   `min` per point, byte for byte (`nlifs bench cpu`: map + closest 105 → 261 M points/s);
-//! - the accumulating modes with AVX-512F and AVX-512CD, into sums the target holds
-//!   ([`Pixels::own_sums`]): on Intel, a vector whose lanes fall on distinct pixels gathers
-//!   their sums, adds and scatters them back; on AMD each lane's sum is updated with one 16-byte
-//!   load and store, a vector after its line's prefetch ([`splat_accumulate_avx512`],
-//!   [`SumUpdates`]);
+//! - the accumulating modes ([`accumulate`]), into sums the target holds
+//!   ([`Pixels::own_sums`]): each lane's sum updated with one 16-byte load and store, a vector
+//!   after its line's prefetch (8-wide; 16-wide on AMD), or, 16-wide on Intel, a vector whose
+//!   lanes fall on distinct pixels gathers their sums, adds and scatters them back
+//!   ([`SumUpdates`]);
 //! - otherwise each lane's pixel is updated by scalar code: closest keys through
-//!   [`Pixels::min_key`], in the accumulating modes the portable splat's own colour arithmetic
-//!   and a saturating add. Making a block of 256 updates first, their lines prefetched, and
-//!   applying them after was tried and measured no faster.
+//!   [`Pixels::min_key`], in the accumulating modes the lanes' updates through [`Pixels::add`].
 //!
 //! Everything here requires AVX2: [`splat`] checks the CPU before entering. Hence the
 //! module-wide `unsafe_code` allowance: the intrinsics are `unsafe` to call outside a
@@ -28,7 +26,11 @@
 
 use std::arch::x86_64::*;
 
-use super::{COLOR_SCALE, DEPTH_BITS, EMPTY, Pixels, SplatMode, SplatView, splat_portable};
+mod accumulate;
+
+use accumulate::{splat_accumulate_avx2, splat_accumulate_avx512};
+
+use super::{DEPTH_BITS, EMPTY, Pixels, SplatMode, SplatView};
 use crate::chaos_game::PointBatch;
 use crate::simd::{SimdLevel, SumUpdates};
 
@@ -45,29 +47,31 @@ pub(super) fn supported(view: &SplatView) -> bool {
 /// Splats `batch` of `view` into `out`, exactly as the portable splat does. Outside lanes of
 /// closest mode send the empty key (a no-op under min) to pixel 0.
 pub(super) fn splat(view: &SplatView, colors: &[[f32; 3]], batch: PointBatch<'_>, out: &mut impl Pixels) {
-    splat_with(view, colors, batch, out, SimdLevel::detect().avx512().then(SumUpdates::detect));
+    splat_with(view, colors, batch, out, SimdLevel::detect().avx512(), SumUpdates::detect());
 }
 
-/// [`splat`], with the 16-wide AVX-512 splats if `wide`, adding to sums as it says (for tests).
+/// [`splat`], with the 16-wide AVX-512 splats if `wide`, adding to sums as `updates` says (for
+/// tests).
 pub(super) fn splat_with(
     view: &SplatView,
     colors: &[[f32; 3]],
     batch: PointBatch<'_>,
     out: &mut impl Pixels,
-    wide: Option<SumUpdates>,
+    wide: bool,
+    updates: SumUpdates,
 ) {
-    assert!(supported(view) && (wide.is_none() || SimdLevel::detect().avx512()));
+    assert!(supported(view) && (!wide || SimdLevel::detect().avx512()));
     assert!(batch.x.len() == batch.len() && batch.y.len() == batch.len() && batch.z.len() == batch.len());
     // SAFETY: the CPU has AVX2 (and AVX-512F and CD if wide: `SimdLevel::Avx512`), and the view has width · height > 0
     // pixels (asserted); the batch's slices have equal lengths (asserted).
     unsafe {
         match view.mode {
-            SplatMode::Closest if wide.is_some() => splat_closest_avx512(view, out, batch),
+            SplatMode::Closest if wide => splat_closest_avx512(view, out, batch),
             SplatMode::Closest => splat_closest_avx2(view, out, batch),
-            SplatMode::Average | SplatMode::Density => match wide {
-                Some(updates) => splat_accumulate_avx512(view, colors, out, batch, updates),
-                None => splat_accumulate_avx2(view, colors, out, batch),
-            },
+            SplatMode::Average | SplatMode::Density if wide => {
+                splat_accumulate_avx512(view, colors, out, batch, updates)
+            }
+            SplatMode::Average | SplatMode::Density => splat_accumulate_avx2(view, colors, out, batch),
         }
     }
 }
@@ -346,346 +350,4 @@ unsafe fn splat_closest_avx512(view: &SplatView, out: &mut impl Pixels, batch: P
             },
         )
     };
-}
-
-#[target_feature(enable = "avx2")]
-unsafe fn splat_accumulate_avx2(
-    view: &SplatView,
-    function_colors: &[[f32; 3]],
-    out: &mut impl Pixels,
-    batch: PointBatch<'_>,
-) {
-    let view = *view;
-    let n = batch.len();
-    let colors: Vec<[f32; 3]> = function_colors.iter().map(|c| c.map(|x| x * COLOR_SCALE)).collect();
-    let bg = view.background.map(|x| x * COLOR_SCALE);
-    // Per channel, the colours as an 8-entry table by function, looked up with a permute (up
-    // to 8 colours), or as a column gathered by index (more: a palette's 256 entries; the
-    // index clamped to the last colour, which every valid key is within). Either way each lane
-    // gets the very colour the portable splat reads, so the arithmetic below is the same.
-    let vector_colors = !colors.is_empty();
-    let permuted = colors.len() <= LANES;
-    let table: [[f32; LANES]; 3] = std::array::from_fn(|ch| {
-        std::array::from_fn(|f| colors.get(f.min(colors.len().saturating_sub(1))).map_or(0.0, |c| c[ch]))
-    });
-    let columns: [Vec<f32>; 3] =
-        std::array::from_fn(|ch| if permuted { Vec::new() } else { colors.iter().map(|c| c[ch]).collect() });
-    let last_color = colors.len().saturating_sub(1).min(255) as i32;
-    let vectors = n / LANES;
-    for g in 0..vectors {
-        let o = g * LANES;
-        let mut pixels = [0u32; LANES];
-        let mut ts = [0f32; LANES];
-        // Per lane: r, g, b, 1 to add (when the vector colour arithmetic applies).
-        let mut adds = [[0u32; 4]; LANES];
-        // SAFETY: o + 8 ≤ n, the length of each of the batch's slices; stores into local arrays.
-        let (mut inside, vector) = unsafe {
-            let fi = _mm256_cvtepu8_epi32(_mm_loadl_epi64(batch.functions.as_ptr().add(o).cast()));
-            let (inside, pixel, t) = project8(
-                &view,
-                _mm256_loadu_ps(batch.x.as_ptr().add(o)),
-                _mm256_loadu_ps(batch.y.as_ptr().add(o)),
-                _mm256_loadu_ps(batch.z.as_ptr().add(o)),
-            );
-            _mm256_storeu_si256(pixels.as_mut_ptr().cast(), pixel);
-            _mm256_storeu_ps(ts.as_mut_ptr(), t);
-            let inside = _mm256_movemask_ps(_mm256_castsi256_ps(inside)) as u32;
-            // k = depth_cue · t; per channel (c + (bg − c) · k + 0.5) as u32, the saturating
-            // cast: NaN and negatives → 0 (the mask), values ≥ 2^31 (beyond the signed
-            // truncation) send the group to the scalar arithmetic.
-            let k = _mm256_mul_ps(_mm256_set1_ps(view.depth_cue), t);
-            let mut big = 0;
-            let mut channel = [_mm256_setzero_si256(); 3];
-            for ch in 0..3 {
-                let c = if permuted {
-                    _mm256_permutevar8x32_ps(_mm256_loadu_ps(table[ch].as_ptr()), fi)
-                } else {
-                    // SAFETY: the indices are clamped to 0..=last_color < columns[ch].len().
-                    _mm256_i32gather_ps::<4>(columns[ch].as_ptr(), _mm256_min_epi32(fi, _mm256_set1_epi32(last_color)))
-                };
-                let v = _mm256_add_ps(
-                    _mm256_add_ps(c, _mm256_mul_ps(_mm256_sub_ps(_mm256_set1_ps(bg[ch]), c), k)),
-                    _mm256_set1_ps(0.5),
-                );
-                big |= _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_GE_OQ>(v, _mm256_set1_ps(2_147_483_648.0)));
-                let nonneg = _mm256_castps_si256(_mm256_cmp_ps::<_CMP_GE_OQ>(v, _mm256_setzero_ps()));
-                channel[ch] = _mm256_and_si256(_mm256_cvttps_epi32(v), nonneg);
-            }
-            // Transpose to r, g, b, 1 per lane: lane l in half l / 4 of vector l % 4.
-            let [r, gr, b] = channel;
-            let one = _mm256_set1_epi32(1);
-            let (rg_lo, rg_hi) = (_mm256_unpacklo_epi32(r, gr), _mm256_unpackhi_epi32(r, gr));
-            let (b1_lo, b1_hi) = (_mm256_unpacklo_epi32(b, one), _mm256_unpackhi_epi32(b, one));
-            let rows = [
-                _mm256_unpacklo_epi64(rg_lo, b1_lo),
-                _mm256_unpackhi_epi64(rg_lo, b1_lo),
-                _mm256_unpacklo_epi64(rg_hi, b1_hi),
-                _mm256_unpackhi_epi64(rg_hi, b1_hi),
-            ];
-            for (j, row) in rows.into_iter().enumerate() {
-                _mm_storeu_si128(adds[j].as_mut_ptr().cast(), _mm256_castsi256_si128(row));
-                _mm_storeu_si128(adds[j + 4].as_mut_ptr().cast(), _mm256_extracti128_si256::<1>(row));
-            }
-            (inside, vector_colors && big == 0)
-        };
-        while inside != 0 {
-            let l = inside.trailing_zeros() as usize;
-            inside &= inside - 1;
-            if vector {
-                out.add(pixels[l] as usize, adds[l]);
-            } else {
-                // The portable splat's arithmetic for one point.
-                let c = colors[batch.functions[o + l] as usize];
-                let k = view.depth_cue * ts[l];
-                let add = [0, 1, 2].map(|ch| (c[ch] + (bg[ch] - c[ch]) * k + 0.5) as u32);
-                out.add(pixels[l] as usize, [add[0], add[1], add[2], 1]);
-            }
-        }
-    }
-    let tail = PointBatch {
-        x: &batch.x[vectors * LANES..],
-        y: &batch.y[vectors * LANES..],
-        z: &batch.z[vectors * LANES..],
-        functions: &batch.functions[vectors * LANES..],
-    };
-    splat_portable(&view, function_colors, tail, out);
-}
-
-/// The accumulating modes' splat with 16 points per vector (AVX-512F and AVX-512CD) for up to
-/// 16 function colours (more, a palette: [`splat_accumulate_avx2`]): [`project16`], each lane's
-/// colour from a 16-entry table by function (`vpermps`), the colour arithmetic of
-/// [`splat_accumulate_avx2`] in its order, so the same updates. Into sums the target holds
-/// ([`Pixels::own_sums`]), as `updates` says:
-/// - [`SumUpdates::Scatter`]: a vector whose lanes all fall on distinct pixels (`vpconflictd`)
-///   gathers its pixels' sums as two 64-bit words each, (r, g) and (b, count), adds with
-///   saturation and scatters them back: sixteen read-modify-writes in flight at once, where the
-///   lane-by-lane updates waited on each other's cache misses (`nlifs bench cpu`, tapering, an
-///   Intel Xeon: map + average 152–157 → 199–210 M points per CPU second; 16-wide with
-///   lane-by-lane updates 177–188). (Scattering such a vector's distinct lanes and then
-///   applying the others one by one measured 7–14 % slower, probably as a lane's load after the
-///   scatter to its pixel waits for the scatter's stores.)
-/// - [`SumUpdates::Lanes`]: the lanes' (r, g, b, 1) transposed into sixteen 16-byte updates
-///   ([`LaneUpdates`]), their lines prefetched, and applied one load, add and store each a
-///   vector later, when the lines are in ([`LaneUpdates::apply`]); lanes on one pixel simply
-///   follow each other, so no conflict test (an AMD EPYC, Zen 4, whose scatters are
-///   microcoded: map + average 166–168 M points a second with `Scatter`, 244–254 with `Lanes`,
-///   closest 275–281 beside them).
-///
-/// A vector with two lanes on one pixel under `Scatter`, and every vector into a target without
-/// its own sums, is applied lane by lane through [`Pixels::add`]. The sums are saturating sums
-/// of non-negative terms, which no order changes.
-#[target_feature(enable = "avx2,avx512f,avx512cd")]
-unsafe fn splat_accumulate_avx512(
-    view: &SplatView,
-    function_colors: &[[f32; 3]],
-    out: &mut impl Pixels,
-    batch: PointBatch<'_>,
-    updates: SumUpdates,
-) {
-    const WIDE: usize = 16;
-    if function_colors.is_empty() || function_colors.len() > WIDE {
-        // SAFETY: AVX2 is enabled here too.
-        return unsafe { splat_accumulate_avx2(view, function_colors, out, batch) };
-    }
-    let view = *view;
-    let n = batch.len();
-    let last = function_colors.len() - 1;
-    // Entries past the last colour repeat it, as the AVX2 table does.
-    let table: [[f32; WIDE]; 3] =
-        std::array::from_fn(|ch| std::array::from_fn(|f| function_colors[f.min(last)][ch] * COLOR_SCALE));
-    let bg = view.background.map(|x| x * COLOR_SCALE);
-    let pixel_count = view.width as usize * view.height as usize;
-    // The gather's qword index 2 · pixel must fit in an i32.
-    let sums: Option<*mut [u32; 4]> =
-        out.own_sums().filter(|s| s.len() == pixel_count && pixel_count <= 1 << 30).map(|s| s.as_mut_ptr());
-    // `Lanes`: the updates of the last vectors, waiting for their lines, in a ring (`filled`
-    // of them, the newest before `slot`).
-    let by_lanes = updates == SumUpdates::Lanes && pixel_count <= 1 << 28;
-    let mut lane_updates = [LaneUpdates::NONE; LaneUpdates::RING];
-    let (mut slot, mut filled) = (0, 0);
-    let vectors = n / WIDE;
-    for g in 0..vectors {
-        let o = g * WIDE;
-        // SAFETY: o + 16 ≤ n, the length of each of the batch's slices; stores into local arrays.
-        // The updates touch only inside lanes' pixels (and pixel 0), iy · width + ix with
-        // 0 ≤ ix < width and 0 ≤ iy < height, below width · height, the length of the sums
-        // behind `sums` (checked above), which is the target's own and which nothing else
-        // touches while it is borrowed here. The gathers and scatters read and write words
-        // 2 · pixel and 2 · pixel + 1 of them as u64s, which the [u32; 4] of that pixel holds
-        // (alignment 8 is not required by the gather or scatter).
-        unsafe {
-            let fi = _mm512_cvtepu8_epi32(_mm_loadu_si128(batch.functions.as_ptr().add(o).cast()));
-            let (inside, pixel, t) = project16(
-                &view,
-                _mm512_loadu_ps(batch.x.as_ptr().add(o)),
-                _mm512_loadu_ps(batch.y.as_ptr().add(o)),
-                _mm512_loadu_ps(batch.z.as_ptr().add(o)),
-            );
-            // k = depth_cue · t; per channel (c + (bg − c) · k + 0.5) as u32 as in the AVX2
-            // splat. `as u32` saturates: the unsigned truncation gives u32::MAX at 2^32 and
-            // beyond, as it does, and its NaN and negatives (below −1 they would be u32::MAX
-            // too) are zeroed.
-            let k = _mm512_mul_ps(_mm512_set1_ps(view.depth_cue), t);
-            let channel: [__m512i; 3] = std::array::from_fn(|ch| {
-                let c = _mm512_permutexvar_ps(fi, _mm512_loadu_ps(table[ch].as_ptr()));
-                let v = _mm512_add_ps(
-                    _mm512_add_ps(c, _mm512_mul_ps(_mm512_sub_ps(_mm512_set1_ps(bg[ch]), c), k)),
-                    _mm512_set1_ps(0.5),
-                );
-                _mm512_maskz_cvttps_epu32(_mm512_cmp_ps_mask::<_CMP_GE_OQ>(v, _mm512_setzero_ps()), v)
-            });
-            match sums {
-                Some(base) if by_lanes => {
-                    let next = &mut lane_updates[slot];
-                    next.fill(inside, pixel, channel);
-                    next.prefetch(base);
-                    slot = (slot + 1) % LaneUpdates::RING;
-                    if filled == LaneUpdates::AHEAD {
-                        lane_updates[slot].apply(base);
-                    } else {
-                        filled += 1;
-                    }
-                }
-                Some(base) if distinct(inside, pixel) => {
-                    let all = _mm512_set1_epi32(-1);
-                    let lo: *mut i64 = base.cast();
-                    let hi = lo.wrapping_add(1);
-                    for half in 0..2 {
-                        let pick = |v: __m512i| {
-                            if half == 0 { _mm512_castsi512_si256(v) } else { _mm512_extracti64x4_epi64::<1>(v) }
-                        };
-                        let lanes = (inside >> (8 * half)) as __mmask8;
-                        let index = _mm256_slli_epi32::<1>(pick(pixel));
-                        let rg_add = _mm512_or_si512(
-                            _mm512_cvtepu32_epi64(pick(channel[0])),
-                            _mm512_slli_epi64::<32>(_mm512_cvtepu32_epi64(pick(channel[1]))),
-                        );
-                        let b1_add = _mm512_or_si512(
-                            _mm512_cvtepu32_epi64(pick(channel[2])),
-                            _mm512_slli_epi64::<32>(_mm512_set1_epi64(1)),
-                        );
-                        let zero = _mm512_setzero_si512();
-                        let rg = _mm512_mask_i32gather_epi64::<8>(zero, lanes, index, lo.cast_const().cast());
-                        let b1 = _mm512_mask_i32gather_epi64::<8>(zero, lanes, index, hi.cast_const().cast());
-                        // a + min(add, !a) per u32: the saturating add of `OwnPixels::add`.
-                        let rg = _mm512_add_epi32(rg, _mm512_min_epu32(rg_add, _mm512_xor_si512(rg, all)));
-                        let b1 = _mm512_add_epi32(b1, _mm512_min_epu32(b1_add, _mm512_xor_si512(b1, all)));
-                        _mm512_mask_i32scatter_epi64::<8>(lo.cast(), lanes, index, rg);
-                        _mm512_mask_i32scatter_epi64::<8>(hi.cast(), lanes, index, b1);
-                    }
-                }
-                _ => {
-                    // Lane by lane through the target.
-                    let mut updates = LaneUpdates::NONE;
-                    updates.fill(inside, pixel, channel);
-                    let mut pixels = [0u32; WIDE];
-                    _mm512_storeu_si512(pixels.as_mut_ptr().cast(), pixel);
-                    let mut lanes = u32::from(inside);
-                    while lanes != 0 {
-                        let l = lanes.trailing_zeros() as usize;
-                        lanes &= lanes - 1;
-                        let mut add = [0u32; 4];
-                        _mm_storeu_si128(add.as_mut_ptr().cast(), updates.sums[LaneUpdates::slot_of_lane(l)]);
-                        out.add(pixels[l] as usize, add);
-                    }
-                }
-            }
-        }
-    }
-    if let Some(base) = sums {
-        for k in (1..=filled).rev() {
-            // SAFETY: as for the updates in the loop.
-            unsafe { lane_updates[(slot + LaneUpdates::RING - k) % LaneUpdates::RING].apply(base) };
-        }
-    }
-    let tail = PointBatch {
-        x: &batch.x[vectors * WIDE..],
-        y: &batch.y[vectors * WIDE..],
-        z: &batch.z[vectors * WIDE..],
-        functions: &batch.functions[vectors * WIDE..],
-    };
-    splat_portable(&view, function_colors, tail, out);
-}
-
-/// Whether the lanes in `inside` fall on distinct pixels.
-#[inline(always)]
-unsafe fn distinct(inside: __mmask16, pixel: __m512i) -> bool {
-    // SAFETY: the caller checked the CPU features (AVX-512F and CD); no memory is accessed.
-    unsafe {
-        let conflicts = _mm512_maskz_conflict_epi32(inside, pixel);
-        _mm512_mask_test_epi32_mask(inside, conflicts, conflicts) == 0
-    }
-}
-
-/// One vector's sixteen updates of [`SumUpdates::Lanes`]: sum `j` is lane 4 (j % 4) + j / 4's
-/// (r, g, b, 1), (0, 0, 0, 0) for a lane outside the image, and `offsets[j]` the byte offset
-/// of its pixel's sum, 16 · pixel (0 outside: adding nothing to pixel 0 leaves it as it is;
-/// so the image has at most 2^28 pixels).
-#[derive(Clone, Copy)]
-struct LaneUpdates {
-    offsets: [u32; 16],
-    sums: [__m128i; 16],
-}
-
-impl LaneUpdates {
-    /// Vectors between a vector's prefetch and its updates.
-    const AHEAD: usize = 1;
-    const RING: usize = Self::AHEAD + 1;
-
-    /// Where lane `l`'s sum is.
-    fn slot_of_lane(l: usize) -> usize {
-        4 * (l % 4) + l / 4
-    }
-    // SAFETY: a vector of integers may hold any bits, zeros too.
-    const NONE: Self = LaneUpdates { offsets: [0; 16], sums: [unsafe { std::mem::zeroed() }; 16] };
-
-    /// The updates of a vector's lanes: those in `inside` add their `channel`s and 1 to `pixel`.
-    #[inline(always)]
-    unsafe fn fill(&mut self, inside: __mmask16, pixel: __m512i, channel: [__m512i; 3]) {
-        // SAFETY: the caller checked the CPU features (AVX-512F); stores into `self`.
-        unsafe {
-            let one = _mm512_maskz_set1_epi32(inside, 1);
-            let [r, g, b] = channel.map(|c| _mm512_maskz_mov_epi32(inside, c));
-            let (rg_lo, rg_hi) = (_mm512_unpacklo_epi32(r, g), _mm512_unpackhi_epi32(r, g));
-            let (b1_lo, b1_hi) = (_mm512_unpacklo_epi32(b, one), _mm512_unpackhi_epi32(b, one));
-            // Row m's 128-bit part q is lane 4q + m's sum.
-            let rows = [
-                _mm512_unpacklo_epi64(rg_lo, b1_lo),
-                _mm512_unpackhi_epi64(rg_lo, b1_lo),
-                _mm512_unpacklo_epi64(rg_hi, b1_hi),
-                _mm512_unpackhi_epi64(rg_hi, b1_hi),
-            ];
-            for (m, row) in rows.into_iter().enumerate() {
-                _mm512_storeu_si512(self.sums.as_mut_ptr().add(4 * m).cast(), row);
-            }
-            let order = _mm512_setr_epi32(0, 4, 8, 12, 1, 5, 9, 13, 2, 6, 10, 14, 3, 7, 11, 15);
-            let offset = _mm512_slli_epi32::<4>(_mm512_maskz_mov_epi32(inside, pixel));
-            _mm512_storeu_si512(self.offsets.as_mut_ptr().cast(), _mm512_permutexvar_epi32(order, offset));
-        }
-    }
-
-    /// Asks for the lines of the updates' sums.
-    #[inline(always)]
-    unsafe fn prefetch(&self, sums: *mut [u32; 4]) {
-        for &offset in &self.offsets {
-            // SAFETY: the caller guarantees every pixel is within `sums`; a prefetch reads nothing.
-            unsafe { _mm_prefetch::<_MM_HINT_T0>(sums.byte_add(offset as usize).cast_const().cast()) };
-        }
-    }
-
-    /// Adds the updates to `sums` with saturation (a + min(add, !a) per u32, as
-    /// `OwnPixels::add`), one after another.
-    #[inline(always)]
-    unsafe fn apply(&self, sums: *mut [u32; 4]) {
-        // SAFETY: the caller checked the CPU features and guarantees every pixel is within
-        // `sums`, which it holds exclusively; unaligned 16-byte loads and stores of one pixel.
-        unsafe {
-            let all = _mm_set1_epi32(-1);
-            for (&offset, &add) in self.offsets.iter().zip(&self.sums) {
-                let at: *mut __m128i = sums.byte_add(offset as usize).cast();
-                let a = _mm_loadu_si128(at);
-                _mm_storeu_si128(at, _mm_add_epi32(a, _mm_min_epu32(add, _mm_xor_si128(a, all))));
-            }
-        }
-    }
 }
