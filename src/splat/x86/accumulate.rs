@@ -18,7 +18,7 @@ use crate::splat::{COLOR_SCALE, Pixels, SplatView, splat_portable};
 /// and per channel (c + (bg − c) · k + 0.5) as u32 in the portable splat's order, so the same
 /// updates. Into sums the target holds, as [`SumUpdates::Lanes`] in [`splat_accumulate_avx512`]
 /// (whatever the CPU: AVX2 has no scatter; on an Intel Xeon the prefetch a vector ahead
-/// measured neither faster nor slower, on a Zen 4 map + average went from 139 to 172 M points a
+/// measured neither faster nor slower, on a Zen 4 map + average went from 150 to 172 M points a
 /// second, closest 193–200); otherwise lane by lane through [`Pixels::add`]. A vector with a
 /// colour beyond a signed 32-bit truncation takes the portable arithmetic per lane.
 #[target_feature(enable = "avx2")]
