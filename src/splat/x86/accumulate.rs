@@ -97,11 +97,7 @@ pub(super) unsafe fn splat_accumulate_avx2(
                     if vector {
                         let mut updates = LaneUpdates::<LANES>::NONE;
                         updates.fill8(inside, pixel, channel);
-                        while lanes != 0 {
-                            let l = lanes.trailing_zeros() as usize;
-                            lanes &= lanes - 1;
-                            out.add(pixels[l] as usize, updates.sum_of_lane(l));
-                        }
+                        updates.add_through(lanes, &pixels, out);
                     } else {
                         let mut ts = [0f32; LANES];
                         _mm256_storeu_ps(ts.as_mut_ptr(), t);
@@ -246,17 +242,11 @@ pub(super) unsafe fn splat_accumulate_avx512(
                     }
                 }
                 _ => {
-                    // Lane by lane through the target.
                     let mut updates = LaneUpdates::<WIDE>::NONE;
                     updates.fill16(inside, pixel, channel);
                     let mut pixels = [0u32; WIDE];
                     _mm512_storeu_si512(pixels.as_mut_ptr().cast(), pixel);
-                    let mut lanes = u32::from(inside);
-                    while lanes != 0 {
-                        let l = lanes.trailing_zeros() as usize;
-                        lanes &= lanes - 1;
-                        out.add(pixels[l] as usize, updates.sum_of_lane(l));
-                    }
+                    updates.add_through(u32::from(inside), &pixels, out);
                 }
             }
         }
@@ -308,12 +298,16 @@ impl<const N: usize> LaneUpdates<N> {
         4 * (j % (N / 4)) + j / (N / 4)
     }
 
-    /// Lane `l`'s (r, g, b, 1).
-    fn sum_of_lane(&self, l: usize) -> [u32; 4] {
-        let j = (l % 4) * (N / 4) + l / 4;
-        debug_assert_eq!(Self::lane_of(j), l);
-        // SAFETY: an __m128i holds four u32s.
-        unsafe { std::mem::transmute::<__m128i, [u32; 4]>(self.sums[j]) }
+    /// Adds the updates of the lanes in `inside` (bit l: lane l) to their `pixels` (by lane)
+    /// through `out`'s [`Pixels::add`], for targets without their own sums.
+    fn add_through(&self, inside: u32, pixels: &[u32; N], out: &mut impl Pixels) {
+        for (j, &sum) in self.sums.iter().enumerate() {
+            let l = Self::lane_of(j);
+            if inside >> l & 1 != 0 {
+                // SAFETY: an __m128i holds four u32s.
+                out.add(pixels[l] as usize, unsafe { std::mem::transmute::<__m128i, [u32; 4]>(sum) });
+            }
+        }
     }
 
     /// Asks for the lines of the updates' sums.
