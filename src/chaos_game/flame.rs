@@ -40,7 +40,7 @@ use glam::{Vec3, Vec3A};
 use super::color_coord::{FINAL_LEFT_OUT, final_flag_fits};
 use super::{CompiledIfs, ORBITS_PER_CHUNK};
 use crate::flame::Xform;
-use crate::flame::variations::{BatchScratch, CompiledXform, FLAME_OP_NONE, FlameOp};
+use crate::flame::variations::{BatchScratch, ChainNumber, CompiledXform, FLAME_OP_NONE, FlameOp};
 use crate::rng::Pcg32;
 use crate::simd::SimdLevel;
 
@@ -99,9 +99,9 @@ impl FlameTable {
 /// The work space of [`CompiledIfs::map_flame_row`], kept between steps.
 pub(super) struct FlameRow {
     /// The lanes grouped by function (a counting sort of the step's functions).
-    order: [u8; K],
+    order: [ChainNumber; K],
     /// Function f's lanes are `order[starts[f]..starts[f + 1]]`.
-    starts: Vec<u8>,
+    starts: Vec<ChainNumber>,
     /// Whether lane k's step draws a point (not a flame function's re-seed or a point its
     /// opacity hides), which the final xform then maps.
     drawn: [bool; K],
@@ -316,7 +316,7 @@ impl CompiledIfs {
         }
         for (k, &f) in fis.iter().enumerate() {
             let slot = &mut starts[f as usize];
-            w.order[*slot as usize] = k as u8;
+            w.order[*slot as usize] = k as ChainNumber;
             *slot += 1;
         }
         // starts[f] now holds where f's lanes end, the start of f + 1's.
@@ -372,7 +372,7 @@ impl CompiledIfs {
                 } else if shown[k].is_nan() {
                     shown[k] = apply_final(f, shown[k].into(), &mut rngs[k]).into();
                 } else {
-                    (w.order[m], w.x[m], w.y[m]) = (k as u8, f64::from(shown[k].x), f64::from(shown[k].y));
+                    (w.order[m], w.x[m], w.y[m]) = (k as ChainNumber, f64::from(shown[k].x), f64::from(shown[k].y));
                     m += 1;
                 }
             }

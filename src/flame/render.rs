@@ -34,7 +34,7 @@ use super::render_camera::Camera;
 pub use super::render_chains::FUSE_ITERATIONS;
 use super::render_chains::{CHAINS, Chains, Round};
 use super::render_layout::Layout;
-use super::variations::{BatchScratch, CompiledXform};
+use super::variations::{BatchScratch, ChainNumber, CompiledXform};
 use super::{Flame, PaletteMode, Xform};
 use crate::rng::Pcg32;
 
@@ -379,14 +379,14 @@ impl ChaosGame {
             r.rank[k] = r.count[x];
             r.count[x] += 1;
         }
-        let mut at = 0u8;
+        let mut at: ChainNumber = 0;
         for &x in &r.drawn {
             r.start[x] = at;
             at += r.count[x];
         }
         // (With the ranks, no store here feeds a later load, as a running `start[x] += 1` did.)
         for (k, (&x, &rank)) in r.chosen[..live].iter().zip(&r.rank[..live]).enumerate() {
-            r.order[(r.start[x] + rank) as usize] = k as u8;
+            r.order[(r.start[x] + rank) as usize] = k as ChainNumber;
         }
     }
 
@@ -444,7 +444,7 @@ impl ChaosGame {
         r.finals.clear();
         for k in 0..c.live {
             if r.plot[k] && (f.opacity == 1.0 || c.rng[k].next_f64() < f.opacity) {
-                r.finals.push(k as u8);
+                r.finals.push(k as ChainNumber);
             }
         }
         let m = r.finals.len();

@@ -2,12 +2,12 @@
 //! one round, one entry per chain, so that the round's phases are loops over the chains that
 //! the compiler can turn into vector loops.
 
+use super::variations::ChainNumber;
 use crate::rng::Pcg32;
 
 /// Runs one worker advances together: their iterations are independent, so the core overlaps
 /// them, and it maps the chains that drew one xform as a batch in vector registers.
 pub(super) const CHAINS: usize = super::variations::BATCH;
-const _: () = assert!(CHAINS <= u8::MAX as usize, "chain numbers are bytes");
 
 /// Iterations dropped at the start of every run (flam3's `FUSE_27`): a run starts at
 /// iteration −`FUSE_ITERATIONS` and plots from 0.
@@ -66,13 +66,13 @@ pub(super) struct Round {
     pub entry: [u32; CHAINS],
     pub chosen: [usize; CHAINS],
     /// Per xform: chains that drew it, and where its group starts in `order`.
-    pub count: Vec<u8>,
-    pub start: Vec<u8>,
+    pub count: Vec<ChainNumber>,
+    pub start: Vec<ChainNumber>,
     /// The xforms drawn this round, in the order first drawn.
     pub drawn: Vec<usize>,
     /// The chains grouped by xform, and each chain's place in its group.
-    pub order: [u8; CHAINS],
-    pub rank: [u8; CHAINS],
+    pub order: [ChainNumber; CHAINS],
+    pub rank: [ChainNumber; CHAINS],
     /// A group's points, member by member, as the batch maps them.
     pub gx: [f64; CHAINS],
     pub gy: [f64; CHAINS],
@@ -88,7 +88,7 @@ pub(super) struct Round {
     pub sy: [f64; CHAINS],
     pub shown_color: [f64; CHAINS],
     /// The chains that apply the final xform this round.
-    pub finals: Vec<u8>,
+    pub finals: Vec<ChainNumber>,
     /// The bucket each chain adds to (0 where it adds nothing) and whether it adds.
     pub bucket: [u32; CHAINS],
     pub adds: [bool; CHAINS],

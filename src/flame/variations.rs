@@ -43,7 +43,7 @@ mod plugins;
 #[path = "variations_tests.rs"]
 mod tests;
 
-pub use batch::{BATCH, BatchScratch};
+pub use batch::{BATCH, BatchScratch, ChainNumber};
 
 use super::{Coefs, Xform, apply_coefs, trig};
 use crate::rng::Pcg32;

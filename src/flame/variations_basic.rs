@@ -166,16 +166,22 @@ pub(super) fn smooth(v: u8) -> bool {
 /// radial_blur four, gaussian_blur five); 0 where nothing is drawn.
 #[inline(always)]
 pub(super) fn smooth_draw(v: u8, rng: &mut Pcg32) -> [f64; DRAWS] {
-    let count = match v {
-        13 => return [(rng.next_u32() & 1) as f64, 0.0, 0.0, 0.0, 0.0],
-        32 | 33 | 41 | 44 | 45 | 47 => 1,
+    if v == 13 {
+        return [(rng.next_u32() & 1) as f64, 0.0, 0.0, 0.0, 0.0];
+    }
+    uniform_draws(smooth_draw_count(v), rng)
+}
+
+/// How many numbers [`smooth_draw`] draws for variation `v` (julia's bit counts one).
+pub(super) const fn smooth_draw_count(v: u8) -> usize {
+    match v {
+        13 | 32 | 33 | 41 | 44 | 45 | 47 => 1,
         31 | 34 | 43 => 2,
         37 => 3,
         36 => 4,
         35 => 5,
         _ => 0,
-    };
-    uniform_draws(count, rng)
+    }
 }
 
 /// w · V(t) for the variations that draw a fixed count of random numbers (`draw`, from

@@ -8,7 +8,11 @@ use crate::flame::{apply_coefs, trig};
 use crate::rng::Pcg32;
 
 /// Most points [`CompiledXform::apply_batch`] maps in one call.
-pub const BATCH: usize = 64;
+pub const BATCH: usize = 256;
+
+/// A chain's (or lane's) number, as the batch's callers list the points' generators.
+pub type ChainNumber = u16;
+const _: () = assert!(BATCH <= ChainNumber::MAX as usize + 1, "chain numbers fit");
 
 /// The work space of [`CompiledXform::apply_batch`], [`Point`]'s quantities as one array each
 /// (so that the loops over them are vector loops), kept by the caller between calls.
@@ -62,6 +66,11 @@ fn smooth_draw(v: u8, rng: &mut Pcg32) -> [f64; DRAWS] {
     if v < plugins::FIRST { basic::smooth_draw(v, rng) } else { plugins::smooth_draw(v, rng) }
 }
 
+/// Whether variation `v`'s formula takes random numbers ([`smooth_draw`]).
+const fn smooth_draws(v: u8) -> bool {
+    if v < plugins::FIRST { basic::smooth_draw_count(v) > 0 } else { plugins::smooth_draw_count(v) > 0 }
+}
+
 /// Variation `v`'s smooth formula (`basic::eval_smooth`, `plugins::eval_smooth`).
 #[inline(always)]
 fn eval_smooth(
@@ -103,7 +112,7 @@ impl CompiledXform {
     /// vector build, next to [`Self::apply_batch`]'s loops, the scalar code was compiled
     /// worse (spiral-julian 2.0 → 2.6 s).
     #[inline(never)]
-    pub fn apply_each(&self, x: &mut [f64], y: &mut [f64], chain: &[u8], rngs: &mut [Pcg32]) {
+    pub fn apply_each(&self, x: &mut [f64], y: &mut [f64], chain: &[ChainNumber], rngs: &mut [Pcg32]) {
         for ((x, y), &k) in x.iter_mut().zip(y.iter_mut()).zip(chain) {
             [*x, *y] = self.apply([*x, *y], &mut rngs[k as usize]);
         }
@@ -127,7 +136,14 @@ impl CompiledXform {
     /// operations in the same order as in `apply`, and draws the same numbers in the same
     /// order from its generator, so the results are the same bits.
     #[inline(always)]
-    pub fn apply_batch(&self, x: &mut [f64], y: &mut [f64], chain: &[u8], rngs: &mut [Pcg32], s: &mut BatchScratch) {
+    pub fn apply_batch(
+        &self,
+        x: &mut [f64],
+        y: &mut [f64],
+        chain: &[ChainNumber],
+        rngs: &mut [Pcg32],
+        s: &mut BatchScratch,
+    ) {
         let m = x.len().min(y.len()).min(chain.len()).min(BATCH);
         let (x, y, chain) = (&mut x[..m], &mut y[..m], &chain[..m]);
         for j in 0..m {
@@ -197,9 +213,11 @@ impl CompiledXform {
             // as `apply` draws them.
             macro_rules! smooth {
                 ($v:literal) => {{
-                    // (For a variation that draws nothing this is a fill with 0.)
-                    for j in 0..m {
-                        s.draw[j] = smooth_draw($v, &mut rngs[chain[j] as usize]);
+                    // (A variation that draws nothing does not read `s.draw`.)
+                    if const { smooth_draws($v) } {
+                        for j in 0..m {
+                            s.draw[j] = smooth_draw($v, &mut rngs[chain[j] as usize]);
+                        }
                     }
                     let mut in_range = true;
                     for j in 0..m {

@@ -87,12 +87,16 @@ pub(super) fn smooth(v: u8) -> bool {
 /// two; 0 where nothing is drawn.
 #[inline(always)]
 pub(super) fn smooth_draw(v: u8, rng: &mut Pcg32) -> [f64; DRAWS] {
-    let count = match v {
+    uniform_draws(smooth_draw_count(v), rng)
+}
+
+/// How many numbers [`smooth_draw`] draws for variation `v`.
+pub(super) const fn smooth_draw_count(v: u8) -> usize {
+    match v {
         50 | 51 | 52 | 78 => 1,
         53 => 2,
         _ => 0,
-    };
-    uniform_draws(count, rng)
+    }
 }
 
 /// w · V(t) for the variations 50 and up that draw a fixed count of random numbers (`draw`,

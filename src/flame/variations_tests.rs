@@ -433,7 +433,7 @@ fn batches_give_the_bits_of_one_point_at_a_time() {
                     _ => [(2.0 * source.next_f64() - 1.0) * scale, (2.0 * source.next_f64() - 1.0) * scale],
                 })
                 .collect();
-            let chain: Vec<u8> = (0..BATCH as u8).rev().collect();
+            let chain: Vec<ChainNumber> = (0..BATCH as ChainNumber).rev().collect();
             let mut rngs: Vec<Pcg32> = (0..BATCH as u32).map(|k| Pcg32::for_stream(9, round as u32, k)).collect();
             let mut expected_rngs = rngs.clone();
             let expected: Vec<[f64; 2]> =
