@@ -100,6 +100,7 @@ impl GameXform {
         }
     }
 
+    /// The colour coordinate after this xform, from `c` before it.
     #[inline(always)]
     fn color_of(&self, c: f64) -> f64 {
         self.color_speed * self.color + (1.0 - self.color_speed) * c
@@ -119,6 +120,10 @@ struct ChaosGame {
     dmap: Vec<[f64; 4]>,
     /// The buckets' increments of a point of weight 1 at each palette entry (step mode).
     step_increments: Vec<Bucket>,
+    /// Per xform: its colour update c' = held + kept · c ([`GameXform::color_of`]'s terms), and
+    /// its points' plotted weight.
+    color_terms: Vec<(f64, f64)>,
+    plotted_weights: Vec<f64>,
 }
 
 impl ChaosGame {
@@ -145,8 +150,11 @@ impl ChaosGame {
         }
         let dmap: Vec<[f64; 4]> = flame.palette.iter().map(|c| c.map(|v| v * WHITE_LEVEL)).collect();
         let step_increments = dmap.iter().map(|c| increments(*c, 1.0)).collect();
+        let xforms: Vec<GameXform> = flame.xforms.iter().map(GameXform::new).collect();
         Ok(Self {
-            xforms: flame.xforms.iter().map(GameXform::new).collect(),
+            color_terms: xforms.iter().map(|x| (x.color_speed * x.color, 1.0 - x.color_speed)).collect(),
+            plotted_weights: xforms.iter().map(|x| x.plotted_weight).collect(),
+            xforms,
             final_xform: flame.final_xform.as_ref().map(GameXform::new),
             choice,
             xaos,
@@ -229,7 +237,7 @@ impl ChaosGame {
                 SimdLevel::Scalar => {}
             }
         }
-        self.run_chains(seed, samples, next_run, histogram, progress)
+        self.run_chains(seed, samples, next_run, histogram, progress, false)
     }
 
     #[cfg(target_arch = "x86_64")]
@@ -242,7 +250,7 @@ impl ChaosGame {
         histogram: &mut [Bucket],
         progress: &(dyn Fn(u64) + Sync),
     ) -> u64 {
-        self.run_chains(seed, samples, next_run, histogram, progress)
+        self.run_chains(seed, samples, next_run, histogram, progress, true)
     }
 
     #[cfg(target_arch = "x86_64")]
@@ -255,7 +263,7 @@ impl ChaosGame {
         histogram: &mut [Bucket],
         progress: &(dyn Fn(u64) + Sync),
     ) -> u64 {
-        self.run_chains(seed, samples, next_run, histogram, progress)
+        self.run_chains(seed, samples, next_run, histogram, progress, false)
     }
 
     /// One worker: [`CHAINS`] runs advanced together, each taking the next run when its own is
@@ -276,6 +284,7 @@ impl ChaosGame {
         next_run: &AtomicU64,
         histogram: &mut [Bucket],
         progress: &(dyn Fn(u64) + Sync),
+        wide: bool,
     ) -> u64 {
         let mut c = Chains::new();
         let mut r = Round::new(self.xforms.len());
@@ -309,17 +318,14 @@ impl ChaosGame {
                 }
                 return bad;
             }
-            self.choose(&mut c, &mut r);
+            self.choose(&mut c, &mut r, wide);
             // Each group mapped by its xform.
             for &x in &r.drawn {
                 let (start, m) = (r.start[x] as usize, r.count[x] as usize);
                 let members = &r.order[start..start + m];
                 let xf = &self.xforms[x];
                 for (j, &k) in members.iter().enumerate() {
-                    let k = k as usize;
-                    (r.gx[j], r.gy[j]) = (c.x[k], c.y[k]);
-                    r.next_color[k] = xf.color_of(c.color[k]);
-                    r.weight[k] = xf.plotted_weight;
+                    (r.gx[j], r.gy[j]) = (c.x[k as usize], c.y[k as usize]);
                 }
                 if xf.map.batches() {
                     xf.map.apply_batch(&mut r.gx[..m], &mut r.gy[..m], members, &mut c.rng, &mut scratch);
@@ -358,35 +364,27 @@ impl ChaosGame {
     }
 
     /// Each live chain's xform (its draw from its generator, a vector loop, then the choice
-    /// table), and the chains grouped by xform (a counting sort): `r.drawn`, `r.count`,
-    /// `r.order` and `r.start` (each group's start in `order`), `r.rank` (each chain's place
-    /// in its group).
+    /// table), the chains grouped by xform ([`Round::group`]), and each chain's next colour and
+    /// plotted weight (a vector loop over the xforms' constants).
     #[inline(always)]
-    fn choose(&self, c: &mut Chains, r: &mut Round) {
+    fn choose(&self, c: &mut Chains, r: &mut Round, wide: bool) {
         // (At most CHAINS, which the compiler then knows: no bounds checks in the loops.)
         let live = c.live.min(CHAINS);
         for (entry, rng) in r.entry[..live].iter_mut().zip(&mut c.rng[..live]) {
             *entry = rng.next_u32() & (CHOICE_ENTRIES as u32 - 1);
         }
-        r.drawn.clear();
         for k in 0..live {
             let row = if self.xaos { c.last[k] } else { 0 };
-            let x = self.choice[row * CHOICE_ENTRIES + r.entry[k] as usize] as usize;
-            r.chosen[k] = x;
-            if r.count[x] == 0 {
-                r.drawn.push(x);
-            }
-            r.rank[k] = r.count[x];
-            r.count[x] += 1;
+            r.chosen[k] = u32::from(self.choice[row * CHOICE_ENTRIES + r.entry[k] as usize]);
         }
-        let mut at: ChainNumber = 0;
-        for &x in &r.drawn {
-            r.start[x] = at;
-            at += r.count[x];
-        }
-        // (With the ranks, no store here feeds a later load, as a running `start[x] += 1` did.)
-        for (k, (&x, &rank)) in r.chosen[..live].iter().zip(&r.rank[..live]).enumerate() {
-            r.order[(r.start[x] + rank) as usize] = k as ChainNumber;
+        r.group(live, self.xforms.len(), wide);
+        let n = self.xforms.len().min(self.color_terms.len()).min(self.plotted_weights.len());
+        for k in 0..live {
+            // (Below n by the choice table; the min spares the bounds check a branch.)
+            let x = (r.chosen[k] as usize).min(n - 1);
+            let (held, kept) = self.color_terms[x];
+            r.next_color[k] = held + kept * c.color[k];
+            r.weight[k] = self.plotted_weights[x];
         }
     }
 
@@ -414,7 +412,7 @@ impl ChaosGame {
                     }
                 }
                 c.consecutive_bad[k] = 0;
-                c.last[k] = r.chosen[k] + 1;
+                c.last[k] = r.chosen[k] as usize + 1;
                 r.plot[k] = true;
                 [r.qx[k], r.qy[k]] = q;
             }
@@ -422,7 +420,7 @@ impl ChaosGame {
             c.consecutive_bad[..live].fill(0);
             r.plot[..live].fill(true);
             for (last, &chosen) in c.last[..live].iter_mut().zip(&r.chosen[..live]) {
-                *last = chosen + 1;
+                *last = chosen as usize + 1;
             }
         }
         for k in 0..live {

@@ -64,14 +64,15 @@ impl Chains {
 pub(super) struct Round {
     /// Each chain's entry into the choice table, and the xform it picks.
     pub entry: [u32; CHAINS],
-    pub chosen: [usize; CHAINS],
+    pub chosen: [u32; CHAINS],
     /// Per xform: chains that drew it, and where its group starts in `order`.
     pub count: Vec<ChainNumber>,
     pub start: Vec<ChainNumber>,
-    /// The xforms drawn this round, in the order first drawn.
+    /// The xforms drawn this round.
     pub drawn: Vec<usize>,
-    /// The chains grouped by xform, and each chain's place in its group.
-    pub order: [ChainNumber; CHAINS],
+    /// The chains grouped by xform ([`Self::group`]; room for one vector past the last), and
+    /// each chain's place in its group.
+    pub order: [ChainNumber; CHAINS + 16],
     pub rank: [ChainNumber; CHAINS],
     /// A group's points, member by member, as the batch maps them.
     pub gx: [f64; CHAINS],
@@ -104,7 +105,7 @@ impl Round {
             count: vec![0; xforms],
             start: vec![0; xforms],
             drawn: Vec::with_capacity(CHAINS),
-            order: [0; CHAINS],
+            order: [0; CHAINS + 16],
             rank: [0; CHAINS],
             gx: [0.0; CHAINS],
             gy: [0.0; CHAINS],
@@ -120,6 +121,87 @@ impl Round {
             bucket: [0; CHAINS],
             adds: [false; CHAINS],
             step_entry: [0; CHAINS],
+        }
+    }
+}
+
+/// Most xforms [`Round::group`] sorts with one pass over the chains each.
+#[cfg(target_arch = "x86_64")]
+const VECTOR_GROUPING_XFORMS: usize = 64;
+
+impl Round {
+    /// Chains `0..live` grouped by the xform they drew (`chosen`, each below `xforms`): the
+    /// xforms drawn (`drawn`), each group's size and start (`count`, `start`) and the chains
+    /// group by group (`order`), each group in chain order. `count` is 0 for every xform before.
+    /// With `wide` (the CPU runs AVX-512F), one compare and compress of 16 chains at a time
+    /// per xform, for up to 64 xforms; otherwise a counting sort.
+    #[inline(always)]
+    pub fn group(&mut self, live: usize, xforms: usize, wide: bool) {
+        let live = live.min(CHAINS);
+        self.drawn.clear();
+        #[cfg(target_arch = "x86_64")]
+        if wide && xforms <= VECTOR_GROUPING_XFORMS {
+            #[expect(unsafe_code, reason = "an AVX-512 function, entered after the CPU check")]
+            // SAFETY: `wide` is set only where the CPU runs AVX-512F.
+            unsafe {
+                self.group_avx512(live, xforms)
+            };
+            return;
+        }
+        let _ = (wide, xforms);
+        for k in 0..live {
+            let x = self.chosen[k] as usize;
+            if self.count[x] == 0 {
+                self.drawn.push(x);
+            }
+            self.rank[k] = self.count[x];
+            self.count[x] += 1;
+        }
+        let mut at: ChainNumber = 0;
+        for &x in &self.drawn {
+            self.start[x] = at;
+            at += self.count[x];
+        }
+        // (With the ranks, no store here feeds a later load, as a running `start[x] += 1` did.)
+        for (k, (&x, &rank)) in self.chosen[..live].iter().zip(&self.rank[..live]).enumerate() {
+            self.order[(self.start[x as usize] + rank) as usize] = k as ChainNumber;
+        }
+    }
+
+    /// [`Self::group`] with AVX-512F: per xform, the chains that drew it, 16 at a time,
+    /// compressed into `order`.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx512f")]
+    #[inline]
+    fn group_avx512(&mut self, live: usize, xforms: usize) {
+        use std::arch::x86_64::*;
+        let live = live.min(CHAINS);
+        let lanes = _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
+        let mut at = 0;
+        for x in 0..xforms.min(self.count.len()).min(self.start.len()) {
+            let first = at;
+            let wanted = _mm512_set1_epi32(x as i32);
+            for block in (0..live).step_by(16) {
+                let valid: __mmask16 = if live - block >= 16 { 0xFFFF } else { (1 << (live - block)) - 1 };
+                #[expect(unsafe_code, reason = "unaligned vector load and store of 16 lanes")]
+                // SAFETY: `block < live <= CHAINS`, and the load is masked to the lanes below
+                // `live`; `at` counts chains placed so far, at most `live`, and order has
+                // CHAINS + 16 entries.
+                unsafe {
+                    let chosen = _mm512_maskz_loadu_epi32(valid, self.chosen.as_ptr().add(block).cast());
+                    let hits = _mm512_mask_cmpeq_epi32_mask(valid, chosen, wanted);
+                    let chains = _mm512_add_epi32(lanes, _mm512_set1_epi32(block as i32));
+                    let packed = _mm512_maskz_compress_epi32(hits, chains);
+                    _mm512_storeu_si512(self.order.as_mut_ptr().add(at).cast(), packed);
+                    at += hits.count_ones() as usize;
+                }
+            }
+            let count = at - first;
+            if count > 0 {
+                self.drawn.push(x);
+                self.start[x] = first as ChainNumber;
+                self.count[x] = count as ChainNumber;
+            }
         }
     }
 }

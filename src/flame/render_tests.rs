@@ -154,7 +154,7 @@ fn every_build_sums_the_same_bits() {
         let bad = build(&AtomicU64::new(0), &mut histogram);
         (histogram, bad)
     };
-    let portable = one_worker(&|next, h| game.run_chains(5, samples, next, h, &|_| {}));
+    let portable = one_worker(&|next, h| game.run_chains(5, samples, next, h, &|_| {}, false));
     assert!(portable.0.iter().any(|b| b[4] != 0), "nothing plotted");
     #[cfg(target_arch = "x86_64")]
     {
@@ -203,5 +203,39 @@ fn buckets_and_palette_entries_are_those_of_as_then_clamp() {
     }
     for v in [0.0, 0.25, 0.999_999, 1.0, 254.5, 255.0, 65_535.9, 2_147_483_647.0, 4_294_967_295.0] {
         assert_eq!(whole_u32(v), v as u32, "{v}");
+    }
+}
+
+/// `Round::group` gives the same groups with and without AVX-512 (where the CPU runs it):
+/// every chain once, in the group of the xform it drew, each group in chain order.
+#[test]
+fn grouping_by_xform_places_every_chain_once() {
+    let mut rng = Pcg32::for_stream(9, 0, 0);
+    let wide = cfg!(target_arch = "x86_64") && crate::simd::SimdLevel::detect() == crate::simd::SimdLevel::Avx512;
+    for xforms in [1, 2, 3, 7, 16, 64, 65, 200] {
+        for live in [1, 15, 16, 17, 100, CHAINS - 1, CHAINS] {
+            // Skewed draws, so that some xforms get no chain.
+            let chosen: Vec<u32> =
+                (0..live).map(|_| (rng.next_u32() % xforms as u32).min(rng.next_u32() % xforms as u32)).collect();
+            let mut groups = Vec::new();
+            for vector in [false, wide] {
+                let mut r = Round::new(xforms);
+                r.chosen[..live].copy_from_slice(&chosen);
+                r.group(live, xforms, vector);
+                let mut by_xform = vec![Vec::new(); xforms];
+                for &x in &r.drawn {
+                    let (start, count) = (r.start[x] as usize, r.count[x] as usize);
+                    assert!(count > 0, "xform {x} drawn without chains");
+                    by_xform[x] = r.order[start..start + count].to_vec();
+                }
+                for (x, members) in by_xform.iter().enumerate() {
+                    let expected: Vec<ChainNumber> =
+                        (0..live as ChainNumber).filter(|&k| r.chosen[k as usize] as usize == x).collect();
+                    assert_eq!(*members, expected, "xform {x} of {xforms}, {live} chains, vector {vector}");
+                }
+                groups.push(by_xform);
+            }
+            assert_eq!(groups[0], groups[1]);
+        }
     }
 }

@@ -11,7 +11,7 @@ use crate::rng::Pcg32;
 pub const BATCH: usize = 256;
 
 /// A chain's (or lane's) number, as the batch's callers list the points' generators.
-pub type ChainNumber = u16;
+pub type ChainNumber = u32;
 const _: () = assert!(BATCH <= ChainNumber::MAX as usize + 1, "chain numbers fit");
 
 /// The work space of [`CompiledXform::apply_batch`], [`Point`]'s quantities as one array each
