@@ -181,12 +181,25 @@ fn a_dropped_png_that_nlifs_wrote_opens_its_scene_and_another_png_is_an_error() 
     assert!(changes.scene_replaced, "{:?}", s.files.view_error);
     assert_eq!(s.scene.functions, scene.functions);
     assert_eq!(s.scene.name, scene.name);
-    // Its scene went to a copy, so that a save never writes over the image; the PNG is what
-    // the recent files remember.
-    assert_ne!(s.scene_path.as_deref(), Some(png.as_path()));
+    // The scene has no path, so that a save never writes over the image (nor anywhere the
+    // user did not choose); the PNG is what the recent files remember, and a save goes beside
+    // it by default, to a name not taken: here sierpinski-shot.toml is (the scene it came from,
+    // say), so sierpinski-shot-2.toml.
+    assert_eq!(s.scene_path, None);
     assert_eq!(s.files.recent.paths[0], canonical(&png));
-    // (That copy is in the temporary folder: removed at the end, not left there by the test.)
-    let copy = s.scene_path.clone().filter(|p| p.starts_with(std::env::temp_dir()));
+    assert_eq!(s.files.opened_name.as_deref(), Some(png.display().to_string().as_str()));
+    assert_eq!(s.edit.save_text, scratch.dir.join("sierpinski-shot.toml").display().to_string());
+    std::fs::write(scratch.dir.join("sierpinski-shot.toml"), "# another scene\n").unwrap();
+    s.apply([Command::OpenFile(png.clone())]);
+    assert_eq!(s.edit.save_text, scratch.dir.join("sierpinski-shot-2.toml").display().to_string());
+    // Without a native dialog (as here) Save writes that file; the image keeps its bytes.
+    let image_bytes = std::fs::read(&png).unwrap();
+    s.apply([Command::Save]);
+    let saved = scratch.dir.join("sierpinski-shot-2.toml");
+    assert_eq!(s.scene_path.as_deref(), Some(saved.as_path()), "{:?}", s.error);
+    assert_eq!(nlifs::scene::Scene::load(&saved).unwrap().functions, scene.functions);
+    assert_eq!(std::fs::read(&png).unwrap(), image_bytes);
+    assert_eq!(std::fs::read_to_string(scratch.dir.join("sierpinski-shot.toml")).unwrap(), "# another scene\n");
     // The same image as bytes (the browser's way): its scene opens, to be saved as TOML.
     let changes =
         s.apply([Command::OpenBytes { name: "sierpinski-shot.png".into(), bytes: std::fs::read(&png).unwrap() }]);
@@ -204,9 +217,6 @@ fn a_dropped_png_that_nlifs_wrote_opens_its_scene_and_another_png_is_an_error() 
     assert_eq!(s.scene, kept);
     let error = s.files.view_error.clone().unwrap();
     assert!(error.contains("plain.png") && error.contains("no embedded scene"), "{error}");
-    if let Some(copy) = copy {
-        std::fs::remove_file(copy).ok();
-    }
 }
 
 #[test]

@@ -64,16 +64,14 @@ impl From<ChaosBackendArg> for ChaosBackend {
 pub fn view(args: ViewArgs) -> anyhow::Result<()> {
     // A missing or bad scene is an error like in every other command (exit 2, located), not
     // the default scene with the error in a panel: the window opens only on a scene that reads.
-    let mut args = args;
     if let Some(path) = &args.scene {
         if nlifs::output::png::is_png(path) {
-            // A PNG that nlifs wrote: its scene is written out as a TOML file of its own (in the
-            // temporary folder, so that nothing next to the image is overwritten and a save never
-            // writes over the image) and opened from there.
-            let (toml, t_secs) =
-                nlifs::output::png::extract_scene(path, &std::env::temp_dir()).map_err(super::image_args::bad)?;
-            eprintln!("opened the scene inside {} (made at t = {t_secs} s) as {}", path.display(), toml.display());
-            args.scene = Some(toml);
+            // A PNG that nlifs wrote: read here, so that a bad one is an error before the window
+            // opens; the viewer opens its scene without a path (a save asks where, beside the
+            // image by default, and never writes over it).
+            let embedded = nlifs::output::png::scene_from_png(path).map_err(super::image_args::bad)?;
+            embedded.scene(&format!("{} (embedded scene)", path.display())).map_err(super::image_args::bad)?;
+            eprintln!("opening the scene inside {} (made at t = {} s)", path.display(), embedded.t_secs);
         } else {
             // A flame file opens as its imported scene; its warnings are printed here, once.
             super::load(path)?;

@@ -12,7 +12,7 @@ pub const BATCH: usize = 256;
 
 /// A chain's (or lane's) number, as the batch's callers list the points' generators.
 pub type ChainNumber = u32;
-const _: () = assert!(BATCH <= ChainNumber::MAX as usize + 1, "chain numbers fit");
+const _: () = assert!(BATCH as u64 <= ChainNumber::MAX as u64 + 1, "chain numbers fit");
 
 /// The work space of [`CompiledXform::apply_batch`], [`Point`]'s quantities as one array each
 /// (so that the loops over them are vector loops), kept by the caller between calls.

@@ -267,18 +267,6 @@ pub fn load_scene_or_png(path: &Path) -> Result<(crate::scene::Scene, f64), Outp
     }
 }
 
-/// Writes the scene embedded in the PNG at `png` to `dir/<png's stem>.scene.toml` (atomically)
-/// and returns that path with the scene time: for commands that open scene files, such as the
-/// viewer, whose saves then go to the copy and never over the image.
-pub fn extract_scene(png: &Path, dir: &Path) -> Result<(std::path::PathBuf, f64), OutputError> {
-    let p = scene_from_png(png)?;
-    p.scene(&format!("{} (embedded scene)", png.display()))?;
-    let stem = png.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| "image".into());
-    let path = dir.join(format!("{stem}.scene.toml"));
-    crate::io::write_atomic(&path, |w| w.write_all(p.scene_toml.as_bytes())).map_err(|e| io_error(&path, e))?;
-    Ok((path, p.t_secs))
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -52,6 +52,8 @@ impl ViewerState {
                 Command::OpenScene(path) if path.as_os_str().is_empty() => {
                     self.show_file_dialog(FileDialogKind::Open, &mut changes)
                 }
+                // A PNG's scene opens as a dropped image's does (`nlifs view IMAGE.png`).
+                Command::OpenScene(path) if crate::output::png::is_png(&path) => self.open_file(&path, &mut changes),
                 // Opening over unsaved edits asks first, as closing does.
                 Command::OpenScene(path) => self.request_open(PendingOpen::File(path), &mut changes),
                 Command::ReloadScene => {
@@ -504,6 +506,7 @@ impl ViewerState {
         self.edit.selected_point = None;
         self.edit.save_text = self.default_save_text();
         self.files.opened_name = None;
+        self.files.opened_image = None;
         self.playback.playing &= self.scene.timeline.is_some();
         self.files.view_error = None;
         self.recompile();

@@ -86,14 +86,17 @@ impl ViewerState {
             self.ui.panel_shown = true;
             return;
         }
+        // The scene's folder, or the folder of the image whose scene is open.
         let directory = self
             .scene_path
             .as_deref()
+            .or(self.files.opened_image.as_deref())
             .map(recent::absolute)
             .and_then(|p| p.parent().map(Path::to_path_buf))
             .or_else(|| std::env::current_dir().ok());
         let file_name = (kind == FileDialogKind::SaveAs).then(|| {
-            self.scene_path.as_ref().and_then(|p| p.file_name()).map_or_else(
+            let beside_image = self.files.opened_image.as_deref().map(scene_path_beside);
+            self.scene_path.as_ref().or(beside_image.as_ref()).and_then(|p| p.file_name()).map_or_else(
                 || format!("{}.toml", file_stem_for(&self.scene.name)),
                 |n| n.to_string_lossy().into_owned(),
             )
@@ -117,16 +120,12 @@ impl ViewerState {
             return;
         }
         if crate::output::png::is_png(path) {
-            // As `nlifs view IMAGE.png`: the scene goes to a TOML copy in the temporary folder,
-            // so that a save never writes over the image.
-            match crate::output::png::extract_scene(path, &std::env::temp_dir()) {
-                Ok((toml, _t_secs)) => {
-                    self.request_open(PendingOpen::File(toml.clone()), changes);
-                    if self.scene_path.as_deref() == Some(toml.as_path()) {
-                        self.remember_recent(path);
-                        self.message = Some(format!("opened the scene inside {}", path.display()));
-                    }
-                }
+            let origin = format!("{} (embedded scene)", path.display());
+            match crate::output::png::scene_from_png(path).and_then(|p| Ok((p.scene(&origin)?, p.scene_toml))) {
+                Ok((scene, text)) => self.request_open(
+                    PendingOpen::Image { png: path.to_path_buf(), scene: Box::new(scene), text },
+                    changes,
+                ),
                 Err(e) => self.set_view_error(e.to_string()),
             }
         } else if path.extension().is_some_and(|e| e.eq_ignore_ascii_case("toml")) {
@@ -193,6 +192,18 @@ impl ViewerState {
                 self.message = Some(format!("opened {name}"));
                 self.files.opened_name = Some(name);
             }
+            PendingOpen::Image { png, scene, text } => {
+                self.install_scene(*scene, text, None);
+                self.show_opened(changes);
+                self.edit.save_text = scene_path_beside(&png).display().to_string();
+                self.message = Some(format!(
+                    "opened the scene inside {}; Save asks where to write it (the image stays as it is)",
+                    png.display()
+                ));
+                self.files.opened_name = Some(png.display().to_string());
+                self.remember_recent(&png);
+                self.files.opened_image = Some(png);
+            }
         }
     }
 
@@ -202,14 +213,8 @@ impl ViewerState {
         self.files.view_error = Some(error);
     }
 
-    /// Puts `path` first in the recent files (a scene copied out of a PNG into the temporary
-    /// folder is not worth remembering: the PNG is) and writes the list.
+    /// Puts `path` first in the recent files and writes the list.
     pub(super) fn remember_recent(&mut self, path: &Path) {
-        let extracted = path.parent() == Some(std::env::temp_dir().as_path())
-            && path.file_name().is_some_and(|n| n.to_string_lossy().ends_with(".scene.toml"));
-        if extracted {
-            return;
-        }
         self.files.recent.prune_missing();
         self.files.recent.push(path);
         self.save_recent();
@@ -222,6 +227,23 @@ impl ViewerState {
             log::warn!("cannot write the recent files list in {}: {e}", dir.display());
         }
     }
+}
+
+/// Where the scene inside `png` is saved by default: `STEM.toml` beside the image, or
+/// `STEM-2.toml`, `STEM-3.toml`, … where that name is taken (the image may sit beside the
+/// scene it was rendered from).
+fn scene_path_beside(png: &Path) -> PathBuf {
+    let stem = png.file_stem().map_or_else(|| "image".into(), |s| s.to_string_lossy().into_owned());
+    (1..)
+        .map(|n| {
+            if n == 1 {
+                png.with_file_name(format!("{stem}.toml"))
+            } else {
+                png.with_file_name(format!("{stem}-{n}.toml"))
+            }
+        })
+        .find(|p| !p.exists())
+        .unwrap_or_else(|| png.with_extension("toml"))
 }
 
 /// A file name stem for a scene's name: letters, digits, `-` and `_`; `scene` when none is left.

@@ -27,4 +27,7 @@ pub struct FilesState {
     /// The name of the file the scene came from where it has no path (the browser's file
     /// chooser, a drop on the page, the page's address): said in the Scene section.
     pub opened_name: Option<String>,
+    /// The image whose embedded scene is open (it has no path of its own): the Save As dialog
+    /// starts in the image's folder.
+    pub opened_image: Option<PathBuf>,
 }

@@ -104,6 +104,9 @@ pub enum PendingOpen {
     /// A scene that came as bytes (the page's file chooser or a drop on the page), already read:
     /// one that does not read is an error at once, with no question asked.
     Read { name: String, scene: Box<Scene>, text: String },
+    /// The scene inside a PNG that nlifs wrote, already read. It opens without a path, so that
+    /// a save asks where to write it (beside the image, by default) and never writes over it.
+    Image { png: PathBuf, scene: Box<Scene>, text: String },
 }
 
 impl PendingOpen {
@@ -112,6 +115,7 @@ impl PendingOpen {
         match self {
             Self::File(path) => path.display().to_string(),
             Self::Read { name, .. } => name.clone(),
+            Self::Image { png, .. } => png.display().to_string(),
         }
     }
 }
