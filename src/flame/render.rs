@@ -15,11 +15,11 @@
 //! chains is exact and the picture is the same bytes for a seed whatever the thread count:
 //! run `k` draws from `Pcg32::for_stream(seed, 0, k)`, and threads take runs in any order.
 //!
-//! A worker advances 64 runs together (its chains), one iteration of each per round: one run's
+//! A worker advances 256 runs together (its chains), one iteration of each per round: one run's
 //! iterations depend on each other, the chains' do not, so the core overlaps their work. In a
-//! round the chains are grouped by the xform they drew, and an xform whose variations are all
-//! arithmetic maps its group as one batch in vector registers (the vector path,
-//! `CompiledXform::apply_batch`); each sample's bucket is prefetched when it is computed and
+//! round the chains are grouped by the xform they drew (`Round::group`), and an xform whose
+//! variations all batch (the arithmetic and the smooth ones) maps its group as one batch in
+//! vector registers (the vector path, `CompiledXform::apply_batch`); each sample's bucket is prefetched when it is computed and
 //! added 16 samples later, when it is in cache. Each chain draws its random numbers in flam3's
 //! order and goes through the same operations, so the sums, and the picture, are the same bits
 //! as one run after another.
