@@ -118,9 +118,12 @@ fn render_command_takes_the_file_and_its_options() {
     let (code, err) = run(&[]);
     assert_eq!(code, Some(0), "{err}");
     assert_eq!(size(), (40, 30), "the first flame's size");
+    // The file holds two flames: the render says which it drew and how to choose another.
+    assert!(err.contains("holds 2 flames; this renders the first, `first`") && err.contains("--index"), "{err}");
     let first = std::fs::read(&out).expect("png");
     let (code, err) = run(&["--name", "second"]);
     assert_eq!(code, Some(0), "{err}");
+    assert!(!err.contains("holds 2 flames"), "a flame chosen by name needs no note: {err}");
     assert_eq!(size(), (36, 24));
     let (code, err) = run(&["--index", "1", "--width", "72", "--threads", "1"]);
     assert_eq!(code, Some(0), "{err}");

@@ -73,7 +73,18 @@ pub fn render(req: FlameRequest) -> anyhow::Result<()> {
     for warning in &read.warnings {
         eprintln!("warning: {warning}");
     }
+    let count = read.flames.len();
     let flame = with_overrides(choose(req.file, read.flames, req.index, req.name)?, &req)?;
+    if count > 1 && req.index.is_none() && req.name.is_none() {
+        let which =
+            if flame.name.is_empty() { "the first".to_string() } else { format!("the first, `{}`", flame.name) };
+        eprintln!(
+            "note: {} holds {count} flames; this renders {which} (--index K or --name N for another; \
+             `nlifs info {}` lists them)",
+            req.file.display(),
+            req.file.display()
+        );
+    }
     probe_output(req.output)?;
     let seed = req.seed.unwrap_or(DEFAULT_SEED);
     let start = std::time::Instant::now();
