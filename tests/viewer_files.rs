@@ -171,6 +171,8 @@ fn a_dropped_png_that_nlifs_wrote_opens_its_scene_and_another_png_is_an_error() 
     let scratch = Scratch::new("drop-png");
     let plant1 = scratch.scene("plant1");
     let mut s = scratch.open(&plant1);
+    let recovery_dir = scratch.dir.join("recovery");
+    s.apply([Command::SetRecoveryDir(Some(recovery_dir.clone()))]);
     // A PNG with sierpinski's scene inside, as every image nlifs writes carries it.
     let scene = common::load_scene("sierpinski");
     let png = scratch.dir.join("sierpinski-shot.png");
@@ -192,6 +194,8 @@ fn a_dropped_png_that_nlifs_wrote_opens_its_scene_and_another_png_is_an_error() 
     std::fs::write(scratch.dir.join("sierpinski-shot.toml"), "# another scene\n").unwrap();
     s.apply([Command::OpenFile(png.clone())]);
     assert_eq!(s.edit.save_text, scratch.dir.join("sierpinski-shot-2.toml").display().to_string());
+    // Edits to it are kept in a recovery file of the image's own (not the scene opened before).
+    assert_eq!(s.recovery_file, Some(nlifs::viewer::recovery::recovery_path(&recovery_dir, Some(&png))));
     // Without a native dialog (as here) Save writes that file; the image keeps its bytes.
     let image_bytes = std::fs::read(&png).unwrap();
     s.apply([Command::Save]);

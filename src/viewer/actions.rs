@@ -62,13 +62,13 @@ impl ViewerState {
         }
     }
 
-    /// Works out this scene's recovery file and offers it when it holds other edits than the
-    /// scene's file.
+    /// Works out this scene's recovery file (that of its file, or of the image whose scene it
+    /// is) and offers it when it holds other edits than the scene's file.
     pub(super) fn check_recovery(&mut self) {
         self.recovery_written = None;
         self.recovery_offer = None;
-        self.recovery_file =
-            self.recovery_dir.as_deref().map(|d| recovery::recovery_path(d, self.scene_path.as_deref()));
+        let origin = self.scene_path.as_deref().or(self.files.opened_image.as_deref());
+        self.recovery_file = self.recovery_dir.as_deref().map(|d| recovery::recovery_path(d, origin));
         let Some(file) = &self.recovery_file else { return };
         if let Some((mut scene, written)) = recovery::read(file) {
             scene.path = self.scene.path.clone();

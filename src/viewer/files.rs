@@ -203,6 +203,7 @@ impl ViewerState {
                 self.files.opened_name = Some(png.display().to_string());
                 self.remember_recent(&png);
                 self.files.opened_image = Some(png);
+                self.check_recovery();
             }
         }
     }
