@@ -333,7 +333,7 @@ impl ChaosGame {
                     xf.map.apply_each(&mut r.gx[..m], &mut r.gy[..m], members, &mut c.rng);
                 }
                 for (j, &k) in members.iter().enumerate() {
-                    (r.qx[k as usize], r.qy[k as usize]) = (r.gx[j], r.gy[j]);
+                    (c.x[k as usize], c.y[k as usize]) = (r.gx[j], r.gy[j]);
                 }
                 r.count[x] = 0;
             }
@@ -388,33 +388,31 @@ impl ChaosGame {
         }
     }
 
-    /// The mapped points into the chains, their re-seeds (a retried step plots nothing), and
-    /// what each shows before the final xform. Returns the re-seeds. Chain by chain only in a
-    /// round with a point out of the plane; otherwise vector loops.
+    /// The chains' mapped points (the groups' batches wrote them into the chains) re-seeded
+    /// where they left the plane (a retried step plots nothing), the chains' colours, and what
+    /// each shows before the final xform. Returns the re-seeds. Chain by chain only in a round
+    /// with a point out of the plane; otherwise vector loops. (A chain goes on from its mapped
+    /// or re-seeded point whether its step plots or not, so the mapped point needs no copy.)
     #[inline(always)]
     fn settle(&self, c: &mut Chains, r: &mut Round) -> u64 {
         // (At most CHAINS, which the compiler then knows: no bounds checks in the loops.)
         let live = c.live.min(CHAINS);
-        let any_bad = r.qx[..live].iter().zip(&r.qy[..live]).fold(false, |any, (&x, &y)| any | is_bad([x, y]));
+        let any_bad = c.x[..live].iter().zip(&c.y[..live]).fold(false, |any, (&x, &y)| any | is_bad([x, y]));
         let mut bad = 0;
         if any_bad {
             for k in 0..live {
-                let mut q = [r.qx[k], r.qy[k]];
                 r.plot[k] = false;
-                if is_bad(q) {
-                    q = [uniform11(&mut c.rng[k]), uniform11(&mut c.rng[k])];
+                if is_bad([c.x[k], c.y[k]]) {
+                    [c.x[k], c.y[k]] = [uniform11(&mut c.rng[k]), uniform11(&mut c.rng[k])];
                     bad += 1;
                     c.consecutive_bad[k] += 1;
                     if c.consecutive_bad[k] < 5 {
-                        [c.x[k], c.y[k]] = q;
-                        c.color[k] = r.next_color[k];
                         continue;
                     }
                 }
                 c.consecutive_bad[k] = 0;
                 c.last[k] = r.chosen[k] as usize + 1;
                 r.plot[k] = true;
-                [r.qx[k], r.qy[k]] = q;
             }
         } else {
             c.consecutive_bad[..live].fill(0);
@@ -423,12 +421,7 @@ impl ChaosGame {
                 *last = chosen as usize + 1;
             }
         }
-        for k in 0..live {
-            if r.plot[k] {
-                (c.x[k], c.y[k]) = (r.qx[k], r.qy[k]);
-                c.color[k] = r.next_color[k];
-            }
-        }
+        c.color[..live].copy_from_slice(&r.next_color[..live]);
         r.sx[..live].copy_from_slice(&c.x[..live]);
         r.sy[..live].copy_from_slice(&c.y[..live]);
         r.shown_color[..live].copy_from_slice(&r.next_color[..live]);

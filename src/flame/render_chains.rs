@@ -77,9 +77,7 @@ pub(super) struct Round {
     /// A group's points, member by member, as the batch maps them.
     pub gx: [f64; CHAINS],
     pub gy: [f64; CHAINS],
-    /// Each chain's mapped point, colour, and its xform's plotted weight.
-    pub qx: [f64; CHAINS],
-    pub qy: [f64; CHAINS],
+    /// Each chain's colour after its xform, and its xform's plotted weight.
     pub next_color: [f64; CHAINS],
     pub weight: [f64; CHAINS],
     /// Whether the chain's step counts (a retried step after a re-seed does not).
@@ -109,8 +107,6 @@ impl Round {
             rank: [0; CHAINS],
             gx: [0.0; CHAINS],
             gy: [0.0; CHAINS],
-            qx: [0.0; CHAINS],
-            qy: [0.0; CHAINS],
             next_color: [0.0; CHAINS],
             weight: [0.0; CHAINS],
             plot: [false; CHAINS],
