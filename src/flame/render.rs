@@ -19,8 +19,8 @@
 //! iterations depend on each other, the chains' do not, so the core overlaps their work. In a
 //! round the chains are grouped by the xform they drew (`Round::group`), and an xform whose
 //! variations all batch (the arithmetic and the smooth ones) maps its group as one batch in
-//! vector registers (the vector path, `CompiledXform::apply_batch`); each sample's bucket is prefetched when it is computed and
-//! added 16 samples later, when it is in cache. Each chain draws its random numbers in flam3's
+//! vector registers (the vector path, `CompiledXform::apply_batch`); each sample's bucket is
+//! prefetched when it is computed and added 16 samples later, when it is in cache. Each chain draws its random numbers in flam3's
 //! order and goes through the same operations, so the sums, and the picture, are the same bits
 //! as one run after another.
 
@@ -80,8 +80,10 @@ pub fn render(flame: &Flame, seed: u32, progress: &(dyn Fn(u64) + Sync)) -> Resu
 /// An xform as the chaos game uses it.
 struct GameXform {
     map: CompiledXform,
-    color: f64,
-    color_speed: f64,
+    /// The colour update c' = s · colour + (1 − s) · c (s the colour speed) as
+    /// `color_held + color_kept · c`, its two products' first computed once.
+    color_held: f64,
+    color_kept: f64,
     /// flam3's `vis_adjusted`: the weight of its points in the histogram.
     plotted_weight: f64,
     /// The final xform's chance of being applied (its raw opacity).
@@ -93,8 +95,8 @@ impl GameXform {
         let plotted_weight = x.plotted_weight();
         Self {
             map: CompiledXform::new(x),
-            color: x.color,
-            color_speed: x.color_speed,
+            color_held: x.color_speed * x.color,
+            color_kept: 1.0 - x.color_speed,
             plotted_weight,
             opacity: x.opacity,
         }
@@ -103,7 +105,7 @@ impl GameXform {
     /// The colour coordinate after this xform, from `c` before it.
     #[inline(always)]
     fn color_of(&self, c: f64) -> f64 {
-        self.color_speed * self.color + (1.0 - self.color_speed) * c
+        self.color_held + self.color_kept * c
     }
 }
 
@@ -120,10 +122,6 @@ struct ChaosGame {
     dmap: Vec<[f64; 4]>,
     /// The buckets' increments of a point of weight 1 at each palette entry (step mode).
     step_increments: Vec<Bucket>,
-    /// Per xform: its colour update c' = held + kept · c ([`GameXform::color_of`]'s terms), and
-    /// its points' plotted weight.
-    color_terms: Vec<(f64, f64)>,
-    plotted_weights: Vec<f64>,
 }
 
 impl ChaosGame {
@@ -150,11 +148,8 @@ impl ChaosGame {
         }
         let dmap: Vec<[f64; 4]> = flame.palette.iter().map(|c| c.map(|v| v * WHITE_LEVEL)).collect();
         let step_increments = dmap.iter().map(|c| increments(*c, 1.0)).collect();
-        let xforms: Vec<GameXform> = flame.xforms.iter().map(GameXform::new).collect();
         Ok(Self {
-            color_terms: xforms.iter().map(|x| (x.color_speed * x.color, 1.0 - x.color_speed)).collect(),
-            plotted_weights: xforms.iter().map(|x| x.plotted_weight).collect(),
-            xforms,
+            xforms: flame.xforms.iter().map(GameXform::new).collect(),
             final_xform: flame.final_xform.as_ref().map(GameXform::new),
             choice,
             xaos,
@@ -378,13 +373,12 @@ impl ChaosGame {
             r.chosen[k] = u32::from(self.choice[row * CHOICE_ENTRIES + r.entry[k] as usize]);
         }
         r.group(live, self.xforms.len(), wide);
-        let n = self.xforms.len().min(self.color_terms.len()).min(self.plotted_weights.len());
+        let n = self.xforms.len();
         for k in 0..live {
             // (Below n by the choice table; the min spares the bounds check a branch.)
-            let x = (r.chosen[k] as usize).min(n - 1);
-            let (held, kept) = self.color_terms[x];
-            r.next_color[k] = held + kept * c.color[k];
-            r.weight[k] = self.plotted_weights[x];
+            let xf = &self.xforms[(r.chosen[k] as usize).min(n - 1)];
+            r.next_color[k] = xf.color_of(c.color[k]);
+            r.weight[k] = xf.plotted_weight;
         }
     }
 
