@@ -154,6 +154,15 @@ fn a_dropped_scene_opens_and_a_broken_one_is_an_error_over_the_view_with_its_loc
     s.apply([Command::OpenFile(plant1.clone())]);
     assert!(s.files.view_error.is_none());
 
+    // A flame file opens as its imported scene (as `nlifs view FILE.flame`), saved beside it as
+    // TOML, never over it.
+    let flame = scratch.dir.join("waves-popcorn.flame");
+    std::fs::copy(common::repo_path("docs/gallery/flames/waves-popcorn.flame"), &flame).unwrap();
+    let changes = s.apply([Command::OpenFile(flame.clone())]);
+    assert!(changes.scene_replaced, "{:?}", s.files.view_error);
+    assert_eq!(s.scene.name, "waves-popcorn");
+    assert_eq!(s.edit.save_text, flame.with_extension("toml").display().to_string());
+
     // Any other kind of file: an error, the scene stays.
     let text = scratch.dir.join("notes.txt");
     std::fs::write(&text, "hello").unwrap();

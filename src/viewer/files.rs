@@ -105,8 +105,8 @@ impl ViewerState {
         changes.file_dialog = Some(FileDialogRequest { kind, directory, file_name });
     }
 
-    /// Opens a scene file, or the scene inside a PNG that nlifs wrote; anything else, or a file
-    /// that does not read, is an error over the view and the scene stays.
+    /// Opens a scene file, a flame file, or the scene inside a PNG that nlifs wrote; anything
+    /// else, or a file that does not read, is an error over the view and the scene stays.
     pub(super) fn open_file(&mut self, path: &Path, changes: &mut Changes) {
         if !path.is_file() {
             let what = if path.exists() { "is not a file" } else { "does not exist" };
@@ -128,11 +128,14 @@ impl ViewerState {
                 ),
                 Err(e) => self.set_view_error(e.to_string()),
             }
-        } else if path.extension().is_some_and(|e| e.eq_ignore_ascii_case("toml")) {
+        } else if path.extension().is_some_and(|e| e.eq_ignore_ascii_case("toml"))
+            || crate::flame::xml::is_flame_path(path)
+        {
+            // A scene file, or a flame file (opened as its imported scene).
             self.request_open(PendingOpen::File(path.to_path_buf()), changes);
         } else {
             self.set_view_error(format!(
-                "cannot open {}: not a scene file (.toml) or a PNG that nlifs wrote",
+                "cannot open {}: not a scene file (.toml), a flame file (.flame) or a PNG that nlifs wrote",
                 path.display()
             ));
         }

@@ -213,7 +213,7 @@ fn scene_ui(ui: &mut egui::Ui, state: &ViewerState, commands: &mut Vec<Command>)
             }
         });
         ui.small(if crate::platform::DESKTOP {
-            "…or drop a .toml file, or a PNG that nlifs wrote, onto the window. The file is reloaded when it \
+            "…or drop a .toml or .flame file, or a PNG that nlifs wrote, onto the window. The file is reloaded when it \
              changes."
         } else {
             "…or drop a .toml file, or a PNG that nlifs wrote, onto the page. Save as downloads the scene under \
