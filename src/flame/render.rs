@@ -23,6 +23,11 @@
 //! prefetched when it is computed and added 16 samples later, when it is in cache. Each chain draws its random numbers in flam3's
 //! order and goes through the same operations, so the sums, and the picture, are the same bits
 //! as one run after another.
+//!
+//! That is the f64 chaos game. A flame whose terms are all common variations and whose view
+//! f32 resolves runs instead in f32 lanes (`render_lanes.rs`): the same flame and the same
+//! picture within flam3's own noise, not the same bytes, about twice as fast.
+//! `NLIFS_FLAME_F64=1` keeps every flame on the f64 game.
 
 use std::sync::atomic::{AtomicU64, Ordering};
 
@@ -162,18 +167,28 @@ impl ChaosGame {
 
     /// All runs of `samples`, on rayon's pool: the summed histogram and the re-seeds.
     fn run(&self, seed: u32, samples: u64, layout: &Layout, progress: &(dyn Fn(u64) + Sync)) -> (Vec<Bucket>, u64) {
-        let runs = samples.div_ceil(RUN_SAMPLES);
+        let lane_game = if f64_only() { None } else { lanes::LaneGame::new(self) };
+        let runs = match &lane_game {
+            Some(_) => samples.div_ceil(lanes::BLOCK_SAMPLES),
+            None => samples.div_ceil(RUN_SAMPLES),
+        };
         let next_run = AtomicU64::new(0);
         let cells = layout.hist_width * layout.hist_height;
         let workers = rayon::current_num_threads().max(1).min(runs.max(1) as usize);
         let parts: Vec<(Vec<Bucket>, u64)> = (0..workers)
             .into_par_iter()
             .map(|_| {
-                let mut histogram = vec![[0u32; 5]; cells];
+                // (The lane game's samples that add nothing go to a bucket past the picture's.)
+                let sink = usize::from(lane_game.is_some());
+                let mut histogram = vec![[0u32; 5]; cells + sink];
                 if workers > 1 {
                     crate::platform::write_every_page(&mut histogram, [0; 5]);
                 }
-                let bad = self.run_chains_dispatch(seed, samples, &next_run, &mut histogram, progress);
+                let bad = match &lane_game {
+                    Some(lanes) => lanes.run_worker(seed, samples, &next_run, &mut histogram, progress),
+                    None => self.run_chains_dispatch(seed, samples, &next_run, &mut histogram, progress),
+                };
+                histogram.truncate(cells);
                 (histogram, bad)
             })
             .collect();
@@ -579,12 +594,21 @@ fn uniform11(rng: &mut Pcg32) -> f64 {
     rng.next_f64() * 2.0 - 1.0
 }
 
+/// Whether `NLIFS_FLAME_F64` asks for the f64 chaos game, whose chains draw as flam3's do, for
+/// every flame (otherwise flames it can take run in f32 lanes: `render_lanes.rs`).
+fn f64_only() -> bool {
+    std::env::var_os("NLIFS_FLAME_F64").is_some_and(|v| v != "0")
+}
+
 /// flam3's `badvalue`: NaN or beyond ±1e10.
 #[inline(always)]
 fn is_bad(p: [f64; 2]) -> bool {
     let bad = |v: f64| v.is_nan() || !(-1e10..=1e10).contains(&v);
     bad(p[0]) || bad(p[1])
 }
+
+#[path = "render_lanes.rs"]
+mod lanes;
 
 #[cfg(test)]
 #[path = "render_tests.rs"]

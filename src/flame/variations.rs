@@ -298,7 +298,7 @@ impl Variation {
 pub(crate) const EPS: f64 = 1e-10;
 
 /// The most numbers a variation keeps precomputed (mobius' eight coefficients).
-const MAX_CONSTS: usize = 8;
+pub(crate) const MAX_CONSTS: usize = 8;
 
 /// The quantities of the affine image that several variations share (flam3's `precalc_*`).
 /// `atan_xy`, `sina`, `cosa` and `atan_yx` are computed only when a term of the xform reads them.
@@ -350,6 +350,19 @@ struct Term {
     k: [f64; MAX_CONSTS],
 }
 
+/// A [`CompiledXform`]'s parts ([`CompiledXform::parts`]).
+pub(crate) struct XformParts<'a> {
+    pub coefs: &'a Coefs,
+    /// The post-affine where flam3 applies one.
+    pub post: Option<&'a Coefs>,
+    /// The weight of `pre_blur` (0: none).
+    pub pre_blur: f64,
+    /// The [`Point`] quantities the terms read (`NEEDS_*`).
+    pub needs: u8,
+    /// The terms in flam3's order: variation, weight, prepared constants.
+    pub terms: Vec<(u8, f64, [f64; MAX_CONSTS])>,
+}
+
 /// An xform ready to apply.
 #[derive(Clone, Debug)]
 pub struct CompiledXform {
@@ -399,6 +412,17 @@ impl CompiledXform {
         let post = x.post.filter(|p| *p != super::IDENTITY);
         let (color, color_speed, plotted_weight) = (x.color, x.color_speed, x.plotted_weight());
         Self { coefs: x.coefs, post, pre_blur, needs, terms, color, color_speed, plotted_weight }
+    }
+
+    /// What the f32 lane game (`flame/render_lanes.rs`) rebuilds the xform from.
+    pub(crate) fn parts(&self) -> XformParts<'_> {
+        XformParts {
+            coefs: &self.coefs,
+            post: self.post.as_ref(),
+            pre_blur: self.pre_blur,
+            needs: self.needs,
+            terms: self.terms.iter().map(|t| (t.variation, t.weight, t.k)).collect(),
+        }
     }
 
     /// flam3's weight of the xform's points ([`super::Xform::plotted_weight`]).

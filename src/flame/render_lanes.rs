@@ -1,0 +1,668 @@
+//! The flame chaos game in f32 lanes, for flames whose terms are all common variations
+//! (`variations_lanes::SUPPORTED`) and whose view f32 resolves: the points are not chains that
+//! keep flam3's draws, but a pool of [`POINTS`] orbits in one queue per xform. A round maps each
+//! queue 16 points at a time (contiguous loads, no gather), plots them, draws each one's next
+//! xform and appends it to that xform's queue for the next round (a compress per xform, no
+//! scatter). Every phase of a vector of 16 runs in registers, in f32 (two lanes where f64 has
+//! one), and the elementary functions are f32 polynomials (`trig32.rs`).
+//!
+//! The picture is the same flame as the f64 game's (same xforms, choice tables, colours,
+//! camera, palette and bucket increments; `tests/flame_fidelity.rs` holds both to flam3's
+//! renders), not the same bytes: the orbits differ from the first rounding on. It is still a
+//! pure function of the seed, whatever the thread count: the samples are cut into blocks of
+//! [`BLOCK_SAMPLES`], each drawn from its own generators, and the sums are integers. A block
+//! starts its points at random in [−1, 1]² and drops their first [`FUSE_ITERATIONS`] rounds, as
+//! flam3's runs do; a point that leaves the plane is re-seeded and its step counted, not plotted
+//! (flam3 retries the step instead: the difference is the share of such steps).
+
+use std::sync::atomic::{AtomicU64, Ordering};
+
+use super::super::render_base::Bucket;
+use super::super::trig32::{Exact32, Fast32};
+use super::super::variations::{MAX_CONSTS, NEEDS_ANGLES, NEEDS_ATAN_XY, NEEDS_ATAN_YX, NEEDS_SQRT};
+use super::super::variations_lanes::{self as lanes, Draw, Point32, SUPPORTED};
+use super::{CHOICE_ENTRIES, ChaosGame, FUSE_ITERATIONS, GameXform, add, prefetch};
+use crate::flame::PaletteMode;
+use crate::rng::Pcg32;
+
+/// Points mapped at once: one vector of f32.
+const LANES: usize = 16;
+type Lanes = [f32; LANES];
+/// Orbits a worker keeps in its queues.
+const POINTS: usize = 2048;
+/// Samples of one block (1024 rounds of the pool), each block from its own generators.
+pub(super) const BLOCK_SAMPLES: u64 = 1 << 21;
+/// Most xforms the lane game takes (the next xform is found by comparisons with each's share).
+const MAX_XFORMS: usize = 64;
+/// The view is drawn in f32 only where f32's spacing at the view's farthest coordinate is below
+/// 1/`RESOLUTION` of a bucket.
+const RESOLUTION: f64 = 64.0;
+
+/// One term in f32.
+struct Term32 {
+    variation: u8,
+    weight: f32,
+    k: [f32; MAX_CONSTS],
+}
+
+/// An xform in f32, as [`GameXform`] in f64.
+struct Xform32 {
+    coefs: [f32; 6],
+    post: Option<[f32; 6]>,
+    needs: u8,
+    terms: Vec<Term32>,
+    color_held: f32,
+    color_kept: f32,
+    plotted_weight: f64,
+    /// Its points' bucket increments by step-palette entry (step mode).
+    increments: Vec<Bucket>,
+}
+
+impl Xform32 {
+    /// `x` in f32; `None` when a term is not in [`SUPPORTED`] or it has `pre_blur`.
+    fn new(x: &GameXform, game: &ChaosGame) -> Option<Self> {
+        let parts = x.map.parts();
+        if parts.pre_blur != 0.0 {
+            return None;
+        }
+        let f6 = |c: &[f64; 6]| c.map(|v| v as f32);
+        let terms = parts
+            .terms
+            .iter()
+            .map(|&(variation, weight, k)| {
+                SUPPORTED.contains(&variation).then(|| Term32 {
+                    variation,
+                    weight: weight as f32,
+                    k: k.map(|v| v as f32),
+                })
+            })
+            .collect::<Option<Vec<_>>>()?;
+        let increments =
+            (0..256).map(|i| game.increments_of((f64::from(i) + 0.5) / 256.0, x.plotted_weight)).collect::<Vec<_>>();
+        Some(Self {
+            coefs: f6(parts.coefs),
+            post: parts.post.map(f6),
+            needs: parts.needs,
+            terms,
+            color_held: x.color_held as f32,
+            color_kept: x.color_kept as f32,
+            plotted_weight: x.plotted_weight,
+            increments,
+        })
+    }
+
+    /// The xform's images of the 16 points (`x`, `y`), in place, drawing from `rng`.
+    #[inline(always)]
+    fn apply(&self, x: &mut Lanes, y: &mut Lanes, rng: &mut LaneRng) {
+        let c = &self.coefs;
+        let mut p = PointLanes::default();
+        for l in 0..LANES {
+            let (tx, ty) = (c[0] * x[l] + c[2] * y[l] + c[4], c[1] * x[l] + c[3] * y[l] + c[5]);
+            p.x[l] = tx;
+            p.y[l] = ty;
+            p.r2[l] = tx * tx + ty * ty;
+        }
+        if self.needs & (NEEDS_SQRT | NEEDS_ANGLES) != 0 {
+            for l in 0..LANES {
+                p.r[l] = p.r2[l].sqrt();
+            }
+        }
+        if self.needs & NEEDS_ATAN_XY != 0 {
+            atan2_lanes(&mut p.a, &p.x, &p.y);
+        }
+        if self.needs & NEEDS_ANGLES != 0 {
+            for l in 0..LANES {
+                p.sa[l] = p.x[l] / p.r[l];
+                p.ca[l] = p.y[l] / p.r[l];
+            }
+        }
+        if self.needs & NEEDS_ATAN_YX != 0 {
+            atan2_lanes(&mut p.ayx, &p.y, &p.x);
+        }
+        let (mut ox, mut oy) = ([0.0; LANES], [0.0; LANES]);
+        for t in &self.terms {
+            let (w, k) = (t.weight, &t.k);
+            // One loop per variation, its number a constant, so that each is a vector loop; where
+            // a lane's argument is beyond a core's range, every lane again with `Exact32`.
+            macro_rules! term {
+                ($v:literal) => {{
+                    let mut draw = [0.0f32; LANES];
+                    match const { lanes::draw_of($v) } {
+                        Draw::None => {}
+                        Draw::Bit => draw = rng.bits(),
+                        Draw::Uniform => draw = rng.uniform(),
+                    }
+                    let (mut dx, mut dy) = ([0.0; LANES], [0.0; LANES]);
+                    let mut in_range = true;
+                    for l in 0..LANES {
+                        let mut m = Fast32 { in_range: true };
+                        [dx[l], dy[l]] = lanes::eval::<$v>(w, k, &p.lane(l), draw[l], &mut m);
+                        in_range &= m.in_range;
+                    }
+                    if !in_range {
+                        exact_term::<$v>(w, k, &p, &draw, &mut dx, &mut dy);
+                    }
+                    for l in 0..LANES {
+                        ox[l] += dx[l];
+                        oy[l] += dy[l];
+                    }
+                }};
+            }
+            macro_rules! by_variation {
+                ($($v:literal)*) => {
+                    match t.variation {
+                        $($v => term!($v),)*
+                        _ => {}
+                    }
+                };
+            }
+            by_variation!(0 1 2 3 4 5 6 7 8 9 10 11 12 13 14 15 16 17 18 19 20 23 24 27 28 29 30 32 33 39 42 51 78);
+        }
+        match &self.post {
+            Some(c) => {
+                for l in 0..LANES {
+                    x[l] = c[0] * ox[l] + c[2] * oy[l] + c[4];
+                    y[l] = c[1] * ox[l] + c[3] * oy[l] + c[5];
+                }
+            }
+            None => (*x, *y) = (ox, oy),
+        }
+    }
+
+    /// The colour coordinate after this xform.
+    #[inline(always)]
+    fn color_of(&self, c: f32) -> f32 {
+        self.color_held + self.color_kept * c
+    }
+}
+
+/// [`Point32`]'s quantities of the 16 lanes, one array each (so that loops over them are vector
+/// loops); those no term reads stay 0.
+#[derive(Default)]
+struct PointLanes {
+    x: Lanes,
+    y: Lanes,
+    r2: Lanes,
+    r: Lanes,
+    a: Lanes,
+    sa: Lanes,
+    ca: Lanes,
+    ayx: Lanes,
+}
+
+impl PointLanes {
+    #[inline(always)]
+    fn lane(&self, l: usize) -> Point32 {
+        Point32 {
+            x: self.x[l],
+            y: self.y[l],
+            r2: self.r2[l],
+            r: self.r[l],
+            a: self.a[l],
+            sa: self.sa[l],
+            ca: self.ca[l],
+            ayx: self.ayx[l],
+        }
+    }
+}
+
+/// Variation `V`'s terms of the 16 lanes with [`Exact32`]: where a core's argument was out of its
+/// range. Out of line and cold: inlined, it slowed the vector loops it stands beside (3×).
+#[cold]
+#[inline(never)]
+fn exact_term<const V: u8>(
+    w: f32,
+    k: &[f32; MAX_CONSTS],
+    p: &PointLanes,
+    draw: &Lanes,
+    dx: &mut Lanes,
+    dy: &mut Lanes,
+) {
+    for l in 0..LANES {
+        [dx[l], dy[l]] = lanes::eval::<V>(w, k, &p.lane(l), draw[l], &mut Exact32);
+    }
+}
+
+/// `out[l]` = atan2(`y[l]`, `x[l]`): `trig32`'s core; every lane again in f64 where one is not
+/// finite.
+#[inline(always)]
+fn atan2_lanes(out: &mut Lanes, y: &Lanes, x: &Lanes) {
+    let mut finite = true;
+    for l in 0..LANES {
+        let (a, ok) = super::super::trig32::atan2_core(y[l], x[l]);
+        out[l] = a;
+        finite &= ok;
+    }
+    if !finite {
+        for l in 0..LANES {
+            out[l] = f64::from(y[l]).atan2(f64::from(x[l])) as f32;
+        }
+    }
+}
+
+/// 16 generators, one a lane: nlifs's PCG, advanced as a vector.
+struct LaneRng {
+    state: [u32; LANES],
+}
+
+impl LaneRng {
+    fn new(seed: u32, block: u64) -> Self {
+        let block = block as u32;
+        Self { state: std::array::from_fn(|l| Pcg32::for_stream(seed, block, 0x8000_0000 | l as u32).state()) }
+    }
+
+    #[inline(always)]
+    fn next_u32(&mut self) -> [u32; LANES] {
+        let mut out = [0; LANES];
+        for (o, s) in out.iter_mut().zip(&mut self.state) {
+            let mut g = Pcg32::from_state(*s);
+            *o = g.next_u32();
+            *s = g.state();
+        }
+        out
+    }
+
+    /// Uniform in [0, 1), 24 bits.
+    #[inline(always)]
+    fn uniform(&mut self) -> Lanes {
+        self.next_u32().map(|u| (u >> 8) as f32 * (1.0 / 16_777_216.0))
+    }
+
+    /// 0 or 1.
+    #[inline(always)]
+    fn bits(&mut self) -> Lanes {
+        self.next_u32().map(|u| (u & 1) as f32)
+    }
+}
+
+/// The camera in f32: the histogram's bounds and buckets per unit.
+struct Camera32 {
+    rotation: Option<([[f32; 2]; 2], [f32; 2])>,
+    bounds: [f32; 4],
+    scale: [f32; 2],
+    width: u32,
+    last: [f32; 2],
+    /// The bucket past the histogram's: where samples that add nothing go.
+    sink: u32,
+}
+
+/// The chaos game of a flame in f32 lanes.
+pub(super) struct LaneGame<'a> {
+    game: &'a ChaosGame,
+    xforms: Vec<Xform32>,
+    final_xform: Option<(Xform32, f32)>,
+    /// Per choice row, the first entry of each xform after the first: the next xform is the count
+    /// of those at or below the drawn entry.
+    firsts: Vec<[u32; MAX_XFORMS]>,
+    camera: Camera32,
+    /// Whether the CPU runs AVX-512F (the queues' compress).
+    wide: bool,
+}
+
+impl<'a> LaneGame<'a> {
+    /// `game` in f32 lanes; `None` where a term is not supported, it has more than
+    /// [`MAX_XFORMS`] xforms, its choice table is not in xform order, or f32 does not resolve
+    /// its view ([`RESOLUTION`]).
+    pub fn new(game: &'a ChaosGame) -> Option<Self> {
+        let n = game.xforms.len();
+        if n > MAX_XFORMS {
+            return None;
+        }
+        let cam = &game.camera;
+        let far = cam.bounds.iter().chain(&cam.center).fold(0f64, |m, v| m.max(v.abs()));
+        let bucket = 1.0 / cam.x_scale.max(cam.y_scale);
+        let cells = cam.hist_width as u64 * cam.hist_height as u64;
+        if !(far * f64::from(f32::EPSILON) * RESOLUTION <= bucket)
+            || cam.hist_width.max(cam.hist_height) >= 1 << 23
+            || cells >= u64::from(u32::MAX)
+        {
+            return None;
+        }
+        let xforms = game.xforms.iter().map(|x| Xform32::new(x, game)).collect::<Option<Vec<_>>>()?;
+        let final_xform = match &game.final_xform {
+            Some(f) => Some((Xform32::new(f, game)?, f.opacity as f32)),
+            None => None,
+        };
+        let mut firsts = Vec::new();
+        for row in game.choice.chunks_exact(CHOICE_ENTRIES) {
+            if row.windows(2).any(|w| w[1] < w[0]) {
+                return None;
+            }
+            let mut f = [CHOICE_ENTRIES as u32; MAX_XFORMS];
+            for (j, first) in f.iter_mut().enumerate().take(n).skip(1) {
+                *first = row.partition_point(|&e| usize::from(e) < j) as u32;
+            }
+            firsts.push(f);
+        }
+        let rotation = cam.rotation.map(|r| (r.map(|row| row.map(|v| v as f32)), cam.center.map(|v| v as f32)));
+        let camera = Camera32 {
+            rotation,
+            bounds: cam.bounds.map(|v| v as f32),
+            scale: [cam.x_scale as f32, cam.y_scale as f32],
+            width: cam.hist_width as u32,
+            last: [cam.hist_width as f32 - 1.0, cam.hist_height as f32 - 1.0],
+            sink: (cam.hist_width * cam.hist_height) as u32,
+        };
+        #[cfg(target_arch = "x86_64")]
+        let wide = crate::simd::SimdLevel::detect().avx512();
+        #[cfg(not(target_arch = "x86_64"))]
+        let wide = false;
+        Some(Self { game, xforms, final_xform, firsts, camera, wide })
+    }
+
+    /// One worker: blocks taken in turn from `next_block` until none is left, into `histogram`,
+    /// whose last bucket is the sink (past the picture's). Returns the re-seeds.
+    pub fn run_worker(
+        &self,
+        seed: u32,
+        samples: u64,
+        next_block: &AtomicU64,
+        histogram: &mut [Bucket],
+        progress: &(dyn Fn(u64) + Sync),
+    ) -> u64 {
+        #[cfg(target_arch = "x86_64")]
+        {
+            use crate::simd::SimdLevel;
+            match SimdLevel::detect() {
+                #[expect(unsafe_code, reason = "an AVX-512 function, entered after the CPU check")]
+                // SAFETY: the CPU runs AVX-512F (detected).
+                SimdLevel::Avx512 => unsafe {
+                    return self.run_worker_avx512(seed, samples, next_block, histogram, progress);
+                },
+                #[expect(unsafe_code, reason = "an AVX2 function, entered after the CPU check")]
+                // SAFETY: the CPU runs AVX2 (detected).
+                SimdLevel::Avx2 => unsafe {
+                    return self.run_worker_avx2(seed, samples, next_block, histogram, progress);
+                },
+                SimdLevel::Scalar => {}
+            }
+        }
+        self.run_blocks(seed, samples, next_block, histogram, progress)
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,avx512f")]
+    fn run_worker_avx512(
+        &self,
+        seed: u32,
+        samples: u64,
+        next_block: &AtomicU64,
+        histogram: &mut [Bucket],
+        progress: &(dyn Fn(u64) + Sync),
+    ) -> u64 {
+        self.run_blocks(seed, samples, next_block, histogram, progress)
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    fn run_worker_avx2(
+        &self,
+        seed: u32,
+        samples: u64,
+        next_block: &AtomicU64,
+        histogram: &mut [Bucket],
+        progress: &(dyn Fn(u64) + Sync),
+    ) -> u64 {
+        self.run_blocks(seed, samples, next_block, histogram, progress)
+    }
+
+    #[inline(always)]
+    fn run_blocks(
+        &self,
+        seed: u32,
+        samples: u64,
+        next_block: &AtomicU64,
+        histogram: &mut [Bucket],
+        progress: &(dyn Fn(u64) + Sync),
+    ) -> u64 {
+        let blocks = samples.div_ceil(BLOCK_SAMPLES);
+        let mut queues = Queues::new(self.xforms.len());
+        let mut bad = 0;
+        loop {
+            let block = next_block.fetch_add(1, Ordering::Relaxed);
+            if block >= blocks {
+                return bad;
+            }
+            let n = BLOCK_SAMPLES.min(samples - block * BLOCK_SAMPLES);
+            bad += self.run_block(seed, block, n, &mut queues, histogram);
+            progress(n);
+        }
+    }
+
+    /// Block `block`: [`POINTS`] orbits until `n` samples are drawn after their fuse.
+    #[inline(always)]
+    fn run_block(&self, seed: u32, block: u64, n: u64, q: &mut Queues, histogram: &mut [Bucket]) -> u64 {
+        let xforms = self.xforms.len();
+        let mut start = Pcg32::for_stream(seed, block as u32, 0x7FFF_FFFF);
+        let mut rng = LaneRng::new(seed, block);
+        q.clear();
+        for _ in 0..POINTS {
+            let p = [start.next_f32() * 2.0 - 1.0, start.next_f32() * 2.0 - 1.0];
+            let color = start.next_f32();
+            let j = self.next_xform(0, start.next_u32() & (CHOICE_ENTRIES as u32 - 1));
+            q.push(j, p, color);
+        }
+        let mut pending = InFlight::new(self.camera.sink);
+        let mut bad = 0;
+        let mut drawn = 0u64;
+        let mut round = -FUSE_ITERATIONS;
+        while drawn < n {
+            let plot = round >= 0;
+            'round: for j in 0..xforms {
+                let len = q.len[j];
+                for at in (0..len).step_by(LANES) {
+                    let mut count = (len - at).min(LANES);
+                    if plot {
+                        count = count.min((n - drawn) as usize);
+                        drawn += count as u64;
+                    }
+                    bad += self.step(j, at, count, plot, q, &mut rng, &mut pending, histogram);
+                    if plot && drawn >= n {
+                        break 'round;
+                    }
+                }
+            }
+            q.next_round();
+            round += 1;
+        }
+        pending.finish(histogram);
+        bad
+    }
+
+    /// The next xform after xform `row` − 1 (0: by weight) for choice-table entry `entry`.
+    #[inline(always)]
+    fn next_xform(&self, row: usize, entry: u32) -> usize {
+        let firsts = &self.firsts[row.min(self.firsts.len() - 1)];
+        firsts[1..self.xforms.len()].iter().map(|&f| usize::from(entry >= f)).sum()
+    }
+
+    /// Points `at..at + count` of xform `j`'s queue: mapped, re-seeded where they left the plane,
+    /// plotted when `plot`, and queued to their next xforms. Returns the re-seeds.
+    #[inline(always)]
+    #[expect(clippy::too_many_arguments, reason = "one step of the round's state")]
+    fn step(
+        &self,
+        j: usize,
+        at: usize,
+        count: usize,
+        plot: bool,
+        q: &mut Queues,
+        rng: &mut LaneRng,
+        pending: &mut InFlight,
+        histogram: &mut [Bucket],
+    ) -> u64 {
+        let xf = &self.xforms[j];
+        let (mut x, mut y, mut c) = q.load(j, at);
+        xf.apply(&mut x, &mut y, rng);
+        for c in &mut c {
+            *c = xf.color_of(*c);
+        }
+        let mut bad = [false; LANES];
+        let mut any_bad = false;
+        for l in 0..LANES {
+            bad[l] = !(x[l].abs() <= 1e10 && y[l].abs() <= 1e10) && l < count;
+            any_bad |= bad[l];
+        }
+        let mut reseeds = 0;
+        if any_bad {
+            let (rx, ry) = (rng.uniform(), rng.uniform());
+            for l in 0..LANES {
+                if bad[l] {
+                    x[l] = rx[l] * 2.0 - 1.0;
+                    y[l] = ry[l] * 2.0 - 1.0;
+                    reseeds += 1;
+                }
+            }
+        }
+        if plot && xf.plotted_weight != 0.0 {
+            self.plot(xf, count, &bad, (x, y, c), rng, pending, histogram);
+        }
+        // Each point's next xform, and the point queued to it.
+        let entries = rng.next_u32();
+        let row = if self.game.xaos { j + 1 } else { 0 };
+        let mut next = [0u32; LANES];
+        for &first in &self.firsts[row][1..self.xforms.len()] {
+            for l in 0..LANES {
+                next[l] += u32::from((entries[l] & (CHOICE_ENTRIES as u32 - 1)) >= first);
+            }
+        }
+        q.append(&next, count, &x, &y, &c, self.wide);
+        reseeds
+    }
+
+    /// Adds the points that plot (lanes below `count`, not re-seeded, in view) to their buckets:
+    /// the final xform's image where there is one (applied by its opacity), the colour looked
+    /// up, the bucket prefetched now and added with the next vector.
+    #[inline(always)]
+    #[expect(clippy::too_many_arguments, reason = "one step of the round's state")]
+    fn plot(
+        &self,
+        xf: &Xform32,
+        count: usize,
+        bad: &[bool; LANES],
+        (x, y, c): (Lanes, Lanes, Lanes),
+        rng: &mut LaneRng,
+        pending: &mut InFlight,
+        histogram: &mut [Bucket],
+    ) {
+        let (mut sx, mut sy, mut sc) = (x, y, c);
+        if let Some((f, opacity)) = &self.final_xform {
+            let (mut fx, mut fy) = (x, y);
+            f.apply(&mut fx, &mut fy, rng);
+            let applies = if *opacity == 1.0 { [1.0; LANES] } else { rng.uniform() };
+            let (rx, ry) = (rng.uniform(), rng.uniform());
+            for l in 0..LANES {
+                if applies[l] < *opacity || *opacity == 1.0 {
+                    sc[l] = f.color_of(c[l]);
+                    let out = !(fx[l].abs() <= 1e10 && fy[l].abs() <= 1e10);
+                    sx[l] = if out { rx[l] * 2.0 - 1.0 } else { fx[l] };
+                    sy[l] = if out { ry[l] * 2.0 - 1.0 } else { fy[l] };
+                }
+            }
+        }
+        let cam = &self.camera;
+        if let Some((r, center)) = &cam.rotation {
+            for l in 0..LANES {
+                let d = [sx[l] - center[0], sy[l] - center[1]];
+                sx[l] = d[0] * r[0][0] + d[1] * r[0][1] + center[0];
+                sy[l] = d[0] * r[1][0] + d[1] * r[1][1] + center[1];
+            }
+        }
+        let b = &cam.bounds;
+        let mut bucket = [0u32; LANES];
+        let mut entry = [0u32; LANES];
+        for l in 0..LANES {
+            let inside = (sx[l] >= b[0]) & (sy[l] >= b[1]) & (sx[l] <= b[2]) & (sy[l] <= b[3]);
+            let i = whole((sx[l] - b[0]) * cam.scale[0], cam.last[0]);
+            let k = whole((sy[l] - b[1]) * cam.scale[1], cam.last[1]);
+            let adds = inside & !bad[l] & (l < count);
+            // A sample that adds nothing goes to the sink, the bucket past the histogram's.
+            bucket[l] = if adds { i + k * cam.width } else { cam.sink };
+            entry[l] = whole(sc[l] * 256.0, 255.0);
+        }
+        for &b in &bucket {
+            prefetch(&histogram[b as usize]);
+        }
+        let pending = pending.take(histogram);
+        pending.bucket = bucket;
+        if self.game.palette_mode == PaletteMode::Step {
+            for (inc, &e) in pending.increments.iter_mut().zip(&entry) {
+                *inc = xf.increments[e as usize];
+            }
+        } else {
+            for (inc, &c) in pending.increments.iter_mut().zip(&sc) {
+                *inc = self.game.increments_of(f64::from(c), xf.plotted_weight);
+            }
+        }
+    }
+}
+
+/// `v` clamped to [0, `last`] (NaN: 0) and truncated, for `last` < 2^23: with operations vector
+/// loops have (2^23 added puts the whole part in the low bits).
+#[inline(always)]
+fn whole(v: f32, last: f32) -> u32 {
+    const TWO_23: f32 = 8_388_608.0;
+    let v = v.max(0.0).min(last);
+    (v.trunc() + TWO_23).to_bits() & 0x7F_FFFF
+}
+
+/// One vector's adds, waiting for their buckets' lines (prefetched): bucket and increments.
+struct Pending {
+    bucket: [u32; LANES],
+    increments: [Bucket; LANES],
+}
+
+impl Pending {
+    /// Nothing to add: 0 to bucket `sink`.
+    fn new(sink: u32) -> Self {
+        Self { bucket: [sink; LANES], increments: [[0; 5]; LANES] }
+    }
+
+    /// Adds them; nothing is left to add.
+    #[inline(always)]
+    fn apply(&mut self, histogram: &mut [Bucket]) {
+        for (&b, inc) in self.bucket.iter().zip(&self.increments) {
+            add(&mut histogram[b as usize], inc);
+        }
+        self.increments = [[0; 5]; LANES];
+    }
+}
+
+/// Vectors whose adds wait this many vectors for their buckets' lines.
+const IN_FLIGHT_VECTORS: usize = 2;
+
+/// The vectors whose adds wait, oldest first from `next`.
+struct InFlight {
+    vectors: [Pending; IN_FLIGHT_VECTORS],
+    next: usize,
+}
+
+impl InFlight {
+    fn new(sink: u32) -> Self {
+        Self { vectors: std::array::from_fn(|_| Pending::new(sink)), next: 0 }
+    }
+
+    /// The oldest vector's adds done, and its place for the next vector's.
+    #[inline(always)]
+    fn take(&mut self, histogram: &mut [Bucket]) -> &mut Pending {
+        let k = self.next % IN_FLIGHT_VECTORS;
+        self.next = (k + 1) % IN_FLIGHT_VECTORS;
+        self.vectors[k].apply(histogram);
+        &mut self.vectors[k]
+    }
+
+    /// Every waiting add done.
+    fn finish(&mut self, histogram: &mut [Bucket]) {
+        for v in &mut self.vectors {
+            v.apply(histogram);
+        }
+    }
+}
+
+#[path = "render_lanes_queues.rs"]
+mod queues;
+use queues::Queues;
+
+#[cfg(test)]
+#[path = "render_lanes_tests.rs"]
+mod tests;

@@ -1,0 +1,118 @@
+//! The lane chaos game's queues (`render_lanes.rs`): its pool of points, one queue per xform,
+//! this round's and the next's.
+
+use super::{LANES, Lanes, POINTS};
+
+/// The points' queues, one per xform, this round's and the next's: x, y and colour, each
+/// xform's stretch [`POINTS`] + [`LANES`] long (a vector may be loaded or stored past the last
+/// point).
+pub(super) struct Queues {
+    stride: usize,
+    x: Vec<f32>,
+    y: Vec<f32>,
+    c: Vec<f32>,
+    pub(super) len: Vec<usize>,
+    next_x: Vec<f32>,
+    next_y: Vec<f32>,
+    next_c: Vec<f32>,
+    next_len: Vec<usize>,
+}
+
+impl Queues {
+    pub(super) fn new(xforms: usize) -> Self {
+        let stride = POINTS + LANES;
+        let zeros = vec![0.0; stride * xforms];
+        Self {
+            stride,
+            x: zeros.clone(),
+            y: zeros.clone(),
+            c: zeros.clone(),
+            len: vec![0; xforms],
+            next_x: zeros.clone(),
+            next_y: zeros.clone(),
+            next_c: zeros,
+            next_len: vec![0; xforms],
+        }
+    }
+
+    pub(super) fn clear(&mut self) {
+        self.next_len.fill(0);
+        self.len.fill(0);
+    }
+
+    /// Queues a starting point for the first round.
+    pub(super) fn push(&mut self, j: usize, p: [f32; 2], color: f32) {
+        let at = j * self.stride + self.len[j];
+        (self.x[at], self.y[at], self.c[at]) = (p[0], p[1], color);
+        self.len[j] += 1;
+    }
+
+    /// The 16 points from `at` of xform `j`'s queue (past its end: earlier points, ignored).
+    #[inline(always)]
+    pub(super) fn load(&self, j: usize, at: usize) -> (Lanes, Lanes, Lanes) {
+        let from = j * self.stride + at;
+        let lanes = |v: &[f32]| -> Lanes { v[from..from + LANES].try_into().unwrap_or([0.0; LANES]) };
+        (lanes(&self.x), lanes(&self.y), lanes(&self.c))
+    }
+
+    /// Appends lanes `0..count` to the next round's queues of their xforms `next`: with `wide`
+    /// (the CPU runs AVX-512F), one compress a quantity per xform.
+    #[inline(always)]
+    pub(super) fn append(&mut self, next: &[u32; LANES], count: usize, x: &Lanes, y: &Lanes, c: &Lanes, wide: bool) {
+        #[cfg(target_arch = "x86_64")]
+        if wide {
+            #[expect(unsafe_code, reason = "an AVX-512 function, entered after the CPU check")]
+            // SAFETY: `wide` is set only where the CPU runs AVX-512F.
+            unsafe {
+                self.append_avx512(next, count, x, y, c)
+            };
+            return;
+        }
+        let _ = wide;
+        for l in 0..count.min(LANES) {
+            let j = next[l] as usize;
+            let at = j * self.stride + self.next_len[j];
+            self.next_x[at] = x[l];
+            self.next_y[at] = y[l];
+            self.next_c[at] = c[l];
+            self.next_len[j] += 1;
+        }
+    }
+
+    /// [`Self::append`] with AVX-512F: per xform, the lanes going to it compressed and stored.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx512f")]
+    #[inline]
+    fn append_avx512(&mut self, next: &[u32; LANES], count: usize, x: &Lanes, y: &Lanes, c: &Lanes) {
+        use std::arch::x86_64::*;
+        let valid: __mmask16 = if count >= LANES { 0xFFFF } else { (1 << count) - 1 };
+        #[expect(unsafe_code, reason = "unaligned vector loads and stores of 16 lanes")]
+        // SAFETY: the loads read the 16 lanes of arrays of 16; each store writes 16 floats at
+        // `at`, within xform j's stretch: the pool's points number at most POINTS, so a queue's
+        // length is at most POINTS and the stretch is POINTS + LANES long.
+        unsafe {
+            let next = _mm512_loadu_si512(next.as_ptr().cast());
+            let (x, y, c) = (_mm512_loadu_ps(x.as_ptr()), _mm512_loadu_ps(y.as_ptr()), _mm512_loadu_ps(c.as_ptr()));
+            for j in 0..self.next_len.len() {
+                let hits = _mm512_mask_cmpeq_epi32_mask(valid, next, _mm512_set1_epi32(j as i32));
+                if hits == 0 {
+                    continue;
+                }
+                let at = j * self.stride + self.next_len[j].min(POINTS);
+                debug_assert!(at + LANES <= self.next_x.len());
+                _mm512_storeu_ps(self.next_x.as_mut_ptr().add(at), _mm512_maskz_compress_ps(hits, x));
+                _mm512_storeu_ps(self.next_y.as_mut_ptr().add(at), _mm512_maskz_compress_ps(hits, y));
+                _mm512_storeu_ps(self.next_c.as_mut_ptr().add(at), _mm512_maskz_compress_ps(hits, c));
+                self.next_len[j] += hits.count_ones() as usize;
+            }
+        }
+    }
+
+    pub(super) fn next_round(&mut self) {
+        std::mem::swap(&mut self.x, &mut self.next_x);
+        std::mem::swap(&mut self.y, &mut self.next_y);
+        std::mem::swap(&mut self.c, &mut self.next_c);
+        std::mem::swap(&mut self.len, &mut self.next_len);
+        self.next_len.fill(0);
+    }
+}
