@@ -9,7 +9,7 @@
 //! The picture is the same flame as the f64 game's (same xforms, choice tables, colours,
 //! camera, palette and bucket increments; `tests/flame_fidelity.rs` holds both to flam3's
 //! renders), not the same bytes: the orbits differ from the first rounding on. It is still a
-//! pure function of the seed, whatever the thread count: the samples are cut into blocks of
+//! pure function of the seed, whatever the thread count and vector build (AVX-512, AVX2, none): the samples are cut into blocks of
 //! [`BLOCK_SAMPLES`], each drawn from its own generators, and the sums are integers. A block
 //! starts its points at random in [−1, 1]² and drops their first [`FUSE_ITERATIONS`] rounds, as
 //! flam3's runs do; a point that leaves the plane is re-seeded and its step counted, not plotted
@@ -20,7 +20,7 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use super::super::render_base::Bucket;
 use super::super::trig32::{Exact32, Fast32};
 use super::super::variations::{MAX_CONSTS, NEEDS_ANGLES, NEEDS_ATAN_XY, NEEDS_ATAN_YX, NEEDS_SQRT};
-use super::super::variations_lanes::{self as lanes, Draw, Point32, SUPPORTED};
+use super::super::variations_lanes::{self as lanes, DRAWS, Draw, Point32, SUPPORTED};
 use super::{CHOICE_ENTRIES, ChaosGame, FUSE_ITERATIONS, GameXform, add, prefetch};
 use crate::flame::PaletteMode;
 use crate::rng::Pcg32;
@@ -120,23 +120,28 @@ impl Xform32 {
             atan2_lanes(&mut p.ayx, &p.y, &p.x);
         }
         let (mut ox, mut oy) = ([0.0; LANES], [0.0; LANES]);
+        // The terms' random numbers (each term draws its own; those that draw none read none).
+        let mut draw = [[0.0f32; LANES]; DRAWS];
         for t in &self.terms {
             let (w, k) = (t.weight, &t.k);
             // One loop per variation, its number a constant, so that each is a vector loop; where
             // a lane's argument is beyond a core's range, every lane again with `Exact32`.
             macro_rules! term {
                 ($v:literal) => {{
-                    let mut draw = [0.0f32; LANES];
                     match const { lanes::draw_of($v) } {
                         Draw::None => {}
-                        Draw::Bit => draw = rng.bits(),
-                        Draw::Uniform => draw = rng.uniform(),
+                        Draw::Bit => draw[0] = rng.bits(),
+                        Draw::Uniform(n) => {
+                            for d in &mut draw[..n] {
+                                *d = rng.uniform();
+                            }
+                        }
                     }
                     let (mut dx, mut dy) = ([0.0; LANES], [0.0; LANES]);
                     let mut in_range = true;
                     for l in 0..LANES {
                         let mut m = Fast32 { in_range: true };
-                        [dx[l], dy[l]] = lanes::eval::<$v>(w, k, &p.lane(l), draw[l], &mut m);
+                        [dx[l], dy[l]] = lanes::eval::<$v>(w, k, &p.lane(l), &draw, l, &mut m);
                         in_range &= m.in_range;
                     }
                     if !in_range {
@@ -156,7 +161,10 @@ impl Xform32 {
                     }
                 };
             }
-            by_variation!(0 1 2 3 4 5 6 7 8 9 10 11 12 13 14 15 16 17 18 19 20 23 24 27 28 29 30 32 33 39 42 51 78);
+            by_variation!(
+                0 1 2 3 4 5 6 7 8 9 10 11 12 13 14 15 16 17 18 19 20 23 24 27 28 29 30 31 32 33 34 35 36 37 39 40 41 42
+                43 44 45 46 47 48 49 50 51 52 53 54 60 78
+            );
         }
         match &self.post {
             Some(c) => {
@@ -214,12 +222,12 @@ fn exact_term<const V: u8>(
     w: f32,
     k: &[f32; MAX_CONSTS],
     p: &PointLanes,
-    draw: &Lanes,
+    draw: &[Lanes; DRAWS],
     dx: &mut Lanes,
     dy: &mut Lanes,
 ) {
     for l in 0..LANES {
-        [dx[l], dy[l]] = lanes::eval::<V>(w, k, &p.lane(l), draw[l], &mut Exact32);
+        [dx[l], dy[l]] = lanes::eval::<V>(w, k, &p.lane(l), draw, l, &mut Exact32);
     }
 }
 
@@ -449,6 +457,7 @@ impl<'a> LaneGame<'a> {
         while drawn < n {
             let plot = round >= 0;
             'round: for j in 0..xforms {
+                q.clear_tail(j);
                 let len = q.len[j];
                 for at in (0..len).step_by(LANES) {
                     let mut count = (len - at).min(LANES);

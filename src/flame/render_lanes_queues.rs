@@ -47,12 +47,22 @@ impl Queues {
         self.len[j] += 1;
     }
 
-    /// The 16 points from `at` of xform `j`'s queue (past its end: earlier points, ignored).
+    /// The 16 points from `at` of xform `j`'s queue (past its end: 0, [`Self::clear_tail`]).
     #[inline(always)]
     pub(super) fn load(&self, j: usize, at: usize) -> (Lanes, Lanes, Lanes) {
         let from = j * self.stride + at;
         let lanes = |v: &[f32]| -> Lanes { v[from..from + LANES].try_into().unwrap_or([0.0; LANES]) };
         (lanes(&self.x), lanes(&self.y), lanes(&self.c))
+    }
+
+    /// Zeroes the 16 places past the end of xform `j`'s queue, which its last vector loads: they
+    /// take part in that vector's range tests, and the AVX-512 and portable appends leave
+    /// different values there, so that without this the two builds' pictures would differ.
+    pub(super) fn clear_tail(&mut self, j: usize) {
+        let from = j * self.stride + self.len[j].min(POINTS);
+        for v in [&mut self.x, &mut self.y, &mut self.c] {
+            v[from..from + LANES].fill(0.0);
+        }
     }
 
     /// Appends lanes `0..count` to the next round's queues of their xforms `next`: with `wide`

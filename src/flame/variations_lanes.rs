@@ -9,12 +9,16 @@ use std::f32::consts::{FRAC_1_PI, PI};
 /// flam3's `EPS`, the guard added to denominators.
 const EPS: f32 = 1e-10;
 
-/// The variations [`eval`] holds: linear … cosine (0–20), blob, pdj, eyefish, bubble, cylinder,
-/// perspective, julian, juliascope, curl, tangent, flower, wedge_julia.
+/// The variations [`eval`] holds: linear … cosine (0–20), blob, pdj, eyefish … juliascope (27–30,
+/// 32, 33), noise, the blurs, pie, curl … disc2 (39–49 but ngon), super_shape, flower, conic,
+/// parabola, bent2, curve, wedge_julia.
 pub const SUPPORTED: &[u8] = &[
-    0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15, 16, 17, 18, 19, 20, 23, 24, 27, 28, 29, 30, 32, 33, 39, 42,
-    51, 78,
+    0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15, 16, 17, 18, 19, 20, 23, 24, 27, 28, 29, 30, 31, 32, 33, 34,
+    35, 36, 37, 39, 40, 41, 42, 43, 44, 45, 46, 47, 48, 49, 50, 51, 52, 53, 54, 60, 78,
 ];
+
+/// Most random numbers a variation draws.
+pub const DRAWS: usize = 5;
 
 /// The point's quantities, one lane: as `variations::Point`, in f32.
 #[derive(Clone, Copy, Debug, Default)]
@@ -34,27 +38,42 @@ pub struct Point32 {
     pub ayx: f32,
 }
 
-/// What variation `v` draws: none, one bit (julia) or one uniform number in [0, 1).
+/// What variation `v` draws: none, one bit (julia) or uniform numbers in [0, 1), as many as
+/// flam3 draws for it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Draw {
     None,
     Bit,
-    Uniform,
+    Uniform(usize),
 }
 
 /// What [`eval`] of variation `v` draws.
 pub const fn draw_of(v: u8) -> Draw {
     match v {
         13 => Draw::Bit,
-        32 | 33 | 51 | 78 => Draw::Uniform,
+        32 | 33 | 41 | 44 | 45 | 47 | 50 | 51 | 52 | 78 => Draw::Uniform(1),
+        31 | 34 | 43 | 53 => Draw::Uniform(2),
+        37 => Draw::Uniform(3),
+        36 => Draw::Uniform(4),
+        35 => Draw::Uniform(5),
         _ => Draw::None,
     }
 }
 
-/// w · V(t) of variation `V` with constants `k`, `draw` its random number ([`draw_of`]).
+/// w · V(t) of variation `V` with constants `k` in lane `l`, `draws` the lanes' random numbers
+/// ([`draw_of`]).
 #[inline(always)]
-pub fn eval<const V: u8>(w: f32, k: &[f32; 8], p: &Point32, draw: f32, m: &mut impl Elementary32) -> [f32; 2] {
+pub fn eval<const V: u8>(
+    w: f32,
+    k: &[f32; 8],
+    p: &Point32,
+    draws: &[[f32; 16]; DRAWS],
+    l: usize,
+    m: &mut impl Elementary32,
+) -> [f32; 2] {
     let Point32 { x, y, r2, r, a, sa, ca, ayx } = *p;
+    let draws = |i: usize| draws[i][l];
+    let draw = draws(0);
     match V {
         // linear
         0 => [w * x, w * y],
@@ -230,6 +249,120 @@ pub fn eval<const V: u8>(w: f32, k: &[f32; 8], p: &Point32, draw: f32, m: &mut i
             let (s, co) = m.sin_cos(aa);
             [f * co, f * s]
         }
+        // noise
+        31 => {
+            let (s, c) = m.sin_cos(draw * 2.0 * PI);
+            let f = w * draws(1);
+            [x * f * c, y * f * s]
+        }
+        // blur
+        34 => {
+            let (s, c) = m.sin_cos(draw * 2.0 * PI);
+            let f = w * draws(1);
+            [f * c, f * s]
+        }
+        // gaussian_blur
+        35 => {
+            let (s, c) = m.sin_cos(draw * 2.0 * PI);
+            let f = w * (draws(1) + draws(2) + draws(3) + draws(4) - 2.0);
+            [f * c, f * s]
+        }
+        // radial_blur
+        36 => {
+            let g = w * (draws(0) + draws(1) + draws(2) + draws(3) - 2.0);
+            let (s, c) = m.sin_cos(ayx + k[0] * g);
+            let rz = k[1] * g - 1.0;
+            [r * c + rz * x, r * s + rz * y]
+        }
+        // pie: slices, rotation, thickness
+        37 => {
+            let slice = (draw * k[0] + 0.5).trunc();
+            let ang = k[1] + 2.0 * PI * (slice + draws(1) * k[2]) / k[0];
+            let f = w * draws(2);
+            let (s, c) = m.sin_cos(ang);
+            [f * c, f * s]
+        }
+        // rectangles
+        40 => {
+            let (rx, ry) = (k[0], k[1]);
+            let nx = if rx == 0.0 { x } else { (2.0 * (x / rx).floor() + 1.0) * rx - x };
+            let ny = if ry == 0.0 { y } else { (2.0 * (y / ry).floor() + 1.0) * ry - y };
+            [w * nx, w * ny]
+        }
+        // arch
+        41 => {
+            let (s, c) = m.sin_cos(draw * w * PI);
+            [w * s, w * (s * s) / c]
+        }
+        // square
+        43 => [w * (draw - 0.5), w * (draws(1) - 0.5)],
+        // rays
+        44 => {
+            let ang = w * draw * PI;
+            let f = w / (r2 + EPS);
+            let t = w * m.tan(ang) * f;
+            [t * m.cos(x), t * m.sin(y)]
+        }
+        // blade
+        45 => {
+            let (s, c) = m.sin_cos(draw * w * r);
+            [w * x * (c + s), w * x * (c - s)]
+        }
+        // secant2
+        46 => {
+            let cr = m.cos(w * r);
+            let icr = 1.0 / cr;
+            [w * x, if cr < 0.0 { w * (icr + 1.0) } else { w * (icr - 1.0) }]
+        }
+        // twintrian
+        47 => {
+            let (s, c) = m.sin_cos(draw * w * r);
+            let mut diff = m.ln(s * s) * std::f32::consts::LOG10_E + c;
+            if !(diff.abs() <= 1e10) {
+                diff = -30.0;
+            }
+            [w * x * diff, w * x * (diff - s * PI)]
+        }
+        // cross
+        48 => {
+            let s = x * x - y * y;
+            let f = w * (1.0 / (s * s + EPS)).sqrt();
+            [x * f, y * f]
+        }
+        // disc2: rot π, sin(twist)', cos(twist)' − 1
+        49 => {
+            let (s, c) = m.sin_cos(k[0] * (x + y));
+            let f = w * a / PI;
+            [(s + k[2]) * f, (c + k[1]) * f]
+        }
+        // super_shape: rnd, m/4, −1/n1, n2, n3, holes
+        50 => {
+            let (st, ct) = m.sin_cos(k[1] * ayx + std::f32::consts::FRAC_PI_4);
+            let t1 = m.pow(ct.abs(), k[3]);
+            let t2 = m.pow(st.abs(), k[4]);
+            let rnd = k[0];
+            let f = w * ((rnd * draw + (1.0 - rnd) * r) - k[5]) * m.pow(t1 + t2, k[2]) / r;
+            [f * x, f * y]
+        }
+        // conic: eccentricity, holes
+        52 => {
+            let ct = x / r;
+            let f = w * (draw - k[1]) * k[0] / (1.0 + k[0] * ct) / r;
+            [f * x, f * y]
+        }
+        // parabola: height, width
+        53 => {
+            let (s, c) = m.sin_cos(r);
+            [k[0] * w * s * s * draw, k[1] * w * c * draws(1)]
+        }
+        // bent2: x, y
+        54 => {
+            let nx = if x < 0.0 { x * k[0] } else { x };
+            let ny = if y < 0.0 { y * k[1] } else { y };
+            [w * nx, w * ny]
+        }
+        // curve: xamp, yamp, xlength², ylength²
+        60 => [w * (x + k[0] * m.exp(-y * y / k[2])), w * (y + k[1] * m.exp(-x * x / k[3]))],
         _ => [0.0, 0.0],
     }
 }
