@@ -202,6 +202,11 @@ pub fn bench(file: &Path, out: &Path) -> anyhow::Result<()> {
     let row = |what: &str, cpu: f64, wall: f64| {
         println!("  {what:<28} {cpu:8.2} s CPU {wall:8.2} s wall {:14.0} samples/CPU-s", rate(cpu));
     };
+    let in_lanes = read.flames.iter().filter(|f| nlifs::flame::render::runs_in_lanes(f)).count();
+    println!(
+        "  chaos game: f32 lanes for {in_lanes} of {} flame(s), the f64 game for the others (NLIFS_FLAME_F64=1: all)",
+        read.flames.len()
+    );
     row("nlifs (1 thread)", one_cpu, one_wall);
     row(&format!("nlifs ({all_threads} threads)"), all_cpu, all_wall);
     row("nlifs, imported (1 thread)", scene_cpu, scene_wall);

@@ -63,14 +63,17 @@ fn lanes_map_as_the_f64_xforms() {
     assert!(checked >= 25, "{checked} variations checked");
 }
 
-/// A flame with a term the lanes do not hold, or pre_blur, takes the f64 game.
+/// A flame with a term the lanes do not hold, or pre_blur, takes the f64 game
+/// (`runs_in_lanes` says so too).
 #[test]
 fn other_variations_take_the_f64_game() {
     for v in [21u8, 38, 67, 90] {
         let (flame, layout) = one_term(v);
         let game = ChaosGame::new(&flame, &layout).expect("game");
         assert!(LaneGame::new(&game).is_none(), "variation {v}");
+        assert!(!super::super::runs_in_lanes(&flame), "variation {v}");
     }
+    assert!(super::super::runs_in_lanes(&one_term(17).0));
 }
 
 /// The lane game's picture is a pure function of the seed, whatever the thread count.
