@@ -91,6 +91,70 @@ pub fn runs_in_lanes(flame: &Flame) -> bool {
     !f64_only() && lanes::LaneGame::new(&game).is_some()
 }
 
+/// A worker's entry, `$dispatch(&self, seed, samples, next, histogram, progress) -> u64`, that
+/// runs `$worker` (the same arguments and `wide`: whether the CPU runs AVX-512F) compiled for
+/// AVX-512 (`$avx512`) or AVX2 (`$avx2`) where the CPU has it, else as it is: the f64 and the lane
+/// chaos games' one dispatch. `$worker` is `#[inline(always)]`, so each build is its own vector
+/// code.
+macro_rules! vector_builds {
+    ($(#[$doc:meta])* $vis:vis fn $dispatch:ident => $worker:ident, $avx512:ident, $avx2:ident) => {
+        $(#[$doc])*
+        $vis fn $dispatch(
+            &self,
+            seed: u32,
+            samples: u64,
+            next: &AtomicU64,
+            histogram: &mut [Bucket],
+            progress: &(dyn Fn(u64) + Sync),
+        ) -> u64 {
+            #[cfg(target_arch = "x86_64")]
+            {
+                use crate::simd::SimdLevel;
+                match SimdLevel::detect() {
+                    #[expect(unsafe_code, reason = "an AVX-512 function, entered after the CPU check")]
+                    // SAFETY: the CPU runs AVX-512F (detected).
+                    SimdLevel::Avx512 => unsafe {
+                        return self.$avx512(seed, samples, next, histogram, progress);
+                    },
+                    #[expect(unsafe_code, reason = "an AVX2 function, entered after the CPU check")]
+                    // SAFETY: the CPU runs AVX2 (detected).
+                    SimdLevel::Avx2 => unsafe {
+                        return self.$avx2(seed, samples, next, histogram, progress);
+                    },
+                    SimdLevel::Scalar => {}
+                }
+            }
+            self.$worker(seed, samples, next, histogram, progress, false)
+        }
+
+        #[cfg(target_arch = "x86_64")]
+        #[target_feature(enable = "avx2,avx512f")]
+        fn $avx512(
+            &self,
+            seed: u32,
+            samples: u64,
+            next: &AtomicU64,
+            histogram: &mut [Bucket],
+            progress: &(dyn Fn(u64) + Sync),
+        ) -> u64 {
+            self.$worker(seed, samples, next, histogram, progress, true)
+        }
+
+        #[cfg(target_arch = "x86_64")]
+        #[target_feature(enable = "avx2")]
+        fn $avx2(
+            &self,
+            seed: u32,
+            samples: u64,
+            next: &AtomicU64,
+            histogram: &mut [Bucket],
+            progress: &(dyn Fn(u64) + Sync),
+        ) -> u64 {
+            self.$worker(seed, samples, next, histogram, progress, false)
+        }
+    };
+}
+
 /// An xform as the chaos game uses it.
 struct GameXform {
     map: CompiledXform,
@@ -229,60 +293,10 @@ impl ChaosGame {
         Some((rng, p, color, n as i64))
     }
 
-    /// [`Self::run_chains`] compiled for AVX-512 or AVX2 when the CPU has it (no FMA: the same
-    /// bits).
-    fn run_chains_dispatch(
-        &self,
-        seed: u32,
-        samples: u64,
-        next_run: &AtomicU64,
-        histogram: &mut [Bucket],
-        progress: &(dyn Fn(u64) + Sync),
-    ) -> u64 {
-        #[cfg(target_arch = "x86_64")]
-        {
-            use crate::simd::SimdLevel;
-            match SimdLevel::detect() {
-                #[expect(unsafe_code, reason = "an AVX-512 function, entered after the CPU check")]
-                // SAFETY: the CPU runs AVX-512F (detected).
-                SimdLevel::Avx512 => unsafe {
-                    return self.run_chains_avx512(seed, samples, next_run, histogram, progress);
-                },
-                #[expect(unsafe_code, reason = "an AVX2 function, entered after the CPU check")]
-                // SAFETY: the CPU runs AVX2 (detected).
-                SimdLevel::Avx2 => unsafe {
-                    return self.run_chains_avx2(seed, samples, next_run, histogram, progress);
-                },
-                SimdLevel::Scalar => {}
-            }
-        }
-        self.run_chains(seed, samples, next_run, histogram, progress, false)
-    }
-
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2,avx512f")]
-    fn run_chains_avx512(
-        &self,
-        seed: u32,
-        samples: u64,
-        next_run: &AtomicU64,
-        histogram: &mut [Bucket],
-        progress: &(dyn Fn(u64) + Sync),
-    ) -> u64 {
-        self.run_chains(seed, samples, next_run, histogram, progress, true)
-    }
-
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2")]
-    fn run_chains_avx2(
-        &self,
-        seed: u32,
-        samples: u64,
-        next_run: &AtomicU64,
-        histogram: &mut [Bucket],
-        progress: &(dyn Fn(u64) + Sync),
-    ) -> u64 {
-        self.run_chains(seed, samples, next_run, histogram, progress, false)
+    vector_builds! {
+        /// [`Self::run_chains`] compiled for AVX-512 or AVX2 when the CPU has it (no FMA: the same
+        /// bits).
+        fn run_chains_dispatch => run_chains, run_chains_avx512, run_chains_avx2
     }
 
     /// One worker: [`CHAINS`] runs advanced together, each taking the next run when its own is

@@ -303,8 +303,6 @@ pub(super) struct LaneGame<'a> {
     /// of those at or below the drawn entry.
     firsts: Vec<[u32; MAX_XFORMS]>,
     camera: Camera32,
-    /// Whether the CPU runs AVX-512F (the queues' compress).
-    wide: bool,
 }
 
 impl<'a> LaneGame<'a> {
@@ -351,69 +349,16 @@ impl<'a> LaneGame<'a> {
             last: [cam.hist_width as f32 - 1.0, cam.hist_height as f32 - 1.0],
             sink: (cam.hist_width * cam.hist_height) as u32,
         };
-        #[cfg(target_arch = "x86_64")]
-        let wide = crate::simd::SimdLevel::detect().avx512();
-        #[cfg(not(target_arch = "x86_64"))]
-        let wide = false;
-        Some(Self { game, xforms, final_xform, firsts, camera, wide })
+        Some(Self { game, xforms, final_xform, firsts, camera })
     }
 
-    /// One worker: blocks taken in turn from `next_block` until none is left, into `histogram`,
-    /// whose last bucket is the sink (past the picture's). Returns the re-seeds.
-    pub fn run_worker(
-        &self,
-        seed: u32,
-        samples: u64,
-        next_block: &AtomicU64,
-        histogram: &mut [Bucket],
-        progress: &(dyn Fn(u64) + Sync),
-    ) -> u64 {
-        #[cfg(target_arch = "x86_64")]
-        {
-            use crate::simd::SimdLevel;
-            match SimdLevel::detect() {
-                #[expect(unsafe_code, reason = "an AVX-512 function, entered after the CPU check")]
-                // SAFETY: the CPU runs AVX-512F (detected).
-                SimdLevel::Avx512 => unsafe {
-                    return self.run_worker_avx512(seed, samples, next_block, histogram, progress);
-                },
-                #[expect(unsafe_code, reason = "an AVX2 function, entered after the CPU check")]
-                // SAFETY: the CPU runs AVX2 (detected).
-                SimdLevel::Avx2 => unsafe {
-                    return self.run_worker_avx2(seed, samples, next_block, histogram, progress);
-                },
-                SimdLevel::Scalar => {}
-            }
-        }
-        self.run_blocks(seed, samples, next_block, histogram, progress)
+    vector_builds! {
+        /// One worker: blocks taken in turn from `next` until none is left, into `histogram`,
+        /// whose last bucket is the sink (past the picture's). Returns the re-seeds.
+        pub fn run_worker => run_blocks, run_blocks_avx512, run_blocks_avx2
     }
 
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2,avx512f")]
-    fn run_worker_avx512(
-        &self,
-        seed: u32,
-        samples: u64,
-        next_block: &AtomicU64,
-        histogram: &mut [Bucket],
-        progress: &(dyn Fn(u64) + Sync),
-    ) -> u64 {
-        self.run_blocks(seed, samples, next_block, histogram, progress)
-    }
-
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2")]
-    fn run_worker_avx2(
-        &self,
-        seed: u32,
-        samples: u64,
-        next_block: &AtomicU64,
-        histogram: &mut [Bucket],
-        progress: &(dyn Fn(u64) + Sync),
-    ) -> u64 {
-        self.run_blocks(seed, samples, next_block, histogram, progress)
-    }
-
+    /// [`Self::run_worker`]'s body; `wide`: the CPU runs AVX-512F (the queues' compress).
     #[inline(always)]
     fn run_blocks(
         &self,
@@ -422,9 +367,10 @@ impl<'a> LaneGame<'a> {
         next_block: &AtomicU64,
         histogram: &mut [Bucket],
         progress: &(dyn Fn(u64) + Sync),
+        wide: bool,
     ) -> u64 {
         let blocks = samples.div_ceil(BLOCK_SAMPLES);
-        let mut queues = Queues::new(self.xforms.len());
+        let mut queues = Queues::new(self.xforms.len(), wide);
         let mut bad = 0;
         loop {
             let block = next_block.fetch_add(1, Ordering::Relaxed);
@@ -535,7 +481,7 @@ impl<'a> LaneGame<'a> {
                 next[l] += u32::from((entries[l] & (CHOICE_ENTRIES as u32 - 1)) >= first);
             }
         }
-        q.append(&next, count, &x, &y, &c, self.wide);
+        q.append(&next, count, &x, &y, &c);
         reseeds
     }
 

@@ -8,6 +8,8 @@ use super::{LANES, Lanes, POINTS};
 /// point).
 pub(super) struct Queues {
     stride: usize,
+    /// Whether the CPU runs AVX-512F: the appends compress.
+    wide: bool,
     x: Vec<f32>,
     y: Vec<f32>,
     c: Vec<f32>,
@@ -19,11 +21,12 @@ pub(super) struct Queues {
 }
 
 impl Queues {
-    pub(super) fn new(xforms: usize) -> Self {
+    pub(super) fn new(xforms: usize, wide: bool) -> Self {
         let stride = POINTS + LANES;
         let zeros = vec![0.0; stride * xforms];
         Self {
             stride,
+            wide,
             x: zeros.clone(),
             y: zeros.clone(),
             c: zeros.clone(),
@@ -68,17 +71,18 @@ impl Queues {
     /// Appends lanes `0..count` to the next round's queues of their xforms `next`: with `wide`
     /// (the CPU runs AVX-512F), one compress a quantity per xform.
     #[inline(always)]
-    pub(super) fn append(&mut self, next: &[u32; LANES], count: usize, x: &Lanes, y: &Lanes, c: &Lanes, wide: bool) {
+    pub(super) fn append(&mut self, next: &[u32; LANES], count: usize, x: &Lanes, y: &Lanes, c: &Lanes) {
+        #[cfg(not(target_arch = "x86_64"))]
+        let _ = self.wide;
         #[cfg(target_arch = "x86_64")]
-        if wide {
+        if self.wide {
             #[expect(unsafe_code, reason = "an AVX-512 function, entered after the CPU check")]
-            // SAFETY: `wide` is set only where the CPU runs AVX-512F.
+            // SAFETY: `wide` is set only where the CPU runs AVX-512F (`vector_builds!`).
             unsafe {
                 self.append_avx512(next, count, x, y, c)
             };
             return;
         }
-        let _ = wide;
         for l in 0..count.min(LANES) {
             let j = next[l] as usize;
             let at = j * self.stride + self.next_len[j];

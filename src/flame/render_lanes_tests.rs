@@ -101,17 +101,21 @@ fn same_sums_with_either_append() {
     let flame = crate::flame::read_str(text, "wedge-petals.flame").expect("flame").flames.remove(0);
     let layout = Layout::new(&flame).expect("layout");
     let game = ChaosGame::new(&flame, &layout).expect("game");
-    let mut lane_game = LaneGame::new(&game).expect("lanes");
+    let lane_game = LaneGame::new(&game).expect("lanes");
     let cells = layout.hist_width * layout.hist_height + 1;
-    let sums = |lane_game: &LaneGame| {
+    // The dispatched build (AVX-512's compress where the CPU has it), then the portable build.
+    let sums = |dispatched: bool| {
         let mut histogram = vec![[0u32; 5]; cells];
         let next = std::sync::atomic::AtomicU64::new(0);
-        lane_game.run_worker(3, 4 * BLOCK_SAMPLES, &next, &mut histogram, &|_| {});
+        let samples = 4 * BLOCK_SAMPLES;
+        if dispatched {
+            lane_game.run_worker(3, samples, &next, &mut histogram, &|_| {});
+        } else {
+            lane_game.run_blocks(3, samples, &next, &mut histogram, &|_| {}, false);
+        }
         histogram
     };
-    let wide = sums(&lane_game);
-    lane_game.wide = false;
-    let portable = sums(&lane_game);
+    let (wide, portable) = (sums(true), sums(false));
     assert!(wide.iter().any(|b| b[4] > 0), "something is drawn");
     assert_eq!(wide, portable);
 }
