@@ -91,20 +91,20 @@ pub fn runs_in_lanes(flame: &Flame) -> bool {
     !f64_only() && lanes::LaneGame::new(&game).is_some()
 }
 
-/// A worker's entry, `$dispatch(&self, seed, samples, next, histogram, progress) -> u64`, that
+/// A worker's entry, `$dispatch(&self, seed, samples, next, histogram: &mut [$cell], progress) -> u64`, that
 /// runs `$worker` (the same arguments and `wide`: whether the CPU runs AVX-512F) compiled for
 /// AVX-512 (`$avx512`) or AVX2 (`$avx2`) where the CPU has it, else as it is: the f64 and the lane
 /// chaos games' one dispatch. `$worker` is `#[inline(always)]`, so each build is its own vector
 /// code.
 macro_rules! vector_builds {
-    ($(#[$doc:meta])* $vis:vis fn $dispatch:ident => $worker:ident, $avx512:ident, $avx2:ident) => {
+    ($(#[$doc:meta])* $vis:vis fn $dispatch:ident($cell:ty) => $worker:ident, $avx512:ident, $avx2:ident) => {
         $(#[$doc])*
         $vis fn $dispatch(
             &self,
             seed: u32,
             samples: u64,
             next: &AtomicU64,
-            histogram: &mut [Bucket],
+            histogram: &mut [$cell],
             progress: &(dyn Fn(u64) + Sync),
         ) -> u64 {
             #[cfg(target_arch = "x86_64")]
@@ -134,7 +134,7 @@ macro_rules! vector_builds {
             seed: u32,
             samples: u64,
             next: &AtomicU64,
-            histogram: &mut [Bucket],
+            histogram: &mut [$cell],
             progress: &(dyn Fn(u64) + Sync),
         ) -> u64 {
             self.$worker(seed, samples, next, histogram, progress, true)
@@ -147,7 +147,7 @@ macro_rules! vector_builds {
             seed: u32,
             samples: u64,
             next: &AtomicU64,
-            histogram: &mut [Bucket],
+            histogram: &mut [$cell],
             progress: &(dyn Fn(u64) + Sync),
         ) -> u64 {
             self.$worker(seed, samples, next, histogram, progress, false)
@@ -248,34 +248,25 @@ impl ChaosGame {
         let next_run = AtomicU64::new(0);
         let cells = layout.hist_width * layout.hist_height;
         let workers = rayon::current_num_threads().max(1).min(runs.max(1) as usize);
+        if let Some(lanes) = &lane_game {
+            let parts: Vec<_> = (0..workers)
+                .into_par_iter()
+                .map(|_| lanes.run_part(seed, samples, &next_run, cells, workers > 1, progress))
+                .collect();
+            return sum_parts(cells, parts, lanes::Cell::bucket);
+        }
         let parts: Vec<(Vec<Bucket>, u64)> = (0..workers)
             .into_par_iter()
             .map(|_| {
-                // (The lane game's samples that add nothing go to a bucket past the picture's.)
-                let sink = usize::from(lane_game.is_some());
-                let mut histogram = vec![[0u32; 5]; cells + sink];
+                let mut histogram = vec![[0u32; 5]; cells];
                 if workers > 1 {
                     crate::platform::write_every_page(&mut histogram, [0; 5]);
                 }
-                let bad = match &lane_game {
-                    Some(lanes) => lanes.run_worker(seed, samples, &next_run, &mut histogram, progress),
-                    None => self.run_chains_dispatch(seed, samples, &next_run, &mut histogram, progress),
-                };
-                histogram.truncate(cells);
+                let bad = self.run_chains_dispatch(seed, samples, &next_run, &mut histogram, progress);
                 (histogram, bad)
             })
             .collect();
-        let mut parts = parts.into_iter();
-        let (mut total, mut bad) = parts.next().unwrap_or_else(|| (vec![[0u32; 5]; cells], 0));
-        for (part, part_bad) in parts {
-            bad += part_bad;
-            total.par_iter_mut().zip(part.par_iter()).for_each(|(t, p)| {
-                for k in 0..5 {
-                    t[k] = t[k].saturating_add(p[k]);
-                }
-            });
-        }
-        (total, bad)
+        sum_parts(cells, parts, |b| b)
     }
 
     /// The next run not yet taken, if any: its generator, starting point and colour, and its
@@ -296,7 +287,7 @@ impl ChaosGame {
     vector_builds! {
         /// [`Self::run_chains`] compiled for AVX-512 or AVX2 when the CPU has it (no FMA: the same
         /// bits).
-        fn run_chains_dispatch => run_chains, run_chains_avx512, run_chains_avx2
+        fn run_chains_dispatch(Bucket) => run_chains, run_chains_avx512, run_chains_avx2
     }
 
     /// One worker: [`CHAINS`] runs advanced together, each taking the next run when its own is
@@ -547,6 +538,24 @@ impl ChaosGame {
 const EMPTY_SLOT: (usize, Bucket) = (0, [0; 5]);
 
 #[inline(always)]
+/// The workers' histograms of `cells` cells of type `T` (each `bucket` of the histogram's)
+/// summed, each dropped once added, and their re-seeds. (Where `T` is [`Bucket`], the first
+/// histogram becomes the sum.)
+fn sum_parts<T: Copy + Send + Sync>(
+    cells: usize,
+    parts: Vec<(Vec<T>, u64)>,
+    bucket: impl Fn(T) -> Bucket + Sync,
+) -> (Vec<Bucket>, u64) {
+    let mut parts = parts.into_iter();
+    let Some((first, mut bad)) = parts.next() else { return (vec![[0; 5]; cells], 0) };
+    let mut total: Vec<Bucket> = first.into_iter().map(&bucket).collect();
+    for (part, part_bad) in parts {
+        bad += part_bad;
+        total.par_iter_mut().zip(part.par_iter()).for_each(|(t, p)| add(t, &bucket(*p)));
+    }
+    (total, bad)
+}
+
 fn add(bucket: &mut Bucket, inc: &Bucket) {
     for k in 0..5 {
         bucket[k] = bucket[k].saturating_add(inc[k]);

@@ -17,11 +17,11 @@
 
 use std::sync::atomic::{AtomicU64, Ordering};
 
-use super::super::render_base::Bucket;
+use super::super::render_base::{Bucket, WHITE_LEVEL};
 use super::super::trig32::{Exact32, Fast32};
 use super::super::variations::{MAX_CONSTS, NEEDS_ANGLES, NEEDS_ATAN_XY, NEEDS_ATAN_YX, NEEDS_SQRT};
 use super::super::variations_lanes::{self as lanes, DRAWS, Draw, Point32, SUPPORTED};
-use super::{CHOICE_ENTRIES, ChaosGame, FUSE_ITERATIONS, GameXform, add, prefetch};
+use super::{CHOICE_ENTRIES, ChaosGame, FUSE_ITERATIONS, GameXform};
 use crate::flame::PaletteMode;
 use crate::rng::Pcg32;
 
@@ -54,8 +54,8 @@ struct Xform32 {
     color_held: f32,
     color_kept: f32,
     plotted_weight: f64,
-    /// Its points' bucket increments by step-palette entry (step mode).
-    increments: Vec<Bucket>,
+    /// Its points' cell increments by step-palette entry (step mode).
+    increments: Vec<Cell>,
 }
 
 impl Xform32 {
@@ -77,8 +77,9 @@ impl Xform32 {
                 })
             })
             .collect::<Option<Vec<_>>>()?;
-        let increments =
-            (0..256).map(|i| game.increments_of((f64::from(i) + 0.5) / 256.0, x.plotted_weight)).collect::<Vec<_>>();
+        let increments = (0..256)
+            .map(|i| Cell::of(game.increments_of((f64::from(i) + 0.5) / 256.0, x.plotted_weight)))
+            .collect::<Vec<_>>();
         Some(Self {
             coefs: f6(parts.coefs),
             post: parts.post.map(f6),
@@ -307,8 +308,8 @@ pub(super) struct LaneGame<'a> {
 
 impl<'a> LaneGame<'a> {
     /// `game` in f32 lanes; `None` where a term is not supported, it has more than
-    /// [`MAX_XFORMS`] xforms, its choice table is not in xform order, or f32 does not resolve
-    /// its view ([`RESOLUTION`]).
+    /// [`MAX_XFORMS`] xforms, its choice table is not in xform order, f32 does not resolve its
+    /// view ([`RESOLUTION`]), or an entry of its palette is not opaque ([`Cell`]).
     pub fn new(game: &'a ChaosGame) -> Option<Self> {
         let n = game.xforms.len();
         if n > MAX_XFORMS {
@@ -319,6 +320,7 @@ impl<'a> LaneGame<'a> {
         let bucket = 1.0 / cam.x_scale.max(cam.y_scale);
         let cells = cam.hist_width as u64 * cam.hist_height as u64;
         if !(far * f64::from(f32::EPSILON) * RESOLUTION <= bucket)
+            || game.dmap.iter().any(|c| c[3] != WHITE_LEVEL)
             || cam.hist_width.max(cam.hist_height) >= 1 << 23
             || cells >= u64::from(u32::MAX)
         {
@@ -352,10 +354,31 @@ impl<'a> LaneGame<'a> {
         Some(Self { game, xforms, final_xform, firsts, camera })
     }
 
+    /// One worker's part of `samples`: blocks taken in turn from `next` until none is left. Its
+    /// histogram of `cells` cells and its re-seeds; `shared`: other workers run beside it.
+    pub fn run_part(
+        &self,
+        seed: u32,
+        samples: u64,
+        next: &AtomicU64,
+        cells: usize,
+        shared: bool,
+        progress: &(dyn Fn(u64) + Sync),
+    ) -> (Vec<Cell>, u64) {
+        // The samples that add nothing go to a cell past the picture's.
+        let mut histogram = vec![Cell::default(); cells + 1];
+        if shared {
+            crate::platform::write_every_page(&mut histogram, Cell::default());
+        }
+        let bad = self.run_worker(seed, samples, next, &mut histogram, progress);
+        histogram.truncate(cells);
+        (histogram, bad)
+    }
+
     vector_builds! {
-        /// One worker: blocks taken in turn from `next` until none is left, into `histogram`,
-        /// whose last bucket is the sink (past the picture's). Returns the re-seeds.
-        pub fn run_worker => run_blocks, run_blocks_avx512, run_blocks_avx2
+        /// [`Self::run_part`]'s blocks into `histogram`, whose last cell is the sink. Returns the
+        /// re-seeds.
+        fn run_worker(Cell) => run_blocks, run_blocks_avx512, run_blocks_avx2
     }
 
     /// [`Self::run_worker`]'s body; `wide`: the CPU runs AVX-512F (the queues' compress).
@@ -365,7 +388,7 @@ impl<'a> LaneGame<'a> {
         seed: u32,
         samples: u64,
         next_block: &AtomicU64,
-        histogram: &mut [Bucket],
+        histogram: &mut [Cell],
         progress: &(dyn Fn(u64) + Sync),
         wide: bool,
     ) -> u64 {
@@ -385,7 +408,7 @@ impl<'a> LaneGame<'a> {
 
     /// Block `block`: [`POINTS`] orbits until `n` samples are drawn after their fuse.
     #[inline(always)]
-    fn run_block(&self, seed: u32, block: u64, n: u64, q: &mut Queues, histogram: &mut [Bucket]) -> u64 {
+    fn run_block(&self, seed: u32, block: u64, n: u64, q: &mut Queues, histogram: &mut [Cell]) -> u64 {
         let xforms = self.xforms.len();
         let mut start = Pcg32::for_stream(seed, block as u32, 0x7FFF_FFFF);
         let mut rng = LaneRng::new(seed, block);
@@ -444,7 +467,7 @@ impl<'a> LaneGame<'a> {
         q: &mut Queues,
         rng: &mut LaneRng,
         pending: &mut InFlight,
-        histogram: &mut [Bucket],
+        histogram: &mut [Cell],
     ) -> u64 {
         let xf = &self.xforms[j];
         let (mut x, mut y, mut c) = q.load(j, at);
@@ -498,7 +521,7 @@ impl<'a> LaneGame<'a> {
         (x, y, c): (Lanes, Lanes, Lanes),
         rng: &mut LaneRng,
         pending: &mut InFlight,
-        histogram: &mut [Bucket],
+        histogram: &mut [Cell],
     ) {
         let (mut sx, mut sy, mut sc) = (x, y, c);
         if let Some((f, opacity)) = &self.final_xform {
@@ -536,7 +559,7 @@ impl<'a> LaneGame<'a> {
             entry[l] = whole(sc[l] * 256.0, 255.0);
         }
         for &b in &bucket {
-            prefetch(&histogram[b as usize]);
+            histogram[b as usize].prefetch();
         }
         let pending = pending.take(histogram);
         pending.bucket = bucket;
@@ -546,8 +569,49 @@ impl<'a> LaneGame<'a> {
             }
         } else {
             for (inc, &c) in pending.increments.iter_mut().zip(&sc) {
-                *inc = self.game.increments_of(f64::from(c), xf.plotted_weight);
+                *inc = Cell::of(self.game.increments_of(f64::from(c), xf.plotted_weight));
             }
+        }
+    }
+}
+
+/// A histogram cell of the lane game: palette colour sums R, G, B and A, each × 255, on a 16-byte
+/// line of its own. The lane game draws only flames whose palette's alpha is 1, where A is the
+/// count × 255 as well: [`Cell::bucket`] gives it back in both places.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[repr(C, align(16))]
+pub(super) struct Cell([u32; 4]);
+
+impl Cell {
+    /// The cell of `b`, its A taken as its count (in linear palette mode the f64 blend of two
+    /// alphas of 1 may round A one below the count).
+    fn of(b: Bucket) -> Self {
+        Self([b[0], b[1], b[2], b[4]])
+    }
+
+    /// The histogram's bucket.
+    pub(super) fn bucket(self) -> Bucket {
+        let [r, g, b, a] = self.0;
+        [r, g, b, a, a]
+    }
+
+    /// Saturating sums, each channel (a vector add where the CPU has one).
+    #[inline(always)]
+    fn add(&mut self, inc: &Cell) {
+        for k in 0..4 {
+            self.0[k] = self.0[k].saturating_add(inc.0[k]);
+        }
+    }
+
+    /// Asks for the cell's cache line ahead of the add.
+    #[inline(always)]
+    fn prefetch(&self) {
+        #[cfg(target_arch = "x86_64")]
+        #[expect(unsafe_code, reason = "a prefetch is a hint: it reads nothing and cannot fault")]
+        // SAFETY: the pointer is to `self`, a live reference; prefetching never dereferences it.
+        unsafe {
+            use std::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
+            _mm_prefetch::<_MM_HINT_T0>((self as *const Self).cast());
         }
     }
 }
@@ -564,22 +628,23 @@ fn whole(v: f32, last: f32) -> u32 {
 /// One vector's adds, waiting for their buckets' lines (prefetched): bucket and increments.
 struct Pending {
     bucket: [u32; LANES],
-    increments: [Bucket; LANES],
+    increments: [Cell; LANES],
+    sink: u32,
 }
 
 impl Pending {
     /// Nothing to add: 0 to bucket `sink`.
     fn new(sink: u32) -> Self {
-        Self { bucket: [sink; LANES], increments: [[0; 5]; LANES] }
+        Self { bucket: [sink; LANES], increments: [Cell::default(); LANES], sink }
     }
 
-    /// Adds them; nothing is left to add.
+    /// Adds them; nothing is left to add (the sink's bucket, whatever the increments).
     #[inline(always)]
-    fn apply(&mut self, histogram: &mut [Bucket]) {
+    fn apply(&mut self, histogram: &mut [Cell]) {
         for (&b, inc) in self.bucket.iter().zip(&self.increments) {
-            add(&mut histogram[b as usize], inc);
+            histogram[b as usize].add(inc);
         }
-        self.increments = [[0; 5]; LANES];
+        self.bucket = [self.sink; LANES];
     }
 }
 
@@ -599,7 +664,7 @@ impl InFlight {
 
     /// The oldest vector's adds done, and its place for the next vector's.
     #[inline(always)]
-    fn take(&mut self, histogram: &mut [Bucket]) -> &mut Pending {
+    fn take(&mut self, histogram: &mut [Cell]) -> &mut Pending {
         let k = self.next % IN_FLIGHT_VECTORS;
         self.next = (k + 1) % IN_FLIGHT_VECTORS;
         self.vectors[k].apply(histogram);
@@ -607,7 +672,7 @@ impl InFlight {
     }
 
     /// Every waiting add done.
-    fn finish(&mut self, histogram: &mut [Bucket]) {
+    fn finish(&mut self, histogram: &mut [Cell]) {
         for v in &mut self.vectors {
             v.apply(histogram);
         }

@@ -21,7 +21,8 @@ fn one_term(v: u8) -> (Flame, Layout) {
         variations: vec![VariationTerm { variation, weight: 0.9, params }],
         chaos: vec![],
     };
-    let flame = Flame { size: [40, 30], scale: 12.0, xforms: vec![xform], ..Flame::default() };
+    let palette = (0..256).map(|i| [f64::from(i) / 255.0, 0.5, 1.0, 1.0]).collect();
+    let flame = Flame { size: [40, 30], scale: 12.0, xforms: vec![xform], palette, ..Flame::default() };
     let layout = Layout::new(&flame).expect("layout");
     (flame, layout)
 }
@@ -63,10 +64,10 @@ fn lanes_map_as_the_f64_xforms() {
     assert!(checked >= 25, "{checked} variations checked");
 }
 
-/// A flame with a term the lanes do not hold, or pre_blur, takes the f64 game
-/// (`runs_in_lanes` says so too).
+/// A flame with a term the lanes do not hold, or a palette entry that is not opaque (the cells
+/// keep one sum for A and the count), takes the f64 game (`runs_in_lanes` says so too).
 #[test]
-fn other_variations_take_the_f64_game() {
+fn other_flames_take_the_f64_game() {
     for v in [21u8, 38, 67, 90] {
         let (flame, layout) = one_term(v);
         let game = ChaosGame::new(&flame, &layout).expect("game");
@@ -74,6 +75,9 @@ fn other_variations_take_the_f64_game() {
         assert!(!super::super::runs_in_lanes(&flame), "variation {v}");
     }
     assert!(super::super::runs_in_lanes(&one_term(17).0));
+    let (mut flame, _) = one_term(17);
+    flame.palette[100][3] = 0.5;
+    assert!(!super::super::runs_in_lanes(&flame), "a palette entry of alpha 0.5");
 }
 
 /// The lane game's picture is a pure function of the seed, whatever the thread count.
@@ -105,7 +109,7 @@ fn same_sums_with_either_append() {
     let cells = layout.hist_width * layout.hist_height + 1;
     // The dispatched build (AVX-512's compress where the CPU has it), then the portable build.
     let sums = |dispatched: bool| {
-        let mut histogram = vec![[0u32; 5]; cells];
+        let mut histogram = vec![Cell::default(); cells];
         let next = std::sync::atomic::AtomicU64::new(0);
         let samples = 4 * BLOCK_SAMPLES;
         if dispatched {
@@ -116,6 +120,6 @@ fn same_sums_with_either_append() {
         histogram
     };
     let (wide, portable) = (sums(true), sums(false));
-    assert!(wide.iter().any(|b| b[4] > 0), "something is drawn");
+    assert!(wide.iter().any(|c| c.bucket()[4] > 0), "something is drawn");
     assert_eq!(wide, portable);
 }
