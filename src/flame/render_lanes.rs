@@ -478,7 +478,7 @@ impl<'a> LaneGame<'a> {
         let mut bad = [false; LANES];
         let mut any_bad = false;
         for l in 0..LANES {
-            bad[l] = !(x[l].abs() <= 1e10 && y[l].abs() <= 1e10) && l < count;
+            bad[l] = !((x[l].abs() <= 1e10) & (y[l].abs() <= 1e10)) & (l < count);
             any_bad |= bad[l];
         }
         let mut reseeds = 0;
@@ -530,9 +530,9 @@ impl<'a> LaneGame<'a> {
             let applies = if *opacity == 1.0 { [1.0; LANES] } else { rng.uniform() };
             let (rx, ry) = (rng.uniform(), rng.uniform());
             for l in 0..LANES {
-                if applies[l] < *opacity || *opacity == 1.0 {
+                if (applies[l] < *opacity) | (*opacity == 1.0) {
                     sc[l] = f.color_of(c[l]);
-                    let out = !(fx[l].abs() <= 1e10 && fy[l].abs() <= 1e10);
+                    let out = !((fx[l].abs() <= 1e10) & (fy[l].abs() <= 1e10));
                     sx[l] = if out { rx[l] * 2.0 - 1.0 } else { fx[l] };
                     sy[l] = if out { ry[l] * 2.0 - 1.0 } else { fy[l] };
                 }

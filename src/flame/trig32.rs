@@ -120,7 +120,7 @@ pub fn sin_cos_core(x: f32) -> (f32, f32, bool) {
 /// (e^x, whether −87 < x < 88, where the result is a normal float).
 #[inline(always)]
 pub fn exp_core(x: f32) -> (f32, bool) {
-    let ok = x > -87.0 && x < 88.0;
+    let ok = (x > -87.0) & (x < 88.0);
     let x = if ok { x } else { 0.0 };
     let shifted = x * std::f32::consts::LOG2_E + ROUND_MAGIC;
     let n = shifted - ROUND_MAGIC;
@@ -138,7 +138,8 @@ pub fn exp_core(x: f32) -> (f32, bool) {
 /// (ln x, whether x is positive, normal and finite).
 #[inline(always)]
 pub fn ln_core(x: f32) -> (f32, bool) {
-    let ok = (f32::MIN_POSITIVE..f32::INFINITY).contains(&x);
+    #[expect(clippy::manual_range_contains, reason = "`contains` is two branches, not a vector compare")]
+    let ok = (x >= f32::MIN_POSITIVE) & (x < f32::INFINITY);
     let x = if ok { x } else { 1.0 };
     let bits = x.to_bits();
     // x = 2^e · m with m in [1, 2), then moved to [√½, √2).
@@ -158,7 +159,7 @@ pub fn ln_core(x: f32) -> (f32, bool) {
 #[inline(always)]
 pub fn atan2_core(y: f32, x: f32) -> (f32, bool) {
     let (ax, ay) = (x.abs(), y.abs());
-    let ok = ax < f32::INFINITY && ay < f32::INFINITY;
+    let ok = (ax < f32::INFINITY) & (ay < f32::INFINITY);
     let swapped = ay > ax;
     let (small, large) = if swapped { (ax, ay) } else { (ay, ax) };
     let t = if large > 0.0 { small / large } else { 0.0 };
