@@ -50,7 +50,7 @@ impl Queues {
         self.len[j] += 1;
     }
 
-    /// The 16 points from `at` of xform `j`'s queue (past its end: 0, [`Self::clear_tail`]).
+    /// The [`LANES`] points from `at` of xform `j`'s queue (past its end: 0, [`Self::clear_tail`]).
     #[inline(always)]
     pub(super) fn load(&self, j: usize, at: usize) -> (Lanes, Lanes, Lanes) {
         let from = j * self.stride + at;
@@ -58,7 +58,7 @@ impl Queues {
         (lanes(&self.x), lanes(&self.y), lanes(&self.c))
     }
 
-    /// Zeroes the 16 places past the end of xform `j`'s queue, which its last vector loads: they
+    /// Zeroes the [`LANES`] places past the end of xform `j`'s queue, which its last vector loads: they
     /// take part in that vector's range tests, and the AVX-512 and portable appends leave
     /// different values there, so that without this the two builds' pictures would differ.
     pub(super) fn clear_tail(&mut self, j: usize) {
@@ -93,31 +93,41 @@ impl Queues {
         }
     }
 
-    /// [`Self::append`] with AVX-512F: per xform, the lanes going to it compressed and stored.
+    /// [`Self::append`] with AVX-512F: per vector of 16 lanes and per xform, the lanes going to it
+    /// compressed and stored (in lane order, as the portable append).
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx512f")]
     #[inline]
     fn append_avx512(&mut self, next: &[u32; LANES], count: usize, x: &Lanes, y: &Lanes, c: &Lanes) {
         use std::arch::x86_64::*;
-        let valid: __mmask16 = if count >= LANES { 0xFFFF } else { (1 << count) - 1 };
+        const _: () = assert!(LANES.is_multiple_of(16), "the lanes are whole AVX-512 vectors");
         #[expect(unsafe_code, reason = "unaligned vector loads and stores of 16 lanes")]
-        // SAFETY: the loads read the 16 lanes of arrays of 16; each store writes 16 floats at
-        // `at`, within xform j's stretch: the pool's points number at most POINTS, so a queue's
-        // length is at most POINTS and the stretch is POINTS + LANES long.
+        // SAFETY: the loads read 16 lanes from `part` < LANES of arrays of LANES, a multiple of
+        // 16; each store writes 16 floats at `at`, within xform j's stretch: the pool's points
+        // number at most POINTS, so a queue's length is at most POINTS and the stretch is
+        // POINTS + LANES long.
         unsafe {
-            let next = _mm512_loadu_si512(next.as_ptr().cast());
-            let (x, y, c) = (_mm512_loadu_ps(x.as_ptr()), _mm512_loadu_ps(y.as_ptr()), _mm512_loadu_ps(c.as_ptr()));
-            for j in 0..self.next_len.len() {
-                let hits = _mm512_mask_cmpeq_epi32_mask(valid, next, _mm512_set1_epi32(j as i32));
-                if hits == 0 {
-                    continue;
+            for part in (0..LANES).step_by(16) {
+                let left = count.saturating_sub(part);
+                let valid: __mmask16 = if left >= 16 { 0xFFFF } else { (1 << left) - 1 };
+                let next = _mm512_loadu_si512(next[part..].as_ptr().cast());
+                let (x, y, c) = (
+                    _mm512_loadu_ps(x[part..].as_ptr()),
+                    _mm512_loadu_ps(y[part..].as_ptr()),
+                    _mm512_loadu_ps(c[part..].as_ptr()),
+                );
+                for j in 0..self.next_len.len() {
+                    let hits = _mm512_mask_cmpeq_epi32_mask(valid, next, _mm512_set1_epi32(j as i32));
+                    if hits == 0 {
+                        continue;
+                    }
+                    let at = j * self.stride + self.next_len[j].min(POINTS);
+                    debug_assert!(at + 16 <= self.next_x.len());
+                    _mm512_storeu_ps(self.next_x.as_mut_ptr().add(at), _mm512_maskz_compress_ps(hits, x));
+                    _mm512_storeu_ps(self.next_y.as_mut_ptr().add(at), _mm512_maskz_compress_ps(hits, y));
+                    _mm512_storeu_ps(self.next_c.as_mut_ptr().add(at), _mm512_maskz_compress_ps(hits, c));
+                    self.next_len[j] += hits.count_ones() as usize;
                 }
-                let at = j * self.stride + self.next_len[j].min(POINTS);
-                debug_assert!(at + LANES <= self.next_x.len());
-                _mm512_storeu_ps(self.next_x.as_mut_ptr().add(at), _mm512_maskz_compress_ps(hits, x));
-                _mm512_storeu_ps(self.next_y.as_mut_ptr().add(at), _mm512_maskz_compress_ps(hits, y));
-                _mm512_storeu_ps(self.next_c.as_mut_ptr().add(at), _mm512_maskz_compress_ps(hits, c));
-                self.next_len[j] += hits.count_ones() as usize;
             }
         }
     }

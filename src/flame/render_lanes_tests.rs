@@ -42,7 +42,7 @@ fn lanes_map_as_the_f64_xforms() {
         let mut f64_rng = Pcg32::for_stream(7, 0, 0);
         let mut far = 0;
         let mut points = Pcg32::for_stream(1, 2, u32::from(v));
-        for _ in 0..256 {
+        for _ in 0..4096 / LANES {
             let mut x: Lanes = std::array::from_fn(|_| points.next_f32() * 4.0 - 2.0);
             let mut y: Lanes = std::array::from_fn(|_| points.next_f32() * 4.0 - 2.0);
             let (x0, y0) = (x, y);

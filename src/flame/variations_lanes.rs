@@ -63,11 +63,11 @@ pub const fn draw_of(v: u8) -> Draw {
 /// w · V(t) of variation `V` with constants `k` in lane `l`, `draws` the lanes' random numbers
 /// ([`draw_of`]).
 #[inline(always)]
-pub fn eval<const V: u8>(
+pub fn eval<const V: u8, const L: usize>(
     w: f32,
     k: &[f32; 8],
     p: &Point32,
-    draws: &[[f32; 16]; DRAWS],
+    draws: &[[f32; L]; DRAWS],
     l: usize,
     m: &mut impl Elementary32,
 ) -> [f32; 2] {
