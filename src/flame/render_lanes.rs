@@ -96,9 +96,9 @@ impl Xform32 {
 
     /// The xform's images of the lanes' points (`x`, `y`), in place, drawing from `rng`.
     #[inline(always)]
-    fn apply(&self, x: &mut Lanes, y: &mut Lanes, rng: &mut LaneRng) {
+    fn apply(&self, x: &mut Lanes, y: &mut Lanes, rng: &mut LaneRng, scratch: &mut Scratch) {
         let c = &self.coefs;
-        let mut p = PointLanes::default();
+        let Scratch { point: p, draw, dx, dy } = scratch;
         for l in 0..LANES {
             let (tx, ty) = (c[0] * x[l] + c[2] * y[l] + c[4], c[1] * x[l] + c[3] * y[l] + c[5]);
             p.x[l] = tx;
@@ -123,8 +123,6 @@ impl Xform32 {
             atan2_lanes(&mut p.ayx, &p.y, &p.x);
         }
         let (mut ox, mut oy) = ([0.0; LANES], [0.0; LANES]);
-        // The terms' random numbers (each term draws its own; those that draw none read none).
-        let mut draw = [[0.0f32; LANES]; DRAWS];
         for t in &self.terms {
             let (w, k) = (t.weight, &t.k);
             // One loop per variation, its number a constant, so that each is a vector loop; where
@@ -140,15 +138,14 @@ impl Xform32 {
                             }
                         }
                     }
-                    let (mut dx, mut dy) = ([0.0; LANES], [0.0; LANES]);
                     let mut in_range = true;
                     for l in 0..LANES {
                         let mut m = Fast32 { in_range: true };
-                        [dx[l], dy[l]] = lanes::eval::<$v, LANES>(w, k, &p.lane(l), &draw, l, &mut m);
+                        [dx[l], dy[l]] = lanes::eval::<$v, LANES>(w, k, &p.lane(l), draw, l, &mut m);
                         in_range &= m.in_range;
                     }
                     if !in_range {
-                        exact_term::<$v>(w, k, &p, &draw, &mut dx, &mut dy);
+                        exact_term::<$v>(w, k, p, draw, dx, dy);
                     }
                     for l in 0..LANES {
                         ox[l] += dx[l];
@@ -187,8 +184,27 @@ impl Xform32 {
     }
 }
 
+/// The arrays an xform's map works in, kept by a worker from step to step (made afresh each
+/// step, their 3.5 kB of zeros were 5 % of the time): each step writes the quantities and
+/// random numbers its terms read before they read them; the others hold earlier steps' values.
+struct Scratch {
+    point: PointLanes,
+    /// The terms' random numbers (each term draws its own; those that draw none read none).
+    draw: [Lanes; DRAWS],
+    /// A term's image.
+    dx: Lanes,
+    dy: Lanes,
+}
+
+impl Scratch {
+    fn new() -> Self {
+        let zero = [0.0; LANES];
+        Self { point: PointLanes::default(), draw: [zero; DRAWS], dx: zero, dy: zero }
+    }
+}
+
 /// [`Point32`]'s quantities of the lanes, one array each (so that loops over them are vector
-/// loops); those no term reads stay 0.
+/// loops).
 struct PointLanes {
     x: Lanes,
     y: Lanes,
@@ -420,6 +436,7 @@ impl<'a> LaneGame<'a> {
         let xforms = self.xforms.len();
         let mut start = Pcg32::for_stream(seed, block as u32, 0x7FFF_FFFF);
         let mut rng = LaneRng::new(seed, block);
+        let mut scratch = Scratch::new();
         q.clear();
         for _ in 0..POINTS {
             let p = [start.next_f32() * 2.0 - 1.0, start.next_f32() * 2.0 - 1.0];
@@ -442,7 +459,7 @@ impl<'a> LaneGame<'a> {
                         count = count.min((n - drawn) as usize);
                         drawn += count as u64;
                     }
-                    bad += self.step(j, at, count, plot, q, &mut rng, &mut pending, histogram);
+                    bad += self.step(j, at, count, plot, q, (&mut rng, &mut scratch), &mut pending, histogram);
                     if plot && drawn >= n {
                         break 'round;
                     }
@@ -473,13 +490,13 @@ impl<'a> LaneGame<'a> {
         count: usize,
         plot: bool,
         q: &mut Queues,
-        rng: &mut LaneRng,
+        (rng, scratch): (&mut LaneRng, &mut Scratch),
         pending: &mut InFlight,
         histogram: &mut [Cell],
     ) -> u64 {
         let xf = &self.xforms[j];
         let (mut x, mut y, mut c) = q.load(j, at);
-        xf.apply(&mut x, &mut y, rng);
+        xf.apply(&mut x, &mut y, rng, scratch);
         for c in &mut c {
             *c = xf.color_of(*c);
         }
@@ -501,7 +518,7 @@ impl<'a> LaneGame<'a> {
             }
         }
         if plot && xf.plotted_weight != 0.0 {
-            self.plot(xf, count, &bad, (x, y, c), rng, pending, histogram);
+            self.plot(xf, count, &bad, (x, y, c), (rng, scratch), pending, histogram);
         }
         // Each point's next xform, and the point queued to it.
         let entries = rng.next_u32();
@@ -527,14 +544,14 @@ impl<'a> LaneGame<'a> {
         count: usize,
         bad: &[bool; LANES],
         (x, y, c): (Lanes, Lanes, Lanes),
-        rng: &mut LaneRng,
+        (rng, scratch): (&mut LaneRng, &mut Scratch),
         pending: &mut InFlight,
         histogram: &mut [Cell],
     ) {
         let (mut sx, mut sy, mut sc) = (x, y, c);
         if let Some((f, opacity)) = &self.final_xform {
             let (mut fx, mut fy) = (x, y);
-            f.apply(&mut fx, &mut fy, rng);
+            f.apply(&mut fx, &mut fy, rng, scratch);
             let applies = if *opacity == 1.0 { [1.0; LANES] } else { rng.uniform() };
             let (rx, ry) = (rng.uniform(), rng.uniform());
             for l in 0..LANES {

@@ -46,7 +46,7 @@ fn lanes_map_as_the_f64_xforms() {
             let mut x: Lanes = std::array::from_fn(|_| points.next_f32() * 4.0 - 2.0);
             let mut y: Lanes = std::array::from_fn(|_| points.next_f32() * 4.0 - 2.0);
             let (x0, y0) = (x, y);
-            lane_game.xforms[0].apply(&mut x, &mut y, &mut rng);
+            lane_game.xforms[0].apply(&mut x, &mut y, &mut rng, &mut Scratch::new());
             for l in 0..LANES {
                 let [ex, ey] = game.xforms[0].map.apply([f64::from(x0[l]), f64::from(y0[l])], &mut f64_rng);
                 let size = 1.0 + ex.abs().max(ey.abs());
