@@ -315,7 +315,8 @@ struct Camera32 {
     scale: [f32; 2],
     width: u32,
     last: [f32; 2],
-    /// The bucket past the histogram's: where samples that add nothing go.
+    /// The first of [`LANES`] cells past the histogram's: where lane l's samples that add
+    /// nothing go, its own cell (one cell for all was a chain of dependent adds).
     sink: u32,
 }
 
@@ -346,7 +347,7 @@ impl<'a> LaneGame<'a> {
         if !(far * f64::from(f32::EPSILON) * RESOLUTION <= bucket)
             || game.dmap.iter().any(|c| c[3] != WHITE_LEVEL)
             || cam.hist_width.max(cam.hist_height) >= 1 << 23
-            || cells >= u64::from(u32::MAX)
+            || cells + LANES as u64 > u64::from(u32::MAX)
         {
             return None;
         }
@@ -389,8 +390,8 @@ impl<'a> LaneGame<'a> {
         shared: bool,
         progress: &(dyn Fn(u64) + Sync),
     ) -> (Vec<Cell>, u64) {
-        // The samples that add nothing go to a cell past the picture's.
-        let mut histogram = vec![Cell::default(); cells + 1];
+        // The samples that add nothing go to cells past the picture's, one a lane.
+        let mut histogram = vec![Cell::default(); cells + LANES];
         if shared {
             crate::platform::write_every_page(&mut histogram, Cell::default());
         }
@@ -400,7 +401,7 @@ impl<'a> LaneGame<'a> {
     }
 
     vector_builds! {
-        /// [`Self::run_part`]'s blocks into `histogram`, whose last cell is the sink. Returns the
+        /// [`Self::run_part`]'s blocks into `histogram`, whose last cells are the sinks. Returns the
         /// re-seeds.
         fn run_worker(Cell) => run_blocks, run_blocks_avx512, run_blocks_avx2
     }
@@ -579,8 +580,8 @@ impl<'a> LaneGame<'a> {
             let i = whole((sx[l] - b[0]) * cam.scale[0], cam.last[0]);
             let k = whole((sy[l] - b[1]) * cam.scale[1], cam.last[1]);
             let adds = inside & !bad[l] & (l < count);
-            // A sample that adds nothing goes to the sink, the bucket past the histogram's.
-            bucket[l] = if adds { i + k * cam.width } else { cam.sink };
+            // A sample that adds nothing goes to its lane's sink, past the histogram's cells.
+            bucket[l] = if adds { i + k * cam.width } else { cam.sink + l as u32 };
             entry[l] = whole(sc[l] * 256.0, 255.0);
         }
         for &b in &bucket {
@@ -658,18 +659,18 @@ struct Pending {
 }
 
 impl Pending {
-    /// Nothing to add: 0 to bucket `sink`.
+    /// Nothing to add: 0 to the sinks from `sink`.
     fn new(sink: u32) -> Self {
-        Self { bucket: [sink; LANES], increments: [Cell::default(); LANES], sink }
+        Self { bucket: std::array::from_fn(|l| sink + l as u32), increments: [Cell::default(); LANES], sink }
     }
 
-    /// Adds them; nothing is left to add (the sink's bucket, whatever the increments).
+    /// Adds them; nothing is left to add (the sinks' cells, whatever the increments).
     #[inline(always)]
     fn apply(&mut self, histogram: &mut [Cell]) {
         for (&b, inc) in self.bucket.iter().zip(&self.increments) {
             histogram[b as usize].add(inc);
         }
-        self.bucket = [self.sink; LANES];
+        self.bucket = std::array::from_fn(|l| self.sink + l as u32);
     }
 }
 

@@ -106,7 +106,7 @@ fn same_sums_with_either_append() {
     let layout = Layout::new(&flame).expect("layout");
     let game = ChaosGame::new(&flame, &layout).expect("game");
     let lane_game = LaneGame::new(&game).expect("lanes");
-    let cells = layout.hist_width * layout.hist_height + 1;
+    let cells = layout.hist_width * layout.hist_height + LANES;
     // The dispatched build (AVX-512's compress where the CPU has it), then the portable build.
     let sums = |dispatched: bool| {
         let mut histogram = vec![Cell::default(); cells];
