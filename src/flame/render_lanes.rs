@@ -519,7 +519,7 @@ impl<'a> LaneGame<'a> {
             }
         }
         if plot && xf.plotted_weight != 0.0 {
-            self.plot(xf, count, &bad, (x, y, c), (rng, scratch), pending, histogram);
+            self.plot(xf, count, &bad, (&x, &y, &c), (rng, scratch), pending, histogram);
         }
         // Each point's next xform, and the point queued to it.
         let entries = rng.next_u32();
@@ -544,34 +544,47 @@ impl<'a> LaneGame<'a> {
         xf: &Xform32,
         count: usize,
         bad: &[bool; LANES],
-        (x, y, c): (Lanes, Lanes, Lanes),
+        (x, y, c): (&Lanes, &Lanes, &Lanes),
         (rng, scratch): (&mut LaneRng, &mut Scratch),
         pending: &mut InFlight,
         histogram: &mut [Cell],
     ) {
-        let (mut sx, mut sy, mut sc) = (x, y, c);
-        if let Some((f, opacity)) = &self.final_xform {
-            let (mut fx, mut fy) = (x, y);
-            f.apply(&mut fx, &mut fy, rng, scratch);
-            let applies = if *opacity == 1.0 { [1.0; LANES] } else { rng.uniform() };
-            let (rx, ry) = (rng.uniform(), rng.uniform());
-            for l in 0..LANES {
-                if (applies[l] < *opacity) | (*opacity == 1.0) {
-                    sc[l] = f.color_of(c[l]);
-                    let out = !((fx[l].abs() <= 1e10) & (fy[l].abs() <= 1e10));
-                    sx[l] = if out { rx[l] * 2.0 - 1.0 } else { fx[l] };
-                    sy[l] = if out { ry[l] * 2.0 - 1.0 } else { fy[l] };
+        // The points plotted: the orbits' own (not copied) or the final xform's images.
+        let (mut fx, mut fy, mut fc);
+        let (sx, sy, sc) = match &self.final_xform {
+            None => (x, y, c),
+            Some((f, opacity)) => {
+                (fx, fy, fc) = (*x, *y, *c);
+                f.apply(&mut fx, &mut fy, rng, scratch);
+                let applies = if *opacity == 1.0 { [1.0; LANES] } else { rng.uniform() };
+                let (rx, ry) = (rng.uniform(), rng.uniform());
+                for l in 0..LANES {
+                    if (applies[l] < *opacity) | (*opacity == 1.0) {
+                        fc[l] = f.color_of(c[l]);
+                        let out = !((fx[l].abs() <= 1e10) & (fy[l].abs() <= 1e10));
+                        fx[l] = if out { rx[l] * 2.0 - 1.0 } else { fx[l] };
+                        fy[l] = if out { ry[l] * 2.0 - 1.0 } else { fy[l] };
+                    } else {
+                        (fx[l], fy[l]) = (x[l], y[l]);
+                    }
                 }
+                (&fx, &fy, &fc)
             }
-        }
+        };
         let cam = &self.camera;
-        if let Some((r, center)) = &cam.rotation {
-            for l in 0..LANES {
-                let d = [sx[l] - center[0], sy[l] - center[1]];
-                sx[l] = d[0] * r[0][0] + d[1] * r[0][1] + center[0];
-                sy[l] = d[0] * r[1][0] + d[1] * r[1][1] + center[1];
+        let (mut tx, mut ty);
+        let (sx, sy) = match &cam.rotation {
+            None => (sx, sy),
+            Some((r, center)) => {
+                (tx, ty) = ([0.0; LANES], [0.0; LANES]);
+                for l in 0..LANES {
+                    let d = [sx[l] - center[0], sy[l] - center[1]];
+                    tx[l] = d[0] * r[0][0] + d[1] * r[0][1] + center[0];
+                    ty[l] = d[0] * r[1][0] + d[1] * r[1][1] + center[1];
+                }
+                (&tx, &ty)
             }
-        }
+        };
         let b = &cam.bounds;
         let mut bucket = [0u32; LANES];
         let mut entry = [0u32; LANES];
@@ -594,7 +607,7 @@ impl<'a> LaneGame<'a> {
                 *inc = xf.increments[e as usize];
             }
         } else {
-            for (inc, &c) in pending.increments.iter_mut().zip(&sc) {
+            for (inc, &c) in pending.increments.iter_mut().zip(sc) {
                 *inc = Cell::of(self.game.increments_of(f64::from(c), xf.plotted_weight));
             }
         }
