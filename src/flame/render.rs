@@ -83,8 +83,8 @@ pub fn render(flame: &Flame, seed: u32, progress: &(dyn Fn(u64) + Sync)) -> Resu
 }
 
 /// Whether `flame`'s chaos game runs in f32 lanes (`render_lanes.rs`): its terms all among the
-/// lane game's variations, no `pre_blur`, at most 64 xforms, a view f32 resolves, and
-/// `NLIFS_FLAME_F64` not set. Otherwise the f64 game draws it.
+/// lane game's variations, no `pre_blur`, at most 64 xforms, a view f32 resolves, an opaque
+/// palette, and `NLIFS_FLAME_F64` not set. Otherwise the f64 game draws it.
 pub fn runs_in_lanes(flame: &Flame) -> bool {
     let Ok(layout) = Layout::new(flame) else { return false };
     let Ok(game) = ChaosGame::new(flame, &layout) else { return false };

@@ -17,7 +17,7 @@
 
 use std::sync::atomic::{AtomicU64, Ordering};
 
-use super::super::render_base::{Bucket, WHITE_LEVEL};
+use super::super::render_base::WHITE_LEVEL;
 use super::super::trig32::{Exact32, Fast32};
 use super::super::variations::{MAX_CONSTS, NEEDS_ANGLES, NEEDS_ATAN_XY, NEEDS_ATAN_YX, NEEDS_SQRT};
 use super::super::variations_lanes::{self as lanes, DRAWS, Draw, Point32, SUPPORTED};
@@ -614,47 +614,6 @@ impl<'a> LaneGame<'a> {
     }
 }
 
-/// A histogram cell of the lane game: palette colour sums R, G, B and A, each × 255, on a 16-byte
-/// line of its own. The lane game draws only flames whose palette's alpha is 1, where A is the
-/// count × 255 as well: [`Cell::bucket`] gives it back in both places.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-#[repr(C, align(16))]
-pub(super) struct Cell([u32; 4]);
-
-impl Cell {
-    /// The cell of `b`, its A taken as its count (in linear palette mode the f64 blend of two
-    /// alphas of 1 may round A one below the count).
-    fn of(b: Bucket) -> Self {
-        Self([b[0], b[1], b[2], b[4]])
-    }
-
-    /// The histogram's bucket.
-    pub(super) fn bucket(self) -> Bucket {
-        let [r, g, b, a] = self.0;
-        [r, g, b, a, a]
-    }
-
-    /// Saturating sums, each channel (a vector add where the CPU has one).
-    #[inline(always)]
-    fn add(&mut self, inc: &Cell) {
-        for k in 0..4 {
-            self.0[k] = self.0[k].saturating_add(inc.0[k]);
-        }
-    }
-
-    /// Asks for the cell's cache line ahead of the add.
-    #[inline(always)]
-    fn prefetch(&self) {
-        #[cfg(target_arch = "x86_64")]
-        #[expect(unsafe_code, reason = "a prefetch is a hint: it reads nothing and cannot fault")]
-        // SAFETY: the pointer is to `self`, a live reference; prefetching never dereferences it.
-        unsafe {
-            use std::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
-            _mm_prefetch::<_MM_HINT_T0>((self as *const Self).cast());
-        }
-    }
-}
-
 /// `v` clamped to [0, `last`] (NaN: 0) and truncated, for `last` < 2^23: with operations vector
 /// loops have (2^23 added puts the whole part in the low bits).
 #[inline(always)]
@@ -664,59 +623,10 @@ fn whole(v: f32, last: f32) -> u32 {
     (v.trunc() + TWO_23).to_bits() & 0x7F_FFFF
 }
 
-/// One vector's adds, waiting for their buckets' lines (prefetched): bucket and increments.
-struct Pending {
-    bucket: [u32; LANES],
-    increments: [Cell; LANES],
-    sink: u32,
-}
-
-impl Pending {
-    /// Nothing to add: 0 to the sinks from `sink`.
-    fn new(sink: u32) -> Self {
-        Self { bucket: std::array::from_fn(|l| sink + l as u32), increments: [Cell::default(); LANES], sink }
-    }
-
-    /// Adds them; nothing is left to add (the sinks' cells, whatever the increments).
-    #[inline(always)]
-    fn apply(&mut self, histogram: &mut [Cell]) {
-        for (&b, inc) in self.bucket.iter().zip(&self.increments) {
-            histogram[b as usize].add(inc);
-        }
-        self.bucket = std::array::from_fn(|l| self.sink + l as u32);
-    }
-}
-
-/// Vectors whose adds wait this many vectors for their buckets' lines.
-const IN_FLIGHT_VECTORS: usize = 2;
-
-/// The vectors whose adds wait, oldest first from `next`.
-struct InFlight {
-    vectors: [Pending; IN_FLIGHT_VECTORS],
-    next: usize,
-}
-
-impl InFlight {
-    fn new(sink: u32) -> Self {
-        Self { vectors: std::array::from_fn(|_| Pending::new(sink)), next: 0 }
-    }
-
-    /// The oldest vector's adds done, and its place for the next vector's.
-    #[inline(always)]
-    fn take(&mut self, histogram: &mut [Cell]) -> &mut Pending {
-        let k = self.next % IN_FLIGHT_VECTORS;
-        self.next = (k + 1) % IN_FLIGHT_VECTORS;
-        self.vectors[k].apply(histogram);
-        &mut self.vectors[k]
-    }
-
-    /// Every waiting add done.
-    fn finish(&mut self, histogram: &mut [Cell]) {
-        for v in &mut self.vectors {
-            v.apply(histogram);
-        }
-    }
-}
+#[path = "render_lanes_cells.rs"]
+mod cells;
+pub(super) use cells::Cell;
+use cells::InFlight;
 
 #[path = "render_lanes_queues.rs"]
 mod queues;
