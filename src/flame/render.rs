@@ -253,7 +253,9 @@ impl ChaosGame {
                 .into_par_iter()
                 .map(|_| lanes.run_part(seed, samples, &next_run, cells, workers > 1, progress))
                 .collect();
-            return sum_parts(cells, parts, lanes::Cell::bucket);
+            return sum_parts(cells, parts, lanes::Cell::add, |cells| {
+                cells.into_iter().map(lanes::Cell::bucket).collect()
+            });
         }
         let parts: Vec<(Vec<Bucket>, u64)> = (0..workers)
             .into_par_iter()
@@ -266,7 +268,7 @@ impl ChaosGame {
                 (histogram, bad)
             })
             .collect();
-        sum_parts(cells, parts, |b| b)
+        sum_parts(cells, parts, add, |buckets| buckets)
     }
 
     /// The next run not yet taken, if any: its generator, starting point and colour, and its
@@ -537,25 +539,25 @@ impl ChaosGame {
 /// An empty slot of the samples in flight: 0 added to bucket 0.
 const EMPTY_SLOT: (usize, Bucket) = (0, [0; 5]);
 
-#[inline(always)]
-/// The workers' histograms of `cells` cells of type `T` (each `bucket` of the histogram's)
-/// summed, each dropped once added, and their re-seeds. (Where `T` is [`Bucket`], the first
-/// histogram becomes the sum.)
-fn sum_parts<T: Copy + Send + Sync>(
+/// The workers' histograms of `cells` cells of type `T` summed into the first (`add`), each
+/// dropped once added, then made buckets (`buckets`); and their re-seeds. Summing in the cells'
+/// own type keeps the peak memory at the workers' histograms.
+fn sum_parts<T: Send + Sync>(
     cells: usize,
     parts: Vec<(Vec<T>, u64)>,
-    bucket: impl Fn(T) -> Bucket + Sync,
+    add: impl Fn(&mut T, &T) + Sync,
+    buckets: impl FnOnce(Vec<T>) -> Vec<Bucket>,
 ) -> (Vec<Bucket>, u64) {
     let mut parts = parts.into_iter();
-    let Some((first, mut bad)) = parts.next() else { return (vec![[0; 5]; cells], 0) };
-    let mut total: Vec<Bucket> = first.into_iter().map(&bucket).collect();
+    let Some((mut total, mut bad)) = parts.next() else { return (vec![[0; 5]; cells], 0) };
     for (part, part_bad) in parts {
         bad += part_bad;
-        total.par_iter_mut().zip(part.par_iter()).for_each(|(t, p)| add(t, &bucket(*p)));
+        total.par_iter_mut().zip(part.par_iter()).for_each(|(t, p)| add(t, p));
     }
-    (total, bad)
+    (buckets(total), bad)
 }
 
+#[inline(always)]
 fn add(bucket: &mut Bucket, inc: &Bucket) {
     for k in 0..5 {
         bucket[k] = bucket[k].saturating_add(inc[k]);

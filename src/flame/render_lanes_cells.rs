@@ -26,7 +26,7 @@ impl Cell {
 
     /// Saturating sums, each channel (a vector add where the CPU has one).
     #[inline(always)]
-    pub(super) fn add(&mut self, inc: &Cell) {
+    pub(in crate::flame::render) fn add(&mut self, inc: &Cell) {
         for k in 0..4 {
             self.0[k] = self.0[k].saturating_add(inc.0[k]);
         }
