@@ -14,8 +14,9 @@ pub enum SimdLevel {
     Scalar,
     /// x86-64 with AVX2.
     Avx2,
-    /// x86-64 with AVX2, AVX-512F and AVX-512CD (every AVX-512 CPU has both; the splat's
-    /// accumulating modes find a vector's repeated pixels with CD's conflict detection).
+    /// x86-64 with AVX2 and AVX-512 F, CD, VL, DQ and BW (every AVX-512 CPU since Skylake-SP
+    /// and Zen 4 has the five; the splat's accumulating modes find a vector's repeated pixels
+    /// with CD's conflict detection, the flame game's kernel is compiled for all five).
     Avx512,
 }
 
@@ -39,7 +40,7 @@ impl SimdLevel {
         self >= Self::Avx2
     }
 
-    /// Whether AVX-512F and AVX-512CD (and AVX2) code may run at this level.
+    /// Whether AVX-512 F, CD, VL, DQ and BW (and AVX2) code may run at this level.
     pub fn avx512(self) -> bool {
         self >= Self::Avx512
     }
@@ -48,8 +49,11 @@ impl SimdLevel {
         #[cfg(target_arch = "x86_64")]
         {
             if std::arch::is_x86_feature_detected!("avx2") {
-                let avx512 =
-                    std::arch::is_x86_feature_detected!("avx512f") && std::arch::is_x86_feature_detected!("avx512cd");
+                let avx512 = std::arch::is_x86_feature_detected!("avx512f")
+                    && std::arch::is_x86_feature_detected!("avx512cd")
+                    && std::arch::is_x86_feature_detected!("avx512vl")
+                    && std::arch::is_x86_feature_detected!("avx512dq")
+                    && std::arch::is_x86_feature_detected!("avx512bw");
                 return if avx512 { Self::Avx512 } else { Self::Avx2 };
             }
         }

@@ -57,7 +57,7 @@ struct Xform32 {
     color_kept: f32,
     plotted_weight: f64,
     /// Its points' cell increments by step-palette entry (step mode).
-    increments: Vec<Cell>,
+    increments: Box<[Cell; 256]>,
 }
 
 impl Xform32 {
@@ -79,9 +79,8 @@ impl Xform32 {
                 })
             })
             .collect::<Option<Vec<_>>>()?;
-        let increments = (0..256)
-            .map(|i| Cell::of(game.increments_of((f64::from(i) + 0.5) / 256.0, x.plotted_weight)))
-            .collect::<Vec<_>>();
+        let increments =
+            Box::new(std::array::from_fn(|i| Cell::of(game.increments_of((i as f64 + 0.5) / 256.0, x.plotted_weight))));
         Some(Self {
             coefs: f6(parts.coefs),
             post: parts.post.map(f6),
@@ -98,7 +97,7 @@ impl Xform32 {
     #[inline(always)]
     fn apply(&self, x: &mut Lanes, y: &mut Lanes, rng: &mut LaneRng, scratch: &mut Scratch) {
         let c = &self.coefs;
-        let Scratch { point: p, draw, dx, dy } = scratch;
+        let Scratch { point: p, draw, dx, dy, fast } = scratch;
         for l in 0..LANES {
             let (tx, ty) = (c[0] * x[l] + c[2] * y[l] + c[4], c[1] * x[l] + c[3] * y[l] + c[5]);
             p.x[l] = tx;
@@ -122,11 +121,12 @@ impl Xform32 {
         if self.needs & NEEDS_ATAN_YX != 0 {
             atan2_lanes(&mut p.ayx, &p.y, &p.x);
         }
-        let (mut ox, mut oy) = ([0.0; LANES], [0.0; LANES]);
+        // The terms' sum, in place of the point (its quantities are in `p`).
+        (*x, *y) = ([0.0; LANES], [0.0; LANES]);
         for t in &self.terms {
             let (w, k) = (t.weight, &t.k);
             // One loop per variation, its number a constant, so that each is a vector loop; where
-            // a lane's argument is beyond a core's range, every lane again with `Exact32`.
+            // a lane's argument is beyond a core's range, that lane again with `Exact32`.
             macro_rules! term {
                 ($v:literal) => {{
                     match const { lanes::draw_of($v) } {
@@ -142,14 +142,15 @@ impl Xform32 {
                     for l in 0..LANES {
                         let mut m = Fast32 { in_range: true };
                         [dx[l], dy[l]] = lanes::eval::<$v, LANES>(w, k, &p.lane(l), draw, l, &mut m);
+                        fast[l] = m.in_range;
                         in_range &= m.in_range;
                     }
                     if !in_range {
-                        exact_term::<$v>(w, k, p, draw, dx, dy);
+                        exact_term::<$v>(w, k, p, draw, fast, dx, dy);
                     }
                     for l in 0..LANES {
-                        ox[l] += dx[l];
-                        oy[l] += dy[l];
+                        x[l] += dx[l];
+                        y[l] += dy[l];
                     }
                 }};
             }
@@ -166,14 +167,12 @@ impl Xform32 {
                 43 44 45 46 47 48 49 50 51 52 53 54 60 78
             );
         }
-        match &self.post {
-            Some(c) => {
-                for l in 0..LANES {
-                    x[l] = c[0] * ox[l] + c[2] * oy[l] + c[4];
-                    y[l] = c[1] * ox[l] + c[3] * oy[l] + c[5];
-                }
+        if let Some(c) = &self.post {
+            for l in 0..LANES {
+                let (sx, sy) = (x[l], y[l]);
+                x[l] = c[0] * sx + c[2] * sy + c[4];
+                y[l] = c[1] * sx + c[3] * sy + c[5];
             }
-            None => (*x, *y) = (ox, oy),
         }
     }
 
@@ -195,12 +194,14 @@ struct Scratch {
     /// A term's image.
     dx: Lanes,
     dy: Lanes,
+    /// Whether each lane's arguments were within the f32 cores' ranges, in a term.
+    fast: [bool; LANES],
 }
 
 impl Scratch {
     fn new() -> Self {
         let zero = [0.0; LANES];
-        Self { point: PointLanes::default(), draw: [zero; DRAWS], dx: zero, dy: zero }
+        Self { point: PointLanes::default(), draw: [zero; DRAWS], dx: zero, dy: zero, fast: [true; LANES] }
     }
 }
 
@@ -240,8 +241,9 @@ impl PointLanes {
     }
 }
 
-/// Variation `V`'s terms of the lanes with [`Exact32`]: where a core's argument was out of its
-/// range. Out of line and cold: inlined, it slowed the vector loops it stands beside (3×).
+/// Variation `V`'s terms with [`Exact32`] in the lanes not `fast`: where a core's argument was
+/// out of its range. Out of line and cold: inlined, it slowed the vector loops it stands beside
+/// (3×).
 #[cold]
 #[inline(never)]
 fn exact_term<const V: u8>(
@@ -249,10 +251,11 @@ fn exact_term<const V: u8>(
     k: &[f32; MAX_CONSTS],
     p: &PointLanes,
     draw: &[Lanes; DRAWS],
+    fast: &[bool; LANES],
     dx: &mut Lanes,
     dy: &mut Lanes,
 ) {
-    for l in 0..LANES {
+    for l in (0..LANES).filter(|&l| !fast[l]) {
         [dx[l], dy[l]] = lanes::eval::<V, LANES>(w, k, &p.lane(l), draw, l, &mut Exact32);
     }
 }
@@ -485,15 +488,15 @@ impl<'a> LaneGame<'a> {
     /// plotted when `plot`, and queued to their next xforms. Returns the re-seeds.
     #[inline(always)]
     #[expect(clippy::too_many_arguments, reason = "one step of the round's state")]
-    fn step(
-        &self,
+    fn step<'s>(
+        &'s self,
         j: usize,
         at: usize,
         count: usize,
         plot: bool,
         q: &mut Queues,
         (rng, scratch): (&mut LaneRng, &mut Scratch),
-        pending: &mut InFlight,
+        pending: &mut InFlight<'s>,
         histogram: &mut [Cell],
     ) -> u64 {
         let xf = &self.xforms[j];
@@ -540,14 +543,14 @@ impl<'a> LaneGame<'a> {
     /// up, the bucket prefetched now and added with the next vector.
     #[inline(always)]
     #[expect(clippy::too_many_arguments, reason = "one step of the round's state")]
-    fn plot(
-        &self,
-        xf: &Xform32,
+    fn plot<'s>(
+        &'s self,
+        xf: &'s Xform32,
         count: usize,
         bad: &[bool; LANES],
         (x, y, c): (&Lanes, &Lanes, &Lanes),
         (rng, scratch): (&mut LaneRng, &mut Scratch),
-        pending: &mut InFlight,
+        pending: &mut InFlight<'s>,
         histogram: &mut [Cell],
     ) {
         // The points plotted: the orbits' own (not copied) or the final xform's images.
@@ -604,11 +607,13 @@ impl<'a> LaneGame<'a> {
         let pending = pending.take(histogram);
         pending.bucket = bucket;
         if self.game.palette_mode == PaletteMode::Step {
-            for (inc, &e) in pending.increments.iter_mut().zip(&entry) {
-                *inc = xf.increments[e as usize];
+            pending.increments = Increments::Step(&xf.increments);
+            for (to, &e) in pending.entry.iter_mut().zip(&entry) {
+                *to = e as u8;
             }
         } else {
-            for (inc, &c) in pending.increments.iter_mut().zip(sc) {
+            pending.increments = Increments::Own;
+            for (inc, &c) in pending.own.iter_mut().zip(sc) {
                 *inc = Cell::of(self.game.increments_of(f64::from(c), xf.plotted_weight));
             }
         }
@@ -627,7 +632,7 @@ fn whole(v: f32, last: f32) -> u32 {
 #[path = "render_lanes_cells.rs"]
 mod cells;
 pub(super) use cells::Cell;
-use cells::InFlight;
+use cells::{InFlight, Increments};
 
 #[path = "render_lanes_queues.rs"]
 mod queues;

@@ -45,24 +45,51 @@ impl Cell {
     }
 }
 
-/// One vector's adds, waiting for their buckets' lines (prefetched): bucket and increments.
-pub(super) struct Pending {
+/// Where a vector's increments are: an xform's step-palette increments, looked up by entry at
+/// the add (no copy of them waits), or the vector's own (linear palette: each colour's blend).
+#[derive(Clone, Copy)]
+pub(super) enum Increments<'a> {
+    Step(&'a [Cell; 256]),
+    Own,
+}
+
+/// One vector's adds, waiting for their buckets' lines (prefetched): bucket and increment.
+pub(super) struct Pending<'a> {
     pub(super) bucket: [u32; LANES],
-    pub(super) increments: [Cell; LANES],
+    pub(super) increments: Increments<'a>,
+    /// Each lane's step-palette entry ([`Increments::Step`]).
+    pub(super) entry: [u8; LANES],
+    /// Each lane's increment ([`Increments::Own`]).
+    pub(super) own: [Cell; LANES],
     sink: u32,
 }
 
-impl Pending {
+impl Pending<'_> {
     /// Nothing to add: 0 to the sinks from `sink`.
     fn new(sink: u32) -> Self {
-        Self { bucket: std::array::from_fn(|l| sink + l as u32), increments: [Cell::default(); LANES], sink }
+        Self {
+            bucket: std::array::from_fn(|l| sink + l as u32),
+            increments: Increments::Own,
+            entry: [0; LANES],
+            own: [Cell::default(); LANES],
+            sink,
+        }
     }
 
     /// Adds them; nothing is left to add (the sinks' cells, whatever the increments).
     #[inline(always)]
     fn apply(&mut self, histogram: &mut [Cell]) {
-        for (&b, inc) in self.bucket.iter().zip(&self.increments) {
-            histogram[b as usize].add(inc);
+        match self.increments {
+            Increments::Step(table) => {
+                for (&b, &e) in self.bucket.iter().zip(&self.entry) {
+                    histogram[b as usize].add(&table[usize::from(e)]);
+                }
+            }
+            Increments::Own => {
+                for (&b, inc) in self.bucket.iter().zip(&self.own) {
+                    histogram[b as usize].add(inc);
+                }
+            }
         }
         self.bucket = std::array::from_fn(|l| self.sink + l as u32);
     }
@@ -72,19 +99,19 @@ impl Pending {
 const IN_FLIGHT_VECTORS: usize = 2;
 
 /// The vectors whose adds wait, oldest first from `next`.
-pub(super) struct InFlight {
-    vectors: [Pending; IN_FLIGHT_VECTORS],
+pub(super) struct InFlight<'a> {
+    vectors: [Pending<'a>; IN_FLIGHT_VECTORS],
     next: usize,
 }
 
-impl InFlight {
+impl<'a> InFlight<'a> {
     pub(super) fn new(sink: u32) -> Self {
         Self { vectors: std::array::from_fn(|_| Pending::new(sink)), next: 0 }
     }
 
     /// The oldest vector's adds done, and its place for the next vector's.
     #[inline(always)]
-    pub(super) fn take(&mut self, histogram: &mut [Cell]) -> &mut Pending {
+    pub(super) fn take(&mut self, histogram: &mut [Cell]) -> &mut Pending<'a> {
         let k = self.next % IN_FLIGHT_VECTORS;
         self.next = (k + 1) % IN_FLIGHT_VECTORS;
         self.vectors[k].apply(histogram);

@@ -15,6 +15,9 @@ const ROUND_MAGIC: f32 = 12_582_912.0;
 const PIO2_1: f32 = 1.570_312_5;
 const PIO2_2: f32 = 4.837_513e-4;
 const PIO2_3: f32 = 7.549_79e-8;
+/// The minimax odd polynomial of sin on [−π/2, π/2] past its first term (r³ … r⁹ coefficients;
+/// within 3e-8 of sin there).
+const SIN_HALF_PI: [f32; 4] = [-1.666_666_6e-1, 8.333_258e-3, -1.982_346_7e-4, 2.634_852_5e-6];
 
 /// The elementary functions a variation's formula calls in f32 (`variations_lanes.rs`).
 pub trait Elementary32 {
@@ -63,6 +66,18 @@ impl Elementary32 for Fast32 {
         let (s, c, ok) = sin_cos_core(x);
         self.in_range &= ok;
         (s, c)
+    }
+    #[inline(always)]
+    fn sin(&mut self, x: f32) -> f32 {
+        let (s, ok) = sin_core::<false>(x);
+        self.in_range &= ok;
+        s
+    }
+    #[inline(always)]
+    fn cos(&mut self, x: f32) -> f32 {
+        let (c, ok) = sin_core::<true>(x);
+        self.in_range &= ok;
+        c
     }
     #[inline(always)]
     fn exp(&mut self, x: f32) -> f32 {
@@ -115,6 +130,28 @@ pub fn sin_cos_core(x: f32) -> (f32, f32, bool) {
     let s = f32::from_bits(s.to_bits() ^ ((quadrant & 2) << 30));
     let c = f32::from_bits(c.to_bits() ^ ((quadrant.wrapping_add(1) & 2) << 30));
     (s, c, ok)
+}
+
+/// (sin x, or cos x where `COS`, whether |x| ≤ 8192), one polynomial: x less the nearest n·π
+/// (n whole for sin, half-odd for cos, as cos x = −sin(x − π/2)), the sign flipped for odd n.
+/// Where only one of the two is wanted, it takes half [`sin_cos_core`]'s work.
+#[inline(always)]
+pub fn sin_core<const COS: bool>(x: f32) -> (f32, bool) {
+    let ok = x.abs() <= REDUCE_LIMIT;
+    let x = if ok { x } else { 0.0 };
+    let half = if COS { 0.5 } else { 0.0 };
+    let shifted = (x * std::f32::consts::FRAC_1_PI - half) + ROUND_MAGIC;
+    let n = (shifted - ROUND_MAGIC) + half;
+    // n · (π/2's parts doubled): 2n is below 2^13, as the quadrant of `sin_cos_core`.
+    let r = ((x - n * (2.0 * PIO2_1)) - n * (2.0 * PIO2_2)) - n * (2.0 * PIO2_3);
+    let z = r * r;
+    let [s3, s5, s7, s9] = SIN_HALF_PI;
+    let s = r + r * z * (s3 + z * (s5 + z * (s7 + z * s9)));
+    // sin(r + kπ) = (−1)^k sin r, and cos(r + kπ + π/2) = −(−1)^k sin r: k's parity is the low
+    // bit of `shifted`.
+    let odd = shifted.to_bits() << 31;
+    let sign = if COS { odd ^ 0x8000_0000 } else { odd };
+    (f32::from_bits(s.to_bits() ^ sign), ok)
 }
 
 /// (e^x, whether −87 < x < 88, where the result is a normal float).
@@ -195,6 +232,10 @@ mod tests {
         let eps = f64::from(f32::EPSILON);
         assert!(worst(|x| (sin_cos_core(x).0, sin_cos_core(x).2), f64::sin, -8192.0, 8192.0) < 4.0 * eps);
         assert!(worst(|x| (sin_cos_core(x).1, true), f64::cos, -20.0, 20.0) < 4.0 * eps);
+        assert!(worst(sin_core::<false>, f64::sin, -8192.0, 8192.0) < 4.0 * eps);
+        assert!(worst(sin_core::<true>, f64::cos, -8192.0, 8192.0) < 4.0 * eps);
+        assert!(worst(sin_core::<false>, f64::sin, -4.0, 4.0) < 4.0 * eps);
+        assert!(worst(sin_core::<true>, f64::cos, -4.0, 4.0) < 4.0 * eps);
         assert!(worst(exp_core, f64::exp, -80.0, 80.0) < 4.0 * eps);
         assert!(worst(ln_core, f64::ln, 1e-6, 1e6) < 4.0 * eps);
         assert!(worst(|t| atan2_core(t, 1.0 - t), |t| t.atan2(1.0 - t), -3.0, 3.0) < 4.0 * eps);
@@ -204,6 +245,7 @@ mod tests {
     #[test]
     fn cores_say_when_out_of_range() {
         assert!(!sin_cos_core(1e5).2 && !sin_cos_core(f32::NAN).2);
+        assert!(!sin_core::<false>(1e5).1 && !sin_core::<true>(f32::NAN).1 && sin_core::<true>(-8192.0).1);
         assert!(!exp_core(100.0).1 && !exp_core(f32::NAN).1);
         assert!(!ln_core(0.0).1 && !ln_core(-1.0).1 && !ln_core(f32::INFINITY).1);
         assert!(!atan2_core(f32::INFINITY, 1.0).1);
