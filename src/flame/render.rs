@@ -93,8 +93,8 @@ pub fn runs_in_lanes(flame: &Flame) -> bool {
 
 /// A worker's entry, `$dispatch(&self, seed, samples, next, histogram: &mut [$cell], progress) -> u64`, that
 /// runs `$worker` (the same arguments and `wide`: whether the CPU runs AVX-512F) compiled for
-/// AVX-512 (`$avx512`: F, VL, DQ and BW, whose 128- and 256-bit forms took 10–13 % off the lane
-/// game on Zen 4) or AVX2 (`$avx2`) where the CPU has it, else as it is: the f64 and the lane
+/// AVX-512 (`$avx512`: F, VL, DQ and BW, for the 128- and 256-bit forms of the cell adds and
+/// lane tests) or AVX2 (`$avx2`) where the CPU has it, else as it is: the f64 and the lane
 /// chaos games' one dispatch. `$worker` is `#[inline(always)]`, so each build is its own vector
 /// code.
 macro_rules! vector_builds {
