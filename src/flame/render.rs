@@ -254,7 +254,7 @@ impl ChaosGame {
                 .into_par_iter()
                 .map(|_| lanes.run_part(seed, samples, &next_run, cells, workers > 1, progress))
                 .collect();
-            return sum_parts(cells, parts, lanes::Cell::add, |cells| {
+            return sum_parts(cells, parts, lanes::Cell::add_saturating, |cells| {
                 cells.into_iter().map(lanes::Cell::bucket).collect()
             });
         }

@@ -20,7 +20,7 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use super::super::render_base::WHITE_LEVEL;
 use super::super::trig32::{Exact32, Fast32};
 use super::super::variations::{MAX_CONSTS, NEEDS_ANGLES, NEEDS_ATAN_XY, NEEDS_ATAN_YX, NEEDS_SQRT};
-use super::super::variations_lanes::{self as lanes, DRAWS, Draw, Point32, SUPPORTED};
+use super::super::variations_lanes::{self as lanes, DRAWS, Draw, SUPPORTED};
 use super::{CHOICE_ENTRIES, ChaosGame, FUSE_ITERATIONS, GameXform};
 use crate::flame::PaletteMode;
 use crate::rng::Pcg32;
@@ -28,7 +28,6 @@ use crate::rng::Pcg32;
 /// Points mapped at once: four AVX-512 vectors of f32, whose independent work overlaps (a step
 /// of 64 points took 25 % less time per point than one of 16, one of 32 15 %: measured).
 const LANES: usize = 64;
-type Lanes = [f32; LANES];
 /// Orbits a worker keeps in its queues (a queue's last vector is partial: the more points, the
 /// fewer lanes idle).
 const POINTS: usize = 4096;
@@ -122,7 +121,7 @@ impl Xform32 {
             atan2_lanes(&mut p.ayx, &p.y, &p.x);
         }
         // The terms' sum, in place of the point (its quantities are in `p`).
-        (*x, *y) = ([0.0; LANES], [0.0; LANES]);
+        (*x, *y) = (Lanes::splat(0.0), Lanes::splat(0.0));
         for t in &self.terms {
             let (w, k) = (t.weight, &t.k);
             // One loop per variation, its number a constant, so that each is a vector loop; where
@@ -131,17 +130,17 @@ impl Xform32 {
                 ($v:literal) => {{
                     match const { lanes::draw_of($v) } {
                         Draw::None => {}
-                        Draw::Bit => draw[0] = rng.bits(),
+                        Draw::Bit => draw.0[0] = rng.bits().0,
                         Draw::Uniform(n) => {
-                            for d in &mut draw[..n] {
-                                *d = rng.uniform();
+                            for d in &mut draw.0[..n] {
+                                *d = rng.uniform().0;
                             }
                         }
                     }
                     let mut in_range = true;
                     for l in 0..LANES {
                         let mut m = Fast32 { in_range: true };
-                        [dx[l], dy[l]] = lanes::eval::<$v, LANES>(w, k, &p.lane(l), draw, l, &mut m);
+                        [dx[l], dy[l]] = lanes::eval::<$v, LANES>(w, k, &p.lane(l), &draw.0, l, &mut m);
                         fast[l] = m.in_range;
                         in_range &= m.in_range;
                     }
@@ -187,56 +186,27 @@ impl Xform32 {
 /// step, their 3.5 kB of zeros were a memset call, 4 % of the samples in perf): each step
 /// writes the quantities and random numbers its terms read before they read them; the others
 /// hold earlier steps' values.
+#[repr(C)]
 struct Scratch {
     point: PointLanes,
     /// The terms' random numbers (each term draws its own; those that draw none read none).
-    draw: [Lanes; DRAWS],
+    draw: Draws,
     /// A term's image.
     dx: Lanes,
     dy: Lanes,
     /// Whether each lane's arguments were within the f32 cores' ranges, in a term.
-    fast: [bool; LANES],
+    fast: Lanes<bool>,
 }
 
 impl Scratch {
     fn new() -> Self {
-        let zero = [0.0; LANES];
-        Self { point: PointLanes::default(), draw: [zero; DRAWS], dx: zero, dy: zero, fast: [true; LANES] }
-    }
-}
-
-/// [`Point32`]'s quantities of the lanes, one array each (so that loops over them are vector
-/// loops).
-struct PointLanes {
-    x: Lanes,
-    y: Lanes,
-    r2: Lanes,
-    r: Lanes,
-    a: Lanes,
-    sa: Lanes,
-    ca: Lanes,
-    ayx: Lanes,
-}
-
-impl Default for PointLanes {
-    fn default() -> Self {
-        let zero = [0.0; LANES];
-        Self { x: zero, y: zero, r2: zero, r: zero, a: zero, sa: zero, ca: zero, ayx: zero }
-    }
-}
-
-impl PointLanes {
-    #[inline(always)]
-    fn lane(&self, l: usize) -> Point32 {
-        Point32 {
-            x: self.x[l],
-            y: self.y[l],
-            r2: self.r2[l],
-            r: self.r[l],
-            a: self.a[l],
-            sa: self.sa[l],
-            ca: self.ca[l],
-            ayx: self.ayx[l],
+        let zero = Lanes::splat(0.0);
+        Self {
+            point: PointLanes::default(),
+            draw: Draws([[0.0; LANES]; DRAWS]),
+            dx: zero,
+            dy: zero,
+            fast: Lanes::splat(true),
         }
     }
 }
@@ -250,13 +220,13 @@ fn exact_term<const V: u8>(
     w: f32,
     k: &[f32; MAX_CONSTS],
     p: &PointLanes,
-    draw: &[Lanes; DRAWS],
-    fast: &[bool; LANES],
+    draw: &Draws,
+    fast: &Lanes<bool>,
     dx: &mut Lanes,
     dy: &mut Lanes,
 ) {
     for l in (0..LANES).filter(|&l| !fast[l]) {
-        [dx[l], dy[l]] = lanes::eval::<V, LANES>(w, k, &p.lane(l), draw, l, &mut Exact32);
+        [dx[l], dy[l]] = lanes::eval::<V, LANES>(w, k, &p.lane(l), &draw.0, l, &mut Exact32);
     }
 }
 
@@ -279,19 +249,19 @@ fn atan2_lanes(out: &mut Lanes, y: &Lanes, x: &Lanes) {
 
 /// [`LANES`] generators, one a lane: nlifs's PCG, advanced as vectors.
 struct LaneRng {
-    state: [u32; LANES],
+    state: Lanes<u32>,
 }
 
 impl LaneRng {
     fn new(seed: u32, block: u64) -> Self {
         let block = block as u32;
-        Self { state: std::array::from_fn(|l| Pcg32::for_stream(seed, block, 0x8000_0000 | l as u32).state()) }
+        Self { state: Lanes(std::array::from_fn(|l| Pcg32::for_stream(seed, block, 0x8000_0000 | l as u32).state())) }
     }
 
     #[inline(always)]
-    fn next_u32(&mut self) -> [u32; LANES] {
-        let mut out = [0; LANES];
-        for (o, s) in out.iter_mut().zip(&mut self.state) {
+    fn next_u32(&mut self) -> Lanes<u32> {
+        let mut out = Lanes::splat(0);
+        for (o, s) in out.iter_mut().zip(self.state.iter_mut()) {
             let mut g = Pcg32::from_state(*s);
             *o = g.next_u32();
             *s = g.state();
@@ -302,13 +272,13 @@ impl LaneRng {
     /// Uniform in [0, 1), 24 bits.
     #[inline(always)]
     fn uniform(&mut self) -> Lanes {
-        self.next_u32().map(|u| (u >> 8) as f32 * (1.0 / 16_777_216.0))
+        Lanes(self.next_u32().0.map(|u| (u >> 8) as f32 * (1.0 / 16_777_216.0)))
     }
 
     /// 0 or 1.
     #[inline(always)]
     fn bits(&mut self) -> Lanes {
-        self.next_u32().map(|u| (u & 1) as f32)
+        Lanes(self.next_u32().0.map(|u| (u & 1) as f32))
     }
 }
 
@@ -333,12 +303,15 @@ pub(super) struct LaneGame<'a> {
     /// of those at or below the drawn entry.
     firsts: Vec<[u32; MAX_XFORMS]>,
     camera: Camera32,
+    /// What keeps a worker's cells from wrapping (none set aside yet).
+    overflow: Overflow,
 }
 
 impl<'a> LaneGame<'a> {
     /// `game` in f32 lanes; `None` where a term is not supported, it has more than
     /// [`MAX_XFORMS`] xforms, its choice table is not in xform order, f32 does not resolve its
-    /// view ([`RESOLUTION`]), or an entry of its palette is not opaque ([`Cell`]).
+    /// view ([`RESOLUTION`]), an entry of its palette is not opaque ([`Cell`]), or its increments
+    /// are so large that a block could carry a cell past 2^31 ([`Overflow`]: opacities above 2).
     pub fn new(game: &'a ChaosGame) -> Option<Self> {
         let n = game.xforms.len();
         if n > MAX_XFORMS {
@@ -380,7 +353,16 @@ impl<'a> LaneGame<'a> {
             last: [cam.hist_width as f32 - 1.0, cam.hist_height as f32 - 1.0],
             sink: (cam.hist_width * cam.hist_height) as u32,
         };
-        Some(Self { game, xforms, final_xform, firsts, camera })
+        // A linear palette's increment blends two entries' (the larger bounds it).
+        let largest = game
+            .xforms
+            .iter()
+            .flat_map(|x| game.dmap.iter().map(|&c| super::increments(c, x.plotted_weight)))
+            .flatten()
+            .max()
+            .unwrap_or(0);
+        let overflow = Overflow::new(largest, BLOCK_SAMPLES)?;
+        Some(Self { game, xforms, final_xform, firsts, camera, overflow })
     }
 
     /// One worker's part of `samples`: blocks taken in turn from `next` until none is left. Its
@@ -423,13 +405,16 @@ impl<'a> LaneGame<'a> {
     ) -> u64 {
         let blocks = samples.div_ceil(BLOCK_SAMPLES);
         let mut queues = Queues::new(self.xforms.len(), wide);
+        let mut overflow = self.overflow.clone();
         let mut bad = 0;
         loop {
             let block = next_block.fetch_add(1, Ordering::Relaxed);
             if block >= blocks {
+                overflow.finish(histogram);
                 return bad;
             }
             let n = BLOCK_SAMPLES.min(samples - block * BLOCK_SAMPLES);
+            overflow.before_block(n, histogram);
             bad += self.run_block(seed, block, n, &mut queues, histogram);
             progress(n);
         }
@@ -502,10 +487,10 @@ impl<'a> LaneGame<'a> {
         let xf = &self.xforms[j];
         let (mut x, mut y, mut c) = q.load(j, at);
         xf.apply(&mut x, &mut y, rng, scratch);
-        for c in &mut c {
+        for c in c.iter_mut() {
             *c = xf.color_of(*c);
         }
-        let mut bad = [false; LANES];
+        let mut bad = Lanes::splat(false);
         let mut any_bad = false;
         for l in 0..LANES {
             bad[l] = !((x[l].abs() <= 1e10) & (y[l].abs() <= 1e10)) & (l < count);
@@ -528,7 +513,7 @@ impl<'a> LaneGame<'a> {
         // Each point's next xform, and the point queued to it.
         let entries = rng.next_u32();
         let row = if self.game.xaos { j + 1 } else { 0 };
-        let mut next = [0u32; LANES];
+        let mut next = Lanes::splat(0u32);
         for &first in &self.firsts[row][1..self.xforms.len()] {
             for l in 0..LANES {
                 next[l] += u32::from((entries[l] & (CHOICE_ENTRIES as u32 - 1)) >= first);
@@ -547,7 +532,7 @@ impl<'a> LaneGame<'a> {
         &'s self,
         xf: &'s Xform32,
         count: usize,
-        bad: &[bool; LANES],
+        bad: &Lanes<bool>,
         (x, y, c): (&Lanes, &Lanes, &Lanes),
         (rng, scratch): (&mut LaneRng, &mut Scratch),
         pending: &mut InFlight<'s>,
@@ -560,7 +545,7 @@ impl<'a> LaneGame<'a> {
             Some((f, opacity)) => {
                 (fx, fy, fc) = (*x, *y, *c);
                 f.apply(&mut fx, &mut fy, rng, scratch);
-                let applies = if *opacity == 1.0 { [1.0; LANES] } else { rng.uniform() };
+                let applies = if *opacity == 1.0 { Lanes::splat(1.0) } else { rng.uniform() };
                 let (rx, ry) = (rng.uniform(), rng.uniform());
                 for l in 0..LANES {
                     if (applies[l] < *opacity) | (*opacity == 1.0) {
@@ -580,7 +565,7 @@ impl<'a> LaneGame<'a> {
         let (sx, sy) = match &cam.rotation {
             None => (sx, sy),
             Some((r, center)) => {
-                (tx, ty) = ([0.0; LANES], [0.0; LANES]);
+                (tx, ty) = (Lanes::splat(0.0), Lanes::splat(0.0));
                 for l in 0..LANES {
                     let d = [sx[l] - center[0], sy[l] - center[1]];
                     tx[l] = d[0] * r[0][0] + d[1] * r[0][1] + center[0];
@@ -590,8 +575,8 @@ impl<'a> LaneGame<'a> {
             }
         };
         let b = &cam.bounds;
-        let mut bucket = [0u32; LANES];
-        let mut entry = [0u32; LANES];
+        let mut bucket = Lanes::splat(0u32);
+        let mut entry = Lanes::splat(0u32);
         for l in 0..LANES {
             let inside = (sx[l] >= b[0]) & (sy[l] >= b[1]) & (sx[l] <= b[2]) & (sy[l] <= b[3]);
             let i = whole((sx[l] - b[0]) * cam.scale[0], cam.last[0]);
@@ -601,7 +586,7 @@ impl<'a> LaneGame<'a> {
             bucket[l] = if adds { i + k * cam.width } else { cam.sink + l as u32 };
             entry[l] = whole(sc[l] * 256.0, 255.0);
         }
-        for &b in &bucket {
+        for &b in bucket.iter() {
             histogram[b as usize].prefetch();
         }
         let pending = pending.take(histogram);
@@ -629,10 +614,14 @@ fn whole(v: f32, last: f32) -> u32 {
     (v.trunc() + TWO_23).to_bits() & 0x7F_FFFF
 }
 
+#[path = "render_lanes_arrays.rs"]
+mod arrays;
+use arrays::{Draws, Lanes, PointLanes};
+
 #[path = "render_lanes_cells.rs"]
 mod cells;
 pub(super) use cells::Cell;
-use cells::{InFlight, Increments};
+use cells::{InFlight, Increments, Overflow};
 
 #[path = "render_lanes_queues.rs"]
 mod queues;

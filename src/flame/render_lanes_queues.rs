@@ -5,25 +5,30 @@ use super::{LANES, Lanes, POINTS};
 
 /// The points' queues, one per xform, this round's and the next's: x, y and colour, each
 /// xform's stretch [`POINTS`] + [`LANES`] long (a vector may be loaded or stored past the last
-/// point).
+/// point), in [`Lanes`] on cache lines of their own: a step's loads are whole lines.
 pub(super) struct Queues {
     stride: usize,
     /// Whether the CPU runs AVX-512F: the appends compress.
     wide: bool,
-    x: Vec<f32>,
-    y: Vec<f32>,
-    c: Vec<f32>,
+    x: Vec<Lanes>,
+    y: Vec<Lanes>,
+    c: Vec<Lanes>,
     pub(super) len: Vec<usize>,
-    next_x: Vec<f32>,
-    next_y: Vec<f32>,
-    next_c: Vec<f32>,
+    next_x: Vec<Lanes>,
+    next_y: Vec<Lanes>,
+    next_c: Vec<Lanes>,
     next_len: Vec<usize>,
+}
+
+/// The values of `lanes`, one after another.
+fn flat(lanes: &mut [Lanes]) -> &mut [f32] {
+    bytemuck::cast_slice_mut(lanes)
 }
 
 impl Queues {
     pub(super) fn new(xforms: usize, wide: bool) -> Self {
         let stride = POINTS + LANES;
-        let zeros = vec![0.0; stride * xforms];
+        let zeros = vec![Lanes::splat(0.0); stride / LANES * xforms];
         Self {
             stride,
             wide,
@@ -46,16 +51,17 @@ impl Queues {
     /// Queues a starting point for the first round.
     pub(super) fn push(&mut self, j: usize, p: [f32; 2], color: f32) {
         let at = j * self.stride + self.len[j];
-        (self.x[at], self.y[at], self.c[at]) = (p[0], p[1], color);
+        (flat(&mut self.x)[at], flat(&mut self.y)[at], flat(&mut self.c)[at]) = (p[0], p[1], color);
         self.len[j] += 1;
     }
 
-    /// The [`LANES`] points from `at` of xform `j`'s queue (past its end: 0, [`Self::clear_tail`]).
+    /// The [`LANES`] points from `at`, a multiple of [`LANES`], of xform `j`'s queue (past its
+    /// end: 0, [`Self::clear_tail`]).
     #[inline(always)]
     pub(super) fn load(&self, j: usize, at: usize) -> (Lanes, Lanes, Lanes) {
-        let from = j * self.stride + at;
-        let lanes = |v: &[f32]| -> Lanes { v[from..from + LANES].try_into().unwrap_or([0.0; LANES]) };
-        (lanes(&self.x), lanes(&self.y), lanes(&self.c))
+        debug_assert!(at.is_multiple_of(LANES));
+        let k = (j * self.stride + at) / LANES;
+        (self.x[k], self.y[k], self.c[k])
     }
 
     /// Zeroes the [`LANES`] places past the end of xform `j`'s queue, which its last vector loads: they
@@ -64,14 +70,14 @@ impl Queues {
     pub(super) fn clear_tail(&mut self, j: usize) {
         let from = j * self.stride + self.len[j].min(POINTS);
         for v in [&mut self.x, &mut self.y, &mut self.c] {
-            v[from..from + LANES].fill(0.0);
+            flat(v)[from..from + LANES].fill(0.0);
         }
     }
 
     /// Appends lanes `0..count` to the next round's queues of their xforms `next`: with `wide`
     /// (the CPU runs AVX-512F), one compress a quantity per xform.
     #[inline(always)]
-    pub(super) fn append(&mut self, next: &[u32; LANES], count: usize, x: &Lanes, y: &Lanes, c: &Lanes) {
+    pub(super) fn append(&mut self, next: &Lanes<u32>, count: usize, x: &Lanes, y: &Lanes, c: &Lanes) {
         #[cfg(not(target_arch = "x86_64"))]
         let _ = self.wide;
         #[cfg(target_arch = "x86_64")]
@@ -83,12 +89,13 @@ impl Queues {
             };
             return;
         }
+        let (next_x, next_y, next_c) = (flat(&mut self.next_x), flat(&mut self.next_y), flat(&mut self.next_c));
         for l in 0..count.min(LANES) {
             let j = next[l] as usize;
             let at = j * self.stride + self.next_len[j];
-            self.next_x[at] = x[l];
-            self.next_y[at] = y[l];
-            self.next_c[at] = c[l];
+            next_x[at] = x[l];
+            next_y[at] = y[l];
+            next_c[at] = c[l];
             self.next_len[j] += 1;
         }
     }
@@ -98,7 +105,7 @@ impl Queues {
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx512f")]
     #[inline]
-    fn append_avx512(&mut self, next: &[u32; LANES], count: usize, x: &Lanes, y: &Lanes, c: &Lanes) {
+    fn append_avx512(&mut self, next: &Lanes<u32>, count: usize, x: &Lanes, y: &Lanes, c: &Lanes) {
         use std::arch::x86_64::*;
         const _: () = assert!(LANES.is_multiple_of(16), "the lanes are whole AVX-512 vectors");
         #[expect(unsafe_code, reason = "unaligned vector loads and stores of 16 lanes")]
@@ -122,10 +129,11 @@ impl Queues {
                         continue;
                     }
                     let at = j * self.stride + self.next_len[j].min(POINTS);
-                    debug_assert!(at + 16 <= self.next_x.len());
-                    _mm512_storeu_ps(self.next_x.as_mut_ptr().add(at), _mm512_maskz_compress_ps(hits, x));
-                    _mm512_storeu_ps(self.next_y.as_mut_ptr().add(at), _mm512_maskz_compress_ps(hits, y));
-                    _mm512_storeu_ps(self.next_c.as_mut_ptr().add(at), _mm512_maskz_compress_ps(hits, c));
+                    debug_assert!(at + 16 <= self.next_x.len() * LANES);
+                    let store = |to: &mut Vec<Lanes>, v| _mm512_storeu_ps(to.as_mut_ptr().cast::<f32>().add(at), v);
+                    store(&mut self.next_x, _mm512_maskz_compress_ps(hits, x));
+                    store(&mut self.next_y, _mm512_maskz_compress_ps(hits, y));
+                    store(&mut self.next_c, _mm512_maskz_compress_ps(hits, c));
                     self.next_len[j] += hits.count_ones() as usize;
                 }
             }

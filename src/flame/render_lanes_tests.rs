@@ -43,8 +43,8 @@ fn lanes_map_as_the_f64_xforms() {
         let mut far = 0;
         let mut points = Pcg32::for_stream(1, 2, u32::from(v));
         for _ in 0..4096 / LANES {
-            let mut x: Lanes = std::array::from_fn(|_| points.next_f32() * 4.0 - 2.0);
-            let mut y: Lanes = std::array::from_fn(|_| points.next_f32() * 4.0 - 2.0);
+            let mut x = Lanes(std::array::from_fn(|_| points.next_f32() * 4.0 - 2.0));
+            let mut y = Lanes(std::array::from_fn(|_| points.next_f32() * 4.0 - 2.0));
             let (x0, y0) = (x, y);
             lane_game.xforms[0].apply(&mut x, &mut y, &mut rng, &mut Scratch::new());
             for l in 0..LANES {
