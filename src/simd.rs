@@ -12,7 +12,8 @@ pub enum SimdLevel {
     /// Only the baseline target (SSE2 on x86-64), or another architecture.
     #[default]
     Scalar,
-    /// x86-64 with AVX2.
+    /// x86-64 with AVX2 and POPCNT (every AVX2 CPU has it; the baseline target has not, and a
+    /// count of bits was a dozen instructions).
     Avx2,
     /// x86-64 with AVX2 and AVX-512 F, CD, VL, DQ and BW (every AVX-512 CPU since Skylake-SP
     /// and Zen 4 has the five; the splat's accumulating modes find a vector's repeated pixels
@@ -48,7 +49,7 @@ impl SimdLevel {
     fn probe() -> Self {
         #[cfg(target_arch = "x86_64")]
         {
-            if std::arch::is_x86_feature_detected!("avx2") {
+            if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("popcnt") {
                 let avx512 = std::arch::is_x86_feature_detected!("avx512f")
                     && std::arch::is_x86_feature_detected!("avx512cd")
                     && std::arch::is_x86_feature_detected!("avx512vl")

@@ -113,12 +113,12 @@ macro_rules! vector_builds {
                 use crate::simd::SimdLevel;
                 match SimdLevel::detect() {
                     #[expect(unsafe_code, reason = "an AVX-512 function, entered after the CPU check")]
-                    // SAFETY: the CPU runs AVX-512 F, VL, DQ and BW (detected).
+                    // SAFETY: the CPU runs AVX-512 F, VL, DQ and BW, and POPCNT (detected).
                     SimdLevel::Avx512 => unsafe {
                         return self.$avx512(seed, samples, next, histogram, progress);
                     },
                     #[expect(unsafe_code, reason = "an AVX2 function, entered after the CPU check")]
-                    // SAFETY: the CPU runs AVX2 (detected).
+                    // SAFETY: the CPU runs AVX2 and POPCNT (detected).
                     SimdLevel::Avx2 => unsafe {
                         return self.$avx2(seed, samples, next, histogram, progress);
                     },
@@ -129,7 +129,7 @@ macro_rules! vector_builds {
         }
 
         #[cfg(target_arch = "x86_64")]
-        #[target_feature(enable = "avx2,avx512f,avx512vl,avx512dq,avx512bw")]
+        #[target_feature(enable = "avx2,avx512f,avx512vl,avx512dq,avx512bw,popcnt")]
         fn $avx512(
             &self,
             seed: u32,
@@ -142,7 +142,7 @@ macro_rules! vector_builds {
         }
 
         #[cfg(target_arch = "x86_64")]
-        #[target_feature(enable = "avx2")]
+        #[target_feature(enable = "avx2,popcnt")]
         fn $avx2(
             &self,
             seed: u32,

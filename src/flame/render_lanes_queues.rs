@@ -83,7 +83,7 @@ impl Queues {
         #[cfg(target_arch = "x86_64")]
         if self.wide {
             #[expect(unsafe_code, reason = "an AVX-512 function, entered after the CPU check")]
-            // SAFETY: `wide` is set only where the CPU runs AVX-512F (`vector_builds!`).
+            // SAFETY: `wide` is set only where the CPU runs AVX-512F and POPCNT (`vector_builds!`).
             unsafe {
                 self.append_avx512(next, count, x, y, c)
             };
@@ -100,42 +100,44 @@ impl Queues {
         }
     }
 
-    /// [`Self::append`] with AVX-512F: per vector of 16 lanes and per xform, the lanes going to it
-    /// compressed and stored (in lane order, as the portable append).
+    /// [`Self::append`] with AVX-512F: per xform and per vector of 16 lanes, the lanes going to it
+    /// compressed and stored (in lane order, as the portable append; the xform's length is kept
+    /// in a register across its vectors, not stored and loaded again).
     #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx512f")]
+    #[target_feature(enable = "avx512f,popcnt")]
     #[inline]
     fn append_avx512(&mut self, next: &Lanes<u32>, count: usize, x: &Lanes, y: &Lanes, c: &Lanes) {
         use std::arch::x86_64::*;
+        const PARTS: usize = LANES / 16;
         const _: () = assert!(LANES.is_multiple_of(16), "the lanes are whole AVX-512 vectors");
         #[expect(unsafe_code, reason = "unaligned vector loads and stores of 16 lanes")]
-        // SAFETY: the loads read 16 lanes from `part` < LANES of arrays of LANES, a multiple of
+        // SAFETY: the loads read 16 lanes from `16 p` < LANES of arrays of LANES, a multiple of
         // 16; each store writes 16 floats at `at`, within xform j's stretch: the pool's points
         // number at most POINTS, so a queue's length is at most POINTS and the stretch is
         // POINTS + LANES long.
         unsafe {
-            for part in (0..LANES).step_by(16) {
-                let left = count.saturating_sub(part);
-                let valid: __mmask16 = if left >= 16 { 0xFFFF } else { (1 << left) - 1 };
-                let next = _mm512_loadu_si512(next[part..].as_ptr().cast());
-                let (x, y, c) = (
-                    _mm512_loadu_ps(x[part..].as_ptr()),
-                    _mm512_loadu_ps(y[part..].as_ptr()),
-                    _mm512_loadu_ps(c[part..].as_ptr()),
-                );
-                for j in 0..self.next_len.len() {
-                    let hits = _mm512_mask_cmpeq_epi32_mask(valid, next, _mm512_set1_epi32(j as i32));
+            let part = |v: &Lanes, p: usize| _mm512_loadu_ps(v[16 * p..].as_ptr());
+            let valid: [__mmask16; PARTS] = std::array::from_fn(|p| {
+                let left = count.saturating_sub(16 * p);
+                if left >= 16 { 0xFFFF } else { (1 << left) - 1 }
+            });
+            let next: [__m512i; PARTS] = std::array::from_fn(|p| _mm512_loadu_si512(next[16 * p..].as_ptr().cast()));
+            for j in 0..self.next_len.len() {
+                let mut len = self.next_len[j];
+                for p in 0..PARTS {
+                    let hits = _mm512_mask_cmpeq_epi32_mask(valid[p], next[p], _mm512_set1_epi32(j as i32));
                     if hits == 0 {
                         continue;
                     }
-                    let at = j * self.stride + self.next_len[j].min(POINTS);
+                    let at = j * self.stride + len.min(POINTS);
                     debug_assert!(at + 16 <= self.next_x.len() * LANES);
                     let store = |to: &mut Vec<Lanes>, v| _mm512_storeu_ps(to.as_mut_ptr().cast::<f32>().add(at), v);
-                    store(&mut self.next_x, _mm512_maskz_compress_ps(hits, x));
-                    store(&mut self.next_y, _mm512_maskz_compress_ps(hits, y));
-                    store(&mut self.next_c, _mm512_maskz_compress_ps(hits, c));
-                    self.next_len[j] += hits.count_ones() as usize;
+                    store(&mut self.next_x, _mm512_maskz_compress_ps(hits, part(x, p)));
+                    store(&mut self.next_y, _mm512_maskz_compress_ps(hits, part(y, p)));
+                    store(&mut self.next_c, _mm512_maskz_compress_ps(hits, part(c, p)));
+                    len += hits.count_ones() as usize;
                 }
+                self.next_len[j] = len;
             }
         }
     }
