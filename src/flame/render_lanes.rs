@@ -574,28 +574,24 @@ impl<'a> LaneGame<'a> {
                 (&tx, &ty)
             }
         };
+        // This vector's buckets and entries written in place of the oldest vector's, whose adds
+        // are done first.
+        let pending = pending.take(histogram);
         let b = &cam.bounds;
-        let mut bucket = Lanes::splat(0u32);
-        let mut entry = Lanes::splat(0u32);
         for l in 0..LANES {
             let inside = (sx[l] >= b[0]) & (sy[l] >= b[1]) & (sx[l] <= b[2]) & (sy[l] <= b[3]);
             let i = whole((sx[l] - b[0]) * cam.scale[0], cam.last[0]);
             let k = whole((sy[l] - b[1]) * cam.scale[1], cam.last[1]);
             let adds = inside & !bad[l] & (l < count);
             // A sample that adds nothing goes to its lane's sink, past the histogram's cells.
-            bucket[l] = if adds { i + k * cam.width } else { cam.sink + l as u32 };
-            entry[l] = whole(sc[l] * 256.0, 255.0);
+            pending.bucket[l] = if adds { i + k * cam.width } else { cam.sink + l as u32 };
+            pending.entry[l] = whole(sc[l] * 256.0, 255.0) as u8;
         }
-        for &b in bucket.iter() {
+        for &b in pending.bucket.iter() {
             histogram[b as usize].prefetch();
         }
-        let pending = pending.take(histogram);
-        pending.bucket = bucket;
         if self.game.palette_mode == PaletteMode::Step {
             pending.increments = Increments::Step(&xf.increments);
-            for (to, &e) in pending.entry.iter_mut().zip(&entry) {
-                *to = e as u8;
-            }
         } else {
             pending.increments = Increments::Own;
             for (inc, &c) in pending.own.iter_mut().zip(sc) {

@@ -75,7 +75,6 @@ pub(super) struct Pending<'a> {
     pub(super) entry: Lanes<u8>,
     /// Each lane's increment ([`Increments::Own`]).
     pub(super) own: Lanes<Cell>,
-    sink: u32,
 }
 
 impl Pending<'_> {
@@ -86,13 +85,12 @@ impl Pending<'_> {
             increments: Increments::Own,
             entry: Lanes::splat(0),
             own: Lanes::splat(Cell::default()),
-            sink,
         }
     }
 
-    /// Adds them; nothing is left to add (the sinks' cells, whatever the increments).
+    /// Adds them, once: [`InFlight::take`]'s caller writes the next vector's in their place.
     #[inline(always)]
-    fn apply(&mut self, histogram: &mut [Cell]) {
+    fn apply(&self, histogram: &mut [Cell]) {
         // Each bucket is a cell of the histogram by construction; clamped again here (four
         // vector instructions), the adds need no bounds checks (a compare and a branch each).
         let last = u32::try_from(histogram.len().saturating_sub(1)).unwrap_or(u32::MAX);
@@ -115,7 +113,6 @@ impl Pending<'_> {
                 }
             }
         }
-        self.bucket = Lanes(std::array::from_fn(|l| self.sink + l as u32));
     }
 }
 
@@ -133,7 +130,8 @@ impl<'a> InFlight<'a> {
         Self { vectors: std::array::from_fn(|_| Pending::new(sink)), next: 0 }
     }
 
-    /// The oldest vector's adds done, and its place for the next vector's.
+    /// The oldest vector's adds done, and its place for the next vector's, which the caller
+    /// writes whole (bucket, increments and entries or own increments).
     #[inline(always)]
     pub(super) fn take(&mut self, histogram: &mut [Cell]) -> &mut Pending<'a> {
         let k = self.next % IN_FLIGHT_VECTORS;
@@ -143,8 +141,8 @@ impl<'a> InFlight<'a> {
     }
 
     /// Every waiting add done.
-    pub(super) fn finish(&mut self, histogram: &mut [Cell]) {
-        for v in &mut self.vectors {
+    pub(super) fn finish(self, histogram: &mut [Cell]) {
+        for v in &self.vectors {
             v.apply(histogram);
         }
     }
