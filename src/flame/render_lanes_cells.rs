@@ -91,8 +91,8 @@ impl Pending<'_> {
     /// Adds them, once: [`InFlight::take`]'s caller writes the next vector's in their place.
     #[inline(always)]
     fn apply(&self, histogram: &mut [Cell]) {
-        // Each bucket is a cell of the histogram by construction; clamped again here (four
-        // vector instructions), the adds need no bounds checks (a compare and a branch each).
+        // Each bucket is a cell of the histogram by construction; clamped again here, with four
+        // vector instructions, the adds need no bounds check each (a compare and a branch).
         let last = u32::try_from(histogram.len().saturating_sub(1)).unwrap_or(u32::MAX);
         let bucket = self.bucket.0.map(|b| b.min(last));
         let cells = histogram.as_mut_ptr();
@@ -101,8 +101,8 @@ impl Pending<'_> {
             Increments::Step(table) => {
                 for (&b, &e) in bucket.iter().zip(self.entry.iter()) {
                     // SAFETY: b ≤ `last` < histogram.len() (clamped above; the histogram has
-                    // [`LANES`] sink cells, so it is not empty), and no other reference to the
-                    // histogram lives during the add.
+                    // its lanes' sink cells, so it is not empty); `cells` comes from the
+                    // `&mut` histogram, which nothing else reads or writes during the adds.
                     unsafe { (*cells.add(b as usize)).add(&table[usize::from(e)]) };
                 }
             }
