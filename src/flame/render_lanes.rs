@@ -311,7 +311,8 @@ impl<'a> LaneGame<'a> {
     /// `game` in f32 lanes; `None` where a term is not supported, it has more than
     /// [`MAX_XFORMS`] xforms, its choice table is not in xform order, f32 does not resolve its
     /// view ([`RESOLUTION`]), an entry of its palette is not opaque ([`Cell`]), or its increments
-    /// are so large that a block could carry a cell past 2^31 ([`Overflow`]: opacities above 1.5, whose points weigh more than 4).
+    /// are so large that a block could carry a cell past 2^31 ([`Overflow`]: opacities above
+    /// 1.5, whose points weigh more than 4).
     pub fn new(game: &'a ChaosGame) -> Option<Self> {
         let n = game.xforms.len();
         if n > MAX_XFORMS {
