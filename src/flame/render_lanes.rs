@@ -186,7 +186,6 @@ impl Xform32 {
 /// step, their 3.5 kB of zeros were a memset call, 4 % of the samples in perf): each step
 /// writes the quantities and random numbers its terms read before they read them; the others
 /// hold earlier steps' values.
-#[repr(C)]
 struct Scratch {
     point: PointLanes,
     /// The terms' random numbers (each term draws its own; those that draw none read none).

@@ -56,7 +56,6 @@ pub(super) struct Draws(pub(super) [[f32; LANES]; DRAWS]);
 
 /// [`Point32`]'s quantities of the lanes, one array each (so that loops over them are vector
 /// loops).
-#[repr(C)]
 pub(super) struct PointLanes {
     pub(super) x: Lanes,
     pub(super) y: Lanes,
