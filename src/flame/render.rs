@@ -27,7 +27,8 @@
 //! That is the f64 chaos game. A flame whose terms are all common variations and whose view
 //! f32 resolves runs instead in f32 lanes (`render_lanes.rs`): the same flame and the same
 //! picture within flam3's own noise, not the same bytes, about twice as fast.
-//! `NLIFS_FLAME_F64=1` keeps every flame on the f64 game.
+//! `NLIFS_FLAME_F64=1` keeps every flame on the f64 game, and `NLIFS_FLAME_QUEUES=1` keeps the
+//! lane game on its queues where the xforms share their terms (`render_lanes_shared.rs`).
 
 use std::sync::atomic::{AtomicU64, Ordering};
 
@@ -633,6 +634,12 @@ fn uniform11(rng: &mut Pcg32) -> f64 {
 /// every flame (otherwise flames it can take run in f32 lanes: `render_lanes.rs`).
 fn f64_only() -> bool {
     std::env::var_os("NLIFS_FLAME_F64").is_some_and(|v| v != "0")
+}
+
+/// Whether `NLIFS_FLAME_QUEUES` asks the lane game to queue the points of every flame, also
+/// those whose xforms share their terms (`render_lanes_shared.rs`): for comparisons.
+fn queues_only() -> bool {
+    std::env::var_os("NLIFS_FLAME_QUEUES").is_some_and(|v| v != "0")
 }
 
 /// flam3's `badvalue`: NaN or beyond ±1e10.

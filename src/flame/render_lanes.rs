@@ -5,6 +5,9 @@
 //! next xform and appends it to that xform's queue for the next round (a compress per xform, no
 //! scatter). Every phase runs on arrays of [`LANES`] f32 (two lanes where f64 has one), which
 //! LLVM turns into vector code, and the elementary functions are f32 polynomials (`trig32.rs`).
+//! Flames whose xforms share their terms (the same variations and parameters) need no queues:
+//! their [`LANES`] orbits stay in their lanes, each mapped by its own xform's affine maps and
+//! weights (`render_lanes_shared.rs`).
 //!
 //! The picture is the same flame as the f64 game's (same xforms, choice tables, colours,
 //! camera, palette and bucket increments; `tests/flame_fidelity.rs` holds both to flam3's
@@ -18,9 +21,8 @@
 use std::sync::atomic::{AtomicU64, Ordering};
 
 use super::super::render_base::WHITE_LEVEL;
-use super::super::trig32::{Exact32, Fast32};
-use super::super::variations::{MAX_CONSTS, NEEDS_ANGLES, NEEDS_ATAN_XY, NEEDS_ATAN_YX, NEEDS_SQRT};
-use super::super::variations_lanes::{self as lanes, DRAWS, Draw, SUPPORTED};
+use super::super::variations::MAX_CONSTS;
+use super::super::variations_lanes::{DRAWS, SUPPORTED};
 use super::{CHOICE_ENTRIES, ChaosGame, FUSE_ITERATIONS, GameXform};
 use crate::flame::PaletteMode;
 use crate::rng::Pcg32;
@@ -52,6 +54,8 @@ struct Xform32 {
     post: Option<[f32; 6]>,
     needs: u8,
     terms: Vec<Term32>,
+    /// Each term's weight in every lane (the shared-terms game's start).
+    weights: Vec<Lanes>,
     color_held: f32,
     color_kept: f32,
     plotted_weight: f64,
@@ -80,11 +84,13 @@ impl Xform32 {
             .collect::<Option<Vec<_>>>()?;
         let increments =
             Box::new(std::array::from_fn(|i| Cell::of(game.increments_of((i as f64 + 0.5) / 256.0, x.plotted_weight))));
+        let weights = terms.iter().map(|t| Lanes::splat(t.weight)).collect();
         Some(Self {
             coefs: f6(parts.coefs),
             post: parts.post.map(f6),
             needs: parts.needs,
             terms,
+            weights,
             color_held: x.color_held as f32,
             color_kept: x.color_kept as f32,
             plotted_weight: x.plotted_weight,
@@ -95,82 +101,15 @@ impl Xform32 {
     /// The xform's images of the lanes' points (`x`, `y`), in place, drawing from `rng`.
     #[inline(always)]
     fn apply(&self, x: &mut Lanes, y: &mut Lanes, rng: &mut LaneRng, scratch: &mut Scratch) {
-        let c = &self.coefs;
-        let Scratch { point: p, draw, dx, dy, fast } = scratch;
+        let p = &mut scratch.point;
         for l in 0..LANES {
-            let (tx, ty) = (c[0] * x[l] + c[2] * y[l] + c[4], c[1] * x[l] + c[3] * y[l] + c[5]);
-            p.x[l] = tx;
-            p.y[l] = ty;
-            p.r2[l] = tx * tx + ty * ty;
+            let [tx, ty] = affine(&self.coefs, x[l], y[l]);
+            (p.x[l], p.y[l], p.r2[l]) = (tx, ty, tx * tx + ty * ty);
         }
-        if self.needs & (NEEDS_SQRT | NEEDS_ANGLES) != 0 {
-            for l in 0..LANES {
-                p.r[l] = p.r2[l].sqrt();
-            }
-        }
-        if self.needs & NEEDS_ATAN_XY != 0 {
-            atan2_lanes(&mut p.a, &p.x, &p.y);
-        }
-        if self.needs & NEEDS_ANGLES != 0 {
-            for l in 0..LANES {
-                p.sa[l] = p.x[l] / p.r[l];
-                p.ca[l] = p.y[l] / p.r[l];
-            }
-        }
-        if self.needs & NEEDS_ATAN_YX != 0 {
-            atan2_lanes(&mut p.ayx, &p.y, &p.x);
-        }
-        // The terms' sum, in place of the point (its quantities are in `p`).
-        (*x, *y) = (Lanes::splat(0.0), Lanes::splat(0.0));
-        for t in &self.terms {
-            let (w, k) = (t.weight, &t.k);
-            // One loop per variation, its number a constant, so that each is a vector loop; where
-            // a lane's argument is beyond a core's range, that lane again with `Exact32`.
-            macro_rules! term {
-                ($v:literal) => {{
-                    match const { lanes::draw_of($v) } {
-                        Draw::None => {}
-                        Draw::Bit => draw.0[0] = rng.bits().0,
-                        Draw::Uniform(n) => {
-                            for d in &mut draw.0[..n] {
-                                *d = rng.uniform().0;
-                            }
-                        }
-                    }
-                    let mut in_range = true;
-                    for l in 0..LANES {
-                        let mut m = Fast32 { in_range: true };
-                        [dx[l], dy[l]] = lanes::eval::<$v, LANES>(w, k, &p.lane(l), &draw.0, l, &mut m);
-                        fast[l] = m.in_range;
-                        in_range &= m.in_range;
-                    }
-                    if !in_range {
-                        exact_term::<$v>(w, k, p, draw, fast, dx, dy);
-                    }
-                    for l in 0..LANES {
-                        x[l] += dx[l];
-                        y[l] += dy[l];
-                    }
-                }};
-            }
-            macro_rules! by_variation {
-                ($($v:literal)*) => {
-                    match t.variation {
-                        $($v => term!($v),)*
-                        _ => {}
-                    }
-                };
-            }
-            by_variation!(
-                0 1 2 3 4 5 6 7 8 9 10 11 12 13 14 15 16 17 18 19 20 23 24 27 28 29 30 31 32 33 34 35 36 37 39 40 41 42
-                43 44 45 46 47 48 49 50 51 52 53 54 60 78
-            );
-        }
+        sum_terms(&self.terms, &*self.terms, self.needs, (x, y), rng, scratch);
         if let Some(c) = &self.post {
             for l in 0..LANES {
-                let (sx, sy) = (x[l], y[l]);
-                x[l] = c[0] * sx + c[2] * sy + c[4];
-                y[l] = c[1] * sx + c[3] * sy + c[5];
+                [x[l], y[l]] = affine(c, x[l], y[l]);
             }
         }
     }
@@ -206,42 +145,6 @@ impl Scratch {
             dx: zero,
             dy: zero,
             fast: Lanes::splat(true),
-        }
-    }
-}
-
-/// Variation `V`'s terms with [`Exact32`] in the lanes not `fast`: where a core's argument was
-/// out of its range. Out of line and cold: inlined, it slowed the vector loops it stands beside
-/// (3×).
-#[cold]
-#[inline(never)]
-fn exact_term<const V: u8>(
-    w: f32,
-    k: &[f32; MAX_CONSTS],
-    p: &PointLanes,
-    draw: &Draws,
-    fast: &Lanes<bool>,
-    dx: &mut Lanes,
-    dy: &mut Lanes,
-) {
-    for l in (0..LANES).filter(|&l| !fast[l]) {
-        [dx[l], dy[l]] = lanes::eval::<V, LANES>(w, k, &p.lane(l), &draw.0, l, &mut Exact32);
-    }
-}
-
-/// `out[l]` = atan2(`y[l]`, `x[l]`): `trig32`'s core; every lane again in f64 where one is not
-/// finite.
-#[inline(always)]
-fn atan2_lanes(out: &mut Lanes, y: &Lanes, x: &Lanes) {
-    let mut finite = true;
-    for l in 0..LANES {
-        let (a, ok) = super::super::trig32::atan2_core(y[l], x[l]);
-        out[l] = a;
-        finite &= ok;
-    }
-    if !finite {
-        for l in 0..LANES {
-            out[l] = f64::from(y[l]).atan2(f64::from(x[l])) as f32;
         }
     }
 }
@@ -304,6 +207,9 @@ pub(super) struct LaneGame<'a> {
     camera: Camera32,
     /// What keeps a worker's cells from wrapping (none set aside yet).
     overflow: Overflow,
+    /// Whether its xforms share their terms: blocks run without queues
+    /// ([`Self::run_block_shared`]).
+    shared: bool,
 }
 
 impl<'a> LaneGame<'a> {
@@ -362,7 +268,8 @@ impl<'a> LaneGame<'a> {
             .max()
             .unwrap_or(0);
         let overflow = Overflow::new(largest, BLOCK_SAMPLES)?;
-        Some(Self { game, xforms, final_xform, firsts, camera, overflow })
+        let shared = !super::queues_only() && shared::share_terms(&xforms);
+        Some(Self { game, xforms, final_xform, firsts, camera, overflow, shared })
     }
 
     /// One worker's part of `samples`: blocks taken in turn from `next` until none is left. Its
@@ -386,13 +293,35 @@ impl<'a> LaneGame<'a> {
         (histogram, bad)
     }
 
-    vector_builds! {
-        /// [`Self::run_part`]'s blocks into `histogram`, whose last cells are the sinks. Returns the
-        /// re-seeds.
-        fn run_worker(Cell) => run_blocks, run_blocks_avx512, run_blocks_avx2
+    /// [`Self::run_part`]'s blocks into `histogram`, whose last cells are the sinks: with queues, or
+    /// without where the xforms share their terms. Returns the re-seeds.
+    fn run_worker(
+        &self,
+        seed: u32,
+        samples: u64,
+        next: &AtomicU64,
+        histogram: &mut [Cell],
+        progress: &(dyn Fn(u64) + Sync),
+    ) -> u64 {
+        if self.shared {
+            self.run_shared(seed, samples, next, histogram, progress)
+        } else {
+            self.run_queued(seed, samples, next, histogram, progress)
+        }
     }
 
-    /// [`Self::run_worker`]'s body; `wide`: the CPU runs AVX-512F (the queues' compress).
+    // Each game its own builds: in one function, the queues' rounds took 4-7 % longer.
+    vector_builds! {
+        /// [`Self::run_worker`] with queues.
+        fn run_queued(Cell) => run_blocks, run_blocks_avx512, run_blocks_avx2
+    }
+
+    vector_builds! {
+        /// [`Self::run_worker`] without queues ([`Self::run_block_shared`]).
+        fn run_shared(Cell) => run_blocks_shared, run_blocks_shared_avx512, run_blocks_shared_avx2
+    }
+
+    /// [`Self::run_queued`]'s body; `wide`: the CPU runs AVX-512F (the queues' compress).
     #[inline(always)]
     fn run_blocks(
         &self,
@@ -403,8 +332,37 @@ impl<'a> LaneGame<'a> {
         progress: &(dyn Fn(u64) + Sync),
         wide: bool,
     ) -> u64 {
-        let blocks = samples.div_ceil(BLOCK_SAMPLES);
         let mut queues = Queues::new(self.xforms.len(), wide);
+        self.each_block(seed, samples, next_block, histogram, progress, &mut queues)
+    }
+
+    /// [`Self::run_shared`]'s body.
+    #[inline(always)]
+    fn run_blocks_shared(
+        &self,
+        seed: u32,
+        samples: u64,
+        next_block: &AtomicU64,
+        histogram: &mut [Cell],
+        progress: &(dyn Fn(u64) + Sync),
+        _wide: bool,
+    ) -> u64 {
+        self.each_block(seed, samples, next_block, histogram, progress, &mut shared::WithoutQueues)
+    }
+
+    /// Blocks taken in turn from `next_block` until none is left, each run by `game` and its cells
+    /// kept from wrapping ([`Overflow`]). Returns the re-seeds.
+    #[inline(always)]
+    fn each_block(
+        &self,
+        seed: u32,
+        samples: u64,
+        next_block: &AtomicU64,
+        histogram: &mut [Cell],
+        progress: &(dyn Fn(u64) + Sync),
+        game: &mut impl BlockGame,
+    ) -> u64 {
+        let blocks = samples.div_ceil(BLOCK_SAMPLES);
         let mut overflow = self.overflow.clone();
         let mut bad = 0;
         loop {
@@ -415,7 +373,7 @@ impl<'a> LaneGame<'a> {
             }
             let n = BLOCK_SAMPLES.min(samples - block * BLOCK_SAMPLES);
             overflow.before_block(n, histogram);
-            bad += self.run_block(seed, block, n, &mut queues, histogram);
+            bad += game.run_block(self, seed, block, n, histogram);
             progress(n);
         }
     }
@@ -490,6 +448,20 @@ impl<'a> LaneGame<'a> {
         for c in c.iter_mut() {
             *c = xf.color_of(*c);
         }
+        let (bad, reseeds) = self.reseed(count, &mut x, &mut y, rng);
+        if plot && xf.plotted_weight != 0.0 {
+            self.plot(xf, count, &bad, (&x, &y, &c), (rng, scratch), pending, histogram);
+        }
+        // Each point's next xform, and the point queued to it.
+        let next = self.next_xforms(&Lanes::splat(j as u32), rng);
+        q.append(&next, count, &x, &y, &c);
+        reseeds
+    }
+
+    /// The lanes below `count` whose point left the plane, re-seeded at random in [−1, 1]²,
+    /// and their number.
+    #[inline(always)]
+    fn reseed(&self, count: usize, x: &mut Lanes, y: &mut Lanes, rng: &mut LaneRng) -> (Lanes<bool>, u64) {
         let mut bad = Lanes::splat(false);
         let mut any_bad = false;
         for l in 0..LANES {
@@ -507,20 +479,41 @@ impl<'a> LaneGame<'a> {
                 }
             }
         }
-        if plot && xf.plotted_weight != 0.0 {
-            self.plot(xf, count, &bad, (&x, &y, &c), (rng, scratch), pending, histogram);
-        }
-        // Each point's next xform, and the point queued to it.
+        (bad, reseeds)
+    }
+
+    /// Each lane's next xform after its xform `now` (with xaos the choice row is that xform's).
+    #[inline(always)]
+    fn next_xforms(&self, now: &Lanes<u32>, rng: &mut LaneRng) -> Lanes<u32> {
         let entries = rng.next_u32();
-        let row = if self.game.xaos { j + 1 } else { 0 };
+        if !self.game.xaos {
+            return self.next_by_row(0, &entries);
+        }
+        if now.iter().all(|&j| j == now[0]) {
+            return self.next_by_row(now[0] as usize + 1, &entries);
+        }
+        let mut next = Lanes::splat(0u32);
+        for j in 0..self.xforms.len() {
+            let by_row = self.next_by_row(j + 1, &entries);
+            for l in 0..LANES {
+                let keep = 0u32.wrapping_sub(u32::from(now[l] == j as u32));
+                next[l] = (by_row[l] & keep) | (next[l] & !keep);
+            }
+        }
+        next
+    }
+
+    /// Each lane's next xform by choice row `row` for the lane's drawn choice-table entry. (A
+    /// method, not a closure: a closure's body is not built with its caller's vector features.)
+    #[inline(always)]
+    fn next_by_row(&self, row: usize, entries: &Lanes<u32>) -> Lanes<u32> {
         let mut next = Lanes::splat(0u32);
         for &first in &self.firsts[row][1..self.xforms.len()] {
             for l in 0..LANES {
                 next[l] += u32::from((entries[l] & (CHOICE_ENTRIES as u32 - 1)) >= first);
             }
         }
-        q.append(&next, count, &x, &y, &c);
-        reseeds
+        next
     }
 
     /// Adds the points that plot (lanes below `count`, not re-seeded, in view) to their buckets:
@@ -601,6 +594,20 @@ impl<'a> LaneGame<'a> {
     }
 }
 
+/// How a worker runs a block: with its [`Queues`], or without ([`shared::WithoutQueues`]). (A
+/// trait, not a closure: a closure's body is not built with its caller's vector features.)
+trait BlockGame {
+    /// Block `block` of `n` samples of `game` into `histogram`; its re-seeds.
+    fn run_block(&mut self, game: &LaneGame, seed: u32, block: u64, n: u64, histogram: &mut [Cell]) -> u64;
+}
+
+impl BlockGame for Queues {
+    #[inline(always)]
+    fn run_block(&mut self, game: &LaneGame, seed: u32, block: u64, n: u64, histogram: &mut [Cell]) -> u64 {
+        game.run_block(seed, block, n, self, histogram)
+    }
+}
+
 /// `v` clamped to [0, `last`] (NaN: 0) and truncated, for `last` < 2^23: with operations vector
 /// loops have (2^23 added puts the whole part in the low bits).
 #[inline(always)]
@@ -618,6 +625,13 @@ use arrays::{Draws, Lanes, PointLanes};
 mod cells;
 pub(super) use cells::Cell;
 use cells::{InFlight, Increments, Overflow};
+
+#[path = "render_lanes_terms.rs"]
+mod terms;
+use terms::{affine, sum_terms};
+
+#[path = "render_lanes_shared.rs"]
+mod shared;
 
 #[path = "render_lanes_queues.rs"]
 mod queues;
