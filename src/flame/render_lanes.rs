@@ -54,7 +54,7 @@ struct Xform32 {
     post: Option<[f32; 6]>,
     needs: u8,
     terms: Vec<Term32>,
-    /// Each term's weight in every lane (the shared-terms game's start).
+    /// Each term's weight in every lane (the shared-terms game blends them lane by lane).
     weights: Vec<Lanes>,
     color_held: f32,
     color_kept: f32,
@@ -310,7 +310,7 @@ impl<'a> LaneGame<'a> {
         }
     }
 
-    // Each game its own builds: in one function, the queues' rounds took 4-7 % longer.
+    // Each game has its own builds: neither's loops share a function with the other's.
     vector_builds! {
         /// [`Self::run_worker`] with queues.
         fn run_queued(Cell) => run_blocks, run_blocks_avx512, run_blocks_avx2
@@ -387,9 +387,7 @@ impl<'a> LaneGame<'a> {
         let mut scratch = Scratch::new();
         q.clear();
         for _ in 0..POINTS {
-            let p = [start.next_f32() * 2.0 - 1.0, start.next_f32() * 2.0 - 1.0];
-            let color = start.next_f32();
-            let j = self.next_xform(0, start.next_u32() & (CHOICE_ENTRIES as u32 - 1));
+            let (p, color, j) = self.start_point(&mut start);
             q.push(j, p, color);
         }
         let mut pending = InFlight::new(self.camera.sink);
@@ -418,6 +416,15 @@ impl<'a> LaneGame<'a> {
         }
         pending.finish(histogram);
         bad
+    }
+
+    /// A block's starting point drawn from `start`: at random in [−1, 1]², its colour, and its
+    /// first xform (by weight).
+    #[inline(always)]
+    fn start_point(&self, start: &mut Pcg32) -> ([f32; 2], f32, usize) {
+        let p = [start.next_f32() * 2.0 - 1.0, start.next_f32() * 2.0 - 1.0];
+        let color = start.next_f32();
+        (p, color, self.next_xform(0, start.next_u32() & (CHOICE_ENTRIES as u32 - 1)))
     }
 
     /// The next xform after xform `row` − 1 (0: by weight) for choice-table entry `entry`.

@@ -6,7 +6,7 @@
 //! terms once for all lanes. Nothing is queued: no point is stored for the next round and
 //! loaded again.
 
-use super::super::{CHOICE_ENTRIES, FUSE_ITERATIONS};
+use super::super::FUSE_ITERATIONS;
 use super::{BlockGame, Cell, InFlight, LANES, LaneGame, LaneRng, Lanes, Scratch, Xform32, affine, sum_terms};
 use crate::rng::Pcg32;
 
@@ -53,9 +53,8 @@ impl LaneGame<'_> {
         let (mut x, mut y, mut c, mut xform) =
             (Lanes::splat(0.0), Lanes::splat(0.0), Lanes::splat(0.0), Lanes::splat(0u32));
         for l in 0..LANES {
-            (x[l], y[l]) = (start.next_f32() * 2.0 - 1.0, start.next_f32() * 2.0 - 1.0);
-            c[l] = start.next_f32();
-            xform[l] = self.next_xform(0, start.next_u32() & (CHOICE_ENTRIES as u32 - 1)) as u32;
+            let ([px, py], color, j) = self.start_point(&mut start);
+            (x[l], y[l], c[l], xform[l]) = (px, py, color, j as u32);
         }
         let first = &self.xforms[0];
         let mut weights = first.weights.clone();
