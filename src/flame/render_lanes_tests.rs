@@ -6,26 +6,38 @@ use super::*;
 use crate::flame::variations_lanes::{self as lanes, Draw};
 use crate::flame::{Variation, VariationTerm};
 
+/// An xform of colour speed 0.5 and opacity 1, without post map or xaos.
+fn xform(weight: f64, color: f64, coefs: [f64; 6], variations: Vec<VariationTerm>) -> Xform {
+    Xform {
+        weight,
+        color,
+        color_speed: 0.5,
+        opacity: 1.0,
+        coefs,
+        post: None,
+        variation_coefs: None,
+        variations,
+        chaos: vec![],
+    }
+}
+
+/// A 40×30 flame of `xforms` with an opaque palette, and its layout.
+fn small_flame(xforms: Vec<Xform>) -> (Flame, Layout) {
+    let palette = (0..256).map(|i| [f64::from(i) / 255.0, 0.5, 1.0, 1.0]).collect();
+    let flame = Flame { size: [40, 30], scale: 12.0, xforms, palette, ..Flame::default() };
+    let layout = Layout::new(&flame).expect("layout");
+    (flame, layout)
+}
+
 /// A flame of one xform whose only term is variation `v` (its default parameters, those
 /// that default to 0 at 0.4), and its chaos game.
 fn one_term(v: u8) -> (Flame, Layout) {
     let variation = Variation(v);
     let params = variation.default_params().into_iter().map(|p| if p == 0.0 { 0.4 } else { p }).collect();
-    let xform = Xform {
-        weight: 1.0,
-        color: 0.5,
-        color_speed: 0.5,
-        opacity: 1.0,
-        coefs: [0.8, 0.3, -0.2, 0.7, 0.3, -0.4],
-        post: Some([0.9, 0.1, -0.1, 0.9, 0.05, 0.0]),
-        variation_coefs: None,
-        variations: vec![VariationTerm { variation, weight: 0.9, params }],
-        chaos: vec![],
-    };
-    let palette = (0..256).map(|i| [f64::from(i) / 255.0, 0.5, 1.0, 1.0]).collect();
-    let flame = Flame { size: [40, 30], scale: 12.0, xforms: vec![xform], palette, ..Flame::default() };
-    let layout = Layout::new(&flame).expect("layout");
-    (flame, layout)
+    let term = VariationTerm { variation, weight: 0.9, params };
+    let mut one = xform(1.0, 0.5, [0.8, 0.3, -0.2, 0.7, 0.3, -0.4], vec![term]);
+    one.post = Some([0.9, 0.1, -0.1, 0.9, 0.05, 0.0]);
+    small_flame(vec![one])
 }
 
 /// Each supported variation that draws nothing maps points as the f64 xform does, within
@@ -115,27 +127,14 @@ fn shared_terms() -> (Flame, Layout) {
         weight,
         params: vec![],
     };
-    let xform = |weight: f64, color: f64, coefs: [f64; 6], swirl: f64| Xform {
-        weight,
-        color,
-        color_speed: 0.5,
-        opacity: 1.0,
-        coefs,
-        post: None,
-        variation_coefs: None,
-        variations: vec![term("swirl", swirl), term("linear", 1.0 - swirl)],
-        chaos: vec![],
-    };
+    let terms = |swirl: f64| vec![term("swirl", swirl), term("linear", 1.0 - swirl)];
     let mut xforms = vec![
-        xform(0.5, 0.0, [0.55, 0.1, -0.1, 0.55, -0.6, -0.4], 0.3),
-        xform(0.3, 0.5, [0.5, -0.2, 0.2, 0.5, 0.6, -0.4], 0.1),
-        xform(0.2, 1.0, [0.45, 0.0, 0.0, 0.45, 0.0, 0.6], 0.5),
+        xform(0.5, 0.0, [0.55, 0.1, -0.1, 0.55, -0.6, -0.4], terms(0.3)),
+        xform(0.3, 0.5, [0.5, -0.2, 0.2, 0.5, 0.6, -0.4], terms(0.1)),
+        xform(0.2, 1.0, [0.45, 0.0, 0.0, 0.45, 0.0, 0.6], terms(0.5)),
     ];
     xforms[1].post = Some([0.9, 0.1, -0.1, 0.9, 0.05, 0.0]);
-    let palette = (0..256).map(|i| [f64::from(i) / 255.0, 0.5, 1.0, 1.0]).collect();
-    let flame = Flame { size: [40, 30], scale: 12.0, xforms, palette, ..Flame::default() };
-    let layout = Layout::new(&flame).expect("layout");
-    (flame, layout)
+    small_flame(xforms)
 }
 
 /// Which flames take the shared-terms game: the same variations and parameters in every
