@@ -54,8 +54,6 @@ struct Xform32 {
     post: Option<[f32; 6]>,
     needs: u8,
     terms: Vec<Term32>,
-    /// Each term's weight in every lane (the shared-terms game blends them lane by lane).
-    weights: Vec<Lanes>,
     color_held: f32,
     color_kept: f32,
     plotted_weight: f64,
@@ -84,13 +82,11 @@ impl Xform32 {
             .collect::<Option<Vec<_>>>()?;
         let increments =
             Box::new(std::array::from_fn(|i| Cell::of(game.increments_of((i as f64 + 0.5) / 256.0, x.plotted_weight))));
-        let weights = terms.iter().map(|t| Lanes::splat(t.weight)).collect();
         Some(Self {
             coefs: f6(parts.coefs),
             post: parts.post.map(f6),
             needs: parts.needs,
             terms,
-            weights,
             color_held: x.color_held as f32,
             color_kept: x.color_kept as f32,
             plotted_weight: x.plotted_weight,

@@ -57,7 +57,8 @@ impl LaneGame<'_> {
             (x[l], y[l], c[l], xform[l]) = (px, py, color, j as u32);
         }
         let first = &self.xforms[0];
-        let mut weights = first.weights.clone();
+        // Each term's weight in each lane, as its xform has it.
+        let mut weights = vec![Lanes::splat(0.0); first.terms.len()];
         let posts = self.xforms.iter().any(|x| x.post.is_some());
         let mut pending = InFlight::new(self.camera.sink);
         let mut bad = 0;
@@ -76,7 +77,9 @@ impl LaneGame<'_> {
                 [p.x[l], p.y[l]] = affine(&first.coefs, x[l], y[l]);
                 c[l] = first.color_of(before[l]);
             }
-            weights.clone_from_slice(&first.weights);
+            for (w, t) in weights.iter_mut().zip(&first.terms) {
+                *w = Lanes::splat(t.weight);
+            }
             for (j, xf) in self.xforms.iter().enumerate().skip(1) {
                 for l in 0..LANES {
                     let here = xform[l] == j as u32;
@@ -85,9 +88,9 @@ impl LaneGame<'_> {
                     p.y[l] = select(here, ty, p.y[l]);
                     c[l] = select(here, xf.color_of(before[l]), c[l]);
                 }
-                for (w, own) in weights.iter_mut().zip(&xf.weights) {
+                for (w, t) in weights.iter_mut().zip(&xf.terms) {
                     for l in 0..LANES {
-                        w[l] = select(xform[l] == j as u32, own[l], w[l]);
+                        w[l] = select(xform[l] == j as u32, t.weight, w[l]);
                     }
                 }
             }
