@@ -42,34 +42,36 @@ impl LogScale {
 pub(super) fn accumulate(flame: &Flame, layout: &Layout, histogram: &[Bucket]) -> Result<Vec<[f64; 4]>, RenderError> {
     let scale = LogScale::new(flame, layout);
     let Some(de) = &layout.density else {
-        return Ok(histogram
-            .par_iter()
-            .map(|b| {
-                if b[3] == 0 {
-                    return [0.0; 4];
-                }
+        let mut acc = crate::platform::zeroed_pages::<[f64; 4]>(histogram.len());
+        acc.par_iter_mut().zip(histogram).for_each(|(a, b)| {
+            if b[3] != 0 {
                 let ls = scale.of(f64::from(b[3]));
-                [0, 1, 2, 3].map(|c| f64::from(b[c]) * ls)
-            })
-            .collect());
+                *a = [0, 1, 2, 3].map(|c| f64::from(b[c]) * ls);
+            }
+        });
+        return Ok(acc);
     };
     let (w, h) = (layout.hist_width, layout.hist_height);
     let os = layout.oversample;
-    let mut acc = vec![[0.0; 4]; w * h];
+    let mut acc = crate::platform::zeroed_pages::<[f64; 4]>(w * h);
     // flam3's rows and columns: os − 1 from each edge (the last row past the end is empty).
     let rows = (os - 1)..((os - 1) + (h + 1).saturating_sub(2 * (os - 1))).min(h);
     let bands: Vec<std::ops::Range<usize>> =
         rows.clone().step_by(DE_BAND_ROWS).map(|start| start..(start + DE_BAND_ROWS).min(rows.end)).collect();
-    let squares = kernel_squares(de);
+    let estimator = Estimator { squares: kernel_squares(de), de, scale, layout, histogram };
     let group = 2 * rayon::current_num_threads().max(1);
+    // One buffer a band of a group, kept from group to group: memory is asked of the system
+    // (and its pages first written) once, not once a band.
+    let mut buffers: Vec<Vec<[f64; 4]>> = vec![Vec::new(); group];
     for chunk in bands.chunks(group) {
-        let parts: Vec<(usize, Vec<[f64; 4]>)> = chunk
+        let first_rows: Vec<usize> = chunk
             .par_iter()
-            .map(|band| estimate_band_dispatch(&squares, de, &scale, layout, histogram, band.clone()))
+            .zip(buffers.par_iter_mut())
+            .map(|(band, buffer)| estimator.band_dispatch(band.clone(), buffer))
             .collect();
-        for (first_row, part) in parts {
+        for (first_row, part) in first_rows.into_iter().zip(&buffers) {
             let start = first_row * w;
-            acc[start..start + part.len()].iter_mut().zip(&part).for_each(|(a, p)| {
+            acc[start..start + part.len()].iter_mut().zip(part).for_each(|(a, p)| {
                 for c in 0..4 {
                     a[c] += p[c];
                 }
@@ -105,36 +107,91 @@ fn kernel_squares(de: &DensityFilters) -> Vec<KernelSquare> {
         .collect()
 }
 
-/// [`estimate_band`] compiled for AVX2 when the CPU has it (four channels in one vector; no
-/// FMA, so the sums are the same bits).
-fn estimate_band_dispatch(
-    squares: &[KernelSquare],
-    de: &DensityFilters,
-    scale: &LogScale,
-    layout: &Layout,
-    histogram: &[Bucket],
-    band: std::ops::Range<usize>,
-) -> (usize, Vec<[f64; 4]>) {
-    #[cfg(target_arch = "x86_64")]
-    if crate::simd::SimdLevel::detect().avx2() {
-        #[expect(unsafe_code, reason = "an AVX2 function, entered after the CPU check")]
-        // SAFETY: the CPU runs AVX2 (checked just above).
-        return unsafe { estimate_band_avx2(squares, de, scale, layout, histogram, band) };
-    }
-    estimate_band(squares, de, scale, layout, histogram, band, spread_row)
+/// What the estimator reads: the kernels spread to squares, the index rule, the log scale, the
+/// histogram and its geometry.
+struct Estimator<'a> {
+    squares: Vec<KernelSquare>,
+    de: &'a DensityFilters,
+    scale: LogScale,
+    layout: &'a Layout,
+    histogram: &'a [Bucket],
 }
 
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-fn estimate_band_avx2(
-    squares: &[KernelSquare],
-    de: &DensityFilters,
-    scale: &LogScale,
-    layout: &Layout,
-    histogram: &[Bucket],
-    band: std::ops::Range<usize>,
-) -> (usize, Vec<[f64; 4]>) {
-    estimate_band(squares, de, scale, layout, histogram, band, |t, k, colour, ls| spread_row_avx2(t, k, colour, ls))
+impl Estimator<'_> {
+    /// [`Self::band`] compiled for AVX2 when the CPU has it (four channels in one vector; no
+    /// FMA, so the sums are the same bits).
+    fn band_dispatch(&self, band: std::ops::Range<usize>, buffer: &mut Vec<[f64; 4]>) -> usize {
+        #[cfg(target_arch = "x86_64")]
+        if crate::simd::SimdLevel::detect().avx2() {
+            #[expect(unsafe_code, reason = "an AVX2 function, entered after the CPU check")]
+            // SAFETY: the CPU runs AVX2 (checked just above).
+            return unsafe { self.band_avx2(band, buffer) };
+        }
+        self.band(band, buffer, spread_row)
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    fn band_avx2(&self, band: std::ops::Range<usize>, buffer: &mut Vec<[f64; 4]>) -> usize {
+        self.band(band, buffer, |t, k, colour, ls| spread_row_avx2(t, k, colour, ls))
+    }
+
+    /// The estimator over the rows `band` into `buffer` (made the band's rows and the kernels'
+    /// reach above and below, clipped to the histogram, all zero at first); returns the buffer's
+    /// first row. Each bucket adds
+    /// its colour × kernel × log scale to the buckets of its kernel's square; a target's sum takes
+    /// the buckets in row order, one term each, as flam3's octant-by-octant spread does (a zero
+    /// coefficient adds +0, which changes no sum of non-negative terms).
+    #[inline(always)]
+    fn band(
+        &self,
+        band: std::ops::Range<usize>,
+        buffer: &mut Vec<[f64; 4]>,
+        spread: impl Fn(&mut [[f64; 4]], &[f64], [f64; 4], f64),
+    ) -> usize {
+        let Self { squares, de, scale, layout, histogram } = self;
+        let (w, h) = (layout.hist_width, layout.hist_height);
+        let os = layout.oversample;
+        let ss = os / 2;
+        let neighbourhood_scale = if os.is_multiple_of(2) { (os as f64 / (os as f64 + 1.0)).powi(2) } else { 1.0 };
+        let first_row = band.start.saturating_sub(de.reach);
+        let last_row = (band.end + de.reach).min(h);
+        buffer.clear();
+        buffer.resize((last_row - first_row) * w, [0.0; 4]);
+        let buf = buffer.as_mut_slice();
+        for j in band {
+            let rows_hit = j.saturating_sub(ss)..(j + ss + 1).min(h);
+            for i in (os - 1)..w.saturating_sub(os - 1) {
+                let b = &histogram[i + j * w];
+                if b[4] == 0 || b[3] == 0 {
+                    continue;
+                }
+                let mut hits = 0.0;
+                for y in rows_hit.clone() {
+                    for cell in &histogram[i - ss + y * w..=i + ss + y * w] {
+                        hits += f64::from(cell[4]) / WHITE_LEVEL;
+                    }
+                }
+                hits *= neighbourhood_scale;
+                let square = &squares[de.index(hits)];
+                let reach = square.reach;
+                let side = 2 * reach + 1;
+                let alpha = f64::from(b[3]);
+                let ls = scale.of(alpha);
+                let colour = [f64::from(b[0]), f64::from(b[1]), f64::from(b[2]), alpha];
+                // The square's columns and rows inside the buffer.
+                let (u0, u1) = (reach.saturating_sub(i), side.min(w + reach - i));
+                let (v0, v1) = (reach.saturating_sub(j - first_row), side.min(last_row + reach - j));
+                let (x0, x1) = (i + u0 - reach, i + u1 - reach);
+                for v in v0..v1 {
+                    let row_start = (j + v - reach - first_row) * w;
+                    let targets = &mut buf[row_start + x0..row_start + x1];
+                    spread(targets, &square.coefs[v * side + u0..v * side + u1], colour, ls);
+                }
+            }
+        }
+        first_row
+    }
 }
 
 /// `targets[n][c] += colour[c] · coefs[n] · ls`, in that order (the estimator's one sum).
@@ -166,60 +223,4 @@ fn spread_row_avx2(targets: &mut [[f64; 4]], coefs: &[f64], colour: [f64; 4], ls
             _mm256_storeu_pd(t.as_mut_ptr(), _mm256_add_pd(sum, term));
         }
     }
-}
-
-/// The estimator over the rows `band`: the first row of its buffer and the buffer (the band's
-/// rows and the kernels' reach above and below, clipped to the histogram). Each bucket adds
-/// its colour × kernel × log scale to the buckets of its kernel's square; a target's sum takes
-/// the buckets in row order, one term each, as flam3's octant-by-octant spread does (a zero
-/// coefficient adds +0, which changes no sum of non-negative terms).
-#[inline(always)]
-fn estimate_band(
-    squares: &[KernelSquare],
-    de: &DensityFilters,
-    scale: &LogScale,
-    layout: &Layout,
-    histogram: &[Bucket],
-    band: std::ops::Range<usize>,
-    spread: impl Fn(&mut [[f64; 4]], &[f64], [f64; 4], f64),
-) -> (usize, Vec<[f64; 4]>) {
-    let (w, h) = (layout.hist_width, layout.hist_height);
-    let os = layout.oversample;
-    let ss = os / 2;
-    let neighbourhood_scale = if os.is_multiple_of(2) { (os as f64 / (os as f64 + 1.0)).powi(2) } else { 1.0 };
-    let first_row = band.start.saturating_sub(de.reach);
-    let last_row = (band.end + de.reach).min(h);
-    let mut buf = vec![[0.0; 4]; (last_row - first_row) * w];
-    for j in band {
-        let rows_hit = j.saturating_sub(ss)..(j + ss + 1).min(h);
-        for i in (os - 1)..w.saturating_sub(os - 1) {
-            let b = &histogram[i + j * w];
-            if b[4] == 0 || b[3] == 0 {
-                continue;
-            }
-            let mut hits = 0.0;
-            for y in rows_hit.clone() {
-                for cell in &histogram[i - ss + y * w..=i + ss + y * w] {
-                    hits += f64::from(cell[4]) / WHITE_LEVEL;
-                }
-            }
-            hits *= neighbourhood_scale;
-            let square = &squares[de.index(hits)];
-            let reach = square.reach;
-            let side = 2 * reach + 1;
-            let alpha = f64::from(b[3]);
-            let ls = scale.of(alpha);
-            let colour = [f64::from(b[0]), f64::from(b[1]), f64::from(b[2]), alpha];
-            // The square's columns and rows inside the buffer.
-            let (u0, u1) = (reach.saturating_sub(i), side.min(w + reach - i));
-            let (v0, v1) = (reach.saturating_sub(j - first_row), side.min(last_row + reach - j));
-            let (x0, x1) = (i + u0 - reach, i + u1 - reach);
-            for v in v0..v1 {
-                let row_start = (j + v - reach - first_row) * w;
-                let targets = &mut buf[row_start + x0..row_start + x1];
-                spread(targets, &square.coefs[v * side + u0..v * side + u1], colour, ls);
-            }
-        }
-    }
-    (first_row, buf)
 }
