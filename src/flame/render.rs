@@ -256,13 +256,15 @@ impl ChaosGame {
                 .map(|_| lanes.run_part(seed, samples, &next_run, cells, workers > 1, progress))
                 .collect();
             return sum_parts(cells, parts, lanes::Cell::add_saturating, |cells| {
-                cells.into_iter().map(lanes::Cell::bucket).collect()
+                let mut buckets = crate::platform::zeroed_pages::<Bucket>(cells.len());
+                buckets.par_iter_mut().zip(cells).for_each(|(b, c)| *b = c.bucket());
+                buckets
             });
         }
         let parts: Vec<(Vec<Bucket>, u64)> = (0..workers)
             .into_par_iter()
             .map(|_| {
-                let mut histogram = vec![[0u32; 5]; cells];
+                let mut histogram = crate::platform::zeroed_pages::<Bucket>(cells);
                 if workers > 1 {
                     crate::platform::write_every_page(&mut histogram, [0; 5]);
                 }

@@ -280,7 +280,7 @@ impl<'a> LaneGame<'a> {
         progress: &(dyn Fn(u64) + Sync),
     ) -> (Vec<Cell>, u64) {
         // The samples that add nothing go to cells past the picture's, one a lane.
-        let mut histogram = vec![Cell::default(); cells + LANES];
+        let mut histogram = crate::platform::zeroed_pages::<Cell>(cells + LANES);
         if shared {
             crate::platform::write_every_page(&mut histogram, Cell::default());
         }

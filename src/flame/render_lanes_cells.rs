@@ -7,7 +7,7 @@ use super::Lanes;
 /// A histogram cell of the lane game: palette colour sums R, G, B and A, each × 255, on a 16-byte
 /// line of its own. The lane game draws only flames whose palette's alpha is 1, where A is the
 /// count × 255 as well: [`Cell::bucket`] gives it back in both places.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Zeroable)]
 #[repr(C, align(16))]
 pub(in crate::flame::render) struct Cell([u32; 4]);
 
