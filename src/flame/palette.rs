@@ -193,11 +193,13 @@ impl HexLayout {
     }
 }
 
-/// flam3's palette library: numbered 256-entry RGB palettes (channels in [0, 1]).
+/// flam3's palette library: numbered 256-entry RGB palettes (channels in [0, 1]), each kept as
+/// its hex text and read when asked for (a flame names one or two of the library's 700).
 #[derive(Clone, Debug, Default)]
 pub struct PaletteLibrary {
     pub path: PathBuf,
-    pub palettes: Vec<(i32, Vec<[f64; 3]>)>,
+    /// Each `<palette>`'s number and `data`, in the file's order.
+    entries: Vec<(i32, String)>,
 }
 
 impl PaletteLibrary {
@@ -208,23 +210,30 @@ impl PaletteLibrary {
             std::fs::read_to_string(path).map_err(|e| format!("cannot read the flam3 palette library {shown}: {e}"))?;
         let doc = roxmltree::Document::parse(&text)
             .map_err(|e| format!("the flam3 palette library {shown} is not valid XML: {e}"))?;
-        let mut palettes = Vec::new();
-        for node in doc.descendants().filter(|n| n.has_tag_name("palette")) {
-            let number = node.attribute("number").and_then(|s| s.trim().parse::<i32>().ok());
-            let data = node.attribute("data").unwrap_or("");
-            // As flam3: an entry whose data does not read is left out of the library.
-            let Ok((colors, _)) = parse_hex_colors(data, HexLayout::Hex00Rgb, PALETTE_LEN) else { continue };
-            if let (Some(number), true) = (number, colors.len() == PALETTE_LEN) {
-                palettes.push((number, colors.iter().map(|c| [c[0], c[1], c[2]]).collect()));
-            }
-        }
-        Ok(Self { path: path.to_path_buf(), palettes })
+        let entries = doc
+            .descendants()
+            .filter(|n| n.has_tag_name("palette"))
+            .filter_map(|node| {
+                let number = node.attribute("number").and_then(|s| s.trim().parse::<i32>().ok())?;
+                Some((number, node.attribute("data").unwrap_or("").to_string()))
+            })
+            .collect();
+        Ok(Self { path: path.to_path_buf(), entries })
+    }
+
+    /// Palette `number`'s 256 RGB entries: the first entry of that number whose data reads (as
+    /// flam3, which leaves the others out of the library).
+    pub fn colors(&self, number: i32) -> Option<Vec<[f64; 3]>> {
+        self.entries.iter().filter(|(n, _)| *n == number).find_map(|(_, data)| {
+            let (colors, _) = parse_hex_colors(data, HexLayout::Hex00Rgb, PALETTE_LEN).ok()?;
+            (colors.len() == PALETTE_LEN).then(|| colors.iter().map(|c| [c[0], c[1], c[2]]).collect())
+        })
     }
 
     /// Palette `number` with its hue turned by `hue_turns` (flam3's `flam3_get_palette`: every
     /// entry through HSV, hue + 6·hue_turns sextants, alpha 1); `None` if the library lacks it.
     pub fn get(&self, number: i32, hue_turns: f64) -> Option<Palette> {
-        let (_, colors) = self.palettes.iter().find(|(n, _)| *n == number)?;
+        let colors = self.colors(number)?;
         Some(
             colors
                 .iter()
