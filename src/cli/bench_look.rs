@@ -33,7 +33,7 @@ fn looks() -> [(&'static str, &'static [&'static str], ResolveStyle); 4] {
 }
 
 /// The best wall seconds of `repeats` runs of `f` in this process, and its mean CPU seconds
-/// per run. The CPU clock ticks at 10 ms: a mean over many runs resolves finer.
+/// per run.
 fn best(repeats: usize, f: &mut dyn FnMut() -> anyhow::Result<()>) -> anyhow::Result<(f64, f64)> {
     let cpu = || cpu_secs().0;
     let (mut wall, c) = (f64::INFINITY, cpu());

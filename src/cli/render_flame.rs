@@ -200,7 +200,7 @@ pub fn bench(file: &Path, out: &Path) -> anyhow::Result<()> {
     );
     let rate = |secs: f64| if secs > 0.0 { samples as f64 / secs } else { f64::INFINITY };
     let row = |what: &str, cpu: f64, wall: f64| {
-        println!("  {what:<28} {cpu:8.2} s CPU {wall:8.2} s wall {:14.0} samples/CPU-s", rate(cpu));
+        println!("  {what:<28} {cpu:8.3} s CPU {wall:8.3} s wall {:14.0} samples/CPU-s", rate(cpu));
     };
     let in_lanes = read.flames.iter().filter(|f| nlifs::flame::render::runs_in_lanes(f)).count();
     println!(

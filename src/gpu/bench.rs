@@ -67,10 +67,9 @@ impl fmt::Display for BenchReport {
         writeln!(f, "  chaos game + splat per splat mode (M points/s by wall time / by process CPU time):")?;
         for (mode, [wall, cpu]) in &self.per_mode_ms {
             let per_frame = self.points as f64 * self.steps as f64 / 1e6;
-            // On a hardware GPU the process may spend less CPU than the clock's 10 ms tick
-            // over the whole measurement: no rate, rather than one divided by almost nothing.
-            let by_cpu =
-                if *cpu > 0.0 { format!("{:8.1}", per_frame / (cpu / 1e3)) } else { "   (< 10 ms CPU)".into() };
+            // A process that spent no CPU time it could measure: no rate, rather than one
+            // divided by almost nothing.
+            let by_cpu = if *cpu > 0.0 { format!("{:8.1}", per_frame / (cpu / 1e3)) } else { "   (no CPU time)".into() };
             writeln!(f, "    {:<8} {:8.1} / {by_cpu}", mode.name(), per_frame / (wall / 1e3).max(1e-9))?;
         }
         writeln!(
@@ -101,8 +100,8 @@ fn submit_frame(
     n
 }
 
-/// User + system CPU seconds of this process (all threads, lavapipe's workers included), from
-/// /proc (Linux; 0 elsewhere). 10 ms resolution.
+/// User + system CPU seconds of this process (all threads, lavapipe's workers included):
+/// [`crate::cpu_time::cpu_secs`].
 pub fn process_cpu_secs() -> f64 {
     crate::cpu_time::cpu_secs().0
 }
