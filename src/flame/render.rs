@@ -78,7 +78,11 @@ pub fn render(flame: &Flame, seed: u32, progress: &(dyn Fn(u64) + Sync)) -> Resu
     let game = ChaosGame::new(flame, &layout)?;
     let samples = sample_count(flame);
     let (histogram, bad_values) = game.run(seed, samples, &layout, progress);
-    let accumulated = super::render_density::accumulate(flame, &layout, &histogram)?;
+    let accumulated = match &histogram {
+        Histogram::Buckets(buckets) => super::render_density::accumulate(flame, &layout, buckets)?,
+        Histogram::Cells(cells) => super::render_density::accumulate(flame, &layout, cells)?,
+    };
+    drop(histogram);
     let rgba = super::render_tone::tone_map(flame, &layout, &accumulated);
     Ok(FlameImage { width: flame.size[0], height: flame.size[1], rgba, samples, bad_values })
 }
@@ -241,7 +245,7 @@ impl ChaosGame {
     }
 
     /// All runs of `samples`, on rayon's pool: the summed histogram and the re-seeds.
-    fn run(&self, seed: u32, samples: u64, layout: &Layout, progress: &(dyn Fn(u64) + Sync)) -> (Vec<Bucket>, u64) {
+    fn run(&self, seed: u32, samples: u64, layout: &Layout, progress: &(dyn Fn(u64) + Sync)) -> (Histogram, u64) {
         let lane_game = if f64_only() { None } else { lanes::LaneGame::new(self) };
         let runs = match &lane_game {
             Some(_) => samples.div_ceil(lanes::BLOCK_SAMPLES),
@@ -255,11 +259,8 @@ impl ChaosGame {
                 .into_par_iter()
                 .map(|_| lanes.run_part(seed, samples, &next_run, cells, workers > 1, progress))
                 .collect();
-            return sum_parts(cells, parts, lanes::Cell::add_saturating, |cells| {
-                let mut buckets = crate::platform::zeroed_pages::<Bucket>(cells.len());
-                buckets.par_iter_mut().zip(cells).for_each(|(b, c)| *b = c.bucket());
-                buckets
-            });
+            let (cells, bad) = sum_parts(cells, parts, lanes::Cell::add_saturating);
+            return (Histogram::Cells(cells), bad);
         }
         let parts: Vec<(Vec<Bucket>, u64)> = (0..workers)
             .into_par_iter()
@@ -272,7 +273,8 @@ impl ChaosGame {
                 (histogram, bad)
             })
             .collect();
-        sum_parts(cells, parts, add, |buckets| buckets)
+        let (buckets, bad) = sum_parts(cells, parts, add);
+        (Histogram::Buckets(buckets), bad)
     }
 
     /// The next run not yet taken, if any: its generator, starting point and colour, and its
@@ -543,22 +545,28 @@ impl ChaosGame {
 /// An empty slot of the samples in flight: 0 added to bucket 0.
 const EMPTY_SLOT: (usize, Bucket) = (0, [0; 5]);
 
+/// The histogram a chaos game drew: the f64 game's buckets or the lane game's cells, each read
+/// in place by the density estimate.
+enum Histogram {
+    Buckets(Vec<Bucket>),
+    Cells(Vec<lanes::Cell>),
+}
+
 /// The workers' histograms of `cells` cells of type `T` summed into the first (`add`), each
-/// dropped once added, then made buckets (`buckets`); and their re-seeds. Summing in the cells'
-/// own type keeps the peak memory at the workers' histograms.
-fn sum_parts<T: Send + Sync>(
+/// dropped once added; and their re-seeds. Summing in the cells' own type keeps the peak memory
+/// at the workers' histograms.
+fn sum_parts<T: Send + Sync + bytemuck::Zeroable>(
     cells: usize,
     parts: Vec<(Vec<T>, u64)>,
     add: impl Fn(&mut T, &T) + Sync,
-    buckets: impl FnOnce(Vec<T>) -> Vec<Bucket>,
-) -> (Vec<Bucket>, u64) {
+) -> (Vec<T>, u64) {
     let mut parts = parts.into_iter();
-    let Some((mut total, mut bad)) = parts.next() else { return (vec![[0; 5]; cells], 0) };
+    let Some((mut total, mut bad)) = parts.next() else { return (crate::platform::zeroed_pages(cells), 0) };
     for (part, part_bad) in parts {
         bad += part_bad;
         total.par_iter_mut().zip(part.par_iter()).for_each(|(t, p)| add(t, p));
     }
-    (buckets(total), bad)
+    (total, bad)
 }
 
 #[inline(always)]

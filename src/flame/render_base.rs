@@ -6,6 +6,19 @@ pub(super) const WHITE_LEVEL: f64 = 255.0;
 /// One histogram cell: palette colour sums (R, G, B, A, each × 255) and the count × 255.
 pub(super) type Bucket = [u32; 5];
 
+/// A histogram's cell as the density estimate and log scale read it: a [`Bucket`] (the f64
+/// game's), or the lane game's 16-byte cell, read in place (no copy of the histogram made).
+pub(super) trait HistogramCell: Copy + Send + Sync {
+    fn bucket(self) -> Bucket;
+}
+
+impl HistogramCell for Bucket {
+    #[inline(always)]
+    fn bucket(self) -> Bucket {
+        self
+    }
+}
+
 #[derive(Debug, thiserror::Error, PartialEq)]
 pub enum RenderError {
     #[error("flame `{0}` has no xform with a positive weight: there is nothing to iterate")]

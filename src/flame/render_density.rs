@@ -8,7 +8,7 @@
 use rayon::prelude::*;
 
 use super::Flame;
-use super::render_base::{Bucket, RenderError, WHITE_LEVEL};
+use super::render_base::{HistogramCell, RenderError, WHITE_LEVEL};
 use super::render_filter::DensityFilters;
 use super::render_layout::Layout;
 
@@ -39,11 +39,16 @@ impl LogScale {
 }
 
 /// The accumulation buffer (RGBA, the histogram's size) of `histogram`.
-pub(super) fn accumulate(flame: &Flame, layout: &Layout, histogram: &[Bucket]) -> Result<Vec<[f64; 4]>, RenderError> {
+pub(super) fn accumulate<C: HistogramCell>(
+    flame: &Flame,
+    layout: &Layout,
+    histogram: &[C],
+) -> Result<Vec<[f64; 4]>, RenderError> {
     let scale = LogScale::new(flame, layout);
     let Some(de) = &layout.density else {
         let mut acc = crate::platform::zeroed_pages::<[f64; 4]>(histogram.len());
         acc.par_iter_mut().zip(histogram).for_each(|(a, b)| {
+            let b = b.bucket();
             if b[3] != 0 {
                 let ls = scale.of(f64::from(b[3]));
                 *a = [0, 1, 2, 3].map(|c| f64::from(b[c]) * ls);
@@ -109,15 +114,15 @@ fn kernel_squares(de: &DensityFilters) -> Vec<KernelSquare> {
 
 /// What the estimator reads: the kernels spread to squares, the index rule, the log scale, the
 /// histogram and its geometry.
-struct Estimator<'a> {
+struct Estimator<'a, C> {
     squares: Vec<KernelSquare>,
     de: &'a DensityFilters,
     scale: LogScale,
     layout: &'a Layout,
-    histogram: &'a [Bucket],
+    histogram: &'a [C],
 }
 
-impl Estimator<'_> {
+impl<C: HistogramCell> Estimator<'_, C> {
     /// [`Self::band`] compiled for AVX2 when the CPU has it (four channels in one vector; no
     /// FMA, so the sums are the same bits).
     fn band_dispatch(&self, band: std::ops::Range<usize>, buffer: &mut Vec<[f64; 4]>) -> usize {
@@ -162,14 +167,14 @@ impl Estimator<'_> {
         for j in band {
             let rows_hit = j.saturating_sub(ss)..(j + ss + 1).min(h);
             for i in (os - 1)..w.saturating_sub(os - 1) {
-                let b = &histogram[i + j * w];
+                let b = histogram[i + j * w].bucket();
                 if b[4] == 0 || b[3] == 0 {
                     continue;
                 }
                 let mut hits = 0.0;
                 for y in rows_hit.clone() {
                     for cell in &histogram[i - ss + y * w..=i + ss + y * w] {
-                        hits += f64::from(cell[4]) / WHITE_LEVEL;
+                        hits += f64::from(cell.bucket()[4]) / WHITE_LEVEL;
                     }
                 }
                 hits *= neighbourhood_scale;

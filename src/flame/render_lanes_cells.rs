@@ -1,7 +1,7 @@
 //! The lane game's histogram side (`render_lanes.rs`): its 16-byte cells, and the adds that
 //! wait for their cells' cache lines.
 
-use super::super::super::render_base::Bucket;
+use super::super::super::render_base::{Bucket, HistogramCell};
 use super::Lanes;
 
 /// A histogram cell of the lane game: palette colour sums R, G, B and A, each × 255, on a 16-byte
@@ -16,12 +16,6 @@ impl Cell {
     /// alphas of 1 may round A one below the count).
     pub(super) fn of(b: Bucket) -> Self {
         Self([b[0], b[1], b[2], b[4]])
-    }
-
-    /// The histogram's bucket.
-    pub(in crate::flame::render) fn bucket(self) -> Bucket {
-        let [r, g, b, a] = self.0;
-        [r, g, b, a, a]
     }
 
     /// Saturating sums, each channel: the merge of workers' histograms and of cells set aside
@@ -56,6 +50,15 @@ impl Cell {
             use std::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
             _mm_prefetch::<_MM_HINT_T0>((self as *const Self).cast());
         }
+    }
+}
+
+impl HistogramCell for Cell {
+    /// The histogram's bucket.
+    #[inline(always)]
+    fn bucket(self) -> Bucket {
+        let [r, g, b, a] = self.0;
+        [r, g, b, a, a]
     }
 }
 

@@ -69,7 +69,8 @@ impl fmt::Display for BenchReport {
             let per_frame = self.points as f64 * self.steps as f64 / 1e6;
             // A process that spent no CPU time it could measure: no rate, rather than one
             // divided by almost nothing.
-            let by_cpu = if *cpu > 0.0 { format!("{:8.1}", per_frame / (cpu / 1e3)) } else { "   (no CPU time)".into() };
+            let by_cpu =
+                if *cpu > 0.0 { format!("{:8.1}", per_frame / (cpu / 1e3)) } else { "   (no CPU time)".into() };
             writeln!(f, "    {:<8} {:8.1} / {by_cpu}", mode.name(), per_frame / (wall / 1e3).max(1e-9))?;
         }
         writeln!(
