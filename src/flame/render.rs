@@ -547,9 +547,22 @@ const EMPTY_SLOT: (usize, Bucket) = (0, [0; 5]);
 
 /// The histogram a chaos game drew: the f64 game's buckets or the lane game's cells, each read
 /// in place by the density estimate.
+#[derive(Debug, PartialEq)]
 enum Histogram {
     Buckets(Vec<Bucket>),
     Cells(Vec<lanes::Cell>),
+}
+
+#[cfg(test)]
+impl Histogram {
+    /// Every cell as a bucket.
+    fn buckets(&self) -> Vec<Bucket> {
+        use super::render_base::HistogramCell;
+        match self {
+            Self::Buckets(buckets) => buckets.clone(),
+            Self::Cells(cells) => cells.iter().map(|c| c.bucket()).collect(),
+        }
+    }
 }
 
 /// The workers' histograms of `cells` cells of type `T` summed into the first (`add`), each
