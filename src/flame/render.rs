@@ -257,7 +257,7 @@ impl ChaosGame {
         if let Some(lanes) = &lane_game {
             let parts: Vec<_> = (0..workers)
                 .into_par_iter()
-                .map(|_| lanes.run_part(seed, samples, &next_run, cells, workers > 1, progress))
+                .map(|_| lanes.run_part(seed, samples, &next_run, cells, progress))
                 .collect();
             let (cells, bad) = sum_parts(cells, parts, lanes::Cell::add_saturating);
             return (Histogram::Cells(cells), bad);
@@ -265,10 +265,8 @@ impl ChaosGame {
         let parts: Vec<(Vec<Bucket>, u64)> = (0..workers)
             .into_par_iter()
             .map(|_| {
+                // Every page written (several workers update theirs at random).
                 let mut histogram = crate::platform::zeroed_pages::<Bucket>(cells);
-                if workers > 1 {
-                    crate::platform::write_every_page(&mut histogram, [0; 5]);
-                }
                 let bad = self.run_chains_dispatch(seed, samples, &next_run, &mut histogram, progress);
                 (histogram, bad)
             })
@@ -568,7 +566,7 @@ impl Histogram {
 /// The workers' histograms of `cells` cells of type `T` summed into the first (`add`), each
 /// dropped once added; and their re-seeds. Summing in the cells' own type keeps the peak memory
 /// at the workers' histograms.
-fn sum_parts<T: Send + Sync + bytemuck::Zeroable>(
+fn sum_parts<T: Send + Sync + Copy + bytemuck::Zeroable>(
     cells: usize,
     parts: Vec<(Vec<T>, u64)>,
     add: impl Fn(&mut T, &T) + Sync,

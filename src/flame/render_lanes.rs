@@ -269,21 +269,18 @@ impl<'a> LaneGame<'a> {
     }
 
     /// One worker's part of `samples`: blocks taken in turn from `next` until none is left. Its
-    /// histogram of `cells` cells and its re-seeds; `shared`: other workers run beside it.
+    /// histogram of `cells` cells and its re-seeds.
     pub fn run_part(
         &self,
         seed: u32,
         samples: u64,
         next: &AtomicU64,
         cells: usize,
-        shared: bool,
         progress: &(dyn Fn(u64) + Sync),
     ) -> (Vec<Cell>, u64) {
         // The samples that add nothing go to cells past the picture's, one a lane.
+        // Every page written (other workers update theirs at random).
         let mut histogram = crate::platform::zeroed_pages::<Cell>(cells + LANES);
-        if shared {
-            crate::platform::write_every_page(&mut histogram, Cell::default());
-        }
         let bad = self.run_worker(seed, samples, next, &mut histogram, progress);
         histogram.truncate(cells);
         (histogram, bad)

@@ -24,8 +24,8 @@
 //!   them on the desktop and hands them to the page's event loop in the browser, where blocking
 //!   would never let them finish.
 //! - **Memory pages**: a zeroed buffer's pages are mapped on first touch; buffers that several
-//!   threads update at random have every page written first ([`write_every_page`]); large
-//!   buffers written end to end ask Linux for huge pages ([`zeroed_pages`]).
+//!   threads update at random have every page written first ([`write_every_page`]); the flame
+//!   renderer's large buffers ask Linux for huge pages as well ([`zeroed_pages`]).
 
 #[cfg(target_arch = "wasm32")]
 pub mod web;
@@ -53,20 +53,31 @@ pub fn write_every_page<T: Copy>(values: &mut [T], zero: T) {
 
 /// `len` zeroed values in a new vector whose pages Linux may map 2 MiB at a time (transparent
 /// huge pages, asked by `madvise` before the first write; where the system's setting is
-/// `never`, or elsewhere, the usual 4 KiB pages). The flame renderer's buffers (tens of MB,
-/// each written once from end to end) paid about a quarter of a small render's time in 4 KiB
-/// page faults.
-pub fn zeroed_pages<T: bytemuck::Zeroable>(len: usize) -> Vec<T> {
-    let mut values: Vec<T> = Vec::with_capacity(len);
-    let bytes = len * std::mem::size_of::<T>();
+/// `never`, or elsewhere, the usual 4 KiB pages), each page then written once
+/// ([`write_every_page`]: the chaos game's random adds do not stop for page faults). The memory
+/// comes zeroed from the allocator (fresh pages are not written twice). The flame renderer's
+/// buffers (tens of MB) paid about a quarter of a small render's time in 4 KiB page faults.
+pub fn zeroed_pages<T: bytemuck::Zeroable + Copy>(len: usize) -> Vec<T> {
+    let Ok(layout) = std::alloc::Layout::array::<T>(len) else { panic!("{len} values do not fit in memory") };
+    if layout.size() == 0 {
+        return std::iter::repeat_with(T::zeroed).take(len).collect();
+    }
+    #[expect(unsafe_code, reason = "a zeroed allocation made a vector")]
+    // SAFETY: `layout` has a non-zero size; all-zero bytes are a valid `T` (`Zeroable`); the
+    // vector takes the allocation with the layout it was made with (`len` values of `T`).
+    let mut values = unsafe {
+        let ptr = std::alloc::alloc_zeroed(layout).cast::<T>();
+        if ptr.is_null() {
+            std::alloc::handle_alloc_error(layout);
+        }
+        Vec::from_raw_parts(ptr, len, len)
+    };
     #[cfg(target_os = "linux")]
-    if bytes >= 2 << 20 {
-        // From the page that holds the first value: a large allocation is a mapping of its own
-        // whose start (the allocator's header before the values) Linux aligns to 2 MiB, so
-        // the first 2 MiB qualify as well.
+    if layout.size() >= 2 << 20 {
         const PAGE: usize = 4096;
-        let start = values.as_mut_ptr() as usize / PAGE * PAGE;
-        let length = (values.as_mut_ptr() as usize + bytes).next_multiple_of(PAGE) - start;
+        let first = values.as_mut_ptr() as usize;
+        let start = first / PAGE * PAGE;
+        let length = (first + layout.size()).next_multiple_of(PAGE) - start;
         #[expect(unsafe_code, reason = "advice on the pages of an allocation this function owns")]
         // SAFETY: the range is `values`' allocation, rounded out to whole pages (the allocator's
         // header shares the first); MADV_HUGEPAGE changes how pages are mapped, never what they
@@ -75,13 +86,7 @@ pub fn zeroed_pages<T: bytemuck::Zeroable>(len: usize) -> Vec<T> {
             libc::madvise(start as *mut libc::c_void, length, libc::MADV_HUGEPAGE);
         }
     }
-    #[expect(unsafe_code, reason = "a vector's first `len` values written as zero bytes")]
-    // SAFETY: the capacity holds `len` values; all-zero bytes are a valid `T` (`Zeroable`), and
-    // they are written before the length covers them.
-    unsafe {
-        std::ptr::write_bytes(values.as_mut_ptr(), 0, len);
-        values.set_len(len);
-    }
+    write_every_page(&mut values, T::zeroed());
     values
 }
 
