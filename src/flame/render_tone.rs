@@ -95,7 +95,7 @@ fn filter_row(
 /// The tone map's constants.
 struct Tone {
     inverse_gamma: f64,
-    linear_range: f64,
+    alpha: AlphaCurve,
     vibrancy: f64,
     highlight_power: f64,
     /// The background × 256, as flam3 scales it.
@@ -106,7 +106,7 @@ impl Tone {
     fn new(flame: &Flame) -> Self {
         Self {
             inverse_gamma: 1.0 / flame.gamma,
-            linear_range: flame.gamma_threshold,
+            alpha: AlphaCurve::new(1.0 / flame.gamma, flame.gamma_threshold),
             vibrancy: flame.vibrancy,
             highlight_power: flame.highlight_power,
             background: flame.background.map(|c| c * 256.0),
@@ -118,7 +118,7 @@ impl Tone {
         let (alpha, ls) = if t[3] <= 0.0 {
             (0.0, 0.0)
         } else {
-            let alpha = calc_alpha(density, self.inverse_gamma, self.linear_range);
+            let alpha = self.alpha.of(density);
             (alpha.clamp(0.0, 1.0), self.vibrancy * 256.0 * alpha / density)
         };
         let vivid = calc_newrgb(t, ls, self.highlight_power);
@@ -139,16 +139,30 @@ impl Tone {
     }
 }
 
-/// The density raised to `gamma` (here 1/gamma), blended linearly below `linear_range`.
-fn calc_alpha(density: f64, gamma: f64, linear_range: f64) -> f64 {
-    if density <= 0.0 {
-        return 0.0;
+/// flam3's `flam3_calc_alpha`: the density raised to `gamma` (here 1/gamma), blended linearly
+/// below `linear_range`.
+struct AlphaCurve {
+    gamma: f64,
+    linear_range: f64,
+    /// `linear_range` raised to `gamma`, the same for every pixel (flam3 computes it for each).
+    at_threshold: f64,
+}
+
+impl AlphaCurve {
+    fn new(gamma: f64, linear_range: f64) -> Self {
+        Self { gamma, linear_range, at_threshold: linear_range.powf(gamma) }
     }
-    if density < linear_range {
-        let frac = density / linear_range;
-        (1.0 - frac) * density * (linear_range.powf(gamma) / linear_range) + frac * density.powf(gamma)
-    } else {
-        density.powf(gamma)
+
+    fn of(&self, density: f64) -> f64 {
+        if density <= 0.0 {
+            return 0.0;
+        }
+        if density < self.linear_range {
+            let frac = density / self.linear_range;
+            (1.0 - frac) * density * (self.at_threshold / self.linear_range) + frac * density.powf(self.gamma)
+        } else {
+            density.powf(self.gamma)
+        }
     }
 }
 
@@ -186,6 +200,7 @@ mod tests {
     #[test]
     fn alpha_is_linear_below_the_threshold_and_a_power_above() {
         let g = 1.0 / 4.0;
+        let calc_alpha = |density: f64, gamma: f64, linear_range: f64| AlphaCurve::new(gamma, linear_range).of(density);
         assert!((calc_alpha(0.5, g, 0.01) - 0.5f64.powf(g)).abs() < 1e-15);
         // Below the threshold the curve runs from the line through 0 to the power at the threshold.
         // Near 0 its slope is the line's, 0.01^g / 0.01; at the threshold it meets the power.
