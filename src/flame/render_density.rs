@@ -132,13 +132,13 @@ impl<C: HistogramCell> Estimator<'_, C> {
             // SAFETY: the CPU runs AVX2 (checked just above).
             return unsafe { self.band_avx2(band, buffer) };
         }
-        self.band(band, buffer, spread_row)
+        self.band(band, buffer, spread)
     }
 
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
     fn band_avx2(&self, band: std::ops::Range<usize>, buffer: &mut Vec<[f64; 4]>) -> usize {
-        self.band(band, buffer, |t, k, colour, ls| spread_row_avx2(t, k, colour, ls))
+        self.band(band, buffer, |buf, t, k, s, colour, ls| spread_avx2(buf, t, k, s, colour, ls))
     }
 
     /// The estimator over the rows `band` into `buffer` (made the band's rows and the kernels'
@@ -152,7 +152,7 @@ impl<C: HistogramCell> Estimator<'_, C> {
         &self,
         band: std::ops::Range<usize>,
         buffer: &mut Vec<[f64; 4]>,
-        spread: impl Fn(&mut [[f64; 4]], &[f64], [f64; 4], f64),
+        spread: impl Fn(&mut [[f64; 4]], Rows, &[f64], Rows, [f64; 4], f64),
     ) -> usize {
         let Self { squares, de, scale, layout, histogram } = self;
         let (w, h) = (layout.hist_width, layout.hist_height);
@@ -187,45 +187,87 @@ impl<C: HistogramCell> Estimator<'_, C> {
                 // The square's columns and rows inside the buffer.
                 let (u0, u1) = (reach.saturating_sub(i), side.min(w + reach - i));
                 let (v0, v1) = (reach.saturating_sub(j - first_row), side.min(last_row + reach - j));
-                let (x0, x1) = (i + u0 - reach, i + u1 - reach);
-                for v in v0..v1 {
-                    let row_start = (j + v - reach - first_row) * w;
-                    let targets = &mut buf[row_start + x0..row_start + x1];
-                    spread(targets, &square.coefs[v * side + u0..v * side + u1], colour, ls);
-                }
+                let x0 = i + u0 - reach;
+                let (rows, columns) = (v1 - v0, u1 - u0);
+                let targets = Rows { start: (j + v0 - reach - first_row) * w + x0, stride: w, rows, columns };
+                let in_square = Rows { start: v0 * side + u0, stride: side, rows, columns };
+                spread(buf, targets, &square.coefs, in_square, colour, ls);
             }
         }
         first_row
     }
 }
 
-/// `targets[n][c] += colour[c] · coefs[n] · ls`, in that order (the estimator's one sum).
+/// Where a rectangle of rows lies in a slice: `rows` rows of `columns` items, `stride` apart,
+/// from `start`.
+#[derive(Clone, Copy)]
+struct Rows {
+    start: usize,
+    stride: usize,
+    rows: usize,
+    columns: usize,
+}
+
+impl Rows {
+    /// The range of row `n` (of the first `columns` items).
+    fn row(&self, n: usize, columns: usize) -> std::ops::Range<usize> {
+        let at = self.start + n * self.stride;
+        at..at + columns
+    }
+
+    /// Whether rows `0..rows` of `columns` items lie inside a slice of `len` items.
+    fn fits(&self, rows: usize, columns: usize, len: usize) -> bool {
+        rows == 0 || columns == 0 || self.start + (rows - 1) * self.stride + columns <= len
+    }
+}
+
+/// A bucket's spread: `buf[t][c] += colour[c] · coefs[k] · ls` for the targets `t` of
+/// `targets` and the coefficients `k` of `square`, in that order (the estimator's one sum).
 #[inline(always)]
-fn spread_row(targets: &mut [[f64; 4]], coefs: &[f64], colour: [f64; 4], ls: f64) {
-    for (t, &coef) in targets.iter_mut().zip(coefs) {
-        for c in 0..4 {
-            t[c] += colour[c] * coef * ls;
+fn spread(buf: &mut [[f64; 4]], targets: Rows, coefs: &[f64], square: Rows, colour: [f64; 4], ls: f64) {
+    let columns = targets.columns.min(square.columns);
+    for v in 0..targets.rows.min(square.rows) {
+        for (t, &coef) in buf[targets.row(v, columns)].iter_mut().zip(&coefs[square.row(v, columns)]) {
+            for c in 0..4 {
+                t[c] += colour[c] * coef * ls;
+            }
         }
     }
 }
 
-/// [`spread_row`] with a target's four channels in one AVX vector (left to itself, LLVM
+/// [`spread`] with a target's four channels in one AVX vector (left to itself, LLVM
 /// vectorized across targets and spent its time transposing them): the same operations in the
-/// same order, so the same bits.
+/// same order, so the same bits. The bounds are checked once a bucket, and the rows walked with
+/// pointers.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 #[inline]
-fn spread_row_avx2(targets: &mut [[f64; 4]], coefs: &[f64], colour: [f64; 4], ls: f64) {
+fn spread_avx2(buf: &mut [[f64; 4]], targets: Rows, coefs: &[f64], square: Rows, colour: [f64; 4], ls: f64) {
     use std::arch::x86_64::*;
     let colour = _mm256_set_pd(colour[3], colour[2], colour[1], colour[0]);
     let ls = _mm256_set1_pd(ls);
-    for (t, &coef) in targets.iter_mut().zip(coefs) {
-        #[expect(unsafe_code, reason = "an unaligned vector load and store of one target's four channels")]
-        // SAFETY: `t` is a live `[f64; 4]`, 32 bytes, read and written whole.
-        unsafe {
-            let sum = _mm256_loadu_pd(t.as_ptr());
-            let term = _mm256_mul_pd(_mm256_mul_pd(colour, _mm256_set1_pd(coef)), ls);
-            _mm256_storeu_pd(t.as_mut_ptr(), _mm256_add_pd(sum, term));
+    let (rows, columns) = (targets.rows.min(square.rows), targets.columns.min(square.columns));
+    assert!(
+        targets.fits(rows, columns, buf.len()) && square.fits(rows, columns, coefs.len()),
+        "a spread inside its buffers"
+    );
+    if rows == 0 || columns == 0 {
+        return;
+    }
+    #[expect(unsafe_code, reason = "pointer walks over two blocks whose bounds were checked")]
+    // SAFETY: the rows of both rectangles lie inside their slices (asserted above); a target is
+    // a live `[f64; 4]`, 32 bytes.
+    unsafe {
+        let mut target_row = buf.as_mut_ptr().add(targets.start);
+        let mut coef_row = coefs.as_ptr().add(square.start);
+        for _ in 0..rows {
+            for n in 0..columns {
+                let t = target_row.add(n).cast::<f64>();
+                let term = _mm256_mul_pd(_mm256_mul_pd(colour, _mm256_set1_pd(*coef_row.add(n))), ls);
+                _mm256_storeu_pd(t, _mm256_add_pd(_mm256_loadu_pd(t), term));
+            }
+            target_row = target_row.add(targets.stride);
+            coef_row = coef_row.add(square.stride);
         }
     }
 }
