@@ -216,6 +216,7 @@ impl Rows {
     }
 
     /// Whether rows `0..rows` of `columns` items lie inside a slice of `len` items.
+    #[cfg(target_arch = "x86_64")]
     fn fits(&self, rows: usize, columns: usize, len: usize) -> bool {
         rows == 0 || columns == 0 || self.start + (rows - 1) * self.stride + columns <= len
     }
