@@ -16,6 +16,9 @@ use super::render_layout::Layout;
 /// flam3's `PREFILTER_WHITE`.
 const PREFILTER_WHITE: f64 = 255.0;
 
+/// Pixels the tone map takes at a time.
+const BATCH: usize = 8;
+
 /// The RGBA8 pixels of the image from the accumulation buffer.
 pub(super) fn tone_map(flame: &Flame, layout: &Layout, acc: &[[f64; 4]]) -> Vec<u8> {
     let tone = Tone::new(flame);
@@ -24,10 +27,7 @@ pub(super) fn tone_map(flame: &Flame, layout: &Layout, acc: &[[f64; 4]]) -> Vec<
         || vec![[0.0; 4]; layout.width],
         |filtered, (j, row)| {
             filter_row_dispatch(layout, acc, j, filtered);
-            for (px, &t) in row.chunks_exact_mut(4).zip(filtered.iter()) {
-                let [r, g, b] = tone.pixel(t);
-                px.copy_from_slice(&[r, g, b, 255]);
-            }
+            tone.row_dispatch(filtered, row);
         },
     );
     rgba
@@ -42,12 +42,13 @@ fn filter_row_dispatch(layout: &Layout, acc: &[[f64; 4]], j: usize, filtered: &m
         // SAFETY: the CPU runs AVX2 (checked just above).
         return unsafe { filter_row_avx2(layout, acc, j, filtered) };
     }
-    filter_row(layout, acc, j, filtered, |t, coefs, line| {
+    filter_row(layout, acc, j, filtered, [0.0; 4], |mut sum, coefs, line| {
         for (k, a) in coefs.iter().zip(line) {
             for c in 0..4 {
-                t[c] += k * a[c];
+                sum[c] += k * a[c];
             }
         }
+        sum
     });
 }
 
@@ -55,40 +56,55 @@ fn filter_row_dispatch(layout: &Layout, acc: &[[f64; 4]], j: usize, filtered: &m
 #[target_feature(enable = "avx2")]
 fn filter_row_avx2(layout: &Layout, acc: &[[f64; 4]], j: usize, filtered: &mut [[f64; 4]]) {
     use std::arch::x86_64::*;
-    filter_row(layout, acc, j, filtered, |t, coefs, line| {
-        #[expect(unsafe_code, reason = "unaligned vector loads and a store of four channels")]
-        // SAFETY: `t` and each `a` are live `[f64; 4]`s, 32 bytes, read (and `t` written) whole.
-        unsafe {
-            let mut sum = _mm256_loadu_pd(t.as_ptr());
-            for (&k, a) in coefs.iter().zip(line) {
-                sum = _mm256_add_pd(sum, _mm256_mul_pd(_mm256_set1_pd(k), _mm256_loadu_pd(a.as_ptr())));
-            }
-            _mm256_storeu_pd(t.as_mut_ptr(), sum);
+    #[derive(Clone, Copy)]
+    struct Sum(__m256d);
+    impl From<Sum> for [f64; 4] {
+        fn from(sum: Sum) -> Self {
+            let mut value = [0.0; 4];
+            #[expect(unsafe_code, reason = "an unaligned vector store of four channels")]
+            // SAFETY: `value` is a live `[f64; 4]`, 32 bytes, written whole.
+            unsafe {
+                _mm256_storeu_pd(value.as_mut_ptr(), sum.0)
+            };
+            value
         }
+    }
+    filter_row(layout, acc, j, filtered, Sum(_mm256_setzero_pd()), |sum, coefs, line| {
+        let mut sum = sum.0;
+        for (&k, a) in coefs.iter().zip(line) {
+            #[expect(unsafe_code, reason = "an unaligned vector load of four channels")]
+            // SAFETY: `a` is a live `[f64; 4]`, 32 bytes, read whole.
+            let a = unsafe { _mm256_loadu_pd(a.as_ptr()) };
+            sum = _mm256_add_pd(sum, _mm256_mul_pd(_mm256_set1_pd(k), a));
+        }
+        Sum(sum)
     });
 }
 
 /// The spatial filter over output row `j`: each pixel's RGBA, the filter's coefficients times
-/// the accumulation buffer's values under it, summed row by row of the filter, left to right
-/// (`add_line(t, coefs, line)` adds one row of the filter to `t`).
+/// the accumulation buffer's values under it, summed from `zero` row by row of the filter, left
+/// to right (`add_line(sum, coefs, line)` adds one row of the filter to `sum`), the sum kept
+/// out of memory until the pixel is done.
 #[inline(always)]
-fn filter_row(
+fn filter_row<S: Copy + Into<[f64; 4]>>(
     layout: &Layout,
     acc: &[[f64; 4]],
     j: usize,
     filtered: &mut [[f64; 4]],
-    add_line: impl Fn(&mut [f64; 4], &[f64], &[[f64; 4]]),
+    zero: S,
+    add_line: impl Fn(S, &[f64], &[[f64; 4]]) -> S,
 ) {
     let filter = &layout.filter;
     let (w, os) = (layout.hist_width, layout.oversample);
     let y = layout.filter_offset + j * os;
     for (i, t) in filtered.iter_mut().enumerate() {
         let x = layout.filter_offset + i * os;
-        *t = [0.0; 4];
+        let mut sum = zero;
         for jj in 0..filter.width {
             let line = &acc[x + (y + jj) * w..x + (y + jj) * w + filter.width];
-            add_line(t, &filter.coefs[jj * filter.width..(jj + 1) * filter.width], line);
+            sum = add_line(sum, &filter.coefs[jj * filter.width..(jj + 1) * filter.width], line);
         }
+        *t = sum.into();
     }
 }
 
@@ -111,6 +127,116 @@ impl Tone {
             highlight_power: flame.highlight_power,
             background: flame.background.map(|c| c * 256.0),
         }
+    }
+
+    /// The RGBA8 pixels of a row of filtered values, [`Self::row`] compiled for AVX2 where the
+    /// CPU has it.
+    fn row_dispatch(&self, filtered: &[[f64; 4]], rgba: &mut [u8]) {
+        #[cfg(target_arch = "x86_64")]
+        if crate::simd::SimdLevel::detect().avx2() {
+            #[expect(unsafe_code, reason = "an AVX2 function, entered after the CPU check")]
+            // SAFETY: the CPU runs AVX2 (checked just above).
+            return unsafe { self.row_avx2(filtered, rgba) };
+        }
+        self.row(filtered, rgba);
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    fn row_avx2(&self, filtered: &[[f64; 4]], rgba: &mut [u8]) {
+        self.row(filtered, rgba);
+    }
+
+    /// The RGBA8 pixels of a row: [`Self::pixels`] a batch at a time, [`Self::pixel`] for the
+    /// rest.
+    #[inline(always)]
+    fn row(&self, filtered: &[[f64; 4]], rgba: &mut [u8]) {
+        let mut batches = filtered.chunks_exact(BATCH);
+        let mut out = rgba.chunks_exact_mut(4 * BATCH);
+        for (batch, px) in (&mut batches).zip(&mut out) {
+            let colours = self.pixels(batch.try_into().expect("a batch"));
+            for (px, [r, g, b]) in px.chunks_exact_mut(4).zip(colours) {
+                px.copy_from_slice(&[r, g, b, 255]);
+            }
+        }
+        for (px, &t) in out.into_remainder().chunks_exact_mut(4).zip(batches.remainder()) {
+            let [r, g, b] = self.pixel(t);
+            px.copy_from_slice(&[r, g, b, 255]);
+        }
+    }
+
+    /// [`Self::pixel`] of `BATCH` pixels, each step an elementwise operation on the batch (the
+    /// compiler makes them vector instructions: the same IEEE operations, so the same bits),
+    /// the powers one pixel at a time, where they are needed; a pixel whose highlight needs
+    /// its hue and saturation takes [`Self::pixel`].
+    #[inline(always)]
+    fn pixels(&self, t: &[[f64; 4]; BATCH]) -> [[u8; 3]; BATCH] {
+        type Batch = [f64; BATCH];
+        #[inline(always)]
+        fn each(f: impl Fn(usize) -> f64) -> Batch {
+            std::array::from_fn(f)
+        }
+        let channel: [Batch; 4] = std::array::from_fn(|c| each(|l| t[l][c] / PREFILTER_WHITE));
+        let density = channel[3];
+        // As in `pixel`, a NaN density is drawn (and its NaN carried on).
+        let drawn: [bool; BATCH] = std::array::from_fn(|l| !(t[l][3] <= 0.0));
+        let mut power = [0.0; BATCH];
+        for l in 0..BATCH {
+            if drawn[l] {
+                power[l] = density[l].powf(self.alpha.gamma);
+            }
+        }
+        let alpha = each(|l| if drawn[l] { self.alpha.of_with_power(density[l], power[l]) } else { 0.0 });
+        let ls = each(|l| if drawn[l] { self.vibrancy * 256.0 * alpha[l] / density[l] } else { 0.0 });
+        let alpha = alpha.map(|a| a.clamp(0.0, 1.0));
+        // calc_newrgb's largest scaled channel, the first of equals, as its loop finds it.
+        let mut max_scaled = [-1.0; BATCH];
+        let mut max_channel = [0.0; BATCH];
+        for values in &channel[..3] {
+            for l in 0..BATCH {
+                let a = ls[l] * values[l];
+                if a > max_scaled[l] {
+                    max_scaled[l] = a;
+                    max_channel[l] = values[l];
+                }
+            }
+        }
+        let new_ls = each(|l| WHITE_LEVEL / max_channel[l]);
+        let blend = each(|l| if max_scaled[l] <= 255.0 { 1.0 } else { (-self.highlight_power).min(1.0) });
+        let black =
+            each(|l| if ls[l] == 0.0 || (t[l][0] == 0.0 && t[l][1] == 0.0 && t[l][2] == 0.0) { 1.0 } else { 0.0 });
+        let vivid: [Batch; 3] =
+            std::array::from_fn(|c| {
+                each(|l| {
+                    if black[l] == 1.0 {
+                        0.0
+                    } else {
+                        ((1.0 - blend[l]) * new_ls[l] + blend[l] * ls[l]) * channel[c][l]
+                    }
+                })
+            });
+        // At vibrancy 1 the per-channel power adds +0 (see `pixel`), computed only where not.
+        let mut per_channel = [[0.0; BATCH]; 3];
+        for (c, per_channel) in per_channel.iter_mut().enumerate() {
+            for l in 0..BATCH {
+                if !(self.vibrancy == 1.0 && t[l][c] >= 0.0 && t[l][c].is_finite()) {
+                    per_channel[l] = (1.0 - self.vibrancy) * 256.0 * channel[c][l].powf(self.inverse_gamma);
+                }
+            }
+        }
+        let bytes: [[u8; BATCH]; 3] = std::array::from_fn(|c| {
+            std::array::from_fn(|l| {
+                let a = vivid[c][l] + per_channel[c][l] + (1.0 - alpha[l]) * self.background[c];
+                if a.is_nan() { 255 } else { a.clamp(0.0, 255.0) as u8 }
+            })
+        });
+        let mut colours: [[u8; 3]; BATCH] = std::array::from_fn(|l| [0, 1, 2].map(|c| bytes[c][l]));
+        for (l, colour) in colours.iter_mut().enumerate() {
+            if black[l] != 1.0 && max_scaled[l] > 255.0 && self.highlight_power >= 0.0 {
+                *colour = self.pixel(t[l]);
+            }
+        }
+        colours
     }
 
     fn pixel(&self, t: [f64; 4]) -> [u8; 3] {
@@ -157,11 +283,17 @@ impl AlphaCurve {
         if density <= 0.0 {
             return 0.0;
         }
+        self.of_with_power(density, density.powf(self.gamma))
+    }
+
+    /// [`Self::of`] of a density > 0 whose power `gamma` is `power`.
+    #[inline(always)]
+    fn of_with_power(&self, density: f64, power: f64) -> f64 {
         if density < self.linear_range {
             let frac = density / self.linear_range;
-            (1.0 - frac) * density * (self.at_threshold / self.linear_range) + frac * density.powf(self.gamma)
+            (1.0 - frac) * density * (self.at_threshold / self.linear_range) + frac * power
         } else {
-            density.powf(self.gamma)
+            power
         }
     }
 }
@@ -196,6 +328,50 @@ fn calc_newrgb(t: [f64; 4], ls: f64, highlight_power: f64) -> [f64; 3] {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The batch tone map gives each pixel the bytes of the one-pixel tone map: drawn and empty
+    /// pixels, highlights past white, negative, NaN, infinite and subnormal channels, for tone
+    /// maps with and without vibrancy, highlight power and gamma threshold, in both builds.
+    #[test]
+    fn a_batch_of_pixels_is_each_pixel_as_alone() {
+        let specials = [0.0, -0.0, 1.0, 254.9, 255.0, 3e4, 1e9, -3.0, f64::NAN, f64::INFINITY, 5e-324, 1e-300];
+        let mut seed = 0x2545_f491_4f6c_dd1du64;
+        let mut next = move || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            seed
+        };
+        for (vibrancy, highlight_power, gamma, linear_range) in
+            [(1.0, -1.0, 4.0, 0.01), (0.6, 1.0, 2.2, 0.3), (0.0, 0.0, 3.0, 0.0), (1.0, 2.0, 1.0, 1.5)]
+        {
+            let tone = Tone {
+                inverse_gamma: 1.0 / gamma,
+                alpha: AlphaCurve::new(1.0 / gamma, linear_range),
+                vibrancy,
+                highlight_power,
+                background: [0.1, 0.5, 0.0].map(|c| c * 256.0),
+            };
+            for _ in 0..2000 {
+                let row: Vec<[f64; 4]> = (0..BATCH + 3)
+                    .map(|_| {
+                        std::array::from_fn(|_| match next() % 4 {
+                            0 => specials[(next() % specials.len() as u64) as usize],
+                            1 => 0.0,
+                            _ => (next() % 1_000_000) as f64 * 10f64.powi((next() % 9) as i32 - 4),
+                        })
+                    })
+                    .collect();
+                let mut batch = vec![0u8; row.len() * 4];
+                tone.row_dispatch(&row, &mut batch);
+                let mut portable = vec![0u8; row.len() * 4];
+                tone.row(&row, &mut portable);
+                let alone: Vec<u8> = row.iter().flat_map(|&t| tone.pixel(t).into_iter().chain([255])).collect();
+                assert_eq!(batch, alone, "{row:?}");
+                assert_eq!(portable, alone, "{row:?}");
+            }
+        }
+    }
 
     #[test]
     fn alpha_is_linear_below_the_threshold_and_a_power_above() {
