@@ -259,16 +259,14 @@ fn spread_avx2(buf: &mut [[f64; 4]], targets: Rows, coefs: &[f64], square: Rows,
     // SAFETY: the rows of both rectangles lie inside their slices (asserted above); a target is
     // a live `[f64; 4]`, 32 bytes.
     unsafe {
-        let mut target_row = buf.as_mut_ptr().add(targets.start);
-        let mut coef_row = coefs.as_ptr().add(square.start);
-        for _ in 0..rows {
+        for v in 0..rows {
+            let target_row = buf.as_mut_ptr().add(targets.start + v * targets.stride);
+            let coef_row = coefs.as_ptr().add(square.start + v * square.stride);
             for n in 0..columns {
                 let t = target_row.add(n).cast::<f64>();
                 let term = _mm256_mul_pd(_mm256_mul_pd(colour, _mm256_set1_pd(*coef_row.add(n))), ls);
                 _mm256_storeu_pd(t, _mm256_add_pd(_mm256_loadu_pd(t), term));
             }
-            target_row = target_row.add(targets.stride);
-            coef_row = coef_row.add(square.stride);
         }
     }
 }
