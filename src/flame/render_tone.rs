@@ -151,10 +151,16 @@ impl Tone {
     /// rest.
     #[inline(always)]
     fn row(&self, filtered: &[[f64; 4]], rgba: &mut [u8]) {
+        // Batches where nothing was drawn (all bits zero) take the empty pixel's colour.
+        let empty = self.pixel([0.0; 4]);
         let mut batches = filtered.chunks_exact(BATCH);
         let mut out = rgba.chunks_exact_mut(4 * BATCH);
         for (batch, px) in (&mut batches).zip(&mut out) {
-            let colours = self.pixels(batch.try_into().expect("a batch"));
+            let colours = if batch.iter().flatten().all(|v| v.to_bits() == 0) {
+                [empty; BATCH]
+            } else {
+                self.pixels(batch.try_into().expect("a batch"))
+            };
             for (px, [r, g, b]) in px.chunks_exact_mut(4).zip(colours) {
                 px.copy_from_slice(&[r, g, b, 255]);
             }
@@ -353,9 +359,12 @@ mod tests {
                 background: [0.1, 0.5, 0.0].map(|c| c * 256.0),
             };
             for _ in 0..2000 {
-                let row: Vec<[f64; 4]> = (0..BATCH + 3)
+                // Half the rows mostly empty: whole batches of them drawn from the empty pixel.
+                let sparse = next() % 2 == 0;
+                let row: Vec<[f64; 4]> = (0..3 * BATCH + 3)
                     .map(|_| {
-                        std::array::from_fn(|_| match next() % 4 {
+                        let empty = sparse && next() % 8 != 0;
+                        std::array::from_fn(|_| match if empty { 1 } else { next() % 4 } {
                             0 => specials[(next() % specials.len() as u64) as usize],
                             1 => 0.0,
                             _ => (next() % 1_000_000) as f64 * 10f64.powi((next() % 9) as i32 - 4),
