@@ -78,12 +78,15 @@ pub fn render(flame: &Flame, seed: u32, progress: &(dyn Fn(u64) + Sync)) -> Resu
     let game = ChaosGame::new(flame, &layout)?;
     let samples = sample_count(flame);
     let (histogram, bad_values) = game.run(seed, samples, &layout, progress);
-    let accumulated = match &histogram {
-        Histogram::Buckets(buckets) => super::render_density::accumulate(flame, &layout, buckets)?,
-        Histogram::Cells(cells) => super::render_density::accumulate(flame, &layout, cells)?,
-    };
+    // The accumulation buffer's rows made into pixels as they become final.
+    let mut tone_map = super::render_tone::ToneMap::new(flame, &layout);
+    let take = &mut |rows: &super::render_density::AccRows<'_>| tone_map.take(rows);
+    match &histogram {
+        Histogram::Buckets(buckets) => super::render_density::accumulate(flame, &layout, buckets, take)?,
+        Histogram::Cells(cells) => super::render_density::accumulate(flame, &layout, cells, take)?,
+    }
     drop(histogram);
-    let rgba = super::render_tone::tone_map(flame, &layout, &accumulated);
+    let rgba = tone_map.finish();
     Ok(FlameImage { width: flame.size[0], height: flame.size[1], rgba, samples, bad_values })
 }
 

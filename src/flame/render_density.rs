@@ -38,27 +38,90 @@ impl LogScale {
     }
 }
 
-/// The accumulation buffer (RGBA, the histogram's size) of `histogram`.
+/// Rows of no-estimate accumulation computed at a time.
+const PLAIN_CHUNK_ROWS: usize = 64;
+
+/// Rows of the accumulation buffer (RGBA, the histogram's width): `values` holds rows
+/// `first_row..`, of which those below `final_end` have all their sums.
+pub(super) struct AccRows<'a> {
+    pub first_row: usize,
+    pub final_end: usize,
+    pub width: usize,
+    values: &'a [[f64; 4]],
+}
+
+impl AccRows<'_> {
+    /// `len` values of row `y` (final, and not dropped) from column `x`.
+    #[inline(always)]
+    pub fn line(&self, y: usize, x: usize, len: usize) -> &[[f64; 4]] {
+        debug_assert!(y >= self.first_row && y < self.final_end, "row {y} outside the final rows");
+        let at = (y - self.first_row) * self.width + x;
+        &self.values[at..at + len]
+    }
+}
+
+/// The rows of the accumulation buffer still in use: from `first_row`, zero where nothing has
+/// been added yet.
+struct Window {
+    first_row: usize,
+    width: usize,
+    values: Vec<[f64; 4]>,
+}
+
+impl Window {
+    /// Rows from `first_row` on up to `end` (new rows zero).
+    fn extend_to(&mut self, end: usize) {
+        let len = end.saturating_sub(self.first_row) * self.width;
+        if len > self.values.len() {
+            self.values.resize(len, [0.0; 4]);
+        }
+    }
+
+    /// Rows `rows` (within the window).
+    fn rows_mut(&mut self, rows: std::ops::Range<usize>) -> &mut [[f64; 4]] {
+        let w = self.width;
+        &mut self.values[(rows.start - self.first_row) * w..(rows.end - self.first_row) * w]
+    }
+
+    /// Hands the rows below `final_end` to `take`, then drops those it will not read again.
+    fn hand_over(&mut self, final_end: usize, take: &mut dyn FnMut(&AccRows<'_>) -> usize) {
+        self.extend_to(final_end);
+        let rows = AccRows { first_row: self.first_row, final_end, width: self.width, values: &self.values };
+        let keep = take(&rows).min(final_end).max(self.first_row);
+        self.values.drain(..(keep - self.first_row) * self.width);
+        self.first_row = keep;
+    }
+}
+
+/// The accumulation buffer of `histogram` (its log-density scale, or the density estimate),
+/// handed to `take` a few rows at a time, top to bottom (all of them by the last call, whose
+/// `final_end` is the histogram's height); `take` returns the first row it will read again.
+/// Only the rows between are kept: the whole buffer (32 bytes a histogram cell) never exists.
 pub(super) fn accumulate<C: HistogramCell>(
     flame: &Flame,
     layout: &Layout,
     histogram: &[C],
-) -> Result<Vec<[f64; 4]>, RenderError> {
+    take: &mut dyn FnMut(&AccRows<'_>) -> usize,
+) -> Result<(), RenderError> {
     let scale = LogScale::new(flame, layout);
-    let Some(de) = &layout.density else {
-        let mut acc = crate::platform::zeroed_pages::<[f64; 4]>(histogram.len());
-        acc.par_iter_mut().zip(histogram).for_each(|(a, b)| {
-            let b = b.bucket();
-            if b[3] != 0 {
-                let ls = scale.of(f64::from(b[3]));
-                *a = [0, 1, 2, 3].map(|c| f64::from(b[c]) * ls);
-            }
-        });
-        return Ok(acc);
-    };
     let (w, h) = (layout.hist_width, layout.hist_height);
+    let mut window = Window { first_row: 0, width: w, values: Vec::new() };
+    let Some(de) = &layout.density else {
+        for start in (0..h).step_by(PLAIN_CHUNK_ROWS) {
+            let end = (start + PLAIN_CHUNK_ROWS).min(h);
+            window.extend_to(end);
+            window.rows_mut(start..end).par_iter_mut().zip(&histogram[start * w..end * w]).for_each(|(a, b)| {
+                let b = b.bucket();
+                if b[3] != 0 {
+                    let ls = scale.of(f64::from(b[3]));
+                    *a = [0, 1, 2, 3].map(|c| f64::from(b[c]) * ls);
+                }
+            });
+            window.hand_over(end, take);
+        }
+        return Ok(());
+    };
     let os = layout.oversample;
-    let mut acc = crate::platform::zeroed_pages::<[f64; 4]>(w * h);
     // flam3's rows and columns: os − 1 from each edge (the last row past the end is empty).
     let rows = (os - 1)..((os - 1) + (h + 1).saturating_sub(2 * (os - 1))).min(h);
     let bands: Vec<std::ops::Range<usize>> =
@@ -68,22 +131,30 @@ pub(super) fn accumulate<C: HistogramCell>(
     // One buffer a band of a group, kept from group to group: memory is asked of the system
     // (and its pages first written) once, not once a band.
     let mut buffers: Vec<Vec<[f64; 4]>> = vec![Vec::new(); group];
-    for chunk in bands.chunks(group) {
+    let mut groups = bands.chunks(group).peekable();
+    while let Some(chunk) = groups.next() {
         let first_rows: Vec<usize> = chunk
             .par_iter()
             .zip(buffers.par_iter_mut())
             .map(|(band, buffer)| estimator.band_dispatch(band.clone(), buffer))
             .collect();
         for (first_row, part) in first_rows.into_iter().zip(&buffers) {
-            let start = first_row * w;
-            acc[start..start + part.len()].iter_mut().zip(part).for_each(|(a, p)| {
+            let end = first_row + part.len() / w;
+            window.extend_to(end);
+            window.rows_mut(first_row..end).iter_mut().zip(part).for_each(|(a, p)| {
                 for c in 0..4 {
                     a[c] += p[c];
                 }
             });
         }
+        // The rows no later band reaches are final.
+        let final_end = groups.peek().map_or(h, |next| next[0].start.saturating_sub(de.reach));
+        window.hand_over(final_end, take);
     }
-    Ok(acc)
+    if bands.is_empty() {
+        window.hand_over(h, take);
+    }
+    Ok(())
 }
 
 /// A density kernel spread out to its whole square (side 2·reach + 1, rows top to bottom), so

@@ -11,6 +11,7 @@ use rayon::prelude::*;
 use super::Flame;
 use super::palette::{hsv_to_rgb, rgb_to_hsv};
 use super::render_base::WHITE_LEVEL;
+use super::render_density::AccRows;
 use super::render_layout::Layout;
 
 /// flam3's `PREFILTER_WHITE`.
@@ -19,23 +20,56 @@ const PREFILTER_WHITE: f64 = 255.0;
 /// Pixels the tone map takes at a time.
 const BATCH: usize = 8;
 
-/// The RGBA8 pixels of the image from the accumulation buffer.
-pub(super) fn tone_map(flame: &Flame, layout: &Layout, acc: &[[f64; 4]]) -> Vec<u8> {
-    let tone = Tone::new(flame);
-    let mut rgba = vec![0u8; layout.width * layout.height * 4];
-    rgba.par_chunks_mut(layout.width * 4).enumerate().for_each_init(
-        || vec![[0.0; 4]; layout.width],
-        |filtered, (j, row)| {
-            filter_row_dispatch(layout, acc, j, filtered);
-            tone.row_dispatch(filtered, row);
-        },
-    );
-    rgba
+/// The tone map of an image: its RGBA8 pixels, made row by row as the accumulation buffer's
+/// rows under them become final ([`super::render_density::accumulate`]).
+pub(super) struct ToneMap<'a> {
+    tone: Tone,
+    layout: &'a Layout,
+    rgba: Vec<u8>,
+    /// The first output row not made yet.
+    next_row: usize,
+}
+
+impl<'a> ToneMap<'a> {
+    pub fn new(flame: &Flame, layout: &'a Layout) -> Self {
+        Self { tone: Tone::new(flame), layout, rgba: vec![0u8; layout.width * layout.height * 4], next_row: 0 }
+    }
+
+    /// The first accumulation row output row `j`'s filter reads.
+    fn first_acc_row(&self, j: usize) -> usize {
+        self.layout.filter_offset + j * self.layout.oversample
+    }
+
+    /// Makes the output rows whose filter reads only final rows of `acc`; returns the first
+    /// accumulation row still to be read.
+    pub fn take(&mut self, acc: &AccRows<'_>) -> usize {
+        let (layout, tone) = (self.layout, &self.tone);
+        let (start, mut end) = (self.next_row, self.next_row);
+        while end < layout.height && self.first_acc_row(end) + layout.filter.width <= acc.final_end {
+            end += 1;
+        }
+        let row_bytes = layout.width * 4;
+        self.rgba[start * row_bytes..end * row_bytes].par_chunks_mut(row_bytes).enumerate().for_each_init(
+            || vec![[0.0; 4]; layout.width],
+            |filtered, (k, row)| {
+                filter_row_dispatch(layout, acc, start + k, filtered);
+                tone.row_dispatch(filtered, row);
+            },
+        );
+        self.next_row = end;
+        if end < layout.height { self.first_acc_row(end) } else { acc.final_end }
+    }
+
+    /// The pixels, once every row is made.
+    pub fn finish(self) -> Vec<u8> {
+        debug_assert_eq!(self.next_row, self.layout.height, "rows left out of the tone map");
+        self.rgba
+    }
 }
 
 /// [`filter_row`] compiled for AVX2 where the CPU has it (a pixel's four channels in one
 /// vector; no FMA, so the sums are the same bits).
-fn filter_row_dispatch(layout: &Layout, acc: &[[f64; 4]], j: usize, filtered: &mut [[f64; 4]]) {
+fn filter_row_dispatch(layout: &Layout, acc: &AccRows<'_>, j: usize, filtered: &mut [[f64; 4]]) {
     #[cfg(target_arch = "x86_64")]
     if crate::simd::SimdLevel::detect().avx2() {
         #[expect(unsafe_code, reason = "an AVX2 function, entered after the CPU check")]
@@ -54,7 +88,7 @@ fn filter_row_dispatch(layout: &Layout, acc: &[[f64; 4]], j: usize, filtered: &m
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
-fn filter_row_avx2(layout: &Layout, acc: &[[f64; 4]], j: usize, filtered: &mut [[f64; 4]]) {
+fn filter_row_avx2(layout: &Layout, acc: &AccRows<'_>, j: usize, filtered: &mut [[f64; 4]]) {
     use std::arch::x86_64::*;
     #[derive(Clone, Copy)]
     struct Sum(__m256d);
@@ -88,20 +122,20 @@ fn filter_row_avx2(layout: &Layout, acc: &[[f64; 4]], j: usize, filtered: &mut [
 #[inline(always)]
 fn filter_row<S: Copy + Into<[f64; 4]>>(
     layout: &Layout,
-    acc: &[[f64; 4]],
+    acc: &AccRows<'_>,
     j: usize,
     filtered: &mut [[f64; 4]],
     zero: S,
     add_line: impl Fn(S, &[f64], &[[f64; 4]]) -> S,
 ) {
     let filter = &layout.filter;
-    let (w, os) = (layout.hist_width, layout.oversample);
+    let os = layout.oversample;
     let y = layout.filter_offset + j * os;
     for (i, t) in filtered.iter_mut().enumerate() {
         let x = layout.filter_offset + i * os;
         let mut sum = zero;
         for jj in 0..filter.width {
-            let line = &acc[x + (y + jj) * w..x + (y + jj) * w + filter.width];
+            let line = acc.line(y + jj, x, filter.width);
             sum = add_line(sum, &filter.coefs[jj * filter.width..(jj + 1) * filter.width], line);
         }
         *t = sum.into();
