@@ -193,6 +193,56 @@ impl HexLayout {
     }
 }
 
+/// Each `<palette>` element's number and `data` in `text`, in the file's order (those without
+/// a number that reads are left out). The library is 1.5 MB of hex text for 700 palettes, of
+/// which a flame reads one or two: the values are taken raw (entities replaced where there are
+/// any), not normalized as a document reader normalizes every attribute (its whitespace is
+/// skipped when the hex is read); `Err` gives the line and column of what is not XML.
+fn library_entries(text: &str) -> Result<Vec<(i32, String)>, String> {
+    use quick_xml::events::Event;
+    let mut reader = quick_xml::Reader::from_str(text);
+    let mut entries = Vec::new();
+    let at = |reader: &quick_xml::Reader<&[u8]>, e: &dyn std::fmt::Display| {
+        let offset = (reader.error_position() as usize).min(text.len());
+        let before = text.as_bytes()[..offset].split(|&b| b == b'\n');
+        let (lines, last) = before.fold((0, 0), |(n, _), line| (n + 1, line.len()));
+        format!("{e} at {lines}:{}", last + 1)
+    };
+    // Elements open, and whether the root has been seen: a file cut short, or without any
+    // element, is not a document.
+    let (mut open, mut root) = (0usize, false);
+    loop {
+        let event = reader.read_event().map_err(|e| at(&reader, &e))?;
+        match &event {
+            Event::Start(_) => (open, root) = (open + 1, true),
+            Event::Empty(_) => root = true,
+            Event::End(_) => open = open.saturating_sub(1),
+            Event::Eof if open > 0 => return Err(at(&reader, &"an element opened and never closed")),
+            Event::Eof if !root => return Err("there is no element in it".to_string()),
+            Event::Eof => return Ok(entries),
+            _ => {}
+        }
+        let element = match event {
+            Event::Start(e) | Event::Empty(e) if e.local_name().as_ref() == b"palette" => e,
+            _ => continue,
+        };
+        let (mut number, mut data) = (None, String::new());
+        for attribute in element.attributes() {
+            let attribute = attribute.map_err(|e| at(&reader, &e))?;
+            let raw = std::str::from_utf8(&attribute.value).map_err(|e| at(&reader, &e))?;
+            let value = quick_xml::escape::unescape(raw).map_err(|e| at(&reader, &e))?;
+            match attribute.key.local_name().as_ref() {
+                b"number" => number = value.trim().parse::<i32>().ok(),
+                b"data" => data = value.into_owned(),
+                _ => {}
+            }
+        }
+        if let Some(number) = number {
+            entries.push((number, data));
+        }
+    }
+}
+
 /// flam3's palette library: numbered 256-entry RGB palettes (channels in [0, 1]), each kept as
 /// its hex text and read when asked for (a flame names one or two of the library's 700).
 #[derive(Clone, Debug, Default)]
@@ -208,16 +258,8 @@ impl PaletteLibrary {
         let shown = path.display();
         let text =
             std::fs::read_to_string(path).map_err(|e| format!("cannot read the flam3 palette library {shown}: {e}"))?;
-        let doc = roxmltree::Document::parse(&text)
-            .map_err(|e| format!("the flam3 palette library {shown} is not valid XML: {e}"))?;
-        let entries = doc
-            .descendants()
-            .filter(|n| n.has_tag_name("palette"))
-            .filter_map(|node| {
-                let number = node.attribute("number").and_then(|s| s.trim().parse::<i32>().ok())?;
-                Some((number, node.attribute("data").unwrap_or("").to_string()))
-            })
-            .collect();
+        let entries =
+            library_entries(&text).map_err(|e| format!("the flam3 palette library {shown} is not valid XML: {e}"))?;
         Ok(Self { path: path.to_path_buf(), entries })
     }
 
@@ -318,6 +360,34 @@ pub fn hsv_to_rgb([h, s, v]: [f64; 3]) -> [f64; 3] {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The library's entries as a document reader finds them: each `<palette>`'s number and
+    /// data (entities replaced), whitespace aside; malformed files name their line and column.
+    #[test]
+    fn library_entries_are_the_documents_palettes() {
+        let text = "<?xml version=\"1.0\"?>\n<!-- a <palette number=\"9\"/> in a comment -->\n<palettes>\n\
+            <palette number=\" 3 \" name=\"a\" data=\"00010203\n 00040506\"/>\n\
+            <palette number=\"x\" data=\"00ffffff\"/>\n\
+            <palette data=\"00ffffff\" number=\"&#55;\"></palette>\n\
+            <palette number=\"3\" data=\"&#48;0aabbcc\"/>\n</palettes>\n";
+        let doc = roxmltree::Document::parse(text).expect("a document");
+        let expected: Vec<(i32, String)> = doc
+            .descendants()
+            .filter(|n| n.has_tag_name("palette"))
+            .filter_map(|n| Some((n.attribute("number")?.trim().parse().ok()?, n.attribute("data")?.to_string())))
+            .collect();
+        let found = library_entries(text).expect("entries");
+        let digits = |s: &str| s.split_whitespace().collect::<String>();
+        assert_eq!(found.len(), 3, "{found:?}");
+        for ((n, data), (m, want)) in found.iter().zip(&expected) {
+            assert_eq!((n, digits(data)), (m, digits(want)));
+        }
+        let bad = library_entries("<palettes>\n  <palette number=\"1\" data=\"00\">\n</palettes>\n").unwrap_err();
+        assert!(bad.contains("3:"), "{bad}");
+        assert!(library_entries("<palettes>\n<palette number=\"1\" number=\"2\"/></palettes>").is_err());
+        assert!(library_entries("<palettes>\n<palette number=\"1\" data=\"00\"/>\n").is_err(), "cut short");
+        assert!(library_entries("  \n").is_err(), "no element");
+    }
 
     #[test]
     fn hsv_round_trip() {
