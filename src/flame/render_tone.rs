@@ -245,16 +245,13 @@ impl Tone {
         let blend = each(|l| if max_scaled[l] <= 255.0 { 1.0 } else { (-self.highlight_power).min(1.0) });
         let black =
             each(|l| if ls[l] == 0.0 || (t[l][0] == 0.0 && t[l][1] == 0.0 && t[l][2] == 0.0) { 1.0 } else { 0.0 });
-        let vivid: [Batch; 3] =
-            std::array::from_fn(|c| {
-                each(|l| {
-                    if black[l] == 1.0 {
-                        0.0
-                    } else {
-                        ((1.0 - blend[l]) * new_ls[l] + blend[l] * ls[l]) * channel[c][l]
-                    }
-                })
-            });
+        let scaled = each(|l| (1.0 - blend[l]) * new_ls[l] + blend[l] * ls[l]);
+        let mut vivid = [[0.0; BATCH]; 3];
+        for (vivid, channel) in vivid.iter_mut().zip(&channel) {
+            for l in 0..BATCH {
+                vivid[l] = if black[l] == 1.0 { 0.0 } else { scaled[l] * channel[l] };
+            }
+        }
         // At vibrancy 1 the per-channel power adds +0 (see `pixel`), computed only where not.
         let mut per_channel = [[0.0; BATCH]; 3];
         for (c, per_channel) in per_channel.iter_mut().enumerate() {
@@ -264,13 +261,13 @@ impl Tone {
                 }
             }
         }
-        let bytes: [[u8; BATCH]; 3] = std::array::from_fn(|c| {
-            std::array::from_fn(|l| {
+        let mut colours = [[0u8; 3]; BATCH];
+        for c in 0..3 {
+            for l in 0..BATCH {
                 let a = vivid[c][l] + per_channel[c][l] + (1.0 - alpha[l]) * self.background[c];
-                if a.is_nan() { 255 } else { a.clamp(0.0, 255.0) as u8 }
-            })
-        });
-        let mut colours: [[u8; 3]; BATCH] = std::array::from_fn(|l| [0, 1, 2].map(|c| bytes[c][l]));
+                colours[l][c] = if a.is_nan() { 255 } else { a.clamp(0.0, 255.0) as u8 };
+            }
+        }
         for (l, colour) in colours.iter_mut().enumerate() {
             if black[l] != 1.0 && max_scaled[l] > 255.0 && self.highlight_power >= 0.0 {
                 *colour = self.pixel(t[l]);
