@@ -209,7 +209,7 @@ impl<C: HistogramCell> Estimator<'_, C> {
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
     fn band_avx2(&self, band: std::ops::Range<usize>, buffer: &mut Vec<[f64; 4]>) -> usize {
-        self.band(band, buffer, |buf, t, k, s, colour, ls| spread_avx2(buf, t, k, s, colour, ls))
+        self.band(band, buffer, |buf, t, k, s, block, colour, ls| spread_avx2(buf, t, k, s, block, colour, ls))
     }
 
     /// The estimator over the rows `band` into `buffer` (made the band's rows and the kernels'
@@ -223,7 +223,7 @@ impl<C: HistogramCell> Estimator<'_, C> {
         &self,
         band: std::ops::Range<usize>,
         buffer: &mut Vec<[f64; 4]>,
-        spread: impl Fn(&mut [[f64; 4]], Rows, &[f64], Rows, [f64; 4], f64),
+        spread: impl Fn(&mut [[f64; 4]], Strided, &[f64], Strided, Block, [f64; 4], f64),
     ) -> usize {
         let Self { squares, de, scale, layout, histogram } = self;
         let (w, h) = (layout.hist_width, layout.hist_height);
@@ -259,47 +259,59 @@ impl<C: HistogramCell> Estimator<'_, C> {
                 let (u0, u1) = (reach.saturating_sub(i), side.min(w + reach - i));
                 let (v0, v1) = (reach.saturating_sub(j - first_row), side.min(last_row + reach - j));
                 let x0 = i + u0 - reach;
-                let (rows, columns) = (v1 - v0, u1 - u0);
-                let targets = Rows { start: (j + v0 - reach - first_row) * w + x0, stride: w, rows, columns };
-                let in_square = Rows { start: v0 * side + u0, stride: side, rows, columns };
-                spread(buf, targets, &square.coefs, in_square, colour, ls);
+                let block = Block { rows: v1 - v0, columns: u1 - u0 };
+                let targets = Strided { start: (j + v0 - reach - first_row) * w + x0, stride: w };
+                let in_square = Strided { start: v0 * side + u0, stride: side };
+                spread(buf, targets, &square.coefs, in_square, block, colour, ls);
             }
         }
         first_row
     }
 }
 
-/// Where a rectangle of rows lies in a slice: `rows` rows of `columns` items, `stride` apart,
-/// from `start`.
+/// Where rows lie in a slice: the first from `start`, each `stride` after the one before.
 #[derive(Clone, Copy)]
-struct Rows {
+struct Strided {
     start: usize,
     stride: usize,
+}
+
+/// The size of a bucket's spread: `rows` rows of `columns` targets.
+#[derive(Clone, Copy)]
+struct Block {
     rows: usize,
     columns: usize,
 }
 
-impl Rows {
-    /// The range of row `n` (of the first `columns` items).
-    fn row(&self, n: usize, columns: usize) -> std::ops::Range<usize> {
+impl Strided {
+    /// The range of row `n` of `block`.
+    fn row(&self, n: usize, block: Block) -> std::ops::Range<usize> {
         let at = self.start + n * self.stride;
-        at..at + columns
+        at..at + block.columns
     }
 
-    /// Whether rows `0..rows` of `columns` items lie inside a slice of `len` items.
+    /// Whether the rows of `block` lie inside a slice of `len` items.
     #[cfg(target_arch = "x86_64")]
-    fn fits(&self, rows: usize, columns: usize, len: usize) -> bool {
-        rows == 0 || columns == 0 || self.start + (rows - 1) * self.stride + columns <= len
+    fn fits(&self, block: Block, len: usize) -> bool {
+        block.rows == 0 || block.columns == 0 || self.start + (block.rows - 1) * self.stride + block.columns <= len
     }
 }
 
 /// A bucket's spread: `buf[t][c] += colour[c] · coefs[k] · ls` for the targets `t` of
-/// `targets` and the coefficients `k` of `square`, in that order (the estimator's one sum).
+/// `block` at `targets` and the coefficients `k` of `block` at `square`, in that order (the
+/// estimator's one sum).
 #[inline(always)]
-fn spread(buf: &mut [[f64; 4]], targets: Rows, coefs: &[f64], square: Rows, colour: [f64; 4], ls: f64) {
-    let columns = targets.columns.min(square.columns);
-    for v in 0..targets.rows.min(square.rows) {
-        for (t, &coef) in buf[targets.row(v, columns)].iter_mut().zip(&coefs[square.row(v, columns)]) {
+fn spread(
+    buf: &mut [[f64; 4]],
+    targets: Strided,
+    coefs: &[f64],
+    square: Strided,
+    block: Block,
+    colour: [f64; 4],
+    ls: f64,
+) {
+    for v in 0..block.rows {
+        for (t, &coef) in buf[targets.row(v, block)].iter_mut().zip(&coefs[square.row(v, block)]) {
             for c in 0..4 {
                 t[c] += colour[c] * coef * ls;
             }
@@ -314,15 +326,20 @@ fn spread(buf: &mut [[f64; 4]], targets: Rows, coefs: &[f64], square: Rows, colo
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 #[inline]
-fn spread_avx2(buf: &mut [[f64; 4]], targets: Rows, coefs: &[f64], square: Rows, colour: [f64; 4], ls: f64) {
+fn spread_avx2(
+    buf: &mut [[f64; 4]],
+    targets: Strided,
+    coefs: &[f64],
+    square: Strided,
+    block: Block,
+    colour: [f64; 4],
+    ls: f64,
+) {
     use std::arch::x86_64::*;
     let colour = _mm256_set_pd(colour[3], colour[2], colour[1], colour[0]);
     let ls = _mm256_set1_pd(ls);
-    let (rows, columns) = (targets.rows.min(square.rows), targets.columns.min(square.columns));
-    assert!(
-        targets.fits(rows, columns, buf.len()) && square.fits(rows, columns, coefs.len()),
-        "a spread inside its buffers"
-    );
+    let Block { rows, columns } = block;
+    assert!(targets.fits(block, buf.len()) && square.fits(block, coefs.len()), "a spread inside its buffers");
     if rows == 0 || columns == 0 {
         return;
     }
