@@ -24,9 +24,9 @@
 //! order and goes through the same operations, so the sums, and the picture, are the same bits
 //! as one run after another.
 //!
-//! That is the f64 chaos game. A flame whose terms are all common variations and whose view
-//! f32 resolves runs instead in f32 lanes (`render_lanes.rs`): the same flame and the same
-//! picture within flam3's own noise, not the same bytes, about twice as fast.
+//! That is the f64 chaos game. A flame whose view f32 resolves and whose palette is opaque runs
+//! instead in f32 lanes (`render_lanes.rs`, every variation): the same flame and the same
+//! picture within flam3's own noise, not the same bytes, many times faster.
 //! `NLIFS_FLAME_F64=1` keeps every flame on the f64 game, and `NLIFS_FLAME_QUEUES=1` keeps the
 //! lane game on its queues where the xforms share their terms (`render_lanes_shared.rs`).
 
@@ -90,9 +90,9 @@ pub fn render(flame: &Flame, seed: u32, progress: &(dyn Fn(u64) + Sync)) -> Resu
     Ok(FlameImage { width: flame.size[0], height: flame.size[1], rgba, samples, bad_values })
 }
 
-/// Whether `flame`'s chaos game runs in f32 lanes (`render_lanes.rs`): its terms all among the
-/// lane game's variations, no `pre_blur`, at most 64 xforms, a view f32 resolves, an opaque
-/// palette, and `NLIFS_FLAME_F64` not set. Otherwise the f64 game draws it.
+/// Whether `flame`'s chaos game runs in f32 lanes (`render_lanes.rs`): at most 64 xforms, a view
+/// f32 resolves, an opaque palette, and `NLIFS_FLAME_F64` not set. Otherwise the f64 game draws
+/// it.
 pub fn runs_in_lanes(flame: &Flame) -> bool {
     let Ok(layout) = Layout::new(flame) else { return false };
     let Ok(game) = ChaosGame::new(flame, &layout) else { return false };
@@ -247,25 +247,26 @@ impl ChaosGame {
         })
     }
 
-    /// All runs of `samples`, on rayon's pool: the summed histogram and the re-seeds.
+    /// All runs of `samples`, on rayon's pool: the summed histogram and the re-seeds. In f32 lanes
+    /// where the lane game takes the flame, else in f64 ([`Self::run_f64`]).
     fn run(&self, seed: u32, samples: u64, layout: &Layout, progress: &(dyn Fn(u64) + Sync)) -> (Histogram, u64) {
-        let lane_game = if f64_only() { None } else { lanes::LaneGame::new(self) };
-        let runs = match &lane_game {
-            Some(_) => samples.div_ceil(lanes::BLOCK_SAMPLES),
-            None => samples.div_ceil(RUN_SAMPLES),
+        let Some(lanes) = (if f64_only() { None } else { lanes::LaneGame::new(self) }) else {
+            return self.run_f64(seed, samples, layout, progress);
         };
+        let next_block = AtomicU64::new(0);
+        let cells = layout.hist_width * layout.hist_height;
+        let workers = workers_for(samples.div_ceil(lanes::BLOCK_SAMPLES));
+        let parts: Vec<_> =
+            (0..workers).into_par_iter().map(|_| lanes.run_part(seed, samples, &next_block, cells, progress)).collect();
+        let (cells, bad) = sum_parts(cells, parts, lanes::Cell::add_saturating);
+        (Histogram::Cells(cells), bad)
+    }
+
+    /// [`Self::run`] by the f64 chaos game, whatever the flame: chains that draw as flam3's do.
+    fn run_f64(&self, seed: u32, samples: u64, layout: &Layout, progress: &(dyn Fn(u64) + Sync)) -> (Histogram, u64) {
         let next_run = AtomicU64::new(0);
         let cells = layout.hist_width * layout.hist_height;
-        let workers = rayon::current_num_threads().max(1).min(runs.max(1) as usize);
-        if let Some(lanes) = &lane_game {
-            let parts: Vec<_> = (0..workers)
-                .into_par_iter()
-                .map(|_| lanes.run_part(seed, samples, &next_run, cells, progress))
-                .collect();
-            let (cells, bad) = sum_parts(cells, parts, lanes::Cell::add_saturating);
-            return (Histogram::Cells(cells), bad);
-        }
-        let parts: Vec<(Vec<Bucket>, u64)> = (0..workers)
+        let parts: Vec<(Vec<Bucket>, u64)> = (0..workers_for(samples.div_ceil(RUN_SAMPLES)))
             .into_par_iter()
             .map(|_| {
                 // Every page written (several workers update theirs at random).
@@ -647,6 +648,11 @@ fn choice_row(weights: &[f64]) -> Option<Vec<u16>> {
         r += step;
     }
     Some(row)
+}
+
+/// Workers for `runs` runs (or blocks): rayon's threads, at most one a run.
+fn workers_for(runs: u64) -> usize {
+    rayon::current_num_threads().max(1).min(runs.max(1) as usize)
 }
 
 #[inline(always)]

@@ -1,5 +1,5 @@
-//! The flame chaos game in f32 lanes, for flames whose terms are all common variations
-//! (`variations_lanes::SUPPORTED`) and whose view f32 resolves: the points are not chains that
+//! The flame chaos game in f32 lanes (every variation: `variations_lanes::SUPPORTED`), for
+//! flames whose view f32 resolves: the points are not chains that
 //! keep flam3's draws, but a pool of [`POINTS`] orbits in one queue per xform. A round maps each
 //! queue [`LANES`] points at a time (contiguous loads, no gather), plots them, draws each one's
 //! next xform and appends it to that xform's queue for the next round (a compress per xform, no
@@ -24,7 +24,7 @@ use super::super::render_base::WHITE_LEVEL;
 use super::super::variations::MAX_CONSTS;
 use super::super::variations_lanes::{DRAWS, SUPPORTED};
 use super::{CHOICE_ENTRIES, ChaosGame, FUSE_ITERATIONS, GameXform};
-use crate::flame::PaletteMode;
+use crate::flame::{PaletteMode, trig32};
 use crate::rng::Pcg32;
 
 /// Points mapped at once: four AVX-512 vectors of f32, whose independent work overlaps (a step
@@ -52,6 +52,8 @@ struct Term32 {
 struct Xform32 {
     coefs: [f32; 6],
     post: Option<[f32; 6]>,
+    /// `pre_blur`'s weight (0: none).
+    pre_blur: f32,
     needs: u8,
     terms: Vec<Term32>,
     color_held: f32,
@@ -62,12 +64,9 @@ struct Xform32 {
 }
 
 impl Xform32 {
-    /// `x` in f32; `None` when a term is not in [`SUPPORTED`] or it has `pre_blur`.
+    /// `x` in f32; `None` when a term is not in [`SUPPORTED`].
     fn new(x: &GameXform, game: &ChaosGame) -> Option<Self> {
         let parts = x.map.parts();
-        if parts.pre_blur != 0.0 {
-            return None;
-        }
         let f6 = |c: &[f64; 6]| c.map(|v| v as f32);
         let terms = parts
             .terms
@@ -85,6 +84,7 @@ impl Xform32 {
         Some(Self {
             coefs: f6(parts.coefs),
             post: parts.post.map(f6),
+            pre_blur: parts.pre_blur as f32,
             needs: parts.needs,
             terms,
             color_held: x.color_held as f32,
@@ -98,9 +98,16 @@ impl Xform32 {
     #[inline(always)]
     fn apply(&self, x: &mut Lanes, y: &mut Lanes, rng: &mut LaneRng, scratch: &mut Scratch) {
         let p = &mut scratch.point;
-        for l in 0..LANES {
-            let [tx, ty] = affine(&self.coefs, x[l], y[l]);
-            (p.x[l], p.y[l], p.r2[l]) = (tx, ty, tx * tx + ty * ty);
+        if self.pre_blur == 0.0 {
+            for l in 0..LANES {
+                let [tx, ty] = affine(&self.coefs, x[l], y[l]);
+                (p.x[l], p.y[l], p.r2[l]) = (tx, ty, tx * tx + ty * ty);
+            }
+        } else {
+            for l in 0..LANES {
+                [p.x[l], p.y[l]] = affine(&self.coefs, x[l], y[l]);
+            }
+            pre_blur(&Lanes::splat(self.pre_blur), p, rng);
         }
         sum_terms(&self.terms, &*self.terms, self.needs, (x, y), rng, scratch);
         if let Some(c) = &self.post {
@@ -605,6 +612,20 @@ impl BlockGame for Queues {
     #[inline(always)]
     fn run_block(&mut self, game: &LaneGame, seed: u32, block: u64, n: u64, histogram: &mut [Cell]) -> u64 {
         game.run_block(seed, block, n, self, histogram)
+    }
+}
+
+/// `pre_blur` of weight `w` (a lane's) on the affine images `p.x`, `p.y`: each moved by a
+/// pseudo-Gaussian distance of scale w (four uniform draws) in a uniform direction; and their
+/// squared radii `p.r2`.
+#[inline(always)]
+fn pre_blur(w: &Lanes, p: &mut PointLanes, rng: &mut LaneRng) {
+    let (u0, u1, u2, u3, turn) = (rng.uniform(), rng.uniform(), rng.uniform(), rng.uniform(), rng.uniform());
+    for l in 0..LANES {
+        let g = w[l] * (u0[l] + u1[l] + u2[l] + u3[l] - 2.0);
+        let (s, c, _) = trig32::sin_cos_core(turn[l] * (2.0 * std::f32::consts::PI));
+        let (tx, ty) = (p.x[l] + g * c, p.y[l] + g * s);
+        (p.x[l], p.y[l], p.r2[l]) = (tx, ty, tx * tx + ty * ty);
     }
 }
 

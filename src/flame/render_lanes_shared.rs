@@ -1,13 +1,15 @@
 //! The lane game without queues (`render_lanes.rs`), for flames whose xforms share their terms
 //! (the same variations with the same parameters, in the same order; weights may differ) and
 //! their plotted weight: [`LANES`] orbits that stay in their lanes. A step takes each lane's
-//! pre-affine map, term weights, colour and post map (if it has one) from the xform it drew
-//! (every xform's affine maps are done for every lane, a few operations each) and sums the
-//! terms once for all lanes. Nothing is queued: no point is stored for the next round and
-//! loaded again.
+//! pre-affine map, `pre_blur` and term weights, colour and post map (if it has one) from the
+//! xform it drew (every xform's affine maps are done for every lane, a few operations each) and
+//! sums the terms once for all lanes. Nothing is queued: no point is stored for the next round
+//! and loaded again.
 
 use super::super::FUSE_ITERATIONS;
-use super::{BlockGame, Cell, InFlight, LANES, LaneGame, LaneRng, Lanes, Scratch, Xform32, affine, sum_terms};
+use super::{
+    BlockGame, Cell, InFlight, LANES, LaneGame, LaneRng, Lanes, Scratch, Xform32, affine, pre_blur, sum_terms,
+};
 use crate::rng::Pcg32;
 
 /// Most xforms a flame has for the shared-terms game (each one's affine maps are done for every
@@ -60,6 +62,7 @@ impl LaneGame<'_> {
         // Each term's weight in each lane, as its xform has it.
         let mut weights = vec![Lanes::splat(0.0); first.terms.len()];
         let posts = self.xforms.iter().any(|x| x.post.is_some());
+        let blurred = self.xforms.iter().any(|x| x.pre_blur != 0.0);
         let mut pending = InFlight::new(self.camera.sink);
         let mut bad = 0;
         let mut drawn = 0u64;
@@ -94,8 +97,18 @@ impl LaneGame<'_> {
                     }
                 }
             }
-            for l in 0..LANES {
-                p.r2[l] = p.x[l] * p.x[l] + p.y[l] * p.y[l];
+            if blurred {
+                let mut blur = Lanes::splat(first.pre_blur);
+                for (j, xf) in self.xforms.iter().enumerate().skip(1) {
+                    for l in 0..LANES {
+                        blur[l] = select(xform[l] == j as u32, xf.pre_blur, blur[l]);
+                    }
+                }
+                pre_blur(&blur, p, &mut rng);
+            } else {
+                for l in 0..LANES {
+                    p.r2[l] = p.x[l] * p.x[l] + p.y[l] * p.y[l];
+                }
             }
             sum_terms(&first.terms, &*weights, first.needs, (&mut x, &mut y), &mut rng, &mut scratch);
             if posts {

@@ -135,7 +135,7 @@ fn batched_chains_sum_what_one_run_after_another_sums() {
         assert!(expected.1 > 0, "{name}: no re-seed");
         for threads in [1, 3] {
             let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().expect("pool");
-            let got = pool.install(|| game.run(5, samples, &layout, &|_| {}));
+            let got = pool.install(|| game.run_f64(5, samples, &layout, &|_| {}));
             assert!(
                 (got.0.buckets(), got.1) == expected,
                 "{name}, {threads} thread(s): the histograms or re-seed counts differ"

@@ -1,5 +1,5 @@
 //! Elementary functions in f32 for the flame chaos game's lanes (`render_lanes.rs`): sin and cos,
-//! tan, atan2, exp, ln and pow as branch-free polynomial cores, so that a loop of them over the
+//! tan, atan2 (and acos through it), exp, ln and pow as branch-free polynomial cores, so that a loop of them over the
 //! lanes is a vector loop. Each core also says whether its argument was in its range; beyond it
 //! the lanes are computed again by [`Exact32`] (in f64, rounded), which is what every core
 //! approximates. Within range the cores are within a few f32 ulps (Cody and Waite's reduction
@@ -24,6 +24,13 @@ pub trait Elementary32 {
     fn sin_cos(&mut self, x: f32) -> (f32, f32);
     fn exp(&mut self, x: f32) -> f32;
     fn ln(&mut self, x: f32) -> f32;
+    /// atan2(y, x), the angle of (x, y).
+    fn atan2(&mut self, y: f32, x: f32) -> f32;
+    /// acos x for |x| ≤ 1, as the angle of (x, √((1 − x)(1 + x))).
+    #[inline(always)]
+    fn acos(&mut self, x: f32) -> f32 {
+        self.atan2(((1.0 - x) * (1.0 + x)).sqrt(), x)
+    }
     #[inline(always)]
     fn sin(&mut self, x: f32) -> f32 {
         self.sin_cos(x).0
@@ -91,6 +98,12 @@ impl Elementary32 for Fast32 {
         self.in_range &= ok;
         l
     }
+    #[inline(always)]
+    fn atan2(&mut self, y: f32, x: f32) -> f32 {
+        let (a, ok) = atan2_core(y, x);
+        self.in_range &= ok;
+        a
+    }
 }
 
 /// The functions in f64 (libm), rounded to f32: every argument, NaN and infinities included.
@@ -109,6 +122,10 @@ impl Elementary32 for Exact32 {
     #[inline(always)]
     fn ln(&mut self, x: f32) -> f32 {
         f64::from(x).ln() as f32
+    }
+    #[inline(always)]
+    fn atan2(&mut self, y: f32, x: f32) -> f32 {
+        f64::from(y).atan2(f64::from(x)) as f32
     }
 }
 

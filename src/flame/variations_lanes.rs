@@ -1,7 +1,7 @@
-//! The common variations in f32, for the chaos game's lanes (`render_lanes.rs`): the same
-//! formulas as `variations_basic.rs` and `variations_plugins.rs` (flam3's oddities kept) on the
-//! constants `prepare` made there, rounded once. [`SUPPORTED`] lists them; a flame with any
-//! other term takes the f64 chaos game.
+//! The variations in f32, for the chaos game's lanes (`render_lanes.rs`): the same formulas as
+//! `variations_basic.rs` and `variations_plugins.rs` (flam3's oddities kept) on the constants
+//! `prepare` made there, rounded once; 50 and up in `variations_lanes_plugins.rs`.
+//! [`SUPPORTED`] lists them.
 
 use super::trig32::Elementary32;
 use std::f32::consts::{FRAC_1_PI, PI};
@@ -9,12 +9,13 @@ use std::f32::consts::{FRAC_1_PI, PI};
 /// flam3's `EPS`, the guard added to denominators.
 const EPS: f32 = 1e-10;
 
-/// The variations [`eval`] holds: linear … cosine (0–20), blob, pdj, eyefish … juliascope (27–30,
-/// 32, 33), noise, the blurs, pie, curl … disc2 (39–49 but ngon), super_shape, flower, conic,
-/// parabola, bent2, curve, wedge_julia.
+/// The variations [`eval`] holds: all of flam3's but `pre_blur` (which `render_lanes.rs` applies
+/// to the affine image), `linear3D` and `flatten` (nothing in the plane).
 pub const SUPPORTED: &[u8] = &[
-    0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15, 16, 17, 18, 19, 20, 23, 24, 27, 28, 29, 30, 31, 32, 33, 34,
-    35, 36, 37, 39, 40, 41, 42, 43, 44, 45, 46, 47, 48, 49, 50, 51, 52, 53, 54, 60, 78,
+    0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15, 16, 17, 18, 19, 20, 21, 22, 23, 24, 25, 26, 27, 28, 29, 30,
+    31, 32, 33, 34, 35, 36, 37, 38, 39, 40, 41, 42, 43, 44, 45, 46, 47, 48, 49, 50, 51, 52, 53, 54, 55, 56, 57, 58, 59,
+    60, 61, 62, 63, 64, 65, 66, 68, 69, 70, 71, 72, 73, 74, 75, 76, 77, 78, 79, 80, 81, 82, 83, 84, 85, 86, 87, 88, 89,
+    90, 91, 92, 93, 94, 95, 96, 97, 98, 99, 100,
 ];
 
 /// Most random numbers a variation draws.
@@ -51,7 +52,7 @@ pub enum Draw {
 pub const fn draw_of(v: u8) -> Draw {
     match v {
         13 => Draw::Bit,
-        32 | 33 | 41 | 44 | 45 | 47 | 50 | 51 | 52 | 78 => Draw::Uniform(1),
+        32 | 33 | 41 | 44 | 45 | 47 | 50 | 51 | 52 | 56 | 59 | 78 => Draw::Uniform(1),
         31 | 34 | 43 | 53 => Draw::Uniform(2),
         37 => Draw::Uniform(3),
         36 => Draw::Uniform(4),
@@ -71,6 +72,9 @@ pub fn eval<const V: u8, const L: usize>(
     l: usize,
     m: &mut impl Elementary32,
 ) -> [f32; 2] {
+    if V >= 50 {
+        return plugins::eval::<V>(w, k, p, [draws[0][l], draws[1][l]], m);
+    }
     let Point32 { x, y, r2, r, a, sa, ca, ayx } = *p;
     let draws = |i: usize| draws[i][l];
     let draw = draws(0);
@@ -234,21 +238,6 @@ pub fn eval<const V: u8, const L: usize>(
         }
         // tangent
         42 => [w * m.sin(x) / m.cos(y), w * m.tan(y)],
-        // flower: petals, holes
-        51 => {
-            let f = w * (draw - k[1]) * m.cos(k[0] * ayx) / r;
-            [f * x, f * y]
-        }
-        // wedge_julia: angle, count, power, cn, |power|, compensation
-        78 => {
-            let f = w * m.pow(r2, k[3]);
-            let branch = (k[4] * draw).trunc();
-            let aa = (ayx + 2.0 * PI * branch) / k[2];
-            let c = ((k[1] * aa + PI) * FRAC_1_PI * 0.5).floor();
-            let aa = aa * k[5] + c * k[0];
-            let (s, co) = m.sin_cos(aa);
-            [f * co, f * s]
-        }
         // noise
         31 => {
             let (s, c) = m.sin_cos(draw * 2.0 * PI);
@@ -335,34 +324,58 @@ pub fn eval<const V: u8, const L: usize>(
             let f = w * a / PI;
             [(s + k[2]) * f, (c + k[1]) * f]
         }
-        // super_shape: rnd, m/4, −1/n1, n2, n3, holes
-        50 => {
-            let (st, ct) = m.sin_cos(k[1] * ayx + std::f32::consts::FRAC_PI_4);
-            let t1 = m.pow(ct.abs(), k[3]);
-            let t2 = m.pow(st.abs(), k[4]);
-            let rnd = k[0];
-            let f = w * ((rnd * draw + (1.0 - rnd) * r) - k[5]) * m.pow(t1 + t2, k[2]) / r;
-            [f * x, f * y]
+        // rings: dx² + EPS
+        21 => {
+            let dx = k[0];
+            let f = w * ((r + dx) % (2.0 * dx) - dx + r * (1.0 - dx));
+            [f * ca, f * sa]
         }
-        // conic: eccentricity, holes
-        52 => {
-            let ct = x / r;
-            let f = w * (draw - k[1]) * k[0] / (1.0 + k[0] * ct) / r;
-            [f * x, f * y]
+        // fan: π (e² + EPS), f
+        22 => {
+            let (dx, dy) = (k[0], k[1]);
+            let dx2 = 0.5 * dx;
+            let aa = a + if (a + dy) % dx > dx2 { -dx2 } else { dx2 };
+            let (s, c) = m.sin_cos(aa);
+            [w * r * c, w * r * s]
         }
-        // parabola: height, width
-        53 => {
-            let (s, c) = m.sin_cos(r);
-            [k[0] * w * s * s * draw, k[1] * w * c * draws(1)]
+        // fan2: π (x² + EPS), y
+        25 => {
+            let (dx, dy) = (k[0], k[1]);
+            let dx2 = 0.5 * dx;
+            let t = a + dy - dx * c_int((a + dy) / dx);
+            let (s, c) = m.sin_cos(if t > dx2 { a - dx2 } else { a + dx2 });
+            [w * r * s, w * r * c]
         }
-        // bent2: x, y
-        54 => {
-            let nx = if x < 0.0 { x * k[0] } else { x };
-            let ny = if y < 0.0 { y * k[1] } else { y };
-            [w * nx, w * ny]
+        // rings2: val² + EPS
+        26 => {
+            let dx = k[0];
+            let f = r + (-2.0 * dx * c_int((r + dx) / (2.0 * dx)) + r * (1.0 - dx));
+            [w * sa * f, w * ca * f]
         }
-        // curve: xamp, yamp, xlength², ylength²
-        60 => [w * (x + k[0] * m.exp(-y * y / k[2])), w * (y + k[1] * m.exp(-x * x / k[3]))],
+        // ngon: 2π / sides, power / 2, circle, corners
+        38 => {
+            let r_factor = m.pow(r2, k[1]);
+            let b = k[0];
+            let mut phi = ayx - b * (ayx / b).floor();
+            if phi > b / 2.0 {
+                phi -= b;
+            }
+            let amp = (k[3] * (1.0 / (m.cos(phi) + EPS) - 1.0) + k[2]) / (r_factor + EPS);
+            [w * x * amp, w * y * amp]
+        }
         _ => [0.0, 0.0],
     }
 }
+
+/// C's conversion of `v` to `int` as flam3's x86-64 builds do it (`variations_basic::c_int`),
+/// as a float: toward zero, and −2^31 for NaN and anything out of range.
+#[inline(always)]
+fn c_int(v: f32) -> f32 {
+    const LIMIT: f32 = 2_147_483_648.0;
+    #[expect(clippy::manual_range_contains, reason = "`contains` is two branches, not a vector compare")]
+    let inside = (v >= -LIMIT) & (v < LIMIT);
+    if inside { v.trunc() } else { -LIMIT }
+}
+
+#[path = "variations_lanes_plugins.rs"]
+mod plugins;
