@@ -327,14 +327,14 @@ pub fn eval<const V: u8, const L: usize>(
         // rings: dx² + EPS
         21 => {
             let dx = k[0];
-            let f = w * ((r + dx) % (2.0 * dx) - dx + r * (1.0 - dx));
+            let f = w * (fmod(r + dx, 2.0 * dx) - dx + r * (1.0 - dx));
             [f * ca, f * sa]
         }
         // fan: π (e² + EPS), f
         22 => {
             let (dx, dy) = (k[0], k[1]);
             let dx2 = 0.5 * dx;
-            let aa = a + if (a + dy) % dx > dx2 { -dx2 } else { dx2 };
+            let aa = a + if fmod(a + dy, dx) > dx2 { -dx2 } else { dx2 };
             let (s, c) = m.sin_cos(aa);
             [w * r * c, w * r * s]
         }
@@ -375,6 +375,16 @@ fn c_int(v: f32) -> f32 {
     #[expect(clippy::manual_range_contains, reason = "`contains` is two branches, not a vector compare")]
     let inside = (v >= -LIMIT) & (v < LIMIT);
     if inside { v.trunc() } else { -LIMIT }
+}
+
+/// C's `fmod` as vector operations: a − b·trunc(a / b), kept within ±|b| (where the quotient is
+/// past f32's whole numbers; the exact remainder of such an f32 is no nearer flam3's f64 one).
+/// (Rust's `%` on f32 is a call to libm's `fmodf` for each lane.)
+#[inline(always)]
+fn fmod(a: f32, b: f32) -> f32 {
+    let r = a - b * (a / b).trunc();
+    let limit = b.abs();
+    if r.abs() > limit { limit.copysign(r) } else { r }
 }
 
 #[path = "variations_lanes_plugins.rs"]

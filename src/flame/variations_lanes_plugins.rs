@@ -3,7 +3,7 @@
 //! once. Where f32's rounding takes a quantity a hair past its domain (an ellipse's half-axis
 //! below 1, a cosine's argument past ±1), it is clamped back, as the exact value is inside.
 
-use super::{EPS, Elementary32, Point32, c_int};
+use super::{EPS, Elementary32, Point32, c_int, fmod};
 use std::f32::consts::{FRAC_1_PI, FRAC_2_PI, FRAC_PI_2, FRAC_PI_4, PI};
 
 /// 4 / √(3π): butterfly's scale.
@@ -19,9 +19,9 @@ fn wedge_index(count: f32, a: f32) -> f32 {
 #[inline(always)]
 fn modulus(t: f32, m: f32) -> f32 {
     if t > m {
-        -m + (t + m) % (2.0 * m)
+        -m + fmod(t + m, 2.0 * m)
     } else if t < -m {
-        m - (m - t) % (2.0 * m)
+        m - fmod(m - t, 2.0 * m)
     } else {
         t
     }
@@ -100,9 +100,9 @@ pub(super) fn eval<const V: u8>(
             let x2 = 2.0 * x;
             let mut yy = 0.5 * m.atan2(2.0 * y, r2 - 1.0) - FRAC_PI_2 * k[0];
             if yy > FRAC_PI_2 {
-                yy = -FRAC_PI_2 + (yy + FRAC_PI_2) % PI;
+                yy = -FRAC_PI_2 + fmod(yy + FRAC_PI_2, PI);
             } else if yy < -FRAC_PI_2 {
-                yy = FRAC_PI_2 - (FRAC_PI_2 - yy) % PI;
+                yy = FRAC_PI_2 - fmod(FRAC_PI_2 - yy, PI);
             }
             [w * 0.25 * FRAC_2_PI * m.ln((t + x2) / (t - x2)), w * FRAC_2_PI * yy]
         }
