@@ -209,7 +209,7 @@ impl<C: HistogramCell> Estimator<'_, C> {
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
     fn band_avx2(&self, band: std::ops::Range<usize>, buffer: &mut Vec<[f64; 4]>) -> usize {
-        self.band(band, buffer, |buf, t, k, s, block, colour, ls| spread_avx2(buf, t, k, s, block, colour, ls))
+        self.band(band, buffer, |buf, bucket| spread_avx2(buf, bucket))
     }
 
     /// The estimator over the rows `band` into `buffer` (made the band's rows and the kernels'
@@ -223,7 +223,7 @@ impl<C: HistogramCell> Estimator<'_, C> {
         &self,
         band: std::ops::Range<usize>,
         buffer: &mut Vec<[f64; 4]>,
-        spread: impl Fn(&mut [[f64; 4]], Strided, &[f64], Strided, Block, [f64; 4], f64),
+        spread: impl Fn(&mut [[f64; 4]], Spread),
     ) -> usize {
         let Self { squares, de, scale, layout, histogram } = self;
         let (w, h) = (layout.hist_width, layout.hist_height);
@@ -259,10 +259,15 @@ impl<C: HistogramCell> Estimator<'_, C> {
                 let (u0, u1) = (reach.saturating_sub(i), side.min(w + reach - i));
                 let (v0, v1) = (reach.saturating_sub(j - first_row), side.min(last_row + reach - j));
                 let x0 = i + u0 - reach;
-                let block = Block { rows: v1 - v0, columns: u1 - u0 };
-                let targets = Strided { start: (j + v0 - reach - first_row) * w + x0, stride: w };
-                let in_square = Strided { start: v0 * side + u0, stride: side };
-                spread(buf, targets, &square.coefs, in_square, block, colour, ls);
+                let bucket = Spread {
+                    targets: Strided { start: (j + v0 - reach - first_row) * w + x0, stride: w },
+                    coefs: &square.coefs,
+                    square: Strided { start: v0 * side + u0, stride: side },
+                    block: Block { rows: v1 - v0, columns: u1 - u0 },
+                    colour,
+                    ls,
+                };
+                spread(buf, bucket);
             }
         }
         first_row
@@ -300,16 +305,19 @@ impl Strided {
 /// A bucket's spread: `buf[t][c] += colour[c] · coefs[k] · ls` for the targets `t` of
 /// `block` at `targets` and the coefficients `k` of `block` at `square`, in that order (the
 /// estimator's one sum).
-#[inline(always)]
-fn spread(
-    buf: &mut [[f64; 4]],
+struct Spread<'a> {
     targets: Strided,
-    coefs: &[f64],
+    coefs: &'a [f64],
     square: Strided,
     block: Block,
     colour: [f64; 4],
     ls: f64,
-) {
+}
+
+/// `bucket`'s spread into `buf`.
+#[inline(always)]
+fn spread(buf: &mut [[f64; 4]], bucket: Spread) {
+    let Spread { targets, coefs, square, block, colour, ls } = bucket;
     for v in 0..block.rows {
         for (t, &coef) in buf[targets.row(v, block)].iter_mut().zip(&coefs[square.row(v, block)]) {
             for c in 0..4 {
@@ -326,16 +334,9 @@ fn spread(
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 #[inline]
-fn spread_avx2(
-    buf: &mut [[f64; 4]],
-    targets: Strided,
-    coefs: &[f64],
-    square: Strided,
-    block: Block,
-    colour: [f64; 4],
-    ls: f64,
-) {
+fn spread_avx2(buf: &mut [[f64; 4]], bucket: Spread) {
     use std::arch::x86_64::*;
+    let Spread { targets, coefs, square, block, colour, ls } = bucket;
     let colour = _mm256_set_pd(colour[3], colour[2], colour[1], colour[0]);
     let ls = _mm256_set1_pd(ls);
     let Block { rows, columns } = block;
