@@ -202,11 +202,20 @@ pub fn bench(file: &Path, out: &Path) -> anyhow::Result<()> {
     let row = |what: &str, cpu: f64, wall: f64| {
         println!("  {what:<28} {cpu:8.3} s CPU {wall:8.3} s wall {:14.0} samples/CPU-s", rate(cpu));
     };
-    let in_lanes = read.flames.iter().filter(|f| nlifs::flame::render::runs_in_lanes(f)).count();
+    let refusals: Vec<_> = read
+        .flames
+        .iter()
+        .enumerate()
+        .filter_map(|(i, f)| Some((i, f, nlifs::flame::render::lanes_refusal(f)?)))
+        .collect();
     println!(
-        "  chaos game: f32 lanes for {in_lanes} of {} flame(s), the f64 game for the others (NLIFS_FLAME_F64=1: all)",
+        "  chaos game: f32 lanes for {} of {} flame(s), the f64 game for the others (NLIFS_FLAME_F64=1: all)",
+        read.flames.len() - refusals.len(),
         read.flames.len()
     );
+    for (i, flame, why) in refusals {
+        println!("    flame {i} ({}): the f64 game ({why})", flame.name);
+    }
     row("nlifs (1 thread)", one_cpu, one_wall);
     row(&format!("nlifs ({all_threads} threads)"), all_cpu, all_wall);
     row("nlifs, imported (1 thread)", scene_cpu, scene_wall);

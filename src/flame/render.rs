@@ -90,13 +90,24 @@ pub fn render(flame: &Flame, seed: u32, progress: &(dyn Fn(u64) + Sync)) -> Resu
     Ok(FlameImage { width: flame.size[0], height: flame.size[1], rgba, samples, bad_values })
 }
 
-/// Whether `flame`'s chaos game runs in f32 lanes (`render_lanes.rs`): at most 64 xforms, a view
-/// f32 resolves, an opaque palette, and `NLIFS_FLAME_F64` not set. Otherwise the f64 game draws
-/// it.
+/// Whether `flame`'s chaos game runs in f32 lanes (`render_lanes.rs`): see [`lanes_refusal`].
 pub fn runs_in_lanes(flame: &Flame) -> bool {
-    let Ok(layout) = Layout::new(flame) else { return false };
-    let Ok(game) = ChaosGame::new(flame, &layout) else { return false };
-    !f64_only() && lanes::LaneGame::new(&game).is_some()
+    lanes_refusal(flame).is_none()
+}
+
+/// Why `flame`'s chaos game does not run in f32 lanes (`render_lanes.rs`) but in the f64 game,
+/// in a user's words; `None` where it runs in lanes. Every variation runs in lanes; a flame does
+/// not where it has more than 64 xforms, a view f32 does not resolve, a palette entry that is
+/// not opaque, or `NLIFS_FLAME_F64` is set.
+pub fn lanes_refusal(flame: &Flame) -> Option<String> {
+    if f64_only() {
+        return Some("NLIFS_FLAME_F64 is set".into());
+    }
+    let game = Layout::new(flame).and_then(|layout| ChaosGame::new(flame, &layout));
+    match game {
+        Ok(game) => lanes::LaneGame::new(&game).err().map(str::to_string),
+        Err(e) => Some(e.to_string()),
+    }
 }
 
 /// A worker's entry, `$dispatch(&self, seed, samples, next, histogram: &mut [$cell], progress) -> u64`, that
@@ -250,7 +261,7 @@ impl ChaosGame {
     /// All runs of `samples`, on rayon's pool: the summed histogram and the re-seeds. In f32 lanes
     /// where the lane game takes the flame, else in f64 ([`Self::run_f64`]).
     fn run(&self, seed: u32, samples: u64, layout: &Layout, progress: &(dyn Fn(u64) + Sync)) -> (Histogram, u64) {
-        let Some(lanes) = (if f64_only() { None } else { lanes::LaneGame::new(self) }) else {
+        let Some(lanes) = (if f64_only() { None } else { lanes::LaneGame::new(self).ok() }) else {
             return self.run_f64(seed, samples, layout, progress);
         };
         let next_block = AtomicU64::new(0);

@@ -216,36 +216,40 @@ pub(super) struct LaneGame<'a> {
 }
 
 impl<'a> LaneGame<'a> {
-    /// `game` in f32 lanes; `None` where a term is not supported, it has more than
+    /// `game` in f32 lanes; where it cannot be, why (in a user's words): it has more than
     /// [`MAX_XFORMS`] xforms, its choice table is not in xform order, f32 does not resolve its
-    /// view ([`RESOLUTION`]), an entry of its palette is not opaque ([`Cell`]), or its increments
-    /// are so large that a block could carry a cell past 2^31 ([`Overflow`]: opacities above
-    /// 1.5, whose points weigh more than 4).
-    pub fn new(game: &'a ChaosGame) -> Option<Self> {
+    /// view ([`RESOLUTION`]), an entry of its palette is not opaque ([`Cell`]), its histogram is
+    /// too large for the cells' u32 indices, or its increments are so large that a block could
+    /// carry a cell past 2^31 ([`Overflow`]: opacities above 1.5, whose points weigh more than 4).
+    pub fn new(game: &'a ChaosGame) -> Result<Self, &'static str> {
         let n = game.xforms.len();
         if n > MAX_XFORMS {
-            return None;
+            return Err("more than 64 xforms");
         }
         let cam = &game.camera;
         let far = cam.bounds.iter().chain(&cam.center).fold(0f64, |m, v| m.max(v.abs()));
         let bucket = 1.0 / cam.x_scale.max(cam.y_scale);
         let cells = cam.hist_width as u64 * cam.hist_height as u64;
-        if !(far * f64::from(f32::EPSILON) * RESOLUTION <= bucket)
-            || game.dmap.iter().any(|c| c[3] != WHITE_LEVEL)
-            || cam.hist_width.max(cam.hist_height) >= 1 << 23
-            || cells + LANES as u64 > u64::from(u32::MAX)
-        {
-            return None;
+        if !(far * f64::from(f32::EPSILON) * RESOLUTION <= bucket) {
+            return Err("a view too deep or too far from the origin for f32");
         }
-        let xforms = game.xforms.iter().map(|x| Xform32::new(x, game)).collect::<Option<Vec<_>>>()?;
+        if game.dmap.iter().any(|c| c[3] != WHITE_LEVEL) {
+            return Err("a palette entry that is not opaque");
+        }
+        if cam.hist_width.max(cam.hist_height) >= 1 << 23 || cells + LANES as u64 > u64::from(u32::MAX) {
+            return Err("a histogram of more than 2^32 buckets");
+        }
+        const UNSUPPORTED: &str = "a variation the lanes do not hold";
+        let xforms =
+            game.xforms.iter().map(|x| Xform32::new(x, game)).collect::<Option<Vec<_>>>().ok_or(UNSUPPORTED)?;
         let final_xform = match &game.final_xform {
-            Some(f) => Some((Xform32::new(f, game)?, f.opacity as f32)),
+            Some(f) => Some((Xform32::new(f, game).ok_or(UNSUPPORTED)?, f.opacity as f32)),
             None => None,
         };
         let mut firsts = Vec::new();
         for row in game.choice.chunks_exact(CHOICE_ENTRIES) {
             if row.windows(2).any(|w| w[1] < w[0]) {
-                return None;
+                return Err("a choice table out of xform order");
             }
             let mut f = [CHOICE_ENTRIES as u32; MAX_XFORMS];
             for (j, first) in f.iter_mut().enumerate().take(n).skip(1) {
@@ -270,9 +274,9 @@ impl<'a> LaneGame<'a> {
             .flatten()
             .max()
             .unwrap_or(0);
-        let overflow = Overflow::new(largest, BLOCK_SAMPLES)?;
+        let overflow = Overflow::new(largest, BLOCK_SAMPLES).ok_or("an xform's opacity above 1.5")?;
         let shared = !super::queues_only() && shared::share_terms(&xforms);
-        Some(Self { game, xforms, final_xform, firsts, camera, overflow, shared })
+        Ok(Self { game, xforms, final_xform, firsts, camera, overflow, shared })
     }
 
     /// One worker's part of `samples`: blocks taken in turn from `next` until none is left. Its

@@ -51,7 +51,7 @@ fn lanes_map_as_the_f64_xforms() {
     for &v in SUPPORTED.iter().filter(|&&v| lanes::draw_of(v) == Draw::None) {
         let (flame, layout) = one_term(v);
         let game = ChaosGame::new(&flame, &layout).expect("game");
-        let lane_game = LaneGame::new(&game).unwrap_or_else(|| panic!("variation {v} runs in lanes"));
+        let lane_game = LaneGame::new(&game).unwrap_or_else(|e| panic!("variation {v} runs in lanes: {e}"));
         let mut rng = LaneRng::new(7, 0);
         let mut f64_rng = Pcg32::for_stream(7, 0, 0);
         let mut far = 0;
@@ -86,12 +86,16 @@ fn other_flames_take_the_f64_game() {
     for v in Variation::all() {
         assert!(super::super::runs_in_lanes(&one_term(v.0).0), "variation {}", v.name());
     }
+    let refusal = |flame: &Flame| super::super::lanes_refusal(flame).unwrap_or_default();
     let (mut flame, _) = one_term(17);
     flame.palette[100][3] = 0.5;
-    assert!(!super::super::runs_in_lanes(&flame), "a palette entry of alpha 0.5");
+    assert_eq!(refusal(&flame), "a palette entry that is not opaque");
     let (mut flame, _) = one_term(17);
     flame.xforms = vec![flame.xforms[0].clone(); MAX_XFORMS + 1];
-    assert!(!super::super::runs_in_lanes(&flame), "{} xforms", MAX_XFORMS + 1);
+    assert_eq!(refusal(&flame), "more than 64 xforms");
+    let (mut flame, _) = one_term(17);
+    flame.center = [1e6, 0.0];
+    assert_eq!(refusal(&flame), "a view too deep or too far from the origin for f32");
 }
 
 /// The lane game's picture is a pure function of the seed, whatever the thread count: with
