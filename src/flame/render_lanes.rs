@@ -1,9 +1,8 @@
 //! The flame chaos game in f32 lanes (every variation: `variations_lanes::SUPPORTED`), for
-//! flames whose view f32 resolves: the points are not chains that
-//! keep flam3's draws, but a pool of [`POINTS`] orbits in one queue per xform. A round maps each
-//! queue [`LANES`] points at a time (contiguous loads, no gather), plots them, draws each one's
-//! next xform and appends it to that xform's queue for the next round (a compress per xform, no
-//! scatter). Every phase runs on arrays of [`LANES`] f32 (two lanes where f64 has one), which
+//! flames whose view f32 resolves: the points are not chains that keep flam3's draws, but a pool
+//! of [`POINTS`] orbits in one queue per xform. A round maps each queue [`LANES`] points at a time
+//! (contiguous loads, no gather), plots them, draws each one's next xform and appends it to that
+//! xform's queue for the next round (a compress per xform, no scatter). Every phase runs on arrays of [`LANES`] f32 (two lanes where f64 has one), which
 //! LLVM turns into vector code, and the elementary functions are f32 polynomials (`trig32.rs`).
 //! Flames whose xforms share their terms (the same variations and parameters) need no queues:
 //! their [`LANES`] orbits stay in their lanes, each mapped by its own xform's affine maps and
@@ -237,7 +236,7 @@ impl<'a> LaneGame<'a> {
             return Err("a palette entry that is not opaque");
         }
         if cam.hist_width.max(cam.hist_height) >= 1 << 23 || cells + LANES as u64 > u64::from(u32::MAX) {
-            return Err("a histogram of more than 2^32 buckets");
+            return Err("a histogram too large for the lanes' 32-bit bucket indices");
         }
         const UNSUPPORTED: &str = "a variation the lanes do not hold";
         let xforms =

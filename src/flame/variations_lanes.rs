@@ -9,8 +9,9 @@ use std::f32::consts::{FRAC_1_PI, PI};
 /// flam3's `EPS`, the guard added to denominators.
 const EPS: f32 = 1e-10;
 
-/// The variations [`eval`] holds: all of flam3's but `pre_blur` (which `render_lanes.rs` applies
-/// to the affine image), `linear3D` and `flatten` (nothing in the plane).
+/// The variations [`eval`] holds: every one of the table but `pre_blur` (which `render_lanes.rs`
+/// applies to the affine image), that is flam3's 98 others, `linear3D`, and `flatten` (which adds
+/// nothing in the plane).
 pub const SUPPORTED: &[u8] = &[
     0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15, 16, 17, 18, 19, 20, 21, 22, 23, 24, 25, 26, 27, 28, 29, 30,
     31, 32, 33, 34, 35, 36, 37, 38, 39, 40, 41, 42, 43, 44, 45, 46, 47, 48, 49, 50, 51, 52, 53, 54, 55, 56, 57, 58, 59,
